@@ -1,0 +1,226 @@
+// truecut run CONFIG.hal: load a HAL configuration and run its threads.
+#include <unistd.h>
+
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "truecut/rt/executor.hpp"
+#include "truecut/rt/hal_file.hpp"
+
+namespace truecut::cli {
+namespace {
+
+const char* kRunHelp =
+    "usage: truecut run CONFIG.hal [options]\n"
+    "\n"
+    "Loads a .hal wiring file (loadrt, net, setp, addf, ...) and runs its threads.\n"
+    "Without --time or --cycles it runs until a component stops it or Ctrl-C.\n"
+    "\n"
+    "options:\n"
+    "  --ini FILE             INI file for [SECTION]KEY substitution in the .hal file\n"
+    "  --time SECONDS         run this much (simulated) time\n"
+    "  --cycles N             run N cycles of the fastest thread\n"
+    "  --out DIR              folder for component outputs (created; default .)\n"
+    "  --component-path DIR   also search DIR for component NAME.so (repeatable)\n"
+    "  --realtime             wall-clock mode: absolute deadlines, latency statistics\n"
+    "  --cpu N                (wall clock) pin the servo thread to CPU N\n"
+    "  --fifo PRIORITY        (wall clock) SCHED_FIFO priority 1..99 when permitted\n"
+    "  --no-mlock             (wall clock) do not lock memory\n"
+    "  --show                 print threads, pins and signals after loading\n"
+    "  --dry-run              load and check the configuration, run nothing\n"
+    "  --help                 this text\n"
+    "\n"
+    "Components are looked for built in, then as NAME.so in --component-path,\n"
+    "$TRUECUT_COMPONENT_PATH (':'-separated) and the folders beside the truecut binary.\n";
+
+hal::Hal* g_running_hal = nullptr;
+void on_sigint(int) {
+  if (g_running_hal) g_running_hal->request_stop();
+}
+
+std::vector<std::filesystem::path> component_path(const ParsedArgs& a) {
+  std::vector<std::filesystem::path> path;
+  for (const auto& d : a.values("component-path")) path.emplace_back(d);
+  if (const char* env = std::getenv("TRUECUT_COMPONENT_PATH")) {
+    std::string s = env, cur;
+    for (char c : s + ":") {
+      if (c != ':') {
+        cur += c;
+      } else if (!cur.empty()) {
+        path.emplace_back(cur);
+        cur.clear();
+      }
+    }
+  }
+  std::error_code ec;
+  auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    path.push_back(exe.parent_path() / "components");
+    path.push_back(exe.parent_path().parent_path() / "lib" / "truecut" / "components");
+  }
+  return path;
+}
+
+std::string us(int64_t ns) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.2f", double(ns) * 1e-3);
+  return buf;
+}
+
+void print_show(const hal::Hal& h) {
+  std::printf("Threads:\n");
+  for (const auto& t : h.threads()) {
+    std::printf("  %-20s period %lld ns%s\n", t.name.c_str(), (long long)t.period_ns,
+                t.uses_fp ? "" : " (nofp)");
+    int i = 1;
+    for (const auto& f : t.functions) std::printf("    %2d %s\n", i++, f.c_str());
+  }
+  std::printf("Pins:\n");
+  for (const auto& p : h.pins())
+    std::printf("  %-6s %-4s %-36s %s%s\n", hal::to_string(p.type), hal::to_string(p.dir),
+                p.name.c_str(), p.signal.empty() ? "" : "<-> ", p.signal.c_str());
+  std::printf("Signals:\n");
+  for (const auto& s : h.signals())
+    std::printf("  %-6s %-36s %s\n", hal::to_string(s.type), s.name.c_str(),
+                h.get_signal(s.name).to_text().c_str());
+}
+
+struct Progress {
+  int64_t total_ns;
+  bool tty;
+  int64_t last_ns = -1;
+};
+
+void print_progress(void* user, int64_t t_ns) {
+  auto& p = *static_cast<Progress*>(user);
+  if (p.last_ns >= 0 && t_ns - p.last_ns < 1'000'000'000) return;  // at most once per second
+  p.last_ns = t_ns;
+  if (p.total_ns > 0)
+    std::fprintf(stderr, "%s  %.1f / %.1f s (%3.0f%%)%s", p.tty ? "\r" : "", t_ns * 1e-9,
+                 p.total_ns * 1e-9, 100.0 * double(t_ns) / double(p.total_ns), p.tty ? "" : "\n");
+  else
+    std::fprintf(stderr, "%s  %.1f s%s", p.tty ? "\r" : "", t_ns * 1e-9, p.tty ? "" : "\n");
+}
+
+}  // namespace
+
+int cmd_run(const std::vector<std::string>& argv) {
+  ParsedArgs a(argv, {{"ini", true},
+                      {"time", true},
+                      {"cycles", true},
+                      {"out", true},
+                      {"component-path", true, true},
+                      {"realtime", false},
+                      {"cpu", true},
+                      {"fifo", true},
+                      {"no-mlock", false},
+                      {"show", false},
+                      {"dry-run", false},
+                      {"help", false}});
+  if (a.flag("help")) {
+    std::fputs(kRunHelp, stdout);
+    return kExitOk;
+  }
+  if (a.positionals().size() != 1) throw UsageError("expected one CONFIG.hal file");
+  const std::filesystem::path config = a.positionals()[0];
+  const bool realtime = a.flag("realtime");
+  if (!realtime && (a.value("cpu") || a.value("fifo") || a.flag("no-mlock")))
+    throw UsageError("--cpu, --fifo and --no-mlock apply only with --realtime");
+  if (a.value("time") && a.value("cycles")) throw UsageError("give --time or --cycles, not both");
+
+  hal::RunLimits limits;
+  limits.duration_ns = static_cast<int64_t>(a.number("time", 0.0, 1e-6, 1e7) * 1e9 + 0.5);
+  limits.max_cycles = static_cast<uint64_t>(a.integer("cycles", 0, 1, 2'000'000'000'000L));
+  hal::WallClockOptions wall;
+  wall.cpu = static_cast<int>(a.integer("cpu", -1, 0, 1023));
+  wall.fifo_priority = static_cast<int>(a.integer("fifo", 0, 1, 99));
+  wall.lock_memory = !a.flag("no-mlock");
+
+  hal::HalOptions opt;
+  opt.component_path = component_path(a);
+  opt.output_dir = a.value("out").value_or(".");
+
+  std::optional<hal::Ini> ini;
+  try {
+    if (auto f = a.value("ini")) ini = hal::Ini::load(*f);
+  } catch (const hal::IniError& e) {
+    std::fprintf(stderr, "truecut run: %s\n", e.what());
+    return kExitUsage;
+  }
+  if (!std::filesystem::exists(config)) {
+    std::fprintf(stderr, "truecut run: %s: no such file\n", config.c_str());
+    return kExitUsage;
+  }
+  if (!a.flag("dry-run")) {
+    std::error_code ec;
+    std::filesystem::create_directories(opt.output_dir, ec);
+    if (ec) {
+      std::fprintf(stderr, "truecut run: cannot create output folder %s: %s\n",
+                   opt.output_dir.c_str(), ec.message().c_str());
+      return kExitUsage;
+    }
+  }
+
+  hal::Hal h(opt);
+  try {
+    hal::load_hal_file(h, config, ini ? &*ini : nullptr);
+  } catch (const hal::HalFileError& e) {
+    std::fprintf(stderr, "truecut run: %s\n", e.what());
+    return kExitUsage;
+  }
+  if (h.threads().empty()) {
+    std::fprintf(stderr, "truecut run: %s creates no thread (loadrt threads or newthread)\n",
+                 config.c_str());
+    return kExitUsage;
+  }
+  if (a.flag("show")) print_show(h);
+  if (a.flag("dry-run")) {
+    std::printf("%s: configuration loads without error\n", config.c_str());
+    return kExitOk;
+  }
+
+  Progress progress{limits.duration_ns, isatty(STDERR_FILENO) != 0};
+  limits.progress = print_progress;
+  limits.progress_user = &progress;
+  if (limits.duration_ns == 0 && limits.max_cycles == 0)
+    std::fprintf(stderr, "running until a component stops or Ctrl-C (--time S to limit)\n");
+
+  hal::Executor exec(h);
+  g_running_hal = &h;
+  auto previous = std::signal(SIGINT, on_sigint);
+  hal::RunReport r = realtime ? exec.run_wall_clock(limits, wall) : exec.run_simulated(limits);
+  std::signal(SIGINT, previous);
+  g_running_hal = nullptr;
+  if (progress.tty && progress.last_ns >= 0) std::fputs("\n", stderr);
+
+  std::printf("truecut run %s\n", config.c_str());
+  std::printf("  mode        %s%s\n", r.wall_clock ? "wall clock" : "simulated time",
+              r.stopped_by_request ? " (stopped on request)" : "");
+  std::printf("  time        %.6f s simulated in %.3f s wall (%.1fx real time)\n",
+              r.simulated_ns * 1e-9, r.wall_s,
+              r.wall_s > 0 ? r.simulated_ns * 1e-9 / r.wall_s : 0.0);
+  for (const auto& n : r.notes) std::printf("  setup       %s\n", n.c_str());
+  for (const auto& t : r.threads) {
+    std::printf("  thread      %s: period %lld ns, %llu cycles, %llu overruns\n", t.name.c_str(),
+                (long long)t.period_ns, (unsigned long long)t.cycles,
+                (unsigned long long)t.overruns);
+    std::printf("    compute   median %s us, p99 %s us, p99.99 %s us, max %s us\n",
+                us(t.compute.percentile_ns(0.5)).c_str(), us(t.compute.percentile_ns(0.99)).c_str(),
+                us(t.compute.percentile_ns(0.9999)).c_str(), us(t.compute.max_ns()).c_str());
+    if (r.wall_clock)
+      std::printf("    latency   median %s us, p99 %s us, p99.99 %s us, max %s us\n",
+                  us(t.latency.percentile_ns(0.5)).c_str(),
+                  us(t.latency.percentile_ns(0.99)).c_str(),
+                  us(t.latency.percentile_ns(0.9999)).c_str(), us(t.latency.max_ns()).c_str());
+  }
+  return kExitOk;
+}
+
+}  // namespace truecut::cli

@@ -1,0 +1,153 @@
+// The C function table handed to components. Every entry catches what the
+// C++ side throws: nothing may unwind through a component's C frames.
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+
+#include "hal_state.hpp"
+
+using namespace truecut::hal;
+using namespace truecut::hal::detail;
+
+namespace {
+
+bool valid_type(int t) { return t >= TC_HAL_BIT && t <= TC_HAL_U32; }
+bool valid_pin_dir(int d) { return d == TC_HAL_IN || d == TC_HAL_OUT || d == TC_HAL_IO; }
+
+template <class F>
+int guarded(tc_hal* hal, F&& f) {
+  try {
+    return f();
+  } catch (const std::bad_alloc&) {
+    hal->load_error = "out of memory";
+    return -ENOMEM;
+  } catch (const std::exception& e) {
+    hal->load_error = e.what();
+    return -EINVAL;
+  }
+}
+
+int api_component_new(tc_hal* hal, const char* name) {
+  return guarded(hal, [&] {
+    if (!name || !*name) throw HalError("component name is empty");
+    if (hal->loading_module.empty())
+      throw HalError("component_new('" + std::string(name) + "') called outside loadrt");
+    for (const auto& c : hal->components)
+      if (c->name == name) throw HalError("component '" + std::string(name) + "' already exists");
+    auto comp = std::make_unique<Component>();
+    comp->id = hal->next_comp_id++;
+    comp->name = name;
+    comp->module = hal->loading_module;
+    int id = comp->id;
+    hal->components.push_back(std::move(comp));
+    return id;
+  });
+}
+
+int api_component_ready(tc_hal* hal, int comp_id) {
+  return guarded(hal, [&] {
+    Component* c = hal->component(comp_id);
+    if (!c) throw HalError("component_ready: no component " + std::to_string(comp_id));
+    c->ready = true;
+    return 0;
+  });
+}
+
+void* api_alloc(tc_hal* hal, size_t size_bytes) {
+  try {
+    auto block = std::make_unique<unsigned char[]>(size_bytes == 0 ? 1 : size_bytes);
+    std::memset(block.get(), 0, size_bytes == 0 ? 1 : size_bytes);
+    void* p = block.get();
+    hal->allocations.push_back(std::move(block));
+    return p;
+  } catch (...) {
+    return nullptr;
+  }
+}
+
+int api_pin_new(tc_hal* hal, int comp_id, const char* name, tc_hal_type_t type,
+                tc_hal_pin_dir_t dir, void** data_ptr_addr) {
+  return guarded(hal, [&] {
+    std::string n = name ? name : "";
+    if (!valid_type(type)) throw HalError("pin '" + n + "': invalid type " + std::to_string(type));
+    if (!valid_pin_dir(dir))
+      throw HalError("pin '" + n + "': invalid direction " + std::to_string(dir));
+    hal->add_pin(comp_id, n, static_cast<Type>(type), static_cast<PinDir>(dir), data_ptr_addr);
+    return 0;
+  });
+}
+
+int api_param_new(tc_hal* hal, int comp_id, const char* name, tc_hal_type_t type,
+                  tc_hal_param_dir_t dir, void* data_addr) {
+  return guarded(hal, [&] {
+    std::string n = name ? name : "";
+    if (!valid_type(type))
+      throw HalError("parameter '" + n + "': invalid type " + std::to_string(type));
+    if (dir != TC_HAL_RO && dir != TC_HAL_RW)
+      throw HalError("parameter '" + n + "': invalid direction " + std::to_string(dir));
+    hal->add_param(comp_id, n, static_cast<Type>(type), static_cast<ParamDir>(dir), data_addr);
+    return 0;
+  });
+}
+
+int api_funct_new(tc_hal* hal, int comp_id, const char* name, tc_hal_funct_t fn, void* arg,
+                  int uses_fp) {
+  return guarded(hal, [&] {
+    std::string n = name ? name : "";
+    if (n.empty()) throw HalError("function name is empty");
+    if (!fn) throw HalError("function '" + n + "': NULL function pointer");
+    if (!hal->component(comp_id)) throw HalError("function '" + n + "': no such component");
+    if (hal->functs.count(n)) throw HalError("function '" + n + "' already exists");
+    auto f = std::make_unique<Funct>();
+    f->name = n;
+    f->comp_id = comp_id;
+    f->fn = fn;
+    f->arg = arg;
+    f->uses_fp = uses_fp != 0;
+    Funct* raw = f.get();
+    hal->functs.emplace(n, std::move(f));
+    try {
+      hal->add_pin(comp_id, n + ".time", Type::S32, PinDir::Out, &raw->time_pin);
+      hal->add_pin(comp_id, n + ".tmax-increased", Type::Bit, PinDir::Out,
+                   &raw->tmax_increased_pin);
+      hal->add_param(comp_id, n + ".tmax", Type::S32, ParamDir::RW, &raw->tmax_ns);
+    } catch (...) {
+      hal->pins.erase(n + ".time");
+      hal->pins.erase(n + ".tmax-increased");
+      hal->functs.erase(n);
+      throw;
+    }
+    return 0;
+  });
+}
+
+int api_service_new(tc_hal* hal, int comp_id, tc_hal_service_t fn, void* arg) {
+  return guarded(hal, [&] {
+    if (!fn) throw HalError("service: NULL function pointer");
+    if (!hal->component(comp_id)) throw HalError("service: no such component");
+    hal->services.push_back({comp_id, fn, arg});
+    return 0;
+  });
+}
+
+void api_request_stop(tc_hal* hal) { hal->stop.store(true, std::memory_order_relaxed); }
+
+void api_message(tc_hal* hal, tc_hal_msg_level_t level, const char* text) {
+  const char* tag = level == TC_HAL_MSG_ERR ? "error" : level == TC_HAL_MSG_WARN ? "warning" : "info";
+  std::fprintf(stderr, "%s: %s: %s\n", hal->loading_module.empty() ? "hal" : hal->loading_module.c_str(),
+               tag, text ? text : "");
+}
+
+void api_set_error(tc_hal* hal, const char* text) { hal->load_error = text ? text : ""; }
+
+const char* api_output_dir(tc_hal* hal) { return hal->output_dir_text.c_str(); }
+
+const tc_hal_api_t kApi = {
+    TC_HAL_ABI_VERSION, sizeof(tc_hal_api_t), api_component_new, api_component_ready, api_alloc,
+    api_pin_new,        api_param_new,        api_funct_new,     api_service_new,     api_request_stop,
+    api_message,        api_set_error,        api_output_dir,
+};
+
+}  // namespace
+
+const tc_hal_api_t* truecut::hal::Hal::api() { return &kApi; }

@@ -1,0 +1,125 @@
+// Internal: the HAL's data structures, shared by the HAL, the component ABI
+// trampolines and the executor. Objects are held by unique_ptr so their
+// addresses stay fixed: pins point into signals, components point at pins.
+#pragma once
+
+#include <atomic>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "truecut/rt/hal.hpp"
+
+namespace truecut::hal::detail {
+
+// Storage of a pin or signal; pins point at `f`, `s`, `u` or `b` through the
+// component's pointer, all of which share the union's address.
+union Data {
+  bool b;
+  double f;
+  int32_t s;
+  uint32_t u;
+};
+
+struct Signal;
+
+struct Pin {
+  std::string name;
+  Type type;
+  PinDir dir;
+  int comp_id;
+  void** data_ptr_addr;  // the component's pointer that the HAL aims
+  Data dummy{};          // the pin's own value while unlinked
+  Signal* signal = nullptr;
+};
+
+struct Param {
+  std::string name;
+  Type type;
+  ParamDir dir;
+  int comp_id;
+  void* data;
+};
+
+struct Signal {
+  std::string name;
+  Type type;
+  Data data{};
+  int writers = 0;
+  int bidirs = 0;
+  int readers = 0;
+};
+
+struct Funct {
+  std::string name;
+  int comp_id;
+  tc_hal_funct_t fn;
+  void* arg;
+  bool uses_fp;
+  std::string thread;  // empty until addf
+  // Timing pins and parameter, like LinuxCNC's <funct>.time / .tmax. The
+  // pin pointers are aimed by the HAL like any component's.
+  void* time_pin = nullptr;            // s32, ns
+  void* tmax_increased_pin = nullptr;  // bit
+  int32_t tmax_ns = 0;
+};
+
+struct Thread {
+  std::string name;
+  int64_t period_ns;
+  bool uses_fp;
+  std::vector<Funct*> functs;
+  void* time_pin = nullptr;      // s32 <thread>.time: compute time of the last cycle, ns
+  void* overruns_pin = nullptr;  // u32 <thread>.overruns
+  void* cycles_pin = nullptr;    // u32 <thread>.cycles (wraps)
+  int32_t tmax_ns = 0;           // param <thread>.tmax
+};
+
+struct Component {
+  int id;
+  std::string name;
+  std::string module;
+  bool ready = false;
+};
+
+struct Service {
+  int comp_id;
+  tc_hal_service_t fn;
+  void* arg;
+};
+
+struct Module {
+  std::string name;
+  void* dl_handle = nullptr;  // null for built-ins
+  tc_component_exit_fn exit = nullptr;
+  void* state = nullptr;
+};
+
+}  // namespace truecut::hal::detail
+
+struct tc_hal {
+  truecut::hal::HalOptions options;
+  std::string output_dir_text;
+  int next_comp_id = 1;
+  std::string loading_module;  // set while a module's init runs
+  std::string load_error;      // set_error() text of the module being loaded
+  std::vector<std::unique_ptr<truecut::hal::detail::Component>> components;
+  std::map<std::string, std::unique_ptr<truecut::hal::detail::Pin>> pins;
+  std::map<std::string, std::unique_ptr<truecut::hal::detail::Param>> params;
+  std::map<std::string, std::unique_ptr<truecut::hal::detail::Signal>> signals;
+  std::map<std::string, std::unique_ptr<truecut::hal::detail::Funct>> functs;
+  std::vector<std::unique_ptr<truecut::hal::detail::Thread>> threads;  // creation order
+  std::vector<truecut::hal::detail::Service> services;
+  std::vector<truecut::hal::detail::Module> modules;  // load order
+  std::vector<std::unique_ptr<unsigned char[]>> allocations;
+  std::atomic<bool> stop{false};
+
+  truecut::hal::detail::Component* component(int id);
+  truecut::hal::detail::Thread* thread(const std::string& name);
+  // Creates a pin or parameter; throws HalError (duplicate name, bad comp).
+  void add_pin(int comp_id, const std::string& name, truecut::hal::Type type,
+               truecut::hal::PinDir dir, void** data_ptr_addr);
+  void add_param(int comp_id, const std::string& name, truecut::hal::Type type,
+                 truecut::hal::ParamDir dir, void* data);
+};

@@ -1,0 +1,35 @@
+#include "test_paths.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+namespace truecut::test {
+
+std::filesystem::path source_dir() { return TRUECUT_SOURCE_DIR; }
+std::filesystem::path binary_dir() { return TRUECUT_BINARY_DIR; }
+std::filesystem::path component_dir() { return TRUECUT_COMPONENT_DIR; }
+std::filesystem::path test_component_dir() { return binary_dir() / "test-components"; }
+std::filesystem::path cli_path() { return TRUECUT_CLI; }
+std::filesystem::path shared_data_dir() { return TRUECUT_SHARED_DATA_DIR; }
+
+std::filesystem::path scratch_dir() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  std::string name = info ? std::string(info->test_suite_name()) + "." + info->name() : "scratch";
+  for (char& c : name)
+    if (c == '/') c = '_';
+  auto dir = binary_dir() / "test-scratch" / name;
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+std::string read_file(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+}  // namespace truecut::test

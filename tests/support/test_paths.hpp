@@ -1,0 +1,19 @@
+// Paths of the source and build trees, and scratch folders for tests.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+namespace truecut::test {
+
+std::filesystem::path source_dir();
+std::filesystem::path binary_dir();
+std::filesystem::path component_dir();       // components built from the project
+std::filesystem::path test_component_dir();  // components built only for tests
+std::filesystem::path cli_path();            // the truecut executable
+std::filesystem::path shared_data_dir();     // ../shared/data beside the project
+// An empty folder unique to the running test (recreated on each call).
+std::filesystem::path scratch_dir();
+std::string read_file(const std::filesystem::path& file);
+
+}  // namespace truecut::test
