@@ -66,6 +66,38 @@ std::vector<std::filesystem::path> candidate_files(const HalOptions& opt, const 
   return out;
 }
 
+// Calls a module's init; on failure undoes everything it created.
+void run_init(tc_hal& st, Module& mod, tc_component_init_fn init,
+              const std::vector<std::string>& args) {
+  const std::string module = mod.name;
+  std::vector<const char*> argv;
+  for (const auto& a : args) argv.push_back(a.c_str());
+  argv.push_back(nullptr);
+  st.loading_module = module;
+  st.load_error.clear();
+  int rc = init(Hal::api(), &st, static_cast<int>(args.size()), argv.data(), &mod.state);
+  st.loading_module.clear();
+
+  std::string not_ready;
+  for (const auto& c : st.components)
+    if (c->module == module && !c->ready) not_ready += " " + c->name;
+  if (rc == 0 && not_ready.empty()) {
+    st.modules.push_back(std::move(mod));
+    return;
+  }
+  // Undo a failed load completely, as LinuxCNC's hal_exit would.
+  std::vector<int> ids;
+  for (const auto& c : st.components)
+    if (c->module == module) ids.push_back(c->id);
+  if (rc == 0 && mod.exit) mod.exit(Hal::api(), &st, mod.state);
+  for (int id : ids) remove_component(st, id);
+  if (mod.dl_handle) dlclose(mod.dl_handle);
+  if (rc != 0)
+    throw HalError("loadrt " + module + ": initialisation failed (" + std::strerror(-rc) + ")" +
+                   (st.load_error.empty() ? "" : ": " + st.load_error));
+  throw HalError("loadrt " + module + ": component(s)" + not_ready + " never became ready");
+}
+
 }  // namespace
 
 Hal::Hal(HalOptions options) : state_(std::make_unique<tc_hal>()) {
@@ -153,32 +185,17 @@ void Hal::load(const std::string& module, const std::vector<std::string>& args) 
                      (searched.empty() ? std::string(" (the path is empty)") : ":" + searched));
   }
 
-  std::vector<const char*> argv;
-  for (const auto& a : args) argv.push_back(a.c_str());
-  argv.push_back(nullptr);
-  st.loading_module = module;
-  st.load_error.clear();
-  int rc = init(api(), state_.get(), static_cast<int>(args.size()), argv.data(), &mod.state);
-  st.loading_module.clear();
+  run_init(st, mod, init, args);
+}
 
-  std::string not_ready;
-  for (const auto& c : st.components)
-    if (c->module == module && !c->ready) not_ready += " " + c->name;
-  if (rc == 0 && not_ready.empty()) {
-    st.modules.push_back(std::move(mod));
-    return;
-  }
-  // Undo a failed load completely, as LinuxCNC's hal_exit would.
-  std::vector<int> ids;
-  for (const auto& c : st.components)
-    if (c->module == module) ids.push_back(c->id);
-  if (rc == 0 && mod.exit) mod.exit(api(), state_.get(), mod.state);
-  for (int id : ids) remove_component(st, id);
-  if (mod.dl_handle) dlclose(mod.dl_handle);
-  if (rc != 0)
-    throw HalError("loadrt " + module + ": initialisation failed (" + std::strerror(-rc) + ")" +
-                   (st.load_error.empty() ? "" : ": " + st.load_error));
-  throw HalError("loadrt " + module + ": component(s)" + not_ready + " never became ready");
+void Hal::load(const std::string& module, tc_component_init_fn init, tc_component_exit_fn exit,
+               const std::vector<std::string>& args) {
+  if (is_loaded(module)) throw HalError("module " + q(module) + " is already loaded");
+  if (!init) throw HalError("module " + q(module) + ": no init function");
+  Module mod;
+  mod.name = module;
+  mod.exit = exit;
+  run_init(*state_, mod, init, args);
 }
 
 void Hal::new_thread(const std::string& name, int64_t period_ns, bool uses_fp) {

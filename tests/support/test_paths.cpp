@@ -20,7 +20,12 @@ std::filesystem::path scratch_dir() {
   for (char& c : name)
     if (c == '/') c = '_';
   auto dir = binary_dir() / "test-scratch" / name;
-  std::filesystem::remove_all(dir);
+  // Emptied on the first call in a test only, so helpers may call it again.
+  static std::string emptied_for;
+  if (emptied_for != name) {
+    std::filesystem::remove_all(dir);
+    emptied_for = name;
+  }
   std::filesystem::create_directories(dir);
   return dir;
 }

@@ -97,6 +97,10 @@ class Hal {
   // `loadrt module arg...`; `threads` is the built-in thread creator
   // (name1=... period1=... [fp1=0|1], up to 9 threads).
   void load(const std::string& module, const std::vector<std::string>& args);
+  // Loads a component whose entry points the caller already has (an
+  // application embedding truecut, or a test), exactly as loadrt would.
+  void load(const std::string& module, tc_component_init_fn init, tc_component_exit_fn exit,
+            const std::vector<std::string>& args = {});
   bool is_loaded(const std::string& module) const;
 
   // `newthread name period_ns [fp|nofp]`
