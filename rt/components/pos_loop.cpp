@@ -11,7 +11,9 @@
 //
 // Pins (all float): in pos-cmd, kv (1/s), ff1, tau-vel (s), max-accel,
 // encoder-resolution; out pos-fb (encoder), pos-true (unquantised),
-// vel-fb (mm/s), f-error (pos-cmd - pos-fb). Function <inst>.update.
+// vel-fb (mm/s), f-error (pos-cmd minus the encoder reading the loop used
+// this cycle, read at the start of the cycle as a drive would). Function
+// <inst>.update.
 // The first cycle takes pos-cmd as the position (the axis starts in place).
 #include <algorithm>
 #include <cmath>
@@ -61,7 +63,7 @@ void update(void* arg, long period_ns) {
   *s.pos_fb = fb;
   *s.pos_true = s.pos;
   *s.vel_fb = s.vel;
-  *s.f_error = cmd - fb;
+  *s.f_error = cmd - fb_before;  // the error the loop acted on this cycle
 }
 
 }  // namespace

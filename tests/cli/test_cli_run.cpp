@@ -1,0 +1,98 @@
+// `truecut run` as a user runs it: exit codes, messages, outputs.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "run_process.hpp"
+#include "test_paths.hpp"
+
+using namespace truecut::test;
+
+namespace {
+ProcessResult run_truecut(std::vector<std::string> args) {
+  args.insert(args.begin(), cli_path().string());
+  return run_process(args);
+}
+std::string example(const char* f) { return (source_dir() / "examples" / "circle" / f).string(); }
+}  // namespace
+
+TEST(CliRun, UsageAndHelp) {
+  EXPECT_EQ(2, run_truecut({}).exit_code);
+  auto help = run_truecut({"--help"});
+  EXPECT_EQ(0, help.exit_code);
+  EXPECT_NE(std::string::npos, help.out.find("run"));
+  auto run_help = run_truecut({"run", "--help"});
+  EXPECT_EQ(0, run_help.exit_code);
+  EXPECT_NE(std::string::npos, run_help.out.find("usage: truecut run CONFIG.hal"));
+  auto unknown = run_truecut({"frobnicate"});
+  EXPECT_EQ(2, unknown.exit_code);
+  EXPECT_NE(std::string::npos, unknown.err.find("unknown command 'frobnicate'"));
+  auto bad_opt = run_truecut({"run", example("circle.hal"), "--speed", "3"});
+  EXPECT_EQ(2, bad_opt.exit_code);
+  EXPECT_NE(std::string::npos, bad_opt.err.find("unknown option '--speed'"));
+  EXPECT_EQ(2, run_truecut({"run", example("circle.hal"), "--time", "-1"}).exit_code);
+  EXPECT_EQ(2, run_truecut({"run", example("circle.hal"), "--cpu", "1"}).exit_code)
+      << "--cpu needs --realtime";
+}
+
+TEST(CliRun, RunsTheExampleAndWritesTheTrace) {
+  auto out = scratch_dir();
+  auto r = run_truecut({"run", example("circle.hal"), "--ini", example("circle.ini"), "--time", "0.5",
+                    "--out", out.string()});
+  ASSERT_EQ(0, r.exit_code) << r.err;
+  EXPECT_NE(std::string::npos, r.out.find("500 cycles"));
+  std::string trace = read_file(out / "trace.csv");
+  EXPECT_EQ(0u, trace.find("t,x_cmd,x_act,y_cmd,y_act,x_ferr,y_ferr\n"));
+  EXPECT_EQ(501, std::count(trace.begin(), trace.end(), '\n'));
+  EXPECT_FALSE(std::filesystem::exists(out / "trace.csv.tmp"));
+}
+
+TEST(CliRun, WallClockModeRuns) {
+  auto out = scratch_dir();
+  auto r = run_truecut({"run", example("circle.hal"), "--ini", example("circle.ini"), "--cycles", "50",
+                    "--realtime", "--no-mlock", "--out", out.string()});
+  ASSERT_EQ(0, r.exit_code) << r.err;
+  EXPECT_NE(std::string::npos, r.out.find("wall clock"));
+  EXPECT_NE(std::string::npos, r.out.find("latency"));
+}
+
+TEST(CliRun, BadConfigurationGivesFileLineAndNoOutput) {
+  auto dir = scratch_dir();
+  {
+    std::ofstream f(dir / "bad.hal");
+    f << "loadrt threads name1=t period1=1000000\n"
+         "loadrt recorder file=trace.csv columns=a\n"
+         "loadrt siggen\n"
+         "net a siggen.0.clock => recorder.0.a\n";
+  }
+  auto r = run_truecut({"run", (dir / "bad.hal").string(), "--time", "1", "--out",
+                    (dir / "out").string()});
+  EXPECT_EQ(2, r.exit_code);
+  EXPECT_NE(std::string::npos,
+            r.err.find("bad.hal:4: type mismatch: pin 'recorder.0.a' is float, signal 'a' is bit"))
+      << r.err;
+  EXPECT_TRUE(std::filesystem::is_empty(dir / "out")) << "nothing half-written";
+}
+
+TEST(CliRun, MissingFilesAreUsageErrors) {
+  auto r = run_truecut({"run", "/nonexistent/x.hal"});
+  EXPECT_EQ(2, r.exit_code);
+  EXPECT_NE(std::string::npos, r.err.find("/nonexistent/x.hal: no such file"));
+  auto i = run_truecut({"run", example("circle.hal"), "--ini", "/nonexistent/m.ini"});
+  EXPECT_EQ(2, i.exit_code);
+  EXPECT_NE(std::string::npos, i.err.find("/nonexistent/m.ini: cannot open INI file"));
+  auto noini = run_truecut({"run", example("circle.hal"), "--time", "1"});
+  EXPECT_EQ(2, noini.exit_code);
+  EXPECT_NE(std::string::npos, noini.err.find("circle.hal:10: '[EMCMOT]SERVO_PERIOD' needs an INI"))
+      << noini.err;
+}
+
+TEST(CliRun, DryRunChecksWithoutRunning) {
+  auto out = scratch_dir();
+  auto r = run_truecut({"run", example("circle.hal"), "--ini", example("circle.ini"), "--dry-run",
+                    "--show", "--out", out.string()});
+  ASSERT_EQ(0, r.exit_code) << r.err;
+  EXPECT_NE(std::string::npos, r.out.find("x.update"));
+  EXPECT_NE(std::string::npos, r.out.find("configuration loads without error"));
+  EXPECT_TRUE(std::filesystem::is_empty(out));
+}
