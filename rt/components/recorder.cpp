@@ -8,7 +8,8 @@
 // The servo function `<inst>.sample` copies the pins and the cycle time into
 // a lock-free queue every N-th cycle while `<inst>.enable` is true; a
 // non-real-time service drains it into `<file>.tmp`, which becomes `<file>`
-// (relative to the output folder) when the HAL shuts down. Samples that find
+// (relative to the output folder) when the HAL shuts down; a device or FIFO
+// such as /dev/null is written directly. Samples that find
 // the queue full are dropped and counted on `<inst>.overruns`.
 #include <boost/lockfree/spsc_queue.hpp>
 #include <charconv>
@@ -52,6 +53,7 @@ struct Recorder {
   uint64_t cycle = 0;
   // Service-side state.
   std::FILE* out = nullptr;
+  bool direct = false;  // writing straight into a device or FIFO, no rename
   bool write_failed = false;
   std::string line;
   const tc_hal_api_t* api = nullptr;
@@ -95,7 +97,12 @@ void drain(void* arg) {
   while (r.queue->pop(s)) {
     if (r.write_failed) continue;
     if (!r.out) {
-      r.out = std::fopen(r.tmp_path.c_str(), "wb");
+      // A device or FIFO (e.g. /dev/null) is written directly: renaming a
+      // temporary file over it would replace the device.
+      std::error_code ec;
+      auto st = std::filesystem::status(r.final_path, ec);
+      r.direct = !ec && std::filesystem::exists(st) && !std::filesystem::is_regular_file(st);
+      r.out = std::fopen(r.direct ? r.final_path.c_str() : r.tmp_path.c_str(), "wb");
       if (!r.out) {
         r.write_failed = true;
         r.api->message(r.hal, TC_HAL_MSG_ERR,
@@ -205,9 +212,9 @@ void recorder_exit(const tc_hal_api_t* api, tc_hal_t* hal, void* state) {
   bool ok = !r->write_failed;
   if (std::fclose(r->out) != 0) ok = false;
   std::error_code ec;
-  if (ok) std::filesystem::rename(r->tmp_path, r->final_path, ec);
+  if (ok && !r->direct) std::filesystem::rename(r->tmp_path, r->final_path, ec);
   if (!ok || ec) {
-    std::filesystem::remove(r->tmp_path, ec);
+    if (!r->direct) std::filesystem::remove(r->tmp_path, ec);
     api->message(hal, TC_HAL_MSG_ERR,
                  ("recorder: writing " + r->final_path.string() + " failed; no trace written")
                      .c_str());

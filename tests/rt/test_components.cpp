@@ -1,7 +1,11 @@
 // The components truecut ships: siggen, recorder (built in), pos_loop (.so).
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
+#include <algorithm>
 #include <cmath>
+#include <thread>
 #include <sstream>
 
 #include "test_paths.hpp"
@@ -184,4 +188,27 @@ TEST(Recorder, BadColumnsAreRejected) {
   EXPECT_THROW(hal.load("recorder", {"file=a.csv", "columns=a:double"}), HalError);
   EXPECT_THROW(hal.load("recorder", {"file=a.csv", "columns=a,a"}), HalError);
   EXPECT_THROW(hal.load("recorder", {"file=a.csv", "columns=t"}), HalError);
+}
+
+TEST(Recorder, DeviceOrFifoIsWrittenDirectlyAndNeverReplaced) {
+  auto dir = truecut::test::scratch_dir();
+  const auto fifo = dir / "trace.fifo";
+  ASSERT_EQ(0, mkfifo(fifo.c_str(), 0600));
+  std::string received;
+  std::thread reader([&] { received = truecut::test::read_file(fifo); });
+  {
+    Hal hal(opts(dir));
+    load_hal_text(hal,
+                  "loadrt threads name1=t period1=1000000\nloadrt siggen\n"
+                  "loadrt recorder file=trace.fifo columns=s\n"
+                  "net s siggen.0.sine => recorder.0.s\n"
+                  "addf siggen.0.update t\naddf recorder.0.sample t\n",
+                  "r.hal");
+    run_cycles(hal, 3);
+  }
+  reader.join();
+  EXPECT_TRUE(std::filesystem::is_fifo(fifo)) << "the FIFO must not be replaced by a file";
+  EXPECT_FALSE(std::filesystem::exists(dir / "trace.fifo.tmp"));
+  EXPECT_EQ(0u, received.find("t,s\n0,"));
+  EXPECT_EQ(4, std::count(received.begin(), received.end(), '\n'));
 }
