@@ -89,7 +89,13 @@ int main(int argc, char** argv) {
   std::thread loader;
   if (load) loader = std::thread(load_cpu, load_cpu_id, std::ref(stop));
 
-  for (long period_ns : {1'000'000L, 125'000L}) {
+  struct Case {
+    long period_ns;
+    long spin_ns;
+  };
+  for (Case c : {Case{1'000'000, 0}, Case{125'000, 0}, Case{1'000'000, 50'000},
+                 Case{125'000, 50'000}}) {
+    const long period_ns = c.period_ns;
     HalOptions opt;
     opt.component_path = {TRUECUT_COMPONENT_DIR};
     Hal hal(opt);
@@ -100,9 +106,12 @@ int main(int argc, char** argv) {
     WallClockOptions w;
     w.cpu = servo_cpu;
     w.fifo_priority = 80;
+    w.spin_ns = c.spin_ns;
     auto r = ex.run_wall_clock(lim, w);
     const auto& t = r.threads.at(0);
-    std::printf("\nperiod %ld us: %llu cycles, %llu overruns\n", period_ns / 1000,
+    std::printf("\nperiod %ld us, %s: %llu cycles, %llu overruns\n", period_ns / 1000,
+                c.spin_ns ? ("sleep + " + std::to_string(c.spin_ns / 1000) + " us spin").c_str()
+                          : "sleep only",
                 (unsigned long long)t.cycles, (unsigned long long)t.overruns);
     for (const auto& n : r.notes) std::printf("    setup    %s\n", n.c_str());
     print_row("compute", t.compute);

@@ -33,6 +33,7 @@ const char* kRunHelp =
     "  --cpu N                (wall clock) pin the servo thread to CPU N\n"
     "  --fifo PRIORITY        (wall clock) SCHED_FIFO priority 1..99 when permitted\n"
     "  --no-mlock             (wall clock) do not lock memory\n"
+    "  --spin-us N            (wall clock) busy-wait the last N us before each deadline\n"
     "  --show                 print threads, pins and signals after loading\n"
     "  --dry-run              load and check the configuration, run nothing\n"
     "  --help                 this text\n"
@@ -121,6 +122,7 @@ int cmd_run(const std::vector<std::string>& argv) {
                       {"cpu", true},
                       {"fifo", true},
                       {"no-mlock", false},
+                      {"spin-us", true},
                       {"show", false},
                       {"dry-run", false},
                       {"help", false}});
@@ -131,8 +133,8 @@ int cmd_run(const std::vector<std::string>& argv) {
   if (a.positionals().size() != 1) throw UsageError("expected one CONFIG.hal file");
   const std::filesystem::path config = a.positionals()[0];
   const bool realtime = a.flag("realtime");
-  if (!realtime && (a.value("cpu") || a.value("fifo") || a.flag("no-mlock")))
-    throw UsageError("--cpu, --fifo and --no-mlock apply only with --realtime");
+  if (!realtime && (a.value("cpu") || a.value("fifo") || a.flag("no-mlock") || a.value("spin-us")))
+    throw UsageError("--cpu, --fifo, --no-mlock and --spin-us apply only with --realtime");
   if (a.value("time") && a.value("cycles")) throw UsageError("give --time or --cycles, not both");
 
   hal::RunLimits limits;
@@ -142,6 +144,7 @@ int cmd_run(const std::vector<std::string>& argv) {
   wall.cpu = static_cast<int>(a.integer("cpu", -1, 0, 1023));
   wall.fifo_priority = static_cast<int>(a.integer("fifo", 0, 1, 99));
   wall.lock_memory = !a.flag("no-mlock");
+  wall.spin_ns = a.integer("spin-us", 0, 0, 100'000) * 1000;
 
   hal::HalOptions opt;
   opt.component_path = component_path(a);

@@ -208,6 +208,9 @@ RunReport Executor::run_wall_clock(const RunLimits& limits, const WallClockOptio
     } else {
       rt_notes.push_back("normal scheduling (SCHED_OTHER)");
     }
+    if (options.spin_ns > 0)
+      rt_notes.push_back("busy-waits the last " + std::to_string(options.spin_ns / 1000) +
+                         " us before each deadline");
     // Normal threads get 50 us of timer slack: wake-ups would come that late.
     prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
     prefault_stack();
@@ -215,7 +218,13 @@ RunReport Executor::run_wall_clock(const RunLimits& limits, const WallClockOptio
     while (!im.finished(limits)) {
       Impl::Slot& s = im.slots[im.next_slot()];
       const int64_t deadline = start_ns + s.next_ns;
-      if (mono_ns() < deadline) sleep_until_ns(deadline);
+      if (options.spin_ns > 0) {
+        if (mono_ns() < deadline - options.spin_ns) sleep_until_ns(deadline - options.spin_ns);
+        while (mono_ns() < deadline) {
+        }
+      } else if (mono_ns() < deadline) {
+        sleep_until_ns(deadline);
+      }
       const int64_t woke = mono_ns();
       s.stats->latency.add(woke - deadline);
       im.run_cycle(s, limits);
