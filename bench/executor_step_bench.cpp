@@ -11,8 +11,9 @@ static void BM_ServoCycle_SiggenFivePosLoops(benchmark::State& state) {
   HalOptions opt;
   opt.component_path = {TRUECUT_COMPONENT_DIR};
   Hal hal(opt);
-  std::string s = "newthread servo-thread 1000000\nloadrt siggen names=path\n"
-                  "loadrt pos_loop names=x,y,z,a,c\n";
+  std::string s =
+      "newthread servo-thread 1000000\nloadrt siggen names=path\n"
+      "loadrt pos_loop names=x,y,z,a,c\n";
   for (const char* j : {"x", "y", "z", "a", "c"})
     s += std::string("net cmd path.sine => ") + j + ".pos-cmd\n";
   s += "addf path.update servo-thread\n";
@@ -20,7 +21,8 @@ static void BM_ServoCycle_SiggenFivePosLoops(benchmark::State& state) {
     s += std::string("addf ") + j + ".update servo-thread\n";
   load_hal_text(hal, s, "chain.hal");
   Executor ex(hal);
-  for (auto _ : state) ex.step();
+  for (auto _ : state)
+    ex.step();
   state.SetItemsProcessed(state.iterations());
 }
 BENCHMARK(BM_ServoCycle_SiggenFivePosLoops);

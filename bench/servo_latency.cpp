@@ -49,7 +49,8 @@ void load_cpu(int cpu, std::atomic<bool>& stop) {
   size_t i = 0;
   double acc = 0;
   while (!stop.load(std::memory_order_relaxed)) {
-    for (int k = 0; k < 4096; ++k, i = (i + 4099) % buf.size()) acc += buf[i] * 1.0000001;
+    for (int k = 0; k < 4096; ++k, i = (i + 4099) % buf.size())
+      acc += buf[i] * 1.0000001;
     buf[i % buf.size()] = acc;
   }
 }
@@ -77,8 +78,9 @@ int main(int argc, char** argv) {
     else if (a == "--no-load")
       load = false;
     else {
-      std::fprintf(stderr,
-                   "usage: servo_latency [--seconds S] [--servo-cpu N] [--load-cpu N] [--no-load]\n");
+      std::fprintf(
+          stderr,
+          "usage: servo_latency [--seconds S] [--servo-cpu N] [--load-cpu N] [--no-load]\n");
       return 2;
     }
   }
@@ -93,8 +95,8 @@ int main(int argc, char** argv) {
     long period_ns;
     long spin_ns;
   };
-  for (Case c : {Case{1'000'000, 0}, Case{125'000, 0}, Case{1'000'000, 50'000},
-                 Case{125'000, 50'000}}) {
+  for (Case c :
+       {Case{1'000'000, 0}, Case{125'000, 0}, Case{1'000'000, 50'000}, Case{125'000, 50'000}}) {
     const long period_ns = c.period_ns;
     HalOptions opt;
     opt.component_path = {TRUECUT_COMPONENT_DIR};
@@ -113,7 +115,8 @@ int main(int argc, char** argv) {
                 c.spin_ns ? ("sleep + " + std::to_string(c.spin_ns / 1000) + " us spin").c_str()
                           : "sleep only",
                 (unsigned long long)t.cycles, (unsigned long long)t.overruns);
-    for (const auto& n : r.notes) std::printf("    setup    %s\n", n.c_str());
+    for (const auto& n : r.notes)
+      std::printf("    setup    %s\n", n.c_str());
     print_row("compute", t.compute);
     print_row("latency", t.latency);
     std::printf("    compute as share of the period: median %.3f %%, max %.2f %%\n",

@@ -45,7 +45,8 @@ std::optional<std::string> ParsedArgs::value(const std::string& name) const {
 std::vector<std::string> ParsedArgs::values(const std::string& name) const {
   std::vector<std::string> out;
   auto [b, e] = values_.equal_range(name);
-  for (auto it = b; it != e; ++it) out.push_back(it->second);
+  for (auto it = b; it != e; ++it)
+    out.push_back(it->second);
   return out;
 }
 

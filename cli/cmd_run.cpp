@@ -48,7 +48,8 @@ void on_sigint(int) {
 
 std::vector<std::filesystem::path> component_path(const ParsedArgs& a) {
   std::vector<std::filesystem::path> path;
-  for (const auto& d : a.values("component-path")) path.emplace_back(d);
+  for (const auto& d : a.values("component-path"))
+    path.emplace_back(d);
   if (const char* env = std::getenv("TRUECUT_COMPONENT_PATH")) {
     std::string s = env, cur;
     for (char c : s + ":") {
@@ -81,7 +82,8 @@ void print_show(const hal::Hal& h) {
     std::printf("  %-20s period %lld ns%s\n", t.name.c_str(), (long long)t.period_ns,
                 t.uses_fp ? "" : " (nofp)");
     int i = 1;
-    for (const auto& f : t.functions) std::printf("    %2d %s\n", i++, f.c_str());
+    for (const auto& f : t.functions)
+      std::printf("    %2d %s\n", i++, f.c_str());
   }
   std::printf("Pins:\n");
   for (const auto& p : h.pins())
@@ -209,7 +211,8 @@ int cmd_run(const std::vector<std::string>& argv) {
   std::printf("  time        %.6f s simulated in %.3f s wall (%.1fx real time)\n",
               r.simulated_ns * 1e-9, r.wall_s,
               r.wall_s > 0 ? r.simulated_ns * 1e-9 / r.wall_s : 0.0);
-  for (const auto& n : r.notes) std::printf("  setup       %s\n", n.c_str());
+  for (const auto& n : r.notes)
+    std::printf("  setup       %s\n", n.c_str());
   for (const auto& t : r.threads) {
     std::printf("  thread      %s: period %lld ns, %llu cycles, %llu overruns\n", t.name.c_str(),
                 (long long)t.period_ns, (unsigned long long)t.cycles,

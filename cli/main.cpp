@@ -25,7 +25,8 @@ void print_usage(std::FILE* to) {
                "usage: truecut <command> [options]\n"
                "       truecut <command> --help\n\n"
                "commands:\n");
-  for (const auto& c : kCommands) std::fprintf(to, "  %-10s %s\n", c.name, c.summary);
+  for (const auto& c : kCommands)
+    std::fprintf(to, "  %-10s %s\n", c.name, c.summary);
   std::fprintf(to, "\nexit codes: 0 ok, 1 runtime failure, 2 usage or input error\n");
 }
 

@@ -62,10 +62,14 @@ struct Recorder {
 
 double read_pin(const Column& c) {
   switch (c.type) {
-    case TC_HAL_BIT: return *static_cast<const bool*>(c.pin) ? 1.0 : 0.0;
-    case TC_HAL_S32: return *static_cast<const int32_t*>(c.pin);
-    case TC_HAL_U32: return *static_cast<const uint32_t*>(c.pin);
-    case TC_HAL_FLOAT: return *static_cast<const double*>(c.pin);
+    case TC_HAL_BIT:
+      return *static_cast<const bool*>(c.pin) ? 1.0 : 0.0;
+    case TC_HAL_S32:
+      return *static_cast<const int32_t*>(c.pin);
+    case TC_HAL_U32:
+      return *static_cast<const uint32_t*>(c.pin);
+    case TC_HAL_FLOAT:
+      return *static_cast<const double*>(c.pin);
   }
   return 0.0;
 }
@@ -78,7 +82,8 @@ void sample(void* arg, long period_ns) {
   Sample s;
   s.t_ns = t;
   const size_t n = r.columns.size();
-  for (size_t i = 0; i < n; ++i) s.v[i] = read_pin(r.columns[i]);
+  for (size_t i = 0; i < n; ++i)
+    s.v[i] = read_pin(r.columns[i]);
   if (r.queue->push(s))
     ++*r.samples;
   else
@@ -110,7 +115,8 @@ void drain(void* arg) {
         continue;
       }
       r.line = "t";
-      for (const auto& c : r.columns) r.line += "," + c.name;
+      for (const auto& c : r.columns)
+        r.line += "," + c.name;
       r.line += "\n";
       std::fputs(r.line.c_str(), r.out);
     }
@@ -191,7 +197,8 @@ int recorder_init(const tc_hal_api_t* api, tc_hal_t* hal, int argc, const char* 
     const std::string& n = r->instance;
     int id = new_component(api, hal, n);
     Builder b(api, hal, id);
-    for (auto& c : r->columns) b.pin(n + "." + c.name, c.type, TC_HAL_IN, &c.pin);
+    for (auto& c : r->columns)
+      b.pin(n + "." + c.name, c.type, TC_HAL_IN, &c.pin);
     b.pin(n + ".enable", TC_HAL_BIT, TC_HAL_IN, &r->enable);
     b.pin(n + ".overruns", TC_HAL_U32, TC_HAL_OUT, &r->overruns);
     b.pin(n + ".samples", TC_HAL_U32, TC_HAL_OUT, &r->samples);
@@ -215,9 +222,9 @@ void recorder_exit(const tc_hal_api_t* api, tc_hal_t* hal, void* state) {
   if (ok && !r->direct) std::filesystem::rename(r->tmp_path, r->final_path, ec);
   if (!ok || ec) {
     if (!r->direct) std::filesystem::remove(r->tmp_path, ec);
-    api->message(hal, TC_HAL_MSG_ERR,
-                 ("recorder: writing " + r->final_path.string() + " failed; no trace written")
-                     .c_str());
+    api->message(
+        hal, TC_HAL_MSG_ERR,
+        ("recorder: writing " + r->final_path.string() + " failed; no trace written").c_str());
     return;
   }
   api->message(hal, TC_HAL_MSG_INFO,

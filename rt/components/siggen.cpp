@@ -44,8 +44,7 @@ void update(void* arg, long period_ns) {
 
 }  // namespace
 
-int siggen_init(const tc_hal_api_t* api, tc_hal_t* hal, int argc, const char* const* argv,
-                void**) {
+int siggen_init(const tc_hal_api_t* api, tc_hal_t* hal, int argc, const char* const* argv, void**) {
   using namespace component;
   return init_guard(api, hal, [&] {
     Args args(argc, argv);

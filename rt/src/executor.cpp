@@ -2,8 +2,8 @@
 
 #include <pthread.h>
 #include <sched.h>
-#include <sys/prctl.h>
 #include <sys/mman.h>
+#include <sys/prctl.h>
 #include <time.h>
 
 #include <algorithm>
@@ -39,7 +39,8 @@ void sleep_until_ns(int64_t t_ns) noexcept {
 // page-fault.
 __attribute__((noinline)) void prefault_stack() {
   volatile unsigned char buf[256 * 1024];
-  for (size_t i = 0; i < sizeof buf; i += 4096) buf[i] = 0;
+  for (size_t i = 0; i < sizeof buf; i += 4096)
+    buf[i] = 0;
 }
 
 }  // namespace
@@ -58,7 +59,8 @@ struct Executor::Impl {
 
   explicit Impl(Hal& h) : hal(h), st(*h.state()) {
     std::vector<Thread*> ths;
-    for (auto& t : st.threads) ths.push_back(t.get());
+    for (auto& t : st.threads)
+      ths.push_back(t.get());
     std::stable_sort(ths.begin(), ths.end(),
                      [](const Thread* a, const Thread* b) { return a->period_ns < b->period_ns; });
     stats.resize(ths.size());
@@ -137,7 +139,9 @@ struct Executor::Impl {
 };
 
 Executor::Executor(Hal& hal) : impl_(new Impl(hal)) {}
-Executor::~Executor() { delete impl_; }
+Executor::~Executor() {
+  delete impl_;
+}
 
 int64_t Executor::now_ns() const noexcept {
   return impl_->slots.empty() ? 0 : impl_->slots[impl_->next_slot()].next_ns;

@@ -15,24 +15,38 @@ namespace {
 
 Value read_data(Type type, const void* data) {
   switch (type) {
-    case Type::Bit: return Value::of_bit(*static_cast<const bool*>(data));
-    case Type::Float: return Value::of_float(*static_cast<const double*>(data));
-    case Type::S32: return Value::of_s32(*static_cast<const int32_t*>(data));
-    case Type::U32: return Value::of_u32(*static_cast<const uint32_t*>(data));
+    case Type::Bit:
+      return Value::of_bit(*static_cast<const bool*>(data));
+    case Type::Float:
+      return Value::of_float(*static_cast<const double*>(data));
+    case Type::S32:
+      return Value::of_s32(*static_cast<const int32_t*>(data));
+    case Type::U32:
+      return Value::of_u32(*static_cast<const uint32_t*>(data));
   }
   return {};
 }
 
 void write_data(const Value& v, void* data) {
   switch (v.type) {
-    case Type::Bit: *static_cast<bool*>(data) = v.b; break;
-    case Type::Float: *static_cast<double*>(data) = v.f; break;
-    case Type::S32: *static_cast<int32_t*>(data) = v.s; break;
-    case Type::U32: *static_cast<uint32_t*>(data) = v.u; break;
+    case Type::Bit:
+      *static_cast<bool*>(data) = v.b;
+      break;
+    case Type::Float:
+      *static_cast<double*>(data) = v.f;
+      break;
+    case Type::S32:
+      *static_cast<int32_t*>(data) = v.s;
+      break;
+    case Type::U32:
+      *static_cast<uint32_t*>(data) = v.u;
+      break;
   }
 }
 
-std::string q(const std::string& s) { return "'" + s + "'"; }
+std::string q(const std::string& s) {
+  return "'" + s + "'";
+}
 
 void remove_component(tc_hal& st, int comp_id) {
   for (auto it = st.pins.begin(); it != st.pins.end();) {
@@ -53,16 +67,19 @@ void remove_component(tc_hal& st, int comp_id) {
       ++it;
       continue;
     }
-    for (auto& th : st.threads) std::erase(th->functs, it->second.get());
+    for (auto& th : st.threads)
+      std::erase(th->functs, it->second.get());
     it = st.functs.erase(it);
   }
   std::erase_if(st.services, [&](const Service& s) { return s.comp_id == comp_id; });
   std::erase_if(st.components, [&](const auto& c) { return c->id == comp_id; });
 }
 
-std::vector<std::filesystem::path> candidate_files(const HalOptions& opt, const std::string& module) {
+std::vector<std::filesystem::path> candidate_files(const HalOptions& opt,
+                                                   const std::string& module) {
   std::vector<std::filesystem::path> out;
-  for (const auto& dir : opt.component_path) out.push_back(dir / (module + ".so"));
+  for (const auto& dir : opt.component_path)
+    out.push_back(dir / (module + ".so"));
   return out;
 }
 
@@ -71,7 +88,8 @@ void run_init(tc_hal& st, Module& mod, tc_component_init_fn init,
               const std::vector<std::string>& args) {
   const std::string module = mod.name;
   std::vector<const char*> argv;
-  for (const auto& a : args) argv.push_back(a.c_str());
+  for (const auto& a : args)
+    argv.push_back(a.c_str());
   argv.push_back(nullptr);
   st.loading_module = module;
   st.load_error.clear();
@@ -90,7 +108,8 @@ void run_init(tc_hal& st, Module& mod, tc_component_init_fn init,
   for (const auto& c : st.components)
     if (c->module == module) ids.push_back(c->id);
   if (rc == 0 && mod.exit) mod.exit(Hal::api(), &st, mod.state);
-  for (int id : ids) remove_component(st, id);
+  for (int id : ids)
+    remove_component(st, id);
   if (mod.dl_handle) dlclose(mod.dl_handle);
   if (rc != 0)
     throw HalError("loadrt " + module + ": initialisation failed (" + std::strerror(-rc) + ")" +
@@ -119,7 +138,9 @@ Hal::~Hal() {
   }
 }
 
-const HalOptions& Hal::options() const { return state_->options; }
+const HalOptions& Hal::options() const {
+  return state_->options;
+}
 
 bool Hal::is_loaded(const std::string& module) const {
   return std::any_of(state_->modules.begin(), state_->modules.end(),
@@ -135,7 +156,8 @@ void Hal::load(const std::string& module, const std::vector<std::string>& args) 
       bool fp = true;
       for (const auto& a : args) {
         auto eq = a.find('=');
-        if (eq == std::string::npos) throw HalError("threads: argument '" + a + "' is not key=value");
+        if (eq == std::string::npos)
+          throw HalError("threads: argument '" + a + "' is not key=value");
         std::string k = a.substr(0, eq), v = a.substr(eq + 1);
         if (k == "name" + std::to_string(i)) name = v;
         if (k == "period" + std::to_string(i)) period = v;
@@ -236,8 +258,8 @@ void Hal::add_function(const std::string& funct, const std::string& thread, int 
   if (!f.thread.empty())
     throw HalError("function " + q(funct) + " already added to thread " + q(f.thread));
   if (f.uses_fp && !th->uses_fp)
-    throw HalError("function " + q(funct) + " needs floating point but thread " +
-                   q(thread) + " is nofp");
+    throw HalError("function " + q(funct) + " needs floating point but thread " + q(thread) +
+                   " is nofp");
   const int n = static_cast<int>(th->functs.size());
   if (position == 0) throw HalError("addf position 0 is not valid (1 = first, -1 = last)");
   if (position > n + 1 || position < -(n + 1))
@@ -273,8 +295,7 @@ void Hal::link(const std::string& pin_name, const std::string& signal_name) {
   Signal& sig = *st.signals.at(signal_name);
   if (pin.signal == &sig) return;
   if (pin.signal)
-    throw HalError("pin " + q(pin_name) + " is already linked to signal " +
-                   q(pin.signal->name));
+    throw HalError("pin " + q(pin_name) + " is already linked to signal " + q(pin.signal->name));
   if (pin.type != sig.type)
     throw HalError("type mismatch: pin " + q(pin_name) + " is " + to_string(pin.type) +
                    ", signal " + q(signal_name) + " is " + to_string(sig.type));
@@ -282,12 +303,12 @@ void Hal::link(const std::string& pin_name, const std::string& signal_name) {
     std::string other;
     for (const auto& [n, p] : st.pins)
       if (p->signal == &sig && p->dir != PinDir::In) other = n;
-    throw HalError("signal " + q(signal_name) + " already has a writer (" + other +
-                   "); pin " + q(pin_name) + " cannot be a second one");
+    throw HalError("signal " + q(signal_name) + " already has a writer (" + other + "); pin " +
+                   q(pin_name) + " cannot be a second one");
   }
   if (pin.dir == PinDir::IO && sig.writers > 0)
-    throw HalError("signal " + q(signal_name) + " has an output pin; I/O pin " +
-                   q(pin_name) + " cannot join it");
+    throw HalError("signal " + q(signal_name) + " has an output pin; I/O pin " + q(pin_name) +
+                   " cannot join it");
   // The first pin on a signal gives it its value, as in LinuxCNC.
   if (sig.writers + sig.bidirs + sig.readers == 0) sig.data = pin.dummy;
   (pin.dir == PinDir::Out ? sig.writers : pin.dir == PinDir::IO ? sig.bidirs : sig.readers)++;
@@ -352,10 +373,18 @@ Value Hal::get_signal(const std::string& name) const {
   return read_data(it->second->type, &it->second->data);
 }
 
-bool Hal::has_pin(const std::string& n) const { return state_->pins.count(n) > 0; }
-bool Hal::has_param(const std::string& n) const { return state_->params.count(n) > 0; }
-bool Hal::has_signal(const std::string& n) const { return state_->signals.count(n) > 0; }
-bool Hal::has_function(const std::string& n) const { return state_->functs.count(n) > 0; }
+bool Hal::has_pin(const std::string& n) const {
+  return state_->pins.count(n) > 0;
+}
+bool Hal::has_param(const std::string& n) const {
+  return state_->params.count(n) > 0;
+}
+bool Hal::has_signal(const std::string& n) const {
+  return state_->signals.count(n) > 0;
+}
+bool Hal::has_function(const std::string& n) const {
+  return state_->functs.count(n) > 0;
+}
 bool Hal::has_thread(const std::string& n) const {
   return const_cast<tc_hal&>(*state_).thread(n) != nullptr;
 }
@@ -371,7 +400,8 @@ std::vector<PinInfo> Hal::pins() const {
 std::vector<ParamInfo> Hal::params() const {
   std::vector<ParamInfo> out;
   for (const auto& [name, p] : state_->params)
-    out.push_back({name, p->type, p->dir, const_cast<tc_hal&>(*state_).component(p->comp_id)->name});
+    out.push_back(
+        {name, p->type, p->dir, const_cast<tc_hal&>(*state_).component(p->comp_id)->name});
   return out;
 }
 
@@ -386,7 +416,8 @@ std::vector<ThreadInfo> Hal::threads() const {
   std::vector<ThreadInfo> out;
   for (const auto& th : state_->threads) {
     ThreadInfo info{th->name, th->period_ns, th->uses_fp, {}};
-    for (const Funct* f : th->functs) info.functions.push_back(f->name);
+    for (const Funct* f : th->functs)
+      info.functions.push_back(f->name);
     out.push_back(std::move(info));
   }
   return out;
@@ -394,16 +425,24 @@ std::vector<ThreadInfo> Hal::threads() const {
 
 std::vector<std::string> Hal::functions() const {
   std::vector<std::string> out;
-  for (const auto& [name, f] : state_->functs) out.push_back(name);
+  for (const auto& [name, f] : state_->functs)
+    out.push_back(name);
   return out;
 }
 
-void Hal::request_stop() noexcept { state_->stop.store(true, std::memory_order_relaxed); }
-bool Hal::stop_requested() const noexcept { return state_->stop.load(std::memory_order_relaxed); }
-void Hal::clear_stop() noexcept { state_->stop.store(false, std::memory_order_relaxed); }
+void Hal::request_stop() noexcept {
+  state_->stop.store(true, std::memory_order_relaxed);
+}
+bool Hal::stop_requested() const noexcept {
+  return state_->stop.load(std::memory_order_relaxed);
+}
+void Hal::clear_stop() noexcept {
+  state_->stop.store(false, std::memory_order_relaxed);
+}
 
 void Hal::run_services() {
-  for (const Service& s : state_->services) s.fn(s.arg);
+  for (const Service& s : state_->services)
+    s.fn(s.arg);
 }
 
 }  // namespace truecut::hal

@@ -11,8 +11,12 @@ using namespace truecut::hal::detail;
 
 namespace {
 
-bool valid_type(int t) { return t >= TC_HAL_BIT && t <= TC_HAL_U32; }
-bool valid_pin_dir(int d) { return d == TC_HAL_IN || d == TC_HAL_OUT || d == TC_HAL_IO; }
+bool valid_type(int t) {
+  return t >= TC_HAL_BIT && t <= TC_HAL_U32;
+}
+bool valid_pin_dir(int d) {
+  return d == TC_HAL_IN || d == TC_HAL_OUT || d == TC_HAL_IO;
+}
 
 template <class F>
 int guarded(tc_hal* hal, F&& f) {
@@ -130,24 +134,36 @@ int api_service_new(tc_hal* hal, int comp_id, tc_hal_service_t fn, void* arg) {
   });
 }
 
-void api_request_stop(tc_hal* hal) { hal->stop.store(true, std::memory_order_relaxed); }
-
-void api_message(tc_hal* hal, tc_hal_msg_level_t level, const char* text) {
-  const char* tag = level == TC_HAL_MSG_ERR ? "error" : level == TC_HAL_MSG_WARN ? "warning" : "info";
-  std::fprintf(stderr, "%s: %s: %s\n", hal->loading_module.empty() ? "hal" : hal->loading_module.c_str(),
-               tag, text ? text : "");
+void api_request_stop(tc_hal* hal) {
+  hal->stop.store(true, std::memory_order_relaxed);
 }
 
-void api_set_error(tc_hal* hal, const char* text) { hal->load_error = text ? text : ""; }
+void api_message(tc_hal* hal, tc_hal_msg_level_t level, const char* text) {
+  const char* tag = level == TC_HAL_MSG_ERR    ? "error"
+                    : level == TC_HAL_MSG_WARN ? "warning"
+                                               : "info";
+  std::fprintf(stderr, "%s: %s: %s\n",
+               hal->loading_module.empty() ? "hal" : hal->loading_module.c_str(), tag,
+               text ? text : "");
+}
 
-const char* api_output_dir(tc_hal* hal) { return hal->output_dir_text.c_str(); }
+void api_set_error(tc_hal* hal, const char* text) {
+  hal->load_error = text ? text : "";
+}
+
+const char* api_output_dir(tc_hal* hal) {
+  return hal->output_dir_text.c_str();
+}
 
 const tc_hal_api_t kApi = {
-    TC_HAL_ABI_VERSION, sizeof(tc_hal_api_t), api_component_new, api_component_ready, api_alloc,
-    api_pin_new,        api_param_new,        api_funct_new,     api_service_new,     api_request_stop,
-    api_message,        api_set_error,        api_output_dir,
+    TC_HAL_ABI_VERSION, sizeof(tc_hal_api_t), api_component_new, api_component_ready,
+    api_alloc,          api_pin_new,          api_param_new,     api_funct_new,
+    api_service_new,    api_request_stop,     api_message,       api_set_error,
+    api_output_dir,
 };
 
 }  // namespace
 
-const tc_hal_api_t* truecut::hal::Hal::api() { return &kApi; }
+const tc_hal_api_t* truecut::hal::Hal::api() {
+  return &kApi;
+}

@@ -31,7 +31,8 @@ void load_text(Context& ctx, const std::string& text);
 
 // Splits one logical line into words: whitespace separates, "..." groups,
 // '#' at the start of a word ends the line.
-std::vector<std::string> tokenize(const std::string& line, const std::function<void(std::string)>& fail) {
+std::vector<std::string> tokenize(const std::string& line,
+                                  const std::function<void(std::string)>& fail) {
   std::vector<std::string> words;
   std::string cur;
   bool in_word = false, quoted = false;
@@ -73,8 +74,7 @@ std::string substitute_ini(const Context& ctx, const std::string& word,
     out.append(begin, m[0].first);
     if (!ctx.ini) fail("'" + m[0].str() + "' needs an INI file (truecut run --ini FILE)");
     auto v = ctx.ini->find(m[1].str(), m[2].str());
-    if (!v)
-      fail("INI variable " + m[0].str() + " not found in " + ctx.ini->file_name());
+    if (!v) fail("INI variable " + m[0].str() + " not found in " + ctx.ini->file_name());
     out += *v;
     begin = m[0].second;
   }
@@ -92,7 +92,9 @@ int parse_int(const std::string& text, const std::string& what,
   return 0;
 }
 
-bool is_arrow(const std::string& w) { return w == "=>" || w == "<=" || w == "<=>"; }
+bool is_arrow(const std::string& w) {
+  return w == "=>" || w == "<=" || w == "<=>";
+}
 
 void run_command(Context& ctx, std::vector<std::string> w,
                  const std::function<void(std::string)>& fail) {
@@ -113,7 +115,8 @@ void run_command(Context& ctx, std::vector<std::string> w,
     need(3, 4, "newthread NAME PERIOD_NS [fp|nofp]");
     bool fp = true;
     if (w.size() == 4) {
-      if (w[3] != "fp" && w[3] != "nofp") fail("newthread: expected fp or nofp, got '" + w[3] + "'");
+      if (w[3] != "fp" && w[3] != "nofp")
+        fail("newthread: expected fp or nofp, got '" + w[3] + "'");
       fp = w[3] == "fp";
     }
     hal.new_thread(w[1], parse_int(w[2], "period", fail), fp);
@@ -191,7 +194,8 @@ void load_text(Context& ctx, const std::string& text) {
     std::vector<std::string> words = tokenize(logical, fail);
     logical.clear();
     if (words.empty()) continue;
-    for (auto& word : words) word = substitute_ini(ctx, word, fail);
+    for (auto& word : words)
+      word = substitute_ini(ctx, word, fail);
     try {
       run_command(ctx, words, fail);
     } catch (const HalFileError&) {
@@ -200,7 +204,8 @@ void load_text(Context& ctx, const std::string& text) {
       fail(e.what());
     }
   }
-  if (!logical.empty()) throw HalFileError(ctx.file, start_line, "file ends after a '\\' continuation");
+  if (!logical.empty())
+    throw HalFileError(ctx.file, start_line, "file ends after a '\\' continuation");
 }
 
 }  // namespace

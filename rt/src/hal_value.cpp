@@ -10,24 +10,33 @@ namespace truecut::hal {
 
 const char* to_string(Type type) {
   switch (type) {
-    case Type::Bit: return "bit";
-    case Type::Float: return "float";
-    case Type::S32: return "s32";
-    case Type::U32: return "u32";
+    case Type::Bit:
+      return "bit";
+    case Type::Float:
+      return "float";
+    case Type::S32:
+      return "s32";
+    case Type::U32:
+      return "u32";
   }
   return "?";
 }
 
 const char* to_string(PinDir dir) {
   switch (dir) {
-    case PinDir::In: return "IN";
-    case PinDir::Out: return "OUT";
-    case PinDir::IO: return "I/O";
+    case PinDir::In:
+      return "IN";
+    case PinDir::Out:
+      return "OUT";
+    case PinDir::IO:
+      return "I/O";
   }
   return "?";
 }
 
-const char* to_string(ParamDir dir) { return dir == ParamDir::RO ? "RO" : "RW"; }
+const char* to_string(ParamDir dir) {
+  return dir == ParamDir::RO ? "RO" : "RW";
+}
 
 Value Value::of_bit(bool v) {
   Value x;
@@ -56,19 +65,26 @@ Value Value::of_u32(uint32_t v) {
 
 double Value::as_double() const {
   switch (type) {
-    case Type::Bit: return b ? 1.0 : 0.0;
-    case Type::Float: return f;
-    case Type::S32: return s;
-    case Type::U32: return u;
+    case Type::Bit:
+      return b ? 1.0 : 0.0;
+    case Type::Float:
+      return f;
+    case Type::S32:
+      return s;
+    case Type::U32:
+      return u;
   }
   return 0.0;
 }
 
 std::string Value::to_text() const {
   switch (type) {
-    case Type::Bit: return b ? "TRUE" : "FALSE";
-    case Type::S32: return std::to_string(s);
-    case Type::U32: return std::to_string(u);
+    case Type::Bit:
+      return b ? "TRUE" : "FALSE";
+    case Type::S32:
+      return std::to_string(s);
+    case Type::U32:
+      return std::to_string(u);
     case Type::Float: {
       char buf[32];
       auto res = std::to_chars(buf, buf + sizeof buf, f);

@@ -35,7 +35,8 @@ Ini Ini::parse(const std::string& text, const std::string& file_name) {
       continue;
     }
     auto eq = line.find('=');
-    if (eq == std::string::npos) throw IniError(where() + "expected KEY = VALUE, got '" + line + "'");
+    if (eq == std::string::npos)
+      throw IniError(where() + "expected KEY = VALUE, got '" + line + "'");
     if (section.empty()) throw IniError(where() + "KEY = VALUE before any [SECTION]");
     std::string key = trim(line.substr(0, eq));
     if (key.empty()) throw IniError(where() + "empty key");

@@ -13,7 +13,9 @@ ProcessResult run_truecut(std::vector<std::string> args) {
   args.insert(args.begin(), cli_path().string());
   return run_process(args);
 }
-std::string example(const char* f) { return (source_dir() / "examples" / "circle" / f).string(); }
+std::string example(const char* f) {
+  return (source_dir() / "examples" / "circle" / f).string();
+}
 }  // namespace
 
 TEST(CliRun, UsageAndHelp) {
@@ -37,8 +39,8 @@ TEST(CliRun, UsageAndHelp) {
 
 TEST(CliRun, RunsTheExampleAndWritesTheTrace) {
   auto out = scratch_dir();
-  auto r = run_truecut({"run", example("circle.hal"), "--ini", example("circle.ini"), "--time", "0.5",
-                    "--out", out.string()});
+  auto r = run_truecut({"run", example("circle.hal"), "--ini", example("circle.ini"), "--time",
+                        "0.5", "--out", out.string()});
   ASSERT_EQ(0, r.exit_code) << r.err;
   EXPECT_NE(std::string::npos, r.out.find("500 cycles"));
   std::string trace = read_file(out / "trace.csv");
@@ -49,8 +51,8 @@ TEST(CliRun, RunsTheExampleAndWritesTheTrace) {
 
 TEST(CliRun, WallClockModeRuns) {
   auto out = scratch_dir();
-  auto r = run_truecut({"run", example("circle.hal"), "--ini", example("circle.ini"), "--cycles", "50",
-                    "--realtime", "--no-mlock", "--out", out.string()});
+  auto r = run_truecut({"run", example("circle.hal"), "--ini", example("circle.ini"), "--cycles",
+                        "50", "--realtime", "--no-mlock", "--out", out.string()});
   ASSERT_EQ(0, r.exit_code) << r.err;
   EXPECT_NE(std::string::npos, r.out.find("wall clock"));
   EXPECT_NE(std::string::npos, r.out.find("latency"));
@@ -65,8 +67,8 @@ TEST(CliRun, BadConfigurationGivesFileLineAndNoOutput) {
          "loadrt siggen\n"
          "net a siggen.0.clock => recorder.0.a\n";
   }
-  auto r = run_truecut({"run", (dir / "bad.hal").string(), "--time", "1", "--out",
-                    (dir / "out").string()});
+  auto r = run_truecut(
+      {"run", (dir / "bad.hal").string(), "--time", "1", "--out", (dir / "out").string()});
   EXPECT_EQ(2, r.exit_code);
   EXPECT_NE(std::string::npos,
             r.err.find("bad.hal:4: type mismatch: pin 'recorder.0.a' is float, signal 'a' is bit"))
@@ -90,7 +92,7 @@ TEST(CliRun, MissingFilesAreUsageErrors) {
 TEST(CliRun, DryRunChecksWithoutRunning) {
   auto out = scratch_dir();
   auto r = run_truecut({"run", example("circle.hal"), "--ini", example("circle.ini"), "--dry-run",
-                    "--show", "--out", out.string()});
+                        "--show", "--out", out.string()});
   ASSERT_EQ(0, r.exit_code) << r.err;
   EXPECT_NE(std::string::npos, r.out.find("x.update"));
   EXPECT_NE(std::string::npos, r.out.find("configuration loads without error"));

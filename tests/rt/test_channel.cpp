@@ -13,7 +13,8 @@ TEST(SpscChannel, FifoOrderAndFullEmpty) {
   SpscChannel<int, 4> ch;
   int v = 0;
   EXPECT_FALSE(ch.try_pop(v));
-  for (int i = 0; i < 4; ++i) EXPECT_TRUE(ch.try_push(i));
+  for (int i = 0; i < 4; ++i)
+    EXPECT_TRUE(ch.try_push(i));
   EXPECT_FALSE(ch.try_push(99)) << "capacity is 4";
   for (int i = 0; i < 4; ++i) {
     ASSERT_TRUE(ch.try_pop(v));
@@ -102,7 +103,8 @@ TEST(Handover, SwapsUnderConcurrentPublishingNeverTearOrLeak) {
     });
     for (int i = 1; i <= 5000; ++i) {
       std::unique_ptr<const Tracked> p = std::make_unique<Tracked>(i);
-      while (!h.publish(p)) h.collect_retired();
+      while (!h.publish(p))
+        h.collect_retired();
       h.collect_retired();
     }
     stop = true;

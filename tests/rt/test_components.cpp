@@ -5,8 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <thread>
 #include <sstream>
+#include <thread>
 
 #include "test_paths.hpp"
 #include "truecut/rt/executor.hpp"
@@ -39,7 +39,8 @@ std::vector<std::vector<double>> read_csv(const std::filesystem::path& f, std::s
     std::vector<double> row;
     std::stringstream ss(line);
     std::string cell;
-    while (std::getline(ss, cell, ',')) row.push_back(std::stod(cell));
+    while (std::getline(ss, cell, ','))
+      row.push_back(std::stod(cell));
     rows.push_back(row);
   }
   return rows;
@@ -57,8 +58,8 @@ TEST(Siggen, WaveformsAtAQuarterPeriod) {
   run_cycles(hal, 250);  // phase 0.25
   EXPECT_NEAR(3.0, hal.get_pin_or_param("siggen.0.sine").f, 1e-12);
   EXPECT_NEAR(1.0, hal.get_pin_or_param("siggen.0.cosine").f, 1e-12);
-  EXPECT_NEAR(1.0, hal.get_pin_or_param("siggen.0.triangle").f, 1e-12);   // 4*0.25-1 = 0
-  EXPECT_NEAR(0.0, hal.get_pin_or_param("siggen.0.sawtooth").f, 1e-12);   // 2*0.25-1 = -0.5
+  EXPECT_NEAR(1.0, hal.get_pin_or_param("siggen.0.triangle").f, 1e-12);  // 4*0.25-1 = 0
+  EXPECT_NEAR(0.0, hal.get_pin_or_param("siggen.0.sawtooth").f, 1e-12);  // 2*0.25-1 = -0.5
   EXPECT_NEAR(3.0, hal.get_pin_or_param("siggen.0.square").f, 1e-12);
   EXPECT_TRUE(hal.get_pin_or_param("siggen.0.clock").b);
 }
@@ -176,7 +177,8 @@ TEST(Recorder, FullQueueDropsAndCounts) {
                 "loadrt recorder file=q.csv columns=a depth=16\naddf recorder.0.sample t\n",
                 "r.hal");
   Executor ex(hal);
-  for (int i = 0; i < 40; ++i) ex.step();  // no services: nothing drains
+  for (int i = 0; i < 40; ++i)
+    ex.step();  // no services: nothing drains
   EXPECT_EQ(40u, hal.get_pin_or_param("recorder.0.samples").u +
                      hal.get_pin_or_param("recorder.0.overruns").u);
   EXPECT_GT(hal.get_pin_or_param("recorder.0.overruns").u, 0u);

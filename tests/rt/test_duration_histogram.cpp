@@ -6,7 +6,8 @@ using truecut::rt::DurationHistogram;
 
 TEST(DurationHistogram, PercentilesOfKnownSamples) {
   DurationHistogram h;
-  for (int i = 1; i <= 1000; ++i) h.add(i);  // 1..1000 ns, 1 ns bins
+  for (int i = 1; i <= 1000; ++i)
+    h.add(i);  // 1..1000 ns, 1 ns bins
   EXPECT_EQ(1000u, h.count());
   EXPECT_EQ(500, h.percentile_ns(0.5));
   EXPECT_EQ(990, h.percentile_ns(0.99));

@@ -70,7 +70,8 @@ TEST_F(ExecutorTest, FunctionsRunInAddfOrderWithTheThreadPeriod) {
   EXPECT_EQ((std::array<int, 6>{1, 2, 3, 1, 2, 3}),
             (std::array<int, 6>{g_log.id[0], g_log.id[1], g_log.id[2], g_log.id[3], g_log.id[4],
                                 g_log.id[5]}));
-  for (int i = 0; i < 6; ++i) EXPECT_EQ(1'000'000, g_log.period[i]);
+  for (int i = 0; i < 6; ++i)
+    EXPECT_EQ(1'000'000, g_log.period[i]);
 }
 
 TEST_F(ExecutorTest, ThreadsInterleaveFastestFirstAtEqualTimes) {

@@ -51,7 +51,9 @@ int allocating_init(const tc_hal_api_t* api, tc_hal_t* hal, int, const char* con
 
 }  // namespace
 
-TEST(NoAlloc, CounterSeesAllocations) { EXPECT_EQ(2u, alloc_counter_self_test()); }
+TEST(NoAlloc, CounterSeesAllocations) {
+  EXPECT_EQ(2u, alloc_counter_self_test());
+}
 
 TEST(NoAlloc, SimulatedServoCyclesAllocateNothing) {
   Hal hal(opts());

@@ -121,9 +121,10 @@ TEST(HalFile, ErrorsNameFileLineAndProblem) {
   Ini ini = Ini::parse("[A]\nC = 1\n", "m.ini");
   EXPECT_EQ("cfg.hal:1: INI variable [A]B not found in m.ini",
             load_error("loadrt threads name1=t period1=[A]B\n", &ini));
-  EXPECT_EQ("cfg.hal:4: loadusr is not supported: truecut runs no user-space programs from a "
-            ".hal file",
-            load_error(base + "loadusr halui\n"));
+  EXPECT_EQ(
+      "cfg.hal:4: loadusr is not supported: truecut runs no user-space programs from a "
+      ".hal file",
+      load_error(base + "loadusr halui\n"));
 }
 
 TEST(HalFile, UnknownComponentListsTheSearchedFolders) {
@@ -133,12 +134,14 @@ TEST(HalFile, UnknownComponentListsTheSearchedFolders) {
 }
 
 TEST(HalFile, ComponentArgumentErrorsAreReported) {
-  EXPECT_EQ("cfg.hal:1: loadrt siggen: initialisation failed (Invalid argument): siggen has no "
-            "argument 'bogus'",
-            load_error("loadrt siggen bogus=1\n"));
-  EXPECT_EQ("cfg.hal:1: loadrt recorder: initialisation failed (Invalid argument): file= is "
-            "required (e.g. file=trace.csv)",
-            load_error("loadrt recorder columns=a\n"));
+  EXPECT_EQ(
+      "cfg.hal:1: loadrt siggen: initialisation failed (Invalid argument): siggen has no "
+      "argument 'bogus'",
+      load_error("loadrt siggen bogus=1\n"));
+  EXPECT_EQ(
+      "cfg.hal:1: loadrt recorder: initialisation failed (Invalid argument): file= is "
+      "required (e.g. file=trace.csv)",
+      load_error("loadrt recorder columns=a\n"));
 }
 
 TEST(HalFile, SourceIncludesAnotherFileWithItsOwnLineNumbers) {

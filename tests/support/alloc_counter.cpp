@@ -48,7 +48,9 @@ int posix_memalign(void** out, size_t a, size_t n) {
   *out = p;
   return 0;
 }
-void free(void* p) { __libc_free(p); }
+void free(void* p) {
+  __libc_free(p);
+}
 }
 
 // operator new goes through the counted malloc above.
@@ -57,30 +59,62 @@ void* operator new(size_t n) {
   if (!p) throw std::bad_alloc();
   return p;
 }
-void* operator new[](size_t n) { return operator new(n); }
-void* operator new(size_t n, const std::nothrow_t&) noexcept { return malloc(n ? n : 1); }
-void* operator new[](size_t n, const std::nothrow_t&) noexcept { return malloc(n ? n : 1); }
+void* operator new[](size_t n) {
+  return operator new(n);
+}
+void* operator new(size_t n, const std::nothrow_t&) noexcept {
+  return malloc(n ? n : 1);
+}
+void* operator new[](size_t n, const std::nothrow_t&) noexcept {
+  return malloc(n ? n : 1);
+}
 void* operator new(size_t n, std::align_val_t a) {
   void* p = memalign(static_cast<size_t>(a), n ? n : 1);
   if (!p) throw std::bad_alloc();
   return p;
 }
-void* operator new[](size_t n, std::align_val_t a) { return operator new(n, a); }
-void operator delete(void* p) noexcept { free(p); }
-void operator delete[](void* p) noexcept { free(p); }
-void operator delete(void* p, size_t) noexcept { free(p); }
-void operator delete[](void* p, size_t) noexcept { free(p); }
-void operator delete(void* p, std::align_val_t) noexcept { free(p); }
-void operator delete[](void* p, std::align_val_t) noexcept { free(p); }
-void operator delete(void* p, size_t, std::align_val_t) noexcept { free(p); }
-void operator delete[](void* p, size_t, std::align_val_t) noexcept { free(p); }
+void* operator new[](size_t n, std::align_val_t a) {
+  return operator new(n, a);
+}
+void operator delete(void* p) noexcept {
+  free(p);
+}
+void operator delete[](void* p) noexcept {
+  free(p);
+}
+void operator delete(void* p, size_t) noexcept {
+  free(p);
+}
+void operator delete[](void* p, size_t) noexcept {
+  free(p);
+}
+void operator delete(void* p, std::align_val_t) noexcept {
+  free(p);
+}
+void operator delete[](void* p, std::align_val_t) noexcept {
+  free(p);
+}
+void operator delete(void* p, size_t, std::align_val_t) noexcept {
+  free(p);
+}
+void operator delete[](void* p, size_t, std::align_val_t) noexcept {
+  free(p);
+}
 
 namespace truecut::test {
 
-void arm_alloc_counter() noexcept { t_armed = true; }
-void disarm_alloc_counter() noexcept { t_armed = false; }
-uint64_t armed_allocations() noexcept { return g_count.load(); }
-void reset_alloc_counter() noexcept { g_count.store(0); }
+void arm_alloc_counter() noexcept {
+  t_armed = true;
+}
+void disarm_alloc_counter() noexcept {
+  t_armed = false;
+}
+uint64_t armed_allocations() noexcept {
+  return g_count.load();
+}
+void reset_alloc_counter() noexcept {
+  g_count.store(0);
+}
 
 uint64_t alloc_counter_self_test() {
   reset_alloc_counter();

@@ -7,9 +7,9 @@
 
 namespace truecut::test {
 
-void arm_alloc_counter() noexcept;     // start counting on this thread
-void disarm_alloc_counter() noexcept;  // stop counting on this thread
-uint64_t armed_allocations() noexcept; // allocations seen while armed, all threads
+void arm_alloc_counter() noexcept;      // start counting on this thread
+void disarm_alloc_counter() noexcept;   // stop counting on this thread
+uint64_t armed_allocations() noexcept;  // allocations seen while armed, all threads
 void reset_alloc_counter() noexcept;
 // Proves the counter works: allocates while armed and reports what it saw.
 uint64_t alloc_counter_self_test();

@@ -7,12 +7,24 @@
 
 namespace truecut::test {
 
-std::filesystem::path source_dir() { return TRUECUT_SOURCE_DIR; }
-std::filesystem::path binary_dir() { return TRUECUT_BINARY_DIR; }
-std::filesystem::path component_dir() { return TRUECUT_COMPONENT_DIR; }
-std::filesystem::path test_component_dir() { return binary_dir() / "test-components"; }
-std::filesystem::path cli_path() { return TRUECUT_CLI; }
-std::filesystem::path shared_data_dir() { return TRUECUT_SHARED_DATA_DIR; }
+std::filesystem::path source_dir() {
+  return TRUECUT_SOURCE_DIR;
+}
+std::filesystem::path binary_dir() {
+  return TRUECUT_BINARY_DIR;
+}
+std::filesystem::path component_dir() {
+  return TRUECUT_COMPONENT_DIR;
+}
+std::filesystem::path test_component_dir() {
+  return binary_dir() / "test-components";
+}
+std::filesystem::path cli_path() {
+  return TRUECUT_CLI;
+}
+std::filesystem::path shared_data_dir() {
+  return TRUECUT_SHARED_DATA_DIR;
+}
 
 std::filesystem::path scratch_dir() {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();

@@ -1,2 +1,4 @@
 /* A shared library that is not a truecut component (no entry points). */
-int not_a_component_answer(void) { return 42; }
+int not_a_component_answer(void) {
+  return 42;
+}

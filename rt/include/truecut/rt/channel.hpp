@@ -45,8 +45,10 @@ class Handover {
   Handover& operator=(const Handover&) = delete;
   ~Handover() {
     T* p = nullptr;
-    while (incoming_.try_pop(p)) delete p;
-    while (retired_.try_pop(p)) delete p;
+    while (incoming_.try_pop(p))
+      delete p;
+    while (retired_.try_pop(p))
+      delete p;
   }
 
   // Non-RT: offers a new object. Returns false (and keeps ownership with the

@@ -103,7 +103,8 @@ inline std::vector<std::string> instance_names(Args& args, const std::string& co
       if (count->empty() || *end != '\0' || n < 1 || n > max_count)
         throw InitError("count=" + *count + " must be 1.." + std::to_string(max_count));
     }
-    for (long i = 0; i < n; ++i) out.push_back(comp + "." + std::to_string(i));
+    for (long i = 0; i < n; ++i)
+      out.push_back(comp + "." + std::to_string(i));
   }
   return out;
 }
@@ -137,12 +138,10 @@ class Builder {
   }
   template <class T>
   void param(const std::string& name, tc_hal_type_t type, tc_hal_param_dir_t dir, T* data) {
-    if (api_->param_new(hal_, comp_, name.c_str(), type, dir, data) != 0)
-      throw HalRefused(name);
+    if (api_->param_new(hal_, comp_, name.c_str(), type, dir, data) != 0) throw HalRefused(name);
   }
   void funct(const std::string& name, tc_hal_funct_t fn, void* arg) {
-    if (api_->funct_new(hal_, comp_, name.c_str(), fn, arg, 1) != 0)
-      throw HalRefused(name);
+    if (api_->funct_new(hal_, comp_, name.c_str(), fn, arg, 1) != 0) throw HalRefused(name);
   }
   void service(tc_hal_service_t fn, void* arg) {
     if (api_->service_new(hal_, comp_, fn, arg) != 0) throw HalRefused("service");

@@ -46,9 +46,9 @@ struct RunLimits {
 };
 
 struct WallClockOptions {
-  int cpu = -1;            // pin the servo thread to this CPU; -1: no pinning
-  int fifo_priority = 0;   // SCHED_FIFO priority 1..99; 0: normal scheduling
-  bool lock_memory = true; // mlockall(MCL_CURRENT | MCL_FUTURE) for the run
+  int cpu = -1;             // pin the servo thread to this CPU; -1: no pinning
+  int fifo_priority = 0;    // SCHED_FIFO priority 1..99; 0: normal scheduling
+  bool lock_memory = true;  // mlockall(MCL_CURRENT | MCL_FUTURE) for the run
   // Sleep only until this long before each deadline and busy-wait the rest.
   // Trades CPU time for wake-up latency on kernels (or virtual machines)
   // whose timer wake-ups come late; 0: sleep all the way.
