@@ -138,10 +138,8 @@ struct Executor::Impl {
   }
 };
 
-Executor::Executor(Hal& hal) : impl_(new Impl(hal)) {}
-Executor::~Executor() {
-  delete impl_;
-}
+Executor::Executor(Hal& hal) : impl_(std::make_unique<Impl>(hal)) {}
+Executor::~Executor() = default;
 
 int64_t Executor::now_ns() const noexcept {
   return impl_->slots.empty() ? 0 : impl_->slots[impl_->next_slot()].next_ns;

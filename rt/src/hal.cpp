@@ -386,13 +386,13 @@ bool Hal::has_function(const std::string& n) const {
   return state_->functs.count(n) > 0;
 }
 bool Hal::has_thread(const std::string& n) const {
-  return const_cast<tc_hal&>(*state_).thread(n) != nullptr;
+  return state_->thread(n) != nullptr;
 }
 
 std::vector<PinInfo> Hal::pins() const {
   std::vector<PinInfo> out;
   for (const auto& [name, p] : state_->pins)
-    out.push_back({name, p->type, p->dir, const_cast<tc_hal&>(*state_).component(p->comp_id)->name,
+    out.push_back({name, p->type, p->dir, state_->component(p->comp_id)->name,
                    p->signal ? p->signal->name : ""});
   return out;
 }
@@ -401,7 +401,7 @@ std::vector<ParamInfo> Hal::params() const {
   std::vector<ParamInfo> out;
   for (const auto& [name, p] : state_->params)
     out.push_back(
-        {name, p->type, p->dir, const_cast<tc_hal&>(*state_).component(p->comp_id)->name});
+        {name, p->type, p->dir, state_->component(p->comp_id)->name});
   return out;
 }
 
@@ -447,13 +447,13 @@ void Hal::run_services() {
 
 }  // namespace truecut::hal
 
-Component* tc_hal::component(int id) {
+Component* tc_hal::component(int id) const {
   for (auto& c : components)
     if (c->id == id) return c.get();
   return nullptr;
 }
 
-Thread* tc_hal::thread(const std::string& name) {
+Thread* tc_hal::thread(const std::string& name) const {
   for (auto& t : threads)
     if (t->name == name) return t.get();
   return nullptr;

@@ -115,8 +115,8 @@ struct tc_hal {
   std::vector<std::unique_ptr<unsigned char[]>> allocations;
   std::atomic<bool> stop{false};
 
-  truecut::hal::detail::Component* component(int id);
-  truecut::hal::detail::Thread* thread(const std::string& name);
+  truecut::hal::detail::Component* component(int id) const;
+  truecut::hal::detail::Thread* thread(const std::string& name) const;
   // Creates a pin or parameter; throws HalError (duplicate name, bad comp).
   void add_pin(int comp_id, const std::string& name, truecut::hal::Type type,
                truecut::hal::PinDir dir, void** data_ptr_addr);
