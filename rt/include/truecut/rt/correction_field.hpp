@@ -1,0 +1,117 @@
+// The correction field: on a regular 3-D grid in the workpiece frame, one
+// layer per tool of correction vectors (mm) and a validity weight in [0, 1].
+//
+// Evaluation (real-time safe: noexcept, no allocation, fixed work):
+// - vector: interpolating tricubic B-spline. Grid values are node values, not
+//   control points; construction prefilters them into B-spline coefficients
+//   (natural end conditions), so the vector at a node equals the stored one.
+//   C2 inside the grid.
+// - weight: approximating tricubic B-spline whose control points are the node
+//   weights (edge nodes repeated outside the grid). It stays within [0, 1]
+//   without clamping, is C2, and equals the node weight wherever the weight is
+//   constant over the node's 3x3x3 neighbourhood. When the two outermost node
+//   layers have weight 0, weight and its gradient vanish on the grid boundary,
+//   so the correction joins the zero outside the grid C1-smoothly.
+// - correction = weight * vector.
+// A trilinear evaluation of the node values (C0, as in FANUC-style pitch and
+// 3-D error compensation tables) is available as a baseline.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace truecut::rt {
+
+struct FieldGrid {
+  Eigen::Vector3d origin_mm = Eigen::Vector3d::Zero();   // position of node (0, 0, 0)
+  Eigen::Vector3d spacing_mm = Eigen::Vector3d::Ones();  // > 0 along each axis
+  std::array<int32_t, 3> dims{2, 2, 2};                  // nodes along x, y, z; each >= 2
+
+  int64_t node_count() const noexcept { return int64_t{dims[0]} * dims[1] * dims[2]; }
+  // Nodes are stored x fastest, then y, then z.
+  int64_t index(int32_t i, int32_t j, int32_t k) const noexcept {
+    return i + int64_t{dims[0]} * (j + int64_t{dims[1]} * k);
+  }
+  Eigen::Vector3d node_position_mm(int32_t i, int32_t j, int32_t k) const noexcept {
+    return origin_mm + spacing_mm.cwiseProduct(Eigen::Vector3d(i, j, k));
+  }
+};
+
+struct FieldNode {
+  double dx_mm = 0.0;
+  double dy_mm = 0.0;
+  double dz_mm = 0.0;
+  double weight = 0.0;  // in [0, 1]
+};
+
+struct FieldLayer {
+  int32_t tool = 0;              // tool number, >= 0
+  std::vector<FieldNode> nodes;  // grid.node_count() entries, x fastest
+};
+
+enum class FieldInterpolation { tricubic_bspline, trilinear };
+
+enum class FieldStatus {
+  ok,
+  outside_grid,       // zero correction, weight 0
+  no_layer_for_tool,  // zero correction, weight 0
+  non_finite,         // the position (or, never expected, the result) was not finite
+};
+
+const char* to_string(FieldStatus status) noexcept;
+const char* to_string(FieldInterpolation interpolation) noexcept;
+
+struct FieldSample {
+  FieldStatus status = FieldStatus::ok;
+  Eigen::Vector3d correction_mm = Eigen::Vector3d::Zero();  // weight * vector_mm
+  Eigen::Vector3d vector_mm = Eigen::Vector3d::Zero();      // unweighted interpolant
+  double weight = 0.0;
+  // d correction_mm(i) / d position(j), mm per mm.
+  Eigen::Matrix3d jacobian = Eigen::Matrix3d::Zero();
+};
+
+// Immutable once built. Build it outside the real-time thread; publish it by
+// pointer.
+class CorrectionField {
+ public:
+  // Validates the grid (finite origin, positive finite spacing, dims >= 2, at
+  // most kMaxNodes nodes), the layers (distinct tools >= 0, right node count,
+  // finite vectors, weights in [0, 1]) and prefilters. Throws
+  // std::invalid_argument saying what is wrong. Layers are kept sorted by tool.
+  CorrectionField(const FieldGrid& grid, std::vector<FieldLayer> layers,
+                  FieldInterpolation interpolation = FieldInterpolation::tricubic_bspline);
+
+  static constexpr int64_t kMaxNodes = int64_t{1} << 26;  // per layer
+  static constexpr std::size_t kMaxLayers = 1024;
+
+  // Uses interpolation().
+  FieldSample evaluate(int32_t tool, const Eigen::Vector3d& position_mm) const noexcept;
+  FieldSample evaluate_tricubic(int32_t tool, const Eigen::Vector3d& position_mm) const noexcept;
+  FieldSample evaluate_trilinear(int32_t tool, const Eigen::Vector3d& position_mm) const noexcept;
+
+  const FieldGrid& grid() const noexcept { return grid_; }
+  FieldInterpolation interpolation() const noexcept { return interpolation_; }
+  std::span<const int32_t> tools() const noexcept { return tools_; }  // ascending
+  // Node values of the layer for `tool`; empty when there is none.
+  std::span<const FieldNode> nodes(int32_t tool) const noexcept;
+  bool inside(const Eigen::Vector3d& position_mm) const noexcept;
+
+ private:
+  struct Layer {
+    std::vector<FieldNode> nodes;
+    // (dims + 2)^3 padded coefficients: x, y, z = vector B-spline
+    // coefficients, w = node weight (edges repeated).
+    std::vector<Eigen::Vector4d> coefficients;
+  };
+  const Layer* find(int32_t tool) const noexcept;
+
+  FieldGrid grid_;
+  FieldInterpolation interpolation_;
+  std::vector<int32_t> tools_;
+  std::vector<Layer> layers_;  // same order as tools_
+};
+
+}  // namespace truecut::rt

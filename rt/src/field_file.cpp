@@ -1,0 +1,459 @@
+// The `.tcf` correction-field file: text header, little-endian float64
+// payload, CRC-64/XZ over both. Format: docs/formats.md.
+#include "truecut/rt/field_file.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <bit>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <ctime>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <vector>
+
+namespace truecut::rt {
+namespace {
+
+constexpr std::string_view kMagic = "TRUECUT-FIELD";
+constexpr int kVersion = 1;
+constexpr std::string_view kEndHeader = "end_header";
+constexpr std::string_view kChannels = "dx dy dz weight";
+constexpr std::string_view kEncoding = "float64-le";
+constexpr std::size_t kMaxHeaderBytes = 64 * 1024;
+constexpr std::size_t kBytesPerNode = 4 * sizeof(double);
+constexpr const char* kChannelNames[] = {"dx", "dy", "dz", "weight"};
+constexpr std::string_view kKeys[] = {"frame",  "units",         "origin",   "spacing",  "dims",
+                                      "tools",  "interpolation", "channels", "encoding", "created",
+                                      "source", "payload_bytes", "crc64"};
+
+// ---------------------------------------------------------------- helpers
+
+std::string_view trim(std::string_view s) {
+  const auto first = s.find_first_not_of(" \t\r");
+  if (first == std::string_view::npos) return {};
+  return s.substr(first, s.find_last_not_of(" \t\r") - first + 1);
+}
+
+std::vector<std::string_view> split_words(std::string_view s) {
+  std::vector<std::string_view> words;
+  std::size_t pos = 0;
+  while (true) {
+    pos = s.find_first_not_of(" \t", pos);
+    if (pos == std::string_view::npos) return words;
+    const std::size_t end = std::min(s.find_first_of(" \t", pos), s.size());
+    words.push_back(s.substr(pos, end - pos));
+    pos = end;
+  }
+}
+
+template <typename T>
+std::optional<T> parse_number(std::string_view word, int base = 10) {
+  T value{};
+  std::from_chars_result r;
+  if constexpr (std::is_floating_point_v<T>)
+    r = std::from_chars(word.data(), word.data() + word.size(), value);
+  else
+    r = std::from_chars(word.data(), word.data() + word.size(), value, base);
+  if (r.ec != std::errc() || r.ptr != word.data() + word.size()) return std::nullopt;
+  return value;
+}
+
+std::string format_double(double v) {
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);  // shortest exact round trip
+  return std::string(buf, r.ptr);
+}
+
+std::string hex64(uint64_t v) {
+  char buf[17];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v, 16);
+  std::string digits(buf, r.ptr);
+  return std::string(16 - digits.size(), '0') + digits;
+}
+
+// A short, printable rendering of untrusted text for error messages.
+std::string printable(std::string_view s) {
+  std::string out = "'";
+  for (const char ch : s.substr(0, 60))
+    out += (ch >= 0x20 && ch < 0x7F) ? ch : '?';
+  return out + (s.size() > 60 ? "...'" : "'");
+}
+
+void put_le(std::string& out, double v) {
+  uint64_t bits = std::bit_cast<uint64_t>(v);
+  for (int b = 0; b < 8; ++b, bits >>= 8)
+    out.push_back(static_cast<char>(bits & 0xFF));
+}
+
+double get_le(const char* p) {
+  uint64_t bits = 0;
+  for (int b = 7; b >= 0; --b)
+    bits = (bits << 8) | static_cast<unsigned char>(p[b]);
+  return std::bit_cast<double>(bits);
+}
+
+std::string utc_now_iso8601() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+// ----------------------------------------------------------------- header
+
+struct Header {
+  std::map<std::string, std::string, std::less<>> values;
+  std::size_t crc_line_offset = 0;  // the checksum covers the bytes before it
+  std::size_t payload_offset = 0;
+};
+
+class Decoder {
+ public:
+  Decoder(std::string_view bytes, std::string_view name) : bytes_(bytes), name_(name) {}
+
+  LoadedField run() {
+    const Header header = parse_header();
+    FieldGrid grid;
+    grid.origin_mm = vector3(header, "origin");
+    grid.spacing_mm = vector3(header, "spacing");
+    grid.dims = dims(header);
+    const std::vector<int32_t> tools = tool_list(header);
+    const FieldInterpolation interpolation = interpolation_of(header);
+    expect_value(header, "frame", "workpiece");
+    expect_value(header, "units", "mm");
+    expect_value(header, "channels", kChannels);
+    expect_value(header, "encoding", kEncoding);
+
+    const uint64_t expected = static_cast<uint64_t>(tools.size()) *
+                              static_cast<uint64_t>(grid.node_count()) * kBytesPerNode;
+    const auto declared = parse_number<uint64_t>(required(header, "payload_bytes"));
+    if (!declared)
+      fail("payload_bytes is not a byte count: " + printable(required(header, "payload_bytes")));
+    if (*declared != expected)
+      fail("dims mismatch: dims " + std::to_string(grid.dims[0]) + "x" +
+           std::to_string(grid.dims[1]) + "x" + std::to_string(grid.dims[2]) + " with " +
+           std::to_string(tools.size()) + " tool layer(s) need " + std::to_string(expected) +
+           " payload bytes, header says payload_bytes " + std::to_string(*declared));
+    const std::size_t actual = bytes_.size() - header.payload_offset;
+    if (actual < expected)
+      fail("truncated payload: expected " + std::to_string(expected) +
+           " bytes after end_header, found " + std::to_string(actual));
+    if (actual > expected)
+      fail(std::to_string(actual - expected) + " unexpected bytes after the " +
+           std::to_string(expected) + "-byte payload");
+    check_crc(header);
+
+    LoadedField loaded{{header_value(header, "created"), header_value(header, "source")},
+                       make_field(grid, tools, interpolation, header.payload_offset)};
+    return loaded;
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& what) const {
+    throw FieldFileError(std::string(name_) + ": " + what);
+  }
+
+  Header parse_header() {
+    if (bytes_.empty()) fail("empty file, not a truecut correction field");
+    Header h;
+    std::size_t pos = 0;
+    bool first = true;
+    bool after_crc = false;
+    while (true) {
+      const std::size_t eol = bytes_.find('\n', pos);
+      if (eol == std::string_view::npos || eol > kMaxHeaderBytes) {
+        if (first)
+          fail("bad magic: not a truecut correction field (no " + std::string(kMagic) + " line)");
+        fail("no end_header line within the first " + std::to_string(kMaxHeaderBytes) + " bytes");
+      }
+      const std::string_view line = bytes_.substr(pos, eol - pos);
+      const std::size_t line_offset = pos;
+      pos = eol + 1;
+      const std::size_t line_no = ++line_no_;
+      if (first) {
+        check_magic(trim(line));
+        first = false;
+        continue;
+      }
+      if (trim(line) == kEndHeader) {
+        if (!after_crc) fail("crc64 must be the last header line before end_header");
+        h.payload_offset = pos;
+        return h;
+      }
+      if (after_crc)
+        fail("line " + std::to_string(line_no) + ": nothing may follow crc64 but end_header");
+      const std::size_t colon = line.find(':');
+      if (colon == std::string_view::npos)
+        fail("line " + std::to_string(line_no) + ": expected 'key: value', got " + printable(line));
+      const std::string key(trim(line.substr(0, colon)));
+      if (std::find(std::begin(kKeys), std::end(kKeys), key) == std::end(kKeys))
+        fail("line " + std::to_string(line_no) + ": unknown header key " + printable(key));
+      if (!h.values.emplace(key, trim(line.substr(colon + 1))).second)
+        fail("line " + std::to_string(line_no) + ": header key '" + key + "' given twice");
+      if (key == "crc64") {
+        h.crc_line_offset = line_offset;
+        after_crc = true;
+      }
+    }
+  }
+
+  void check_magic(std::string_view line) const {
+    const auto words = split_words(line);
+    if (words.size() != 2 || words[0] != kMagic)
+      fail("bad magic: not a truecut correction field (first line " + printable(line) +
+           ", expected '" + std::string(kMagic) + " " + std::to_string(kVersion) + "')");
+    if (parse_number<int>(words[1]) != kVersion)
+      fail("unsupported version " + printable(words[1]) + "; this reader supports version " +
+           std::to_string(kVersion));
+  }
+
+  std::string_view required(const Header& h, std::string_view key) const {
+    const auto it = h.values.find(key);
+    if (it == h.values.end()) fail("missing header key '" + std::string(key) + "'");
+    return it->second;
+  }
+
+  static std::string header_value(const Header& h, std::string_view key) {
+    const auto it = h.values.find(key);
+    return it == h.values.end() ? std::string() : it->second;
+  }
+
+  void expect_value(const Header& h, std::string_view key, std::string_view want) const {
+    const std::string_view value = required(h, key);
+    const auto got = split_words(value), expected = split_words(want);
+    if (got != expected)
+      fail(std::string(key) + " is " + printable(value) + ", must be '" + std::string(want) + "'");
+  }
+
+  Eigen::Vector3d vector3(const Header& h, std::string_view key) const {
+    const std::string_view value = required(h, key);
+    const auto words = split_words(value);
+    Eigen::Vector3d v;
+    for (std::size_t a = 0; a < 3; ++a) {
+      const auto x = words.size() == 3 ? parse_number<double>(words[a]) : std::nullopt;
+      if (!x || !std::isfinite(*x))
+        fail(std::string(key) + " must be three finite numbers (mm), is " + printable(value));
+      v[static_cast<int>(a)] = *x;
+    }
+    return v;
+  }
+
+  std::array<int32_t, 3> dims(const Header& h) const {
+    const std::string_view value = required(h, "dims");
+    const auto words = split_words(value);
+    std::array<int32_t, 3> d{};
+    for (std::size_t a = 0; a < 3; ++a) {
+      const auto n = words.size() == 3 ? parse_number<int32_t>(words[a]) : std::nullopt;
+      if (!n || *n < 2) fail("dims must be three node counts >= 2, is " + printable(value));
+      d[a] = *n;
+    }
+    if (int64_t{d[0]} * d[1] * d[2] > CorrectionField::kMaxNodes)
+      fail("dims " + printable(value) + " exceed " + std::to_string(CorrectionField::kMaxNodes) +
+           " nodes per layer");
+    return d;
+  }
+
+  std::vector<int32_t> tool_list(const Header& h) const {
+    const std::string_view value = required(h, "tools");
+    std::vector<int32_t> tools;
+    for (const std::string_view word : split_words(value)) {
+      const auto t = parse_number<int32_t>(word);
+      if (!t || *t < 0) fail("tools must be tool numbers >= 0, got " + printable(word));
+      if (std::find(tools.begin(), tools.end(), *t) != tools.end())
+        fail("tool " + std::to_string(*t) + " listed twice in tools");
+      tools.push_back(*t);
+    }
+    if (tools.empty()) fail("tools lists no tool");
+    if (tools.size() > CorrectionField::kMaxLayers)
+      fail(std::to_string(tools.size()) + " tools, at most " +
+           std::to_string(CorrectionField::kMaxLayers));
+    return tools;
+  }
+
+  FieldInterpolation interpolation_of(const Header& h) const {
+    const std::string_view value = required(h, "interpolation");
+    for (const auto mode : {FieldInterpolation::tricubic_bspline, FieldInterpolation::trilinear})
+      if (value == to_string(mode)) return mode;
+    fail("interpolation " + printable(value) +
+         " unknown; expected 'tricubic-bspline' or 'trilinear'");
+  }
+
+  void check_crc(const Header& h) const {
+    const std::string_view text = required(h, "crc64");
+    const auto stated = text.size() == 16 ? parse_number<uint64_t>(text, 16) : std::nullopt;
+    if (!stated) fail("crc64 must be 16 hex digits, is " + printable(text));
+    Crc64 crc;
+    crc.update(bytes_.substr(0, h.crc_line_offset));
+    crc.update(bytes_.substr(h.payload_offset));
+    if (crc.value() != *stated)
+      fail("checksum mismatch: header says crc64 " + std::string(text) +
+           ", header and payload give " + hex64(crc.value()) + "; the file is corrupted");
+  }
+
+  CorrectionField make_field(const FieldGrid& grid, const std::vector<int32_t>& tools,
+                             FieldInterpolation interpolation, std::size_t offset) const {
+    std::vector<FieldLayer> layers;
+    layers.reserve(tools.size());
+    const char* p = bytes_.data() + offset;
+    for (std::size_t l = 0; l < tools.size(); ++l) {
+      FieldLayer layer{tools[l],
+                       std::vector<FieldNode>(static_cast<std::size_t>(grid.node_count()))};
+      for (int64_t n = 0; n < grid.node_count(); ++n) {
+        double v[4];
+        for (int c = 0; c < 4; ++c, p += sizeof(double)) {
+          v[c] = get_le(p);
+          const bool bad = c < 3 ? !std::isfinite(v[c]) : !(v[c] >= 0.0 && v[c] <= 1.0);
+          if (bad) fail(bad_value_message(grid, tools, l, n, c, v[c], p - bytes_.data() - offset));
+        }
+        layer.nodes[static_cast<std::size_t>(n)] = {v[0], v[1], v[2], v[3]};
+      }
+      layers.push_back(std::move(layer));
+    }
+    try {
+      return CorrectionField(grid, std::move(layers), interpolation);
+    } catch (const std::invalid_argument& e) {
+      fail(e.what());
+    }
+  }
+
+  static std::string bad_value_message(const FieldGrid& grid, const std::vector<int32_t>& tools,
+                                       std::size_t layer, int64_t node, int channel, double value,
+                                       std::ptrdiff_t payload_offset) {
+    const int64_t i = node % grid.dims[0], j = (node / grid.dims[0]) % grid.dims[1],
+                  k = node / (int64_t{grid.dims[0]} * grid.dims[1]);
+    std::ostringstream s;
+    s << (channel < 3 ? "non-finite value " : "weight outside [0, 1]: ") << value
+      << " in payload: layer " << layer << " (tool " << tools[layer] << "), node (i, j, k) = (" << i
+      << ", " << j << ", " << k << "), channel " << kChannelNames[channel]
+      << ", payload byte offset " << payload_offset - static_cast<std::ptrdiff_t>(sizeof(double));
+    return s.str();
+  }
+
+  std::string_view bytes_;
+  std::string_view name_;
+  std::size_t line_no_ = 0;
+};
+
+void check_one_line(const std::string& what, const std::string& value) {
+  if (value.find_first_of("\r\n") != std::string::npos)
+    throw FieldFileError("field file " + what + " must be a single line: " + printable(value));
+}
+
+// ------------------------------------------------------------ file output
+
+[[noreturn]] void fail_io(const std::filesystem::path& path, const std::string& what, int err) {
+  throw FieldFileError(path.string() + ": " + what + ": " + std::strerror(err));
+}
+
+void write_all(int fd, std::string_view bytes, const std::filesystem::path& path) {
+  while (!bytes.empty()) {
+    const ssize_t n = ::write(fd, bytes.data(), bytes.size());
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      fail_io(path, "write failed", errno);
+    }
+    bytes.remove_prefix(static_cast<std::size_t>(n));
+  }
+}
+
+}  // namespace
+
+std::string encode_field_file(const CorrectionField& field, const FieldFileInfo& info) {
+  check_one_line("created", info.created);
+  check_one_line("source", info.source);
+  const FieldGrid& g = field.grid();
+  auto triple = [](const Eigen::Vector3d& v) {
+    return format_double(v.x()) + " " + format_double(v.y()) + " " + format_double(v.z());
+  };
+  std::string tools;
+  for (const int32_t t : field.tools())
+    tools += (tools.empty() ? "" : " ") + std::to_string(t);
+
+  std::string payload;
+  payload.reserve(field.tools().size() * static_cast<std::size_t>(g.node_count()) * kBytesPerNode);
+  for (const int32_t t : field.tools()) {
+    for (const FieldNode& n : field.nodes(t)) {
+      put_le(payload, n.dx_mm);
+      put_le(payload, n.dy_mm);
+      put_le(payload, n.dz_mm);
+      put_le(payload, n.weight);
+    }
+  }
+
+  std::string header = std::string(kMagic) + " " + std::to_string(kVersion) + "\n";
+  header += "frame: workpiece\nunits: mm\n";
+  header += "origin: " + triple(g.origin_mm) + "\n";
+  header += "spacing: " + triple(g.spacing_mm) + "\n";
+  header += "dims: " + std::to_string(g.dims[0]) + " " + std::to_string(g.dims[1]) + " " +
+            std::to_string(g.dims[2]) + "\n";
+  header += "tools: " + tools + "\n";
+  header += "interpolation: " + std::string(to_string(field.interpolation())) + "\n";
+  header += "channels: " + std::string(kChannels) + "\n";
+  header += "encoding: " + std::string(kEncoding) + "\n";
+  header += "created: " + (info.created.empty() ? utc_now_iso8601() : info.created) + "\n";
+  header += "source: " + info.source + "\n";
+  header += "payload_bytes: " + std::to_string(payload.size()) + "\n";
+  Crc64 crc;
+  crc.update(header);
+  crc.update(payload);
+  header += "crc64: " + hex64(crc.value()) + "\n";
+  header += std::string(kEndHeader) + "\n";
+  return header + payload;
+}
+
+LoadedField decode_field_file(std::string_view bytes, std::string_view name) {
+  return Decoder(bytes, name).run();
+}
+
+LoadedField read_field_file(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail_io(path, "cannot open correction field", errno);
+  const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  if (in.bad()) fail_io(path, "read failed", errno);
+  return decode_field_file(bytes, path.string());
+}
+
+void write_field_file(const std::filesystem::path& path, const CorrectionField& field,
+                      const FieldFileInfo& info) {
+  const std::string bytes = encode_field_file(field, info);
+  const std::filesystem::path tmp = path.string() + ".tmp";
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) fail_io(tmp, "cannot create", errno);
+  try {
+    write_all(fd, bytes, tmp);
+    if (::fsync(fd) != 0) fail_io(tmp, "fsync failed", errno);
+  } catch (...) {
+    ::close(fd);
+    ::unlink(tmp.c_str());
+    throw;
+  }
+  if (::close(fd) != 0) {
+    const int err = errno;
+    ::unlink(tmp.c_str());
+    fail_io(tmp, "close failed", err);
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const int err = errno;
+    ::unlink(tmp.c_str());
+    fail_io(path, "cannot rename " + tmp.string() + " over it", err);
+  }
+  // Make the rename itself durable; failing here loses nothing already written.
+  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
+  const int dir_fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dir_fd >= 0) {
+    ::fsync(dir_fd);
+    ::close(dir_fd);
+  }
+}
+
+}  // namespace truecut::rt
