@@ -1,0 +1,106 @@
+// machine_joints: the simulated machine's five joints (x y z a c) with the
+// physics effects of a machine description, as a HAL component.
+//
+//   loadrt machine_joints machine=FILE.json [count=N | names=a,b]
+//
+// FILE is read at load time (relative to the working folder); a bad file
+// fails the load with "FILE: key.path: message". Per instance <i> and joint
+// <j>:
+//   in   <i>.<j>.pos-cmd         commanded joint position (mm, deg)
+//   out  <i>.<j>.pos-act         encoder reading (motor side), at the command's instant
+//   out  <i>.<j>.pos-true        table-side position along the joint (backlash, pitch, thermal)
+//   out  <i>.<j>.vel-act         motor velocity (mm/s, deg/s)
+//   out  <i>.<j>.f-error         pos-cmd − pos-act, the error the drive acts on
+//   in   <i>.spindle-power-kw    drives thermal_drift with driver "spindle_power"
+//   out  <i>.true-x/-y/-z        linear slides incl. squareness and straightness (mm)
+//   out  <i>.fault               (bit, latched) a non-finite input was held
+//   out  <i>.limit-fault         (bit, latched) a command left the joint's travel
+// Function <i>.update. The model is sim/include/truecut/sim/machine_model.hpp.
+#include <string>
+
+#include "truecut/rt/component_support.hpp"
+#include "truecut/sim/machine_model.hpp"
+
+namespace {
+
+using namespace truecut::sim;
+
+struct JointPins {
+  double* pos_cmd;
+  double* pos_act;
+  double* pos_true;
+  double* vel_act;
+  double* f_error;
+};
+
+struct Instance {
+  MachineModel model;
+  MachineState state;
+  MachineInputs in;
+  MachineOutputs out;
+  JointPins joint[kJointCount];
+  double* spindle_power_kw;
+  double* true_xyz[3];
+  bool* fault;
+  bool* limit_fault;
+};
+
+void update(void* arg, long period_ns) {
+  auto& s = *static_cast<Instance*>(arg);
+  for (int j = 0; j < kJointCount; ++j)
+    s.in.pos_cmd[j] = *s.joint[j].pos_cmd;
+  s.in.spindle_power_kw = *s.spindle_power_kw;
+  s.model.step(s.state, s.in, double(period_ns) * 1e-9, s.out);
+  for (int j = 0; j < kJointCount; ++j) {
+    *s.joint[j].pos_act = s.out.pos_act[j];
+    *s.joint[j].pos_true = s.out.pos_true[j];
+    *s.joint[j].vel_act = s.out.vel_act[j];
+    *s.joint[j].f_error = s.out.f_error[j];
+  }
+  for (int i = 0; i < 3; ++i)
+    *s.true_xyz[i] = s.out.xyz_true[i];
+  *s.fault = s.out.fault;
+  *s.limit_fault = s.out.limit_fault;
+}
+
+}  // namespace
+
+extern "C" TC_COMPONENT_EXPORT int truecut_component_init(const tc_hal_api_t* api, tc_hal_t* hal,
+                                                          int argc, const char* const* argv,
+                                                          void**) {
+  using namespace truecut::hal::component;
+  return init_guard(api, hal, [&] {
+    Args args(argc, argv);
+    auto file = args.take("machine");
+    auto names = instance_names(args, "machine_joints");
+    args.expect_consumed("machine_joints");
+    if (!file) throw InitError("machine_joints needs machine=FILE (a machine description JSON)");
+    const MachineDescription description = read_machine_description(*file);
+    for (const auto& n : names) {
+      int id = new_component(api, hal, n);
+      Builder b(api, hal, id);
+      auto* s = b.alloc<Instance>();
+      s->model = MachineModel(description.machine);
+      for (int j = 0; j < kJointCount; ++j) {
+        const std::string p = n + "." + std::string(kJointNames[j]) + ".";
+        JointPins& jp = s->joint[j];
+        b.pin(p + "pos-cmd", TC_HAL_FLOAT, TC_HAL_IN, &jp.pos_cmd);
+        b.pin(p + "pos-act", TC_HAL_FLOAT, TC_HAL_OUT, &jp.pos_act);
+        b.pin(p + "pos-true", TC_HAL_FLOAT, TC_HAL_OUT, &jp.pos_true);
+        b.pin(p + "vel-act", TC_HAL_FLOAT, TC_HAL_OUT, &jp.vel_act);
+        b.pin(p + "f-error", TC_HAL_FLOAT, TC_HAL_OUT, &jp.f_error);
+      }
+      b.pin(n + ".spindle-power-kw", TC_HAL_FLOAT, TC_HAL_IN, &s->spindle_power_kw);
+      b.pin(n + ".true-x", TC_HAL_FLOAT, TC_HAL_OUT, &s->true_xyz[0]);
+      b.pin(n + ".true-y", TC_HAL_FLOAT, TC_HAL_OUT, &s->true_xyz[1]);
+      b.pin(n + ".true-z", TC_HAL_FLOAT, TC_HAL_OUT, &s->true_xyz[2]);
+      b.pin(n + ".fault", TC_HAL_BIT, TC_HAL_OUT, &s->fault);
+      b.pin(n + ".limit-fault", TC_HAL_BIT, TC_HAL_OUT, &s->limit_fault);
+      b.funct(n + ".update", update, s);
+      api->component_ready(hal, id);
+    }
+    return 0;
+  });
+}
+
+extern "C" TC_COMPONENT_EXPORT void truecut_component_exit(const tc_hal_api_t*, tc_hal_t*, void*) {}

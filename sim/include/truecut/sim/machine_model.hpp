@@ -1,0 +1,72 @@
+// The simulated machine's joints, one servo period at a time: what the
+// machine_joints HAL component runs, and what the diagnosis re-simulates.
+//
+// Per joint: servo_lag on → the drive dynamic of servo_model.hpp, otherwise
+// the joint is ideal (motor at the command, encoder reads the command).
+// Table side (pos_true) = backlash(motor) + pitch_error(motor) + thermal δ.
+// The three linear slides' true positions then get the geometric errors
+// (squareness, straightness) → xyz_true.
+//
+// Sampling: outputs of cycle k describe the machine at t_k, the instant the
+// command cmd_k belongs to (the encoder is read before the drive acts on
+// cmd_k); the step then advances the state to t_(k+1).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <type_traits>
+
+#include "truecut/sim/machine_description.hpp"
+#include "truecut/sim/servo_model.hpp"
+
+namespace truecut::sim {
+
+struct MachineInputs {
+  std::array<double, kJointCount> pos_cmd{};  // mm, deg
+  double spindle_power_kw = 0.0;
+};
+
+struct MachineOutputs {
+  std::array<double, kJointCount> pos_act{};   // encoder (motor side)
+  std::array<double, kJointCount> pos_true{};  // table side along the joint
+  std::array<double, kJointCount> vel_act{};   // motor velocity, unit/s
+  std::array<double, kJointCount> f_error{};   // cmd − encoder, as the drive sees it
+  std::array<double, 3> xyz_true{};            // linear slides with geometric errors, mm
+  bool fault = false;                          // latched: a non-finite input was seen (and held)
+  bool limit_fault = false;                    // latched: a command left the joint's travel
+};
+
+struct MachineState {
+  std::array<ServoState, kJointCount> joints{};
+  std::array<double, kJointCount> thermal_mm{};
+  double spindle_power_kw = 0.0;
+  uint64_t cycles = 0;
+  bool started = false;
+  bool fault = false;
+  bool limit_fault = false;
+};
+
+class MachineModel {
+ public:
+  MachineModel() = default;  // every joint ideal, no effects
+  explicit MachineModel(const MachineParams& params);
+
+  const MachineParams& params() const noexcept { return params_; }
+  const ServoParams& servo(int joint) const noexcept { return servo_[joint]; }
+  bool dynamic(int joint) const noexcept { return params_.effects.servo_lag.active(joint); }
+
+  // One servo period. The first call places every joint at its command.
+  void step(MachineState& state, const MachineInputs& in, double period_s,
+            MachineOutputs& out) const noexcept;
+
+ private:
+  MachineParams params_;
+  std::array<ServoParams, kJointCount> servo_{};
+};
+static_assert(std::is_trivially_destructible_v<MachineModel>);
+static_assert(std::is_trivially_destructible_v<MachineState>);
+
+// The servo parameters of one joint as the description sets them.
+ServoParams servo_params(const MachineParams& params, int joint);
+
+}  // namespace truecut::sim
