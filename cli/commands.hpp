@@ -8,5 +8,6 @@
 namespace truecut::cli {
 
 int cmd_run(const std::vector<std::string>& args);
+int cmd_canon(const std::vector<std::string>& args);
 
 }  // namespace truecut::cli

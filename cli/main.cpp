@@ -18,6 +18,7 @@ struct Command {
 
 const Command kCommands[] = {
     {"run", "run a .hal configuration in the soft-CNC executor", truecut::cli::cmd_run},
+    {"canon", "print the canonical calls of a G-code program", truecut::cli::cmd_canon},
 };
 
 void print_usage(std::FILE* to) {

@@ -1,0 +1,185 @@
+// The canonical machining calls the interpreter emits: one call per motion
+// or state change, in program order, in the spirit of RS274/NGC's canonical
+// machining functions (and of what LinuxCNC's `rs274` prints). The
+// interpreter knows nothing about time: a later stage plans the motion.
+//
+// Positions are in the active work coordinate system (G5x + G92 + tool length
+// offset already subtracted), in the active program units (mm or inch) for
+// X Y Z and degrees for A B C, exactly as rs274 reports them. Each call
+// carries the offsets and units in force (CallContext) so that a consumer can
+// recover machine positions in mm with machine_position_mm().
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace truecut::interp {
+
+struct Axes6 {
+  double x = 0, y = 0, z = 0, a = 0, b = 0, c = 0;
+  double& operator[](int i) { return (&x)[i]; }
+  double operator[](int i) const { return (&x)[i]; }
+  friend bool operator==(const Axes6&, const Axes6&) = default;
+};
+
+enum class Plane { kXY, kYZ, kXZ };  // G17, G19, G18
+enum class LengthUnits { kMm, kInch };
+enum class FeedMode { kUnitsPerMinute, kInverseTime };        // G94, G93
+enum class PathMode { kExactStop, kExactPath, kContinuous };  // G61.1, G61, G64
+// Sinumerik spline interpolation, in the motion group with G0..G3.
+enum class SplineMode { kNone, kBspline, kCspline };
+
+// Straight moves and arcs.
+struct StraightTraverse {  // G0
+  Axes6 end;
+};
+struct StraightFeed {  // G1 (and spline-mode points, see CallContext::spline)
+  Axes6 end;
+};
+// G2/G3, helical when the axis coordinate changes. `center` holds the centre
+// in the two plane coordinates (the third is unused). rotation < 0 is
+// clockwise; |rotation| is the number of turns (1 for an arc under a turn).
+struct ArcFeed {
+  Axes6 end;
+  Axes6 center;
+  Plane plane = Plane::kXY;
+  int rotation = 1;
+};
+struct Dwell {
+  double seconds = 0;
+};
+
+// Feed and motion settings.
+// Feed in program units per minute. In inverse-time mode (G93) the
+// interpreter converts each move's F into the equivalent rate, like LinuxCNC;
+// CallContext::inverse_time_f keeps the programmed value.
+struct SetFeedRate {
+  double units_per_minute = 0;
+};
+struct SetFeedMode {
+  FeedMode mode = FeedMode::kUnitsPerMinute;
+};
+struct SelectPlane {
+  Plane plane = Plane::kXY;
+};
+struct UseLengthUnits {
+  LengthUnits units = LengthUnits::kMm;
+};
+struct SetMotionControlMode {
+  PathMode mode = PathMode::kContinuous;
+  double tolerance = 0;  // G64 P, program units; 0 = as fast as possible
+};
+struct SetNaivecamTolerance {
+  double tolerance = 0;  // G64 Q
+};
+
+// Offsets (program units, degrees for rotary axes).
+struct SetG5xOffset {
+  int index = 1;  // 1 = G54 ... 9 = G59.3
+  Axes6 offset;
+};
+struct SetG92Offset {
+  Axes6 offset;
+};
+struct SetXYRotation {
+  double degrees = 0;
+};
+struct UseToolLengthOffset {
+  Axes6 offset;
+};
+
+// Tools and spindle.
+struct SelectTool {  // T word
+  int tool = 0;
+};
+struct StartChange {};
+struct ChangeTool {  // M6
+  int tool = 0;
+  int slot = 0;  // 1-based row of the tool in the tool table (rs274's number)
+};
+struct ChangeToolNumber {  // M61 Q
+  int tool = 0;
+};
+struct SetSpindleSpeed {
+  double rpm = 0;
+};
+struct StartSpindle {
+  bool clockwise = true;
+};
+struct StopSpindle {};
+struct SetSpindleMode {  // G97 (the only spindle mode supported)
+  double css_max_rpm = 0;
+};
+struct Coolant {
+  enum Kind { kMist, kFlood } kind = kFlood;
+  bool on = false;
+};
+
+// Program flow and text.
+struct Comment {
+  std::string text;
+};
+struct Message {  // (MSG, ...)
+  std::string text;
+};
+struct ProgramStop {  // M0, or M1 when optional
+  bool optional = false;
+};
+struct PalletShuttle {};  // M30 (printed by rs274 before PROGRAM_END)
+struct ProgramEnd {};
+struct Finish {};  // the program stopped at its closing '%' line, without M2/M30
+// Bookkeeping calls rs274 prints at start and end of a program.
+struct SetFeedReference {};
+struct OnReset {};
+
+// Sinumerik modes (truecut extensions, not printed by rs274).
+struct SetTcp {  // TRAORI (on) / TRAFOOF (off)
+  bool on = false;
+};
+struct SetSplineMode {  // BSPLINE, CSPLINE, or back to G1
+  SplineMode mode = SplineMode::kNone;
+};
+
+using CanonOp =
+    std::variant<StraightTraverse, StraightFeed, ArcFeed, Dwell, SetFeedRate, SetFeedMode,
+                 SelectPlane, UseLengthUnits, SetMotionControlMode, SetNaivecamTolerance,
+                 SetG5xOffset, SetG92Offset, SetXYRotation, UseToolLengthOffset, SelectTool,
+                 StartChange, ChangeTool, ChangeToolNumber, SetSpindleSpeed, StartSpindle,
+                 StopSpindle, SetSpindleMode, Coolant, Comment, Message, ProgramStop, PalletShuttle,
+                 ProgramEnd, Finish, SetFeedReference, OnReset, SetTcp, SetSplineMode>;
+
+// What was in force when a call was made.
+struct CallContext {
+  int file = 0;           // index into CanonProgram::files
+  int line = 0;           // 1-based line in that file
+  std::string operation;  // CAM operation name, "" before the first marker
+  int tool = 0;           // tool in the spindle
+  LengthUnits units = LengthUnits::kMm;
+  FeedMode feed_mode = FeedMode::kUnitsPerMinute;
+  double inverse_time_f = 0;  // the programmed F of an inverse-time move
+  SplineMode spline = SplineMode::kNone;
+  bool tcp = false;  // TRAORI active
+  // Offsets in mm (degrees for A B C) that turn positions into machine ones.
+  Axes6 g5x_mm, g92_mm, tool_offset_mm;
+};
+
+struct CanonCall {
+  CallContext context;
+  CanonOp op;
+};
+
+struct CanonProgram {
+  std::vector<std::string> files;  // main program first, then subroutine files
+  std::vector<CanonCall> calls;
+};
+
+// Name of the call as rs274 prints it (e.g. "STRAIGHT_FEED").
+const char* call_name(const CanonOp& op);
+bool is_motion(const CanonOp& op);  // traverse, feed or arc
+
+// Machine position (mm, degrees) of a programmed position under `ctx`.
+Axes6 machine_position_mm(const Axes6& program_position, const CallContext& ctx);
+
+}  // namespace truecut::interp

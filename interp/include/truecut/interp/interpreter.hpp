@@ -1,0 +1,47 @@
+// RS274/NGC interpreter as LinuxCNC reads it, plus the Sinumerik words
+// TRAORI, TRAFOOF, BSPLINE and CSPLINE. It turns a program into canonical
+// calls (canon.hpp); see docs/gcode.md for the supported language.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "truecut/interp/canon.hpp"
+#include "truecut/interp/tool_table.hpp"
+
+namespace truecut::interp {
+
+struct InterpreterOptions {
+  ToolTable tools;
+  // The block-delete switch: when on, lines starting with '/' are skipped
+  // (LinuxCNC's rs274 starts with it off).
+  bool block_delete = false;
+  // Axes present on the machine. truecut's machine is X Y Z A C: a B word is
+  // rejected with a clear message unless has_b is set.
+  bool has_b = false;
+  // Where `o<name> call` looks for name.ngc after the program's own folder.
+  std::vector<std::filesystem::path> subroutine_path;
+  // Guard against programs that never end (runaway while loops).
+  std::int64_t max_blocks = 50'000'000;
+};
+
+class Interpreter {
+ public:
+  explicit Interpreter(InterpreterOptions options = {});
+
+  // Interprets a whole program. Throws GcodeError (file:line:column) on the
+  // first error; nothing is returned for a program with an error.
+  CanonProgram run_file(const std::filesystem::path& program) const;
+  // Same for a program held in memory; `name` is used in error locations and
+  // its folder (if any) for subroutine files.
+  CanonProgram run_text(std::string_view text, const std::string& name) const;
+
+ private:
+  InterpreterOptions options_;
+};
+
+}  // namespace truecut::interp

@@ -1,0 +1,41 @@
+// Tool table in LinuxCNC's format: one tool per line,
+//   T<number> P<pocket> [X.. Y.. Z.. A.. B.. C.. U.. V.. W..] [D<diameter>]
+//   [I.. J.. Q..] [;comment]
+// Offsets and diameters are in machine units, which are mm in truecut.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "truecut/interp/canon.hpp"
+
+namespace truecut::interp {
+
+struct ToolEntry {
+  int number = 0;
+  int pocket = 0;
+  Axes6 offset_mm;  // length offsets per axis (Z is the usual one)
+  double diameter_mm = 0;
+  std::string comment;
+};
+
+class ToolTable {
+ public:
+  // Throws GcodeError with file:line:column on a malformed line.
+  static ToolTable load(const std::filesystem::path& file);
+  static ToolTable parse(std::string_view text, const std::string& name);
+
+  void add(ToolEntry entry);
+  const std::vector<ToolEntry>& entries() const { return entries_; }
+  const ToolEntry* find(int number) const;
+  // 1-based row of the tool in the table, as LinuxCNC numbers its slots.
+  std::optional<int> slot_of(int number) const;
+
+ private:
+  std::vector<ToolEntry> entries_;
+};
+
+}  // namespace truecut::interp

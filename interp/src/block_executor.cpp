@@ -1,0 +1,770 @@
+#include "block_executor.hpp"
+
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <optional>
+
+#include "arc_geometry.hpp"
+#include "system_parameters.hpp"
+#include "truecut/interp/operations.hpp"
+
+namespace truecut::interp {
+
+namespace {
+
+constexpr char kAxisLetters[6] = {'x', 'y', 'z', 'a', 'b', 'c'};
+constexpr int kMotion = static_cast<int>(GGroup::kMotion);
+
+int group(GGroup g) {
+  return static_cast<int>(g);
+}
+int group(MGroup g) {
+  return static_cast<int>(g);
+}
+
+std::string lower(std::string_view s) {
+  std::string out(s);
+  for (char& c : out)
+    c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+std::string trim_left(std::string_view s) {
+  size_t i = 0;
+  while (i < s.size() && (s[i] == ' ' || s[i] == '\t'))
+    ++i;
+  return std::string(s.substr(i));
+}
+
+// Plane coordinates in ARC_FEED order: first, second, axis.
+void plane_axes(Plane p, int& first, int& second, int& axis) {
+  switch (p) {
+    case Plane::kXY:
+      first = 0, second = 1, axis = 2;
+      break;
+    case Plane::kXZ:
+      first = 2, second = 0, axis = 1;
+      break;
+    case Plane::kYZ:
+      first = 1, second = 2, axis = 0;
+      break;
+  }
+}
+
+// Centre-offset letters for the plane coordinates (XY: I J; XZ: K I; YZ: J K).
+void plane_offset_letters(Plane p, char& first, char& second, char& other) {
+  switch (p) {
+    case Plane::kXY:
+      first = 'i', second = 'j', other = 'k';
+      break;
+    case Plane::kXZ:
+      first = 'k', second = 'i', other = 'j';
+      break;
+    case Plane::kYZ:
+      first = 'j', second = 'k', other = 'i';
+      break;
+  }
+}
+
+const char* plane_name(Plane p) {
+  switch (p) {
+    case Plane::kXY:
+      return "XY";
+    case Plane::kXZ:
+      return "XZ";
+    case Plane::kYZ:
+      return "YZ";
+  }
+  return "";
+}
+
+}  // namespace
+
+void BlockExecutor::fail(int column, const std::string& message) const {
+  throw GcodeError({*line_->file, line_->line, column}, message);
+}
+
+int BlockExecutor::column_of(char letter) const {
+  const auto& w = (*b_)[letter];
+  return w ? w->column : 0;
+}
+
+void BlockExecutor::start_program() {
+  out_.emit(UseLengthUnits{s_.units});
+  out_.emit(SetG5xOffset{s_.coord_index, s_.to_program(s_.g5x_mm)});
+  out_.emit(SetG92Offset{s_.to_program(s_.g92_mm)});
+  out_.emit(SetXYRotation{0});
+  out_.emit(SetFeedReference{});
+  out_.emit(OnReset{});
+}
+
+bool BlockExecutor::execute(const Block& block, const LexedLine& line) {
+  b_ = &block;
+  line_ = &line;
+  codes_ = check_codes(block, line);
+  s_.line = line.line;
+  axes_used_ = false;
+  comments();
+  for (const auto& k : block.sinumerik) {
+    if (k.word == SinumerikWord::kTraori || k.word == SinumerikWord::kTrafoof) {
+      s_.tcp = k.word == SinumerikWord::kTraori;
+      out_.emit(SetTcp{s_.tcp});
+    }
+  }
+  feed_and_speed();
+  tool_words();
+  spindle_and_coolant();
+  if (codes_.g[group(GGroup::kNonModal)] == 40) {
+    if (!block.has('p')) fail(codes_.g_column[0], "G4 (dwell) needs P (seconds)");
+    if (block.value('p') < 0) fail(column_of('p'), "dwell time P must not be negative");
+    out_.emit(Dwell{block.value('p')});
+  }
+  modal_settings();
+  non_modal();
+  motion();
+  const int change = codes_.m[group(MGroup::kToolChange)];
+  if (change == 60 || change == 610) {
+    // LinuxCNC re-reads the position from the machine after a tool change:
+    // the last commanded numbers, now under the new offsets.
+    for (int i = 0; i < 6; ++i)
+      s_.position_mm[i] = s_.to_machine(i, last_program_position_[i]) + s_.g5x_mm[i] +
+                          s_.g92_mm[i] + s_.tool_offset_mm[i];
+  }
+  const int stop = codes_.m[group(MGroup::kStop)];
+  if (stop == 0) out_.emit(ProgramStop{false});
+  if (stop == 10) out_.emit(ProgramStop{true});
+  if (stop == 20 || stop == 300) {
+    end_program(stop == 300);
+    return true;
+  }
+  return false;
+}
+
+void BlockExecutor::comments() {
+  for (const auto& c : b_->comments)
+    if (auto op = operation_from_comment(c.text)) s_.operation = *op;
+  // Like LinuxCNC, only the last parenthesized comment of a line becomes a
+  // call; ';' comments are dropped.
+  const CommentText* last = nullptr;
+  for (const auto& c : b_->comments)
+    if (!c.semicolon) last = &c;
+  if (!last) return;
+  const std::string& text = last->text;
+  const std::string low = lower(trim_left(text));
+  if (low.rfind("msg,", 0) == 0) {
+    out_.emit(Message{text.substr(text.find(',') + 1)});
+    return;
+  }
+  if (low.rfind("debug,", 0) == 0) {
+    if (params_.get(kDebugSwitch) == 0.0) return;  // #5599 = 0 silences (DEBUG,...)
+    out_.emit(Message{substitute_parameters(text.substr(text.find(',') + 1))});
+    return;
+  }
+  // rs274 prints these itself (not as canonical calls); they move nothing.
+  static const char* kSilent[] = {"print,",   "log,",      "logopen,",   "logappend,",
+                                  "logclose", "probeopen", "probeclose", "py,"};
+  for (const char* p : kSilent)
+    if (low.rfind(p, 0) == 0) return;
+  out_.emit(Comment{trim_left(text)});
+}
+
+std::string BlockExecutor::substitute_parameters(const std::string& text) const {
+  // (debug, ...) shows parameter values: #12 and #<name> become numbers.
+  std::string out;
+  for (size_t i = 0; i < text.size();) {
+    if (text[i] != '#') {
+      out.push_back(text[i++]);
+      continue;
+    }
+    std::optional<double> v;
+    size_t end = i + 1;
+    if (end < text.size() && text[end] == '<') {
+      const size_t close = text.find('>', end);
+      if (close != std::string::npos) {
+        std::string name;
+        for (size_t k = end + 1; k < close; ++k)
+          if (text[k] != ' ' && text[k] != '\t')
+            name.push_back(static_cast<char>(std::tolower(static_cast<unsigned char>(text[k]))));
+        v = params_.named(name);
+        end = close + 1;
+      }
+    } else {
+      int index = 0;
+      bool digits = false;
+      while (end < text.size() && std::isdigit(static_cast<unsigned char>(text[end])) &&
+             index < 100000) {
+        index = index * 10 + (text[end++] - '0');
+        digits = true;
+      }
+      if (digits && Parameters::valid_index(index)) v = params_.get(index);
+    }
+    if (!v) {
+      out.push_back(text[i++]);
+      continue;
+    }
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%f", *v);
+    out += buf;
+    i = end;
+  }
+  return out;
+}
+
+void BlockExecutor::feed_and_speed() {
+  if (codes_.g[group(GGroup::kSpindleMode)] == 970) out_.emit(SetSpindleMode{0});
+  const int feed_mode = codes_.g[group(GGroup::kFeedMode)];
+  if (feed_mode == 930) {
+    out_.emit(Comment{"interpreter: feed mode set to inverse time"});
+    s_.feed_mode = FeedMode::kInverseTime;
+    out_.emit(SetFeedMode{s_.feed_mode});
+    s_.feed = 0;
+  } else if (feed_mode == 940) {
+    out_.emit(Comment{"interpreter: feed mode set to units per minute"});
+    s_.feed_mode = FeedMode::kUnitsPerMinute;
+    out_.emit(SetFeedMode{s_.feed_mode});
+    s_.feed = 0;
+    out_.emit(SetFeedRate{0});
+  }
+  if (b_->has('f')) {
+    if (b_->value('f') < 0) fail(column_of('f'), "negative feed rate F");
+    if (s_.feed_mode == FeedMode::kUnitsPerMinute) {
+      s_.feed = b_->value('f');
+      out_.emit(SetFeedRate{s_.feed});
+    }
+  }
+  if (b_->has('s')) {
+    if (b_->value('s') < 0) fail(column_of('s'), "negative spindle speed S");
+    s_.speed = b_->value('s');
+    out_.emit(SetSpindleSpeed{s_.speed});
+  }
+}
+
+void BlockExecutor::tool_words() {
+  if (b_->has('t')) {
+    const double t = b_->value('t');
+    if (t < 0 || t != std::floor(t))
+      fail(column_of('t'), "tool number T must be a whole number >= 0");
+    const int tool = static_cast<int>(t);
+    if (tool != 0 && !tools_.find(tool))
+      fail(column_of('t'), "tool T" + std::to_string(tool) + " is not in the tool table");
+    s_.selected_tool = tool;
+    out_.emit(SelectTool{tool});
+  }
+  const int change = codes_.m[group(MGroup::kToolChange)];
+  if (change == 60) {
+    out_.emit(StartChange{});
+    out_.emit(StopSpindle{});
+    s_.spindle = 0;
+    const auto slot = tools_.slot_of(s_.selected_tool);
+    s_.tool = s_.selected_tool;
+    out_.emit(ChangeTool{s_.tool, slot.value_or(0)});
+  } else if (change == 610) {
+    if (!b_->has('q'))
+      fail(codes_.m_column[group(MGroup::kToolChange)], "M61 needs Q (tool number)");
+    const double q = b_->value('q');
+    if (q < 0 || q != std::floor(q)) fail(column_of('q'), "M61 Q must be a whole number >= 0");
+    const int tool = static_cast<int>(q);
+    if (tool != 0 && !tools_.find(tool))
+      fail(column_of('q'), "tool " + std::to_string(tool) + " is not in the tool table");
+    s_.tool = s_.selected_tool = tool;
+    out_.emit(ChangeToolNumber{tool});
+  }
+}
+
+void BlockExecutor::spindle_and_coolant() {
+  switch (codes_.m[group(MGroup::kSpindle)]) {
+    case 30:
+      s_.spindle = 1;
+      out_.emit(StartSpindle{true});
+      break;
+    case 40:
+      s_.spindle = -1;
+      out_.emit(StartSpindle{false});
+      break;
+    case 50:
+      s_.spindle = 0;
+      out_.emit(StopSpindle{});
+      break;
+    default:
+      break;
+  }
+  switch (codes_.m[group(MGroup::kCoolant)]) {
+    case 70:
+      s_.mist = true;
+      out_.emit(Coolant{Coolant::kMist, true});
+      break;
+    case 80:
+      s_.flood = true;
+      out_.emit(Coolant{Coolant::kFlood, true});
+      break;
+    case 90:
+      s_.mist = s_.flood = false;
+      out_.emit(Coolant{Coolant::kMist, false});
+      out_.emit(Coolant{Coolant::kFlood, false});
+      break;
+    default:
+      break;
+  }
+}
+
+void BlockExecutor::modal_settings() {
+  switch (codes_.g[group(GGroup::kPlane)]) {
+    case 170:
+      s_.plane = Plane::kXY;
+      out_.emit(SelectPlane{s_.plane});
+      break;
+    case 180:
+      s_.plane = Plane::kXZ;
+      out_.emit(SelectPlane{s_.plane});
+      break;
+    case 190:
+      s_.plane = Plane::kYZ;
+      out_.emit(SelectPlane{s_.plane});
+      break;
+    default:
+      break;
+  }
+  switch (codes_.g[group(GGroup::kUnits)]) {
+    case 200:
+      set_units(LengthUnits::kInch);
+      break;
+    case 210:
+      set_units(LengthUnits::kMm);
+      break;
+    default:
+      break;
+  }
+  if (codes_.g[group(GGroup::kCutterComp)] == 400)
+    out_.emit(Comment{"interpreter: cutter radius compensation off"});
+  tool_length_offset();
+  const int cs = codes_.g[group(GGroup::kCoordSystem)];
+  if (cs >= 0) {
+    static const int kCodes[] = {540, 550, 560, 570, 580, 590, 591, 592, 593};
+    for (int i = 0; i < 9; ++i) {
+      if (kCodes[i] != cs) continue;
+      if (i + 1 == s_.coord_index)
+        out_.emit(Comment{"interpreter: continuing to use same coordinate system"});
+      else
+        select_coord_system(i + 1);
+    }
+  }
+  switch (codes_.g[group(GGroup::kPathControl)]) {
+    case 610:
+      s_.path = PathMode::kExactPath;
+      out_.emit(SetMotionControlMode{s_.path, 0});
+      break;
+    case 611:
+      s_.path = PathMode::kExactStop;
+      out_.emit(SetMotionControlMode{s_.path, 0});
+      break;
+    case 640: {
+      const double p = b_->has('p') ? b_->value('p') : 0.0;
+      const double q = b_->has('q') ? b_->value('q') : p;
+      if (p < 0) fail(column_of('p'), "G64 P (blend tolerance) must not be negative");
+      if (q < 0) fail(column_of('q'), "G64 Q (naive CAM tolerance) must not be negative");
+      s_.path = PathMode::kContinuous;
+      out_.emit(SetMotionControlMode{s_.path, p});
+      out_.emit(SetNaivecamTolerance{q});
+      break;
+    }
+    default:
+      break;
+  }
+  const int dist = codes_.g[group(GGroup::kDistance)];
+  if (dist == 900 && s_.incremental) {
+    s_.incremental = false;
+    out_.emit(Comment{"interpreter: distance mode changed to absolute"});
+  } else if (dist == 910 && !s_.incremental) {
+    s_.incremental = true;
+    out_.emit(Comment{"interpreter: distance mode changed to incremental"});
+  }
+  const int arc_dist = codes_.g[group(GGroup::kArcDistance)];
+  if (arc_dist == 901 && !s_.arc_absolute) {
+    s_.arc_absolute = true;
+    out_.emit(Comment{"interpreter: IJK distance mode changed to absolute"});
+  } else if (arc_dist == 911 && s_.arc_absolute) {
+    s_.arc_absolute = false;
+    out_.emit(Comment{"interpreter: IJK distance mode changed to incremental"});
+  }
+  switch (codes_.g[group(GGroup::kRetract)]) {
+    case 980:
+      s_.retract_old_z = true;
+      out_.emit(Comment{"interpreter: retract mode set to old_z"});
+      break;
+    case 990:
+      s_.retract_old_z = false;
+      out_.emit(Comment{"interpreter: retract mode set to r_plane"});
+      break;
+    default:
+      break;
+  }
+}
+
+void BlockExecutor::set_units(LengthUnits units) {
+  if (units != s_.units) {
+    convert_offset_parameters(params_, units == LengthUnits::kInch ? 1.0 / kMmPerInch : kMmPerInch);
+    s_.units = units;
+  }
+  out_.emit(UseLengthUnits{units});
+}
+
+void BlockExecutor::emit_offsets() {
+  out_.emit(SetG5xOffset{s_.coord_index, s_.to_program(s_.g5x_mm)});
+  out_.emit(SetG92Offset{s_.to_program(s_.g92_mm)});
+  out_.emit(SetXYRotation{0});
+}
+
+void BlockExecutor::select_coord_system(int index) {
+  const int base = coord_system_base(index);
+  for (int i = 0; i < 6; ++i)
+    s_.g5x_mm[i] = s_.to_machine(i, params_.get(base + i));
+  s_.coord_index = index;
+  params_.set(kCoordSystemIndex, index);
+  emit_offsets();
+}
+
+void BlockExecutor::tool_length_offset() {
+  const int code = codes_.g[group(GGroup::kToolLength)];
+  if (code == 490) {
+    s_.tool_offset_mm = Axes6{};
+    out_.emit(UseToolLengthOffset{Axes6{}});
+    return;
+  }
+  if (code != 430) {
+    if (b_->has('h')) fail(column_of('h'), "H word without G43 to use it");
+    return;
+  }
+  int tool = s_.tool;
+  if (b_->has('h')) {
+    const double h = b_->value('h');
+    if (h < 0 || h != std::floor(h)) fail(column_of('h'), "H must be a whole number >= 0");
+    tool = static_cast<int>(h);
+  }
+  Axes6 offset;
+  if (tool != 0) {
+    const ToolEntry* e = tools_.find(tool);
+    if (!e)
+      fail(b_->has('h') ? column_of('h') : codes_.g_column[group(GGroup::kToolLength)],
+           "tool " + std::to_string(tool) + " for G43 is not in the tool table");
+    offset = e->offset_mm;
+  }
+  s_.tool_offset_mm = offset;
+  out_.emit(UseToolLengthOffset{s_.to_program(offset)});
+}
+
+void BlockExecutor::non_modal() {
+  const int code = codes_.g[group(GGroup::kNonModal)];
+  if (code == 100) coord_system_data();
+  if (code == 280 || code == 300 || code == 281 || code == 301) go_home(code);
+  if (code >= 920 && code <= 923) g92_offsets(code);
+}
+
+void BlockExecutor::coord_system_data() {
+  const int col = codes_.g_column[0];
+  if (!b_->has('l')) fail(col, "G10 needs L (L2 or L20 are supported)");
+  const double l = b_->value('l');
+  if (l != 2 && l != 20) {
+    if (l == 1 || l == 10 || l == 11)
+      fail(column_of('l'), "G10 L1/L10/L11 (tool table edits) are not supported");
+    fail(column_of('l'), "G10 supports L2 and L20");
+  }
+  if (!b_->has('p')) fail(col, "G10 L2/L20 needs P (coordinate system 0..9)");
+  const double pv = b_->value('p');
+  if (pv < 0 || pv > 9 || pv != std::floor(pv))
+    fail(column_of('p'), "G10 P must be a coordinate system 0..9 (0 = active)");
+  if (b_->has('r') && b_->value('r') != 0)
+    fail(column_of('r'), "G10 R (coordinate system rotation) is not supported");
+  const int index = pv == 0 ? s_.coord_index : static_cast<int>(pv);
+  const int base = coord_system_base(index);
+  const Axes6 prog = s_.program_position();
+  const Axes6 g5x = s_.to_program(s_.g5x_mm);
+  const Axes6 g92 = s_.to_program(s_.g92_mm);
+  for (int i = 0; i < 6; ++i) {
+    const char letter = kAxisLetters[i];
+    if (!b_->has(letter)) continue;
+    const double v = b_->value(letter);
+    params_.set(base + i, l == 2 ? v : prog[i] + g5x[i] + g92[i] - v);
+  }
+  axes_used_ = true;
+  if (index == s_.coord_index) {
+    for (int i = 0; i < 6; ++i)
+      s_.g5x_mm[i] = s_.to_machine(i, params_.get(base + i));
+    out_.emit(SetG5xOffset{s_.coord_index, s_.to_program(s_.g5x_mm)});
+    out_.emit(SetXYRotation{0});
+  } else {
+    out_.emit(Comment{"interpreter: setting coordinate system origin"});
+  }
+}
+
+void BlockExecutor::g92_offsets(int code) {
+  if (code == 920) {
+    bool any = false;
+    const Axes6 prog = s_.program_position();
+    for (int i = 0; i < 6; ++i) {
+      const char letter = kAxisLetters[i];
+      if (!b_->has(letter)) continue;
+      any = true;
+      const double offset = prog[i] + s_.to_program(i, s_.g92_mm[i]) - b_->value(letter);
+      s_.g92_mm[i] = s_.to_machine(i, offset);
+    }
+    if (!any) fail(codes_.g_column[0], "G92 needs at least one axis word");
+    axes_used_ = true;
+    for (int i = 0; i < 6; ++i)
+      params_.set(kG92Offsets + i, s_.to_program(i, s_.g92_mm[i]));
+    params_.set(kG92Enabled, 1);
+  } else if (code == 921 || code == 922) {
+    s_.g92_mm = Axes6{};
+    if (code == 921)
+      for (int i = 0; i < 6; ++i)
+        params_.set(kG92Offsets + i, 0);
+    params_.set(kG92Enabled, 0);
+  } else {  // G92.3
+    for (int i = 0; i < 6; ++i)
+      s_.g92_mm[i] = s_.to_machine(i, params_.get(kG92Offsets + i));
+    params_.set(kG92Enabled, 1);
+  }
+  out_.emit(SetG92Offset{s_.to_program(s_.g92_mm)});
+}
+
+void BlockExecutor::go_home(int code) {
+  const int base = (code == 280 || code == 281) ? kG28Home : kG30Home;
+  if (code == 281 || code == 301) {  // store the current machine position
+    for (int i = 0; i < 6; ++i)
+      params_.set(base + i, s_.to_program(i, s_.position_mm[i]));
+    return;
+  }
+  if (codes_.g[kMotion] >= 0)
+    fail(codes_.g_column[kMotion], "G28/G30 and a motion code on one line");
+  bool any = false;
+  for (char l : kAxisLetters)
+    any = any || b_->has(l);
+  // Through the programmed point (where the tool is, without axis words),
+  // then home for the programmed axes (all without axis words).
+  const Axes6 via = target_position(false);
+  out_.emit(StraightTraverse{s_.program_position(via)});
+  last_program_position_ = s_.program_position(via);
+  s_.position_mm = via;
+  Axes6 home = via;
+  for (int i = 0; i < 6; ++i)
+    if (!any || b_->has(kAxisLetters[i])) home[i] = s_.to_machine(i, params_.get(base + i));
+  out_.emit(StraightTraverse{s_.program_position(home)});
+  last_program_position_ = s_.program_position(home);
+  s_.position_mm = home;
+  axes_used_ = true;
+}
+
+Axes6 BlockExecutor::target_position(bool machine_coords) const {
+  Axes6 t = s_.position_mm;
+  for (int i = 0; i < 6; ++i) {
+    const char letter = kAxisLetters[i];
+    if (!b_->has(letter)) continue;
+    const double v = s_.to_machine(i, b_->value(letter));
+    if (machine_coords)
+      t[i] = v;
+    else if (s_.incremental)
+      t[i] = s_.position_mm[i] + v;
+    else
+      t[i] = v + s_.g5x_mm[i] + s_.g92_mm[i] + s_.tool_offset_mm[i];
+  }
+  return t;
+}
+
+void BlockExecutor::check_feed(int column) const {
+  if (s_.feed_mode == FeedMode::kInverseTime) {
+    if (!b_->has('f')) fail(column, "inverse-time feed (G93) needs an F word on every feed move");
+    if (b_->value('f') <= 0) fail(column_of('f'), "inverse-time F must be greater than zero");
+  } else if (s_.feed <= 0) {
+    fail(column, "feed move with a zero feed rate: program F before or on this line");
+  }
+}
+
+void BlockExecutor::check_unused_words(int motion_code) const {
+  const bool arc = motion_code == 20 || motion_code == 30;
+  const int nm = codes_.g[0];
+  for (char l : {'i', 'j', 'k', 'r'})
+    if (b_->has(l) && !arc && !(l == 'r' && nm == 100))
+      fail(column_of(l),
+           std::string(1, static_cast<char>(std::toupper(l))) + " word with no G2 or G3 to use it");
+  if (b_->has('p') && !arc && nm != 40 && nm != 100 && codes_.g[group(GGroup::kPathControl)] != 640)
+    fail(column_of('p'), "P word with no G code that uses it (G4, G10, G64, G2/G3)");
+  if (b_->has('q') && codes_.g[group(GGroup::kPathControl)] != 640 &&
+      codes_.m[group(MGroup::kToolChange)] != 610)
+    fail(column_of('q'), "Q word with no code that uses it (G64, M61)");
+  if (b_->has('l') && nm != 100) fail(column_of('l'), "L word with no G10 to use it");
+}
+
+void BlockExecutor::motion() {
+  const int explicit_code = codes_.g[kMotion];
+  const bool g53 = b_->has_g(530);
+  bool axis_words = false;
+  int first_axis_column = 0;
+  for (char l : kAxisLetters)
+    if (b_->has(l)) {
+      axis_words = true;
+      if (!first_axis_column) first_axis_column = column_of(l);
+    }
+  if (explicit_code >= 0) {
+    const SplineMode before = s_.spline;
+    s_.motion = explicit_code;
+    s_.spline = explicit_code == kBsplineCode   ? SplineMode::kBspline
+                : explicit_code == kCsplineCode ? SplineMode::kCspline
+                                                : SplineMode::kNone;
+    if (s_.spline != before) out_.emit(SetSplineMode{s_.spline});
+    if (explicit_code == 800) out_.emit(Comment{"interpreter: motion mode set to none"});
+  }
+  const int code = (explicit_code >= 0 || (axis_words && !axes_used_)) ? s_.motion : -1;
+  check_unused_words(code);
+  if (g53) {
+    if (code != 0 && code != 10) fail(b_->g[0].column, "G53 needs G0 or G1 on the line or active");
+    if (s_.incremental) fail(b_->g[0].column, "G53 with incremental distance mode (G91)");
+  }
+  if (code < 0 || axes_used_) return;
+  if (code == 800) {
+    if (axis_words)
+      fail(first_axis_column,
+           "axis words with no motion mode (G80 active): program G0, G1, G2 or G3");
+    return;
+  }
+  const int motion_column = explicit_code >= 0 ? codes_.g_column[kMotion] : first_axis_column;
+  if (code == 20 || code == 30) {
+    arc(code == 20, target_position(false));
+    return;
+  }
+  // An explicit G0/G1 without axis words is a move to where the tool is.
+  if (!axis_words && (code == kBsplineCode || code == kCsplineCode)) return;
+  const Axes6 target = target_position(g53);
+  if (code != 0) check_feed(motion_column);
+  straight(code == 0, target);
+}
+
+void BlockExecutor::straight(bool rapid, const Axes6& target) {
+  const Axes6 end = s_.program_position(target);
+  if (rapid) {
+    out_.emit(StraightTraverse{end});
+  } else {
+    double f = 0;
+    if (s_.feed_mode == FeedMode::kInverseTime) {
+      // LinuxCNC turns inverse time into a rate: the move's length times F,
+      // the XYZ length when XYZ move, else the rotary one.
+      const Axes6 start = s_.program_position();
+      double linear = 0, rotary = 0;
+      for (int i = 0; i < 3; ++i)
+        linear += (end[i] - start[i]) * (end[i] - start[i]);
+      for (int i = 3; i < 6; ++i)
+        rotary += (end[i] - start[i]) * (end[i] - start[i]);
+      const double length = linear > 0 ? std::sqrt(linear) : std::sqrt(rotary);
+      f = b_->value('f');
+      out_.emit(SetFeedRate{length * f}, f);
+    }
+    out_.emit(StraightFeed{end}, f);
+  }
+  last_program_position_ = end;
+  s_.position_mm = target;
+}
+
+void BlockExecutor::arc(bool clockwise, const Axes6& target) {
+  const int code_col = codes_.g[kMotion] >= 0 ? codes_.g_column[kMotion] : 0;
+  int first, second, axis;
+  plane_axes(s_.plane, first, second, axis);
+  char off1, off2, off_other;
+  plane_offset_letters(s_.plane, off1, off2, off_other);
+  int col = code_col;
+  for (char l : kAxisLetters)
+    if (!col && b_->has(l)) col = column_of(l);
+  if (b_->has(off_other))
+    fail(column_of(off_other), std::string(1, static_cast<char>(std::toupper(off_other))) +
+                                   " word given for an arc in the " + plane_name(s_.plane) +
+                                   " plane");
+  const bool r_form = b_->has('r');
+  const bool c_form = b_->has(off1) || b_->has(off2);
+  if (r_form && c_form) fail(column_of('r'), "arc with both R and I/J/K: use one form");
+  if (!r_form && !c_form)
+    fail(col, std::string("missing arc data: give R (radius) or ") +
+                  static_cast<char>(std::toupper(off1)) + "/" +
+                  static_cast<char>(std::toupper(off2)) + " (centre offsets)");
+  ArcRequest req;
+  req.clockwise = clockwise;
+  const Axes6 start = s_.program_position();
+  const Axes6 end = s_.program_position(target);
+  req.start[0] = start[first];
+  req.start[1] = start[second];
+  req.end[0] = end[first];
+  req.end[1] = end[second];
+  req.radius_form = r_form;
+  if (r_form) req.radius = b_->value('r');
+  req.center_in[0] = b_->has(off1) ? b_->value(off1) : 0.0;
+  req.center_in[1] = b_->has(off2) ? b_->value(off2) : 0.0;
+  req.absolute_center = s_.arc_absolute;
+  req.inch = s_.units == LengthUnits::kInch;
+  if (b_->has('p')) {
+    const double p = b_->value('p');
+    if (p < 1 || p != std::floor(p))
+      fail(column_of('p'), "arc turns P must be a whole number >= 1");
+    req.turns = static_cast<int>(p);
+  }
+  check_feed(col);
+  ArcResult res;
+  try {
+    res = compute_arc(req);
+  } catch (const ArcDataError& e) {
+    int c = col;
+    if (e.word == 'r') c = column_of('r');
+    if (e.word == 'i') c = b_->has(off1) ? column_of(off1) : column_of(off2);
+    fail(c ? c : col, e.message);
+  }
+  ArcFeed a;
+  a.end = end;
+  a.center[first] = res.center[0];
+  a.center[second] = res.center[1];
+  a.plane = s_.plane;
+  a.rotation = res.rotation;
+  double f = 0;
+  if (s_.feed_mode == FeedMode::kInverseTime) {
+    f = b_->value('f');
+    out_.emit(SetFeedRate{arc_length(req, res, end[axis] - start[axis]) * f}, f);
+  }
+  out_.emit(std::move(a), f);
+  last_program_position_ = end;
+  s_.position_mm = target;
+}
+
+void BlockExecutor::end_program(bool pallet_shuttle) {
+  const int base = coord_system_base(1);
+  for (int i = 0; i < 6; ++i)
+    s_.g5x_mm[i] = s_.to_machine(i, params_.get(base + i));
+  s_.coord_index = 1;
+  out_.emit(SetG5xOffset{1, s_.to_program(s_.g5x_mm)});
+  out_.emit(SetXYRotation{0});
+  if (s_.plane != Plane::kXY) {
+    s_.plane = Plane::kXY;
+    out_.emit(SelectPlane{s_.plane});
+  }
+  s_.incremental = false;
+  s_.feed_mode = FeedMode::kUnitsPerMinute;
+  out_.emit(SetFeedMode{s_.feed_mode});
+  s_.feed = 0;
+  out_.emit(SetFeedRate{0});
+  s_.spindle = 0;
+  out_.emit(StopSpindle{});
+  out_.emit(SetSpindleMode{0});
+  if (s_.mist) out_.emit(Coolant{Coolant::kMist, false});
+  if (s_.flood) out_.emit(Coolant{Coolant::kFlood, false});
+  s_.mist = s_.flood = false;
+  s_.motion = 10;
+  if (s_.spline != SplineMode::kNone) {
+    s_.spline = SplineMode::kNone;
+    out_.emit(SetSplineMode{s_.spline});
+  }
+  if (s_.tcp) {
+    s_.tcp = false;
+    out_.emit(SetTcp{false});
+  }
+  if (pallet_shuttle) out_.emit(PalletShuttle{});
+  out_.emit(ProgramEnd{});
+  s_.operation.clear();
+  out_.emit(OnReset{});
+  out_.emit(OnReset{});
+}
+
+}  // namespace truecut::interp

@@ -1,0 +1,63 @@
+// Executes one read block on the interpreter state in LinuxCNC's order of
+// execution (comments, feed mode, F, S, T, M6, spindle, coolant, dwell,
+// plane, units, compensation, tool length, coordinate system, path control,
+// distance mode, G10/G28/G30/G92, motion, stop) and emits the canonical calls.
+#pragma once
+
+#include "block.hpp"
+#include "emitter.hpp"
+#include "interp_state.hpp"
+#include "modal_groups.hpp"
+#include "parameters.hpp"
+#include "truecut/interp/tool_table.hpp"
+
+namespace truecut::interp {
+
+class BlockExecutor {
+ public:
+  BlockExecutor(InterpState& state, Parameters& params, const ToolTable& tools, Emitter& out)
+      : s_(state), params_(params), tools_(tools), out_(out) {}
+
+  // Emits the calls LinuxCNC makes before the first block.
+  void start_program();
+  // Returns true when the block ends the program (M2, M30).
+  bool execute(const Block& block, const LexedLine& line);
+  // The program-end sequence (M2/M30).
+  void end_program(bool pallet_shuttle);
+
+ private:
+  [[noreturn]] void fail(int column, const std::string& message) const;
+  int column_of(char letter) const;
+  void comments();
+  void feed_and_speed();
+  void tool_words();
+  void spindle_and_coolant();
+  void modal_settings();
+  void set_units(LengthUnits units);
+  void select_coord_system(int index);
+  void tool_length_offset();
+  void non_modal();
+  void coord_system_data();
+  void g92_offsets(int code);
+  void go_home(int code);
+  void motion();
+  Axes6 target_position(bool machine_coords) const;
+  void straight(bool rapid, const Axes6& target);
+  void arc(bool clockwise, const Axes6& target);
+  void check_feed(int column) const;
+  void check_unused_words(int motion_code) const;
+  void emit_offsets();
+  std::string substitute_parameters(const std::string& text) const;
+
+  InterpState& s_;
+  Parameters& params_;
+  const ToolTable& tools_;
+  Emitter& out_;
+  const Block* b_ = nullptr;
+  const LexedLine* line_ = nullptr;
+  ModalCodes codes_;
+  bool axes_used_ = false;       // axis words consumed by G10/G28/G30/G92
+  Axes6 last_program_position_;  // end of the last move as emitted
+};
+
+}  // namespace truecut::interp

@@ -1,0 +1,46 @@
+// The interpreter's modal state between blocks. Positions and offsets are
+// kept in machine units (mm, degrees); canonical calls are in program units.
+#pragma once
+
+#include <string>
+
+#include "truecut/interp/canon.hpp"
+
+namespace truecut::interp {
+
+constexpr double kMmPerInch = 25.4;
+
+struct InterpState {
+  int motion = 800;  // active motion code x10 (G80: none), or a spline code
+  Plane plane = Plane::kXY;
+  LengthUnits units = LengthUnits::kMm;
+  bool incremental = false;   // G91
+  bool arc_absolute = false;  // G90.1
+  FeedMode feed_mode = FeedMode::kUnitsPerMinute;
+  PathMode path = PathMode::kContinuous;
+  double feed = 0;   // program units per minute (G94)
+  double speed = 0;  // rpm
+  int spindle = 0;   // 1 cw, -1 ccw, 0 stopped
+  bool mist = false, flood = false;
+  int tool = 0;           // in the spindle
+  int selected_tool = 0;  // by the last T word
+  int coord_index = 1;    // 1 = G54 ... 9 = G59.3
+  Axes6 g5x_mm, g92_mm, tool_offset_mm;
+  Axes6 position_mm;           // controlled point in machine coordinates
+  bool retract_old_z = false;  // G98 (else G99)
+  int line = 0;                // source line being executed
+  bool tcp = false;
+  SplineMode spline = SplineMode::kNone;
+  std::string operation;
+
+  double scale() const { return units == LengthUnits::kInch ? kMmPerInch : 1.0; }
+  // Program-unit value of machine-unit length `mm` on axis i (0..5).
+  double to_program(int axis, double mm) const { return axis < 3 ? mm / scale() : mm; }
+  double to_machine(int axis, double value) const { return axis < 3 ? value * scale() : value; }
+  Axes6 to_program(const Axes6& mm) const;
+  // Position `machine` expressed in the work coordinate system.
+  Axes6 program_position(const Axes6& machine) const;
+  Axes6 program_position() const { return program_position(position_mm); }
+};
+
+}  // namespace truecut::interp

@@ -1,0 +1,218 @@
+#include "modal_groups.hpp"
+
+#include <cstdio>
+#include <string>
+
+namespace truecut::interp {
+
+namespace {
+
+struct GInfo {
+  int code;
+  GGroup group;
+  const char* unsupported;  // non-null: known to LinuxCNC, not supported here
+};
+
+constexpr GInfo kGCodes[] = {{0, GGroup::kMotion, nullptr},
+                             {10, GGroup::kMotion, nullptr},
+                             {20, GGroup::kMotion, nullptr},
+                             {30, GGroup::kMotion, nullptr},
+                             {40, GGroup::kNonModal, nullptr},
+                             {50, GGroup::kMotion, "cubic spline (G5)"},
+                             {51, GGroup::kMotion, "quadratic B-spline (G5.1)"},
+                             {52, GGroup::kMotion, "NURBS (G5.2)"},
+                             {53, GGroup::kMotion, "NURBS (G5.3)"},
+                             {70, GGroup::kLatheMode, "lathe diameter mode (G7)"},
+                             {80, GGroup::kLatheMode, "lathe radius mode (G8)"},
+                             {100, GGroup::kNonModal, nullptr},
+                             {170, GGroup::kPlane, nullptr},
+                             {171, GGroup::kPlane, "UV plane (G17.1)"},
+                             {180, GGroup::kPlane, nullptr},
+                             {181, GGroup::kPlane, "WU plane (G18.1)"},
+                             {190, GGroup::kPlane, nullptr},
+                             {191, GGroup::kPlane, "VW plane (G19.1)"},
+                             {200, GGroup::kUnits, nullptr},
+                             {210, GGroup::kUnits, nullptr},
+                             {280, GGroup::kNonModal, nullptr},
+                             {281, GGroup::kNonModal, nullptr},
+                             {300, GGroup::kNonModal, nullptr},
+                             {301, GGroup::kNonModal, nullptr},
+                             {330, GGroup::kMotion, "spindle-synchronized motion (G33)"},
+                             {331, GGroup::kMotion, "rigid tapping (G33.1)"},
+                             {382, GGroup::kMotion, "probing (G38.x)"},
+                             {383, GGroup::kMotion, "probing (G38.x)"},
+                             {384, GGroup::kMotion, "probing (G38.x)"},
+                             {385, GGroup::kMotion, "probing (G38.x)"},
+                             {400, GGroup::kCutterComp, nullptr},
+                             {410, GGroup::kCutterComp, "cutter radius compensation (G41)"},
+                             {411, GGroup::kCutterComp, "cutter radius compensation (G41.1)"},
+                             {420, GGroup::kCutterComp, "cutter radius compensation (G42)"},
+                             {421, GGroup::kCutterComp, "cutter radius compensation (G42.1)"},
+                             {430, GGroup::kToolLength, nullptr},
+                             {431, GGroup::kToolLength, "dynamic tool length offset (G43.1)"},
+                             {432, GGroup::kToolLength, "additional tool length offset (G43.2)"},
+                             {490, GGroup::kToolLength, nullptr},
+                             {520, GGroup::kNonModal, "local offsets (G52)"},
+                             {530, GGroup::kNonModal, nullptr},
+                             {540, GGroup::kCoordSystem, nullptr},
+                             {550, GGroup::kCoordSystem, nullptr},
+                             {560, GGroup::kCoordSystem, nullptr},
+                             {570, GGroup::kCoordSystem, nullptr},
+                             {580, GGroup::kCoordSystem, nullptr},
+                             {590, GGroup::kCoordSystem, nullptr},
+                             {591, GGroup::kCoordSystem, nullptr},
+                             {592, GGroup::kCoordSystem, nullptr},
+                             {593, GGroup::kCoordSystem, nullptr},
+                             {610, GGroup::kPathControl, nullptr},
+                             {611, GGroup::kPathControl, nullptr},
+                             {640, GGroup::kPathControl, nullptr},
+                             {700, GGroup::kUnits, "G70 (use G20)"},
+                             {710, GGroup::kUnits, "G71 (use G21)"},
+                             {730, GGroup::kMotion, "canned cycles (G73)"},
+                             {740, GGroup::kMotion, "canned cycles (G74)"},
+                             {760, GGroup::kMotion, "threading cycle (G76)"},
+                             {800, GGroup::kMotion, nullptr},
+                             {810, GGroup::kMotion, "canned cycles (G81)"},
+                             {820, GGroup::kMotion, "canned cycles (G82)"},
+                             {830, GGroup::kMotion, "canned cycles (G83)"},
+                             {840, GGroup::kMotion, "canned cycles (G84)"},
+                             {850, GGroup::kMotion, "canned cycles (G85)"},
+                             {860, GGroup::kMotion, "canned cycles (G86)"},
+                             {870, GGroup::kMotion, "canned cycles (G87)"},
+                             {880, GGroup::kMotion, "canned cycles (G88)"},
+                             {890, GGroup::kMotion, "canned cycles (G89)"},
+                             {900, GGroup::kDistance, nullptr},
+                             {901, GGroup::kArcDistance, nullptr},
+                             {910, GGroup::kDistance, nullptr},
+                             {911, GGroup::kArcDistance, nullptr},
+                             {920, GGroup::kNonModal, nullptr},
+                             {921, GGroup::kNonModal, nullptr},
+                             {922, GGroup::kNonModal, nullptr},
+                             {923, GGroup::kNonModal, nullptr},
+                             {930, GGroup::kFeedMode, nullptr},
+                             {940, GGroup::kFeedMode, nullptr},
+                             {950, GGroup::kFeedMode, "feed per revolution (G95)"},
+                             {960, GGroup::kSpindleMode, "constant surface speed (G96)"},
+                             {970, GGroup::kSpindleMode, nullptr},
+                             {980, GGroup::kRetract, nullptr},
+                             {990, GGroup::kRetract, nullptr}};
+
+struct MInfo {
+  int code;
+  MGroup group;
+  const char* unsupported;
+};
+
+constexpr MInfo kMCodes[] = {{0, MGroup::kStop, nullptr},
+                             {10, MGroup::kStop, nullptr},
+                             {20, MGroup::kStop, nullptr},
+                             {30, MGroup::kSpindle, nullptr},
+                             {40, MGroup::kSpindle, nullptr},
+                             {50, MGroup::kSpindle, nullptr},
+                             {60, MGroup::kToolChange, nullptr},
+                             {70, MGroup::kCoolant, nullptr},
+                             {80, MGroup::kCoolant, nullptr},
+                             {90, MGroup::kCoolant, nullptr},
+                             {190, MGroup::kSpindle, "spindle orient (M19)"},
+                             {300, MGroup::kStop, nullptr},
+                             {480, MGroup::kOverride, "override switches (M48)"},
+                             {490, MGroup::kOverride, "override switches (M49)"},
+                             {500, MGroup::kOverride, "override switches (M50)"},
+                             {510, MGroup::kOverride, "override switches (M51)"},
+                             {520, MGroup::kOverride, "override switches (M52)"},
+                             {530, MGroup::kOverride, "override switches (M53)"},
+                             {600, MGroup::kStop, "pallet change pause (M60)"},
+                             {610, MGroup::kToolChange, nullptr},
+                             {620, MGroup::kUser, "digital output (M62)"},
+                             {630, MGroup::kUser, "digital output (M63)"},
+                             {640, MGroup::kUser, "digital output (M64)"},
+                             {650, MGroup::kUser, "digital output (M65)"},
+                             {660, MGroup::kUser, "wait on input (M66)"},
+                             {670, MGroup::kUser, "analog output (M67)"},
+                             {680, MGroup::kUser, "analog output (M68)"},
+                             {700, MGroup::kUser, "modal state save (M70)"},
+                             {710, MGroup::kUser, "modal state (M71)"},
+                             {720, MGroup::kUser, "modal state restore (M72)"},
+                             {730, MGroup::kUser, "modal state autorestore (M73)"}};
+
+std::string code_text(char letter, int code) {
+  char buf[32];
+  if (code % 10)
+    std::snprintf(buf, sizeof buf, "%c%d.%d", letter, code / 10, code % 10);
+  else
+    std::snprintf(buf, sizeof buf, "%c%d", letter, code / 10);
+  return buf;
+}
+
+[[noreturn]] void fail(const LexedLine& line, int column, const std::string& message) {
+  throw GcodeError({*line.file, line.line, column}, message);
+}
+
+}  // namespace
+
+ModalCodes::ModalCodes() {
+  for (int i = 0; i < 16; ++i)
+    g[i] = g_column[i] = -1;
+  for (int i = 0; i < 11; ++i)
+    m[i] = m_column[i] = -1;
+}
+
+ModalCodes check_codes(const Block& block, const LexedLine& line) {
+  ModalCodes out;
+  for (const auto& w : block.g) {
+    const GInfo* info = nullptr;
+    for (const auto& g : kGCodes)
+      if (g.code == w.code) info = &g;
+    if (!info) fail(line, w.column, "unknown G code " + code_text('G', w.code));
+    if (info->unsupported)
+      fail(line, w.column, code_text('G', w.code) + " " + info->unsupported + " is not supported");
+    if (w.code == 530) continue;  // G53 combines with a motion code; see execution
+    const int grp = static_cast<int>(info->group);
+    if (info->group == GGroup::kNonModal) {
+      if (out.non_modal_count++ > 0)
+        fail(line, w.column,
+             "two non-modal G codes on one line (" + code_text('G', out.g[0]) + " and " +
+                 code_text('G', w.code) + ")");
+    } else if (out.g[grp] >= 0) {
+      fail(line, w.column,
+           "two G codes from the same modal group on one line: " + code_text('G', out.g[grp]) +
+               " and " + code_text('G', w.code));
+    }
+    out.g[grp] = w.code;
+    out.g_column[grp] = w.column;
+  }
+  for (const auto& w : block.m) {
+    const MInfo* info = nullptr;
+    for (const auto& m : kMCodes)
+      if (m.code == w.code) info = &m;
+    if (!info) {
+      if (w.code >= 1000 && w.code <= 1990)
+        fail(line, w.column, "user M code " + code_text('M', w.code) + " is not supported");
+      fail(line, w.column, "unknown M code " + code_text('M', w.code));
+    }
+    if (info->unsupported)
+      fail(line, w.column, code_text('M', w.code) + " " + info->unsupported + " is not supported");
+    const int grp = static_cast<int>(info->group);
+    if (out.m[grp] >= 0)
+      fail(line, w.column,
+           "two M codes from the same modal group on one line: " + code_text('M', out.m[grp]) +
+               " and " + code_text('M', w.code));
+    out.m[grp] = w.code;
+    out.m_column[grp] = w.column;
+  }
+  // BSPLINE / CSPLINE belong to the motion group like Sinumerik's G-group 1.
+  for (const auto& k : block.sinumerik) {
+    if (k.word != SinumerikWord::kBspline && k.word != SinumerikWord::kCspline) continue;
+    const int grp = static_cast<int>(GGroup::kMotion);
+    if (out.g[grp] >= 0)
+      fail(line, k.column,
+           out.g[grp] >= kBsplineCode ? std::string("two spline modes on one line")
+                                      : "BSPLINE/CSPLINE and " + code_text('G', out.g[grp]) +
+                                            " are both motion modes: only one per line");
+    out.g[grp] = k.word == SinumerikWord::kBspline ? kBsplineCode : kCsplineCode;
+    out.g_column[grp] = k.column;
+  }
+  return out;
+}
+
+}  // namespace truecut::interp

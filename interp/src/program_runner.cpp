@@ -1,0 +1,366 @@
+#include "program_runner.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "system_parameters.hpp"
+
+namespace truecut::interp {
+
+namespace {
+
+constexpr size_t kMaxCallDepth = 100;
+
+bool is_percent_line(const std::string& s) {
+  const auto first = s.find_first_not_of(" \t");
+  return first != std::string::npos && s[first] == '%' &&
+         s.find_first_not_of(" \t", first + 1) == std::string::npos;
+}
+
+bool is_blank(const std::string& s) {
+  return s.find_first_not_of(" \t") == std::string::npos;
+}
+
+const char* keyword_name(OKeyword k) {
+  switch (k) {
+    case OKeyword::kSub:
+      return "sub";
+    case OKeyword::kEndsub:
+      return "endsub";
+    case OKeyword::kCall:
+      return "call";
+    case OKeyword::kReturn:
+      return "return";
+    case OKeyword::kIf:
+      return "if";
+    case OKeyword::kElseif:
+      return "elseif";
+    case OKeyword::kElse:
+      return "else";
+    case OKeyword::kEndif:
+      return "endif";
+    case OKeyword::kWhile:
+      return "while";
+    case OKeyword::kEndwhile:
+      return "endwhile";
+    case OKeyword::kDo:
+      return "do";
+    case OKeyword::kRepeat:
+      return "repeat";
+    case OKeyword::kEndrepeat:
+      return "endrepeat";
+    case OKeyword::kBreak:
+      return "break";
+    case OKeyword::kContinue:
+      return "continue";
+  }
+  return "";
+}
+
+std::string label_text(const std::string& label) {
+  return "o" + label;
+}
+
+}  // namespace
+
+ProgramRunner::ProgramRunner(const InterpreterOptions& options, CanonProgram& out)
+    : options_(options),
+      out_(out),
+      emitter_(out, state_),
+      executor_(state_, params_, options.tools, emitter_) {
+  params_.set(kDebugSwitch, 1.0);
+  params_.predefined = [this](std::string_view name) {
+    return predefined_parameter(state_, params_, name);
+  };
+}
+
+void ProgramRunner::fail(const LexedLine& line, int column, const std::string& message) const {
+  throw GcodeError({*line.file, line.line, column}, message);
+}
+
+int ProgramRunner::add_file(SourceFile source) {
+  File f;
+  f.source = std::move(source);
+  f.end = f.source.lines.size();
+  out_.files.push_back(f.source.name);
+  const int index = static_cast<int>(files_.size());
+  files_.push_back(std::move(f));
+  File& file = files_.back();
+  // A program may be framed by '%' lines: the first non-blank line and a
+  // later one, after which nothing is read.
+  size_t first = 0;
+  while (first < file.source.lines.size() && is_blank(file.source.lines[first]))
+    ++first;
+  const bool framed = first < file.source.lines.size() && is_percent_line(file.source.lines[first]);
+  file.lines.reserve(file.source.lines.size());
+  for (size_t i = 0; i < file.source.lines.size(); ++i) {
+    const std::string& text = file.source.lines[i];
+    if (framed && i > first && is_percent_line(text)) {
+      file.end = i;
+      break;
+    }
+    if (framed && i == first) {
+      file.lines.push_back(lex_line("", file.source.name, static_cast<int>(i) + 1));
+    } else {
+      file.lines.push_back(lex_line(text, file.source.name, static_cast<int>(i) + 1));
+    }
+  }
+  file.end = std::min(file.end, file.lines.size());
+  file.owords.resize(file.lines.size());
+  for (size_t i = 0; i < file.lines.size(); ++i) {
+    file.owords[i] = scan_oword(file.lines[i]);
+    if (file.owords[i] && file.owords[i]->keyword == OKeyword::kSub)
+      subs_.emplace(file.owords[i]->label, std::make_pair(index, i));
+  }
+  return index;
+}
+
+void ProgramRunner::run(SourceFile main_file) {
+  add_file(std::move(main_file));
+  frames_.push_back(Frame{});
+  executor_.start_program();
+  while (step()) {
+  }
+}
+
+size_t ProgramRunner::find_forward(int file, size_t from, const std::string& label,
+                                   std::initializer_list<OKeyword> kinds,
+                                   const LexedLine& at) const {
+  const File& f = files_[file];
+  for (size_t i = from; i < f.end; ++i) {
+    const auto& o = f.owords[i];
+    if (!o || o->label != label) continue;
+    if (std::find(kinds.begin(), kinds.end(), o->keyword) != kinds.end()) return i;
+  }
+  std::string expected;
+  for (OKeyword k : kinds)
+    expected += std::string(expected.empty() ? "" : " or ") + keyword_name(k);
+  fail(at, 1, "no matching " + label_text(label) + " " + expected + " found");
+}
+
+std::optional<std::pair<int, size_t>> ProgramRunner::find_sub(const std::string& label,
+                                                              const LexedLine& at) {
+  if (auto it = subs_.find(label); it != subs_.end()) return it->second;
+  if (label.size() < 3 || label.front() != '<') return std::nullopt;
+  // o<name> call: look for name.ngc beside the program, then on the path.
+  const std::string name = label.substr(1, label.size() - 2);
+  std::vector<std::filesystem::path> dirs;
+  dirs.push_back(std::filesystem::path(files_[0].source.name).parent_path());
+  for (const auto& d : options_.subroutine_path)
+    dirs.push_back(d);
+  for (const auto& d : dirs) {
+    std::error_code ec;
+    for (const auto& candidate : {d / (name + ".ngc"), d / (name + ".NGC")}) {
+      if (!std::filesystem::is_regular_file(candidate, ec)) continue;
+      add_file(load_source(candidate));
+      if (auto it = subs_.find(label); it != subs_.end()) return it->second;
+      fail(at, 1, candidate.string() + " does not define " + label_text(label) + " sub");
+    }
+  }
+  return std::nullopt;
+}
+
+void ProgramRunner::assign(const Block& block, const LexedLine& line) {
+  for (const auto& a : block.assignments) {
+    if (a.target.name.empty()) {
+      params_.set(a.target.index, a.value);
+    } else {
+      if (params_.is_predefined(a.target.name))
+        fail(line, a.column, "#<" + a.target.name + "> is a read-only predefined parameter");
+      params_.set_named(a.target.name, a.value);
+    }
+  }
+}
+
+bool ProgramRunner::step() {
+  Frame& frame = frames_.back();
+  File& file = files_[frame.file];
+  if (frame.pc >= file.end) {
+    const LexedLine* last = file.lines.empty() ? nullptr : &file.lines.back();
+    const int line = last ? last->line : 1;
+    if (file.end < file.source.lines.size() && frames_.size() == 1) {
+      emitter_.set_location(frame.file, line + 1);
+      emitter_.emit(Finish{});
+      emitter_.emit(OnReset{});
+      emitter_.emit(OnReset{});
+      return false;  // closing '%'
+    }
+    if (frames_.size() > 1)
+      throw GcodeError(
+          {file.source.name, line, 1},
+          "end of file inside subroutine " + label_text(frame.label) + " (missing endsub)");
+    throw GcodeError({file.source.name, line, 1},
+                     "file ended with no program end (M2 or M30) and no closing '%'");
+  }
+  if (++blocks_ > options_.max_blocks)
+    fail(file.lines[frame.pc], 1,
+         "more than " + std::to_string(options_.max_blocks) +
+             " blocks executed: endless loop? (InterpreterOptions::max_blocks)");
+  const LexedLine& line = file.lines[frame.pc];
+  if (line.text.empty() && line.sinumerik.empty()) {
+    ++frame.pc;
+    return true;
+  }
+  if (line.text[0] == '/' && options_.block_delete) {
+    ++frame.pc;
+    return true;
+  }
+  if (!line.text.empty() && line.text[0] == '%')
+    fail(line, line.column[0], "'%' is only allowed alone on the first and last program lines");
+  sync_state_parameters(state_, params_);
+  emitter_.set_location(frame.file, line.line);
+  const Block block = read_block(line, params_, options_.has_b);
+  assign(block, line);
+  if (block.o) {
+    control(*block.o, line);
+    return true;
+  }
+  ++frame.pc;
+  return !executor_.execute(block, line);
+}
+
+void ProgramRunner::control(const OWord& o, const LexedLine& line) {
+  Frame& frame = frames_.back();
+  const int fi = frame.file;
+  const size_t pc = frame.pc;
+  auto loop_index = [&](const std::string& label) -> int {
+    for (int i = static_cast<int>(frame.loops.size()) - 1; i >= 0; --i)
+      if (frame.loops[i].label == label) return i;
+    return -1;
+  };
+  switch (o.keyword) {
+    case OKeyword::kSub: {
+      // A definition met in the flow of the program is skipped.
+      frame.pc = find_forward(fi, pc + 1, o.label, {OKeyword::kEndsub}, line) + 1;
+      return;
+    }
+    case OKeyword::kCall: {
+      auto where = find_sub(o.label, line);
+      if (!where) fail(line, o.column, "unknown subroutine " + label_text(o.label));
+      if (frames_.size() > kMaxCallDepth)
+        fail(line, o.column, "subroutine calls nested too deep (recursion?)");
+      frame.pc = pc + 1;
+      params_.push_call(o.args);
+      frames_.push_back(Frame{where->first, where->second + 1, o.label, {}});
+      return;
+    }
+    case OKeyword::kReturn:
+    case OKeyword::kEndsub: {
+      if (frames_.size() == 1)
+        fail(line, o.column,
+             label_text(o.label) + " " + keyword_name(o.keyword) + " outside a subroutine call");
+      params_.pop_call();
+      frames_.pop_back();
+      params_.set_named("_value", o.condition.value_or(0.0));
+      params_.set_named("_value_returned", o.condition ? 1.0 : 0.0);
+      return;
+    }
+    case OKeyword::kIf: {
+      if (*o.condition != 0.0) {
+        frame.pc = pc + 1;
+        return;
+      }
+      size_t at = pc;
+      while (true) {
+        at = find_forward(fi, at + 1, o.label,
+                          {OKeyword::kElseif, OKeyword::kElse, OKeyword::kEndif}, line);
+        const OKeyword k = files_[fi].owords[at]->keyword;
+        if (k != OKeyword::kElseif) break;
+        const LexedLine& branch = files_[fi].lines[at];
+        sync_state_parameters(state_, params_);
+        const Block b = read_block(branch, params_, options_.has_b);
+        if (*b.o->condition != 0.0) break;
+      }
+      frame.pc = at + 1;
+      return;
+    }
+    case OKeyword::kElseif:
+    case OKeyword::kElse:
+      // Reached at the end of a branch that was taken.
+      frame.pc = find_forward(fi, pc + 1, o.label, {OKeyword::kEndif}, line) + 1;
+      return;
+    case OKeyword::kEndif:
+      frame.pc = pc + 1;
+      return;
+    case OKeyword::kDo: {
+      const int li = loop_index(o.label);
+      if (li < 0 || frame.loops[li].start != pc)
+        frame.loops.push_back({o.label, OKeyword::kDo, pc});
+      frame.pc = pc + 1;
+      return;
+    }
+    case OKeyword::kWhile: {
+      const int li = loop_index(o.label);
+      if (li >= 0 && frame.loops[li].kind == OKeyword::kDo) {  // end of do ... while
+        if (*o.condition != 0.0) {
+          frame.pc = frame.loops[li].start + 1;
+        } else {
+          frame.loops.resize(li);
+          frame.pc = pc + 1;
+        }
+        return;
+      }
+      if (*o.condition != 0.0) {
+        if (li < 0 || frame.loops[li].start != pc)
+          frame.loops.push_back({o.label, OKeyword::kWhile, pc});
+        frame.pc = pc + 1;
+      } else {
+        if (li >= 0) frame.loops.resize(li);
+        frame.pc = find_forward(fi, pc + 1, o.label, {OKeyword::kEndwhile}, line) + 1;
+      }
+      return;
+    }
+    case OKeyword::kEndwhile: {
+      const int li = loop_index(o.label);
+      if (li < 0) fail(line, o.column, label_text(o.label) + " endwhile without while");
+      frame.pc = frame.loops[li].start;
+      return;
+    }
+    case OKeyword::kRepeat: {
+      const double n = std::floor(*o.condition);
+      if (n <= 0) {
+        frame.pc = find_forward(fi, pc + 1, o.label, {OKeyword::kEndrepeat}, line) + 1;
+        return;
+      }
+      frame.loops.push_back({o.label, OKeyword::kRepeat, pc, n});
+      frame.pc = pc + 1;
+      return;
+    }
+    case OKeyword::kEndrepeat: {
+      const int li = loop_index(o.label);
+      if (li < 0) fail(line, o.column, label_text(o.label) + " endrepeat without repeat");
+      if (--frame.loops[li].remaining > 0) {
+        frame.pc = frame.loops[li].start + 1;
+      } else {
+        frame.loops.resize(li);
+        frame.pc = pc + 1;
+      }
+      return;
+    }
+    case OKeyword::kBreak:
+    case OKeyword::kContinue: {
+      const int li = loop_index(o.label);
+      if (li < 0)
+        fail(line, o.column,
+             label_text(o.label) + " " + keyword_name(o.keyword) + " outside its loop");
+      const Loop loop = frame.loops[li];
+      size_t end = 0;
+      if (loop.kind == OKeyword::kWhile)
+        end = find_forward(fi, pc + 1, o.label, {OKeyword::kEndwhile}, line);
+      else if (loop.kind == OKeyword::kRepeat)
+        end = find_forward(fi, pc + 1, o.label, {OKeyword::kEndrepeat}, line);
+      else
+        end = find_forward(fi, pc + 1, o.label, {OKeyword::kWhile}, line);
+      if (o.keyword == OKeyword::kBreak) {
+        frame.loops.resize(li);
+        frame.pc = end + 1;
+      } else {
+        frame.loops.resize(li + 1);
+        frame.pc = loop.kind == OKeyword::kWhile ? loop.start : end;
+      }
+      return;
+    }
+  }
+}
+
+}  // namespace truecut::interp

@@ -1,0 +1,66 @@
+// Runs a program line by line: O-word control flow (subroutines, if, while,
+// do, repeat, break, continue), parameter settings, block delete and the
+// program end, handing every other block to the BlockExecutor.
+#pragma once
+
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "block.hpp"
+#include "block_executor.hpp"
+#include "source_text.hpp"
+#include "truecut/interp/interpreter.hpp"
+
+namespace truecut::interp {
+
+class ProgramRunner {
+ public:
+  ProgramRunner(const InterpreterOptions& options, CanonProgram& out);
+  void run(SourceFile main_file);
+
+ private:
+  struct File {
+    SourceFile source;
+    std::vector<LexedLine> lines;
+    std::vector<std::optional<OWord>> owords;  // per line, for jumps
+    size_t end = 0;  // lines after a closing '%' are not part of the program
+  };
+  struct Loop {
+    std::string label;
+    OKeyword kind;  // kWhile, kDo or kRepeat
+    size_t start;   // line index of the while/do/repeat line
+    double remaining = 0;
+  };
+  struct Frame {
+    int file = 0;
+    size_t pc = 0;
+    std::string label;  // subroutine label, "" at top level
+    std::vector<Loop> loops;
+  };
+
+  int add_file(SourceFile source);
+  std::optional<std::pair<int, size_t>> find_sub(const std::string& label, const LexedLine& at);
+  size_t find_forward(int file, size_t from, const std::string& label,
+                      std::initializer_list<OKeyword> kinds, const LexedLine& at) const;
+  // Executes the line at the current frame's pc; false when the program ends.
+  bool step();
+  void control(const OWord& o, const LexedLine& line);
+  void assign(const Block& block, const LexedLine& line);
+  [[noreturn]] void fail(const LexedLine& line, int column, const std::string& message) const;
+
+  const InterpreterOptions& options_;
+  CanonProgram& out_;
+  InterpState state_;
+  Parameters params_;
+  Emitter emitter_;
+  BlockExecutor executor_;
+  std::vector<File> files_;
+  std::vector<Frame> frames_;
+  std::map<std::string, std::pair<int, size_t>> subs_;
+  std::int64_t blocks_ = 0;
+};
+
+}  // namespace truecut::interp

@@ -1,0 +1,60 @@
+#include "source_text.hpp"
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "truecut/interp/error.hpp"
+
+namespace truecut::interp {
+
+namespace {
+
+bool allowed_control(unsigned char c) {
+  return c == '\t' || c == '\r' || c == '\f' || c == '\v';
+}
+
+}  // namespace
+
+SourceFile source_from_text(std::string_view text, const std::string& name) {
+  SourceFile src;
+  src.name = name;
+  int line = 1;
+  int column = 1;
+  std::string current;
+  for (unsigned char c : text) {
+    if (c == '\n') {
+      if (!current.empty() && current.back() == '\r') current.pop_back();
+      src.lines.push_back(std::move(current));
+      current.clear();
+      ++line;
+      column = 1;
+      continue;
+    }
+    if (c < 0x20 && !allowed_control(c)) {
+      char msg[96];
+      std::snprintf(msg, sizeof msg, "not a text file: control byte 0x%02x", unsigned(c));
+      throw GcodeError({name, line, column}, msg);
+    }
+    current.push_back(static_cast<char>(c));
+    ++column;
+  }
+  if (!current.empty()) {
+    if (current.back() == '\r') current.pop_back();
+    src.lines.push_back(std::move(current));
+  }
+  return src;
+}
+
+SourceFile load_source(const std::filesystem::path& file) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(file, ec))
+    throw GcodeError({file.string(), 0, 0}, "is a folder, not a program file");
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw GcodeError({file.string(), 0, 0}, "cannot open file");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return source_from_text(ss.str(), file.string());
+}
+
+}  // namespace truecut::interp

@@ -1,0 +1,75 @@
+#!/bin/bash
+# Makes LinuxCNC's standalone interpreter `rs274` runnable without installing
+# it: downloads the Debian packages (linuxcnc-uspace and the libraries it
+# lacks on this machine) with `apt-get download`, unpacks them with
+# `dpkg -x` into DIR and writes DIR/rs274, a wrapper that sets
+# LD_LIBRARY_PATH and a private HOME. The sample programs end up under
+# DIR/root/usr/share/{linuxcnc/ncfiles,doc/linuxcnc/examples}.
+#
+# usage: fetch_rs274.sh DIR
+# exit 0: DIR/rs274 works; otherwise a one-line reason on stderr.
+# These packages are GPL: they are used at test time only, never committed.
+set -u
+dir=${1:?usage: fetch_rs274.sh DIR}
+mkdir -p "$dir/debs" "$dir/root" "$dir/home" || exit 1
+dir=$(cd "$dir" && pwd)
+wrapper=$dir/rs274
+
+works() {
+  [ -x "$wrapper" ] || return 1
+  printf 'G0 X1\nM2\n' > "$dir/probe.ngc"
+  printf 'T1 P1 Z0\n' > "$dir/probe.tbl"
+  "$wrapper" -g -t "$dir/probe.tbl" "$dir/probe.ngc" 2>/dev/null | grep -q 'STRAIGHT_TRAVERSE(1.0000'
+}
+
+if works; then exit 0; fi
+command -v apt-get >/dev/null && command -v dpkg >/dev/null || {
+  echo "apt-get/dpkg not available: cannot fetch linuxcnc-uspace" >&2; exit 1; }
+
+download() {  # download PACKAGE...: into debs/, retrying once after apt-get update
+  (cd "$dir/debs" && apt-get download "$@" >/dev/null 2>&1) && return 0
+  if [ "$(id -u)" = 0 ] && [ ! -e "$dir/.updated" ]; then
+    apt-get update >/dev/null 2>&1 && touch "$dir/.updated"
+    (cd "$dir/debs" && apt-get download "$@" >/dev/null 2>&1) && return 0
+  fi
+  return 1
+}
+
+unpack() { for deb in "$dir"/debs/*.deb; do dpkg -x "$deb" "$dir/root" || return 1; done; }
+
+download linuxcnc-uspace libboost-python1.74.0 || {
+  echo "apt-get download linuxcnc-uspace libboost-python1.74.0 failed (no package source?)" >&2
+  exit 1; }
+unpack || { echo "dpkg -x failed" >&2; exit 1; }
+
+cat > "$wrapper" <<WRAP
+#!/bin/bash
+export LD_LIBRARY_PATH="$dir/root/usr/lib:$dir/root/usr/lib/x86_64-linux-gnu:$dir/root/lib/x86_64-linux-gnu\${LD_LIBRARY_PATH:+:\$LD_LIBRARY_PATH}"
+export HOME="$dir/home"
+exec "$dir/root/usr/bin/rs274" "\$@"
+WRAP
+chmod +x "$wrapper"
+
+# Runtime libraries missing on this machine, by soname -> Debian package.
+declare -A provider=(
+  [libpython3.11.so.1.0]=libpython3.11 [libedit.so.2]=libedit2 [libtirpc.so.3]=libtirpc3
+  [libexpat.so.1]=libexpat1 [libz.so.1]=zlib1g [libtinfo.so.6]=libtinfo6 [libbsd.so.0]=libbsd0
+  [libmd.so.0]=libmd0 [libgssapi_krb5.so.2]=libgssapi-krb5-2 [libkrb5.so.3]=libkrb5-3
+  [libk5crypto.so.3]=libk5crypto3 [libkrb5support.so.0]=libkrb5support0
+  [libcom_err.so.2]=libcom-err2 [libkeyutils.so.1]=libkeyutils1
+  [libboost_python311.so.1.74.0]=libboost-python1.74.0)
+for round in 1 2 3; do
+  missing=$(LD_LIBRARY_PATH="$dir/root/usr/lib:$dir/root/usr/lib/x86_64-linux-gnu:$dir/root/lib/x86_64-linux-gnu" \
+            ldd "$dir/root/usr/bin/rs274" 2>/dev/null | awk '/not found/ {print $1}')
+  [ -z "$missing" ] && break
+  pkgs=()
+  for lib in $missing; do
+    if [ -n "${provider[$lib]:-}" ]; then pkgs+=("${provider[$lib]}"); else
+      echo "rs274 needs $lib, which this script does not know how to fetch" >&2; exit 1; fi
+  done
+  download "${pkgs[@]}" && unpack || { echo "cannot fetch ${pkgs[*]}" >&2; exit 1; }
+done
+
+if works; then exit 0; fi
+echo "rs274 was unpacked but does not run here (python3.11 runtime missing?)" >&2
+exit 1

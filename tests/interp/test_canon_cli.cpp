@@ -1,0 +1,92 @@
+// `truecut canon`: output layout, options, and bad input (exit 2, located
+// message, nothing on stdout).
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "run_process.hpp"
+#include "test_paths.hpp"
+
+namespace truecut::test {
+namespace {
+
+std::filesystem::path write(const std::filesystem::path& dir, const std::string& name,
+                            const std::string& text) {
+  std::ofstream(dir / name, std::ios::binary) << text;
+  return dir / name;
+}
+
+TEST(CanonCli, PrintsCallsLikeRs274) {
+  const auto dir = scratch_dir();
+  const auto prog = write(dir, "p.ngc", "G0 X1 Y2 Z3\nG1 X4 F100\nM2\n");
+  auto r = run_process({cli_path().string(), "canon", prog.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("    7 N..... STRAIGHT_TRAVERSE(1.0000, 2.0000, 3.0000, 0.0000, 0.0000, "
+                       "0.0000)\n"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("STRAIGHT_FEED(4.0000, 2.0000"), std::string::npos);
+  EXPECT_NE(r.out.find("PROGRAM_END()"), std::string::npos);
+}
+
+TEST(CanonCli, ToolTableDecimalsAndAnnotation) {
+  const auto dir = scratch_dir();
+  const auto tools = write(dir, "t.tbl", "T4 P1 Z12.5\n");
+  const auto prog = write(dir, "p.ngc", "(OPERATION: FACE)\nT4 M6 G43\nG0 Z0\nM2\n");
+  auto r = run_process({cli_path().string(), "canon", "--tool-table", tools.string(), "--decimals",
+                        "6", "--annotate", prog.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("USE_TOOL_LENGTH_OFFSET(0.000000 0.000000 12.500000"), std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("; " + prog.string() + ":3 op=FACE tool=4"), std::string::npos) << r.out;
+  auto ops = run_process({cli_path().string(), "canon", "--tool-table", tools.string(),
+                          "--list-operations", prog.string()});
+  EXPECT_EQ(ops.out, "FACE\n");
+  auto only = run_process({cli_path().string(), "canon", "--tool-table", tools.string(),
+                           "--operation", "FACE", prog.string()});
+  EXPECT_EQ(only.out,
+            "    1 N..... STRAIGHT_TRAVERSE(0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n");
+}
+
+TEST(CanonCli, BadProgramGivesLocationAndNoOutput) {
+  const auto dir = scratch_dir();
+  const auto prog = write(dir, "bad.ngc", "G0 X1\nG1 X2 F100\nG2 X3 Y0\nM2\n");
+  auto r = run_process({cli_path().string(), "canon", prog.string()});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.out, "") << "no partial output";
+  EXPECT_EQ(r.err,
+            prog.string() + ":3:1: missing arc data: give R (radius) or I/J (centre offsets)\n");
+}
+
+TEST(CanonCli, BinaryFileIsRejected) {
+  const auto dir = scratch_dir();
+  const auto prog = write(dir, "image.ngc",
+                          std::string("\x7f"
+                                      "ELF\x02\x01\x01\0\0\0",
+                                      10));
+  auto r = run_process({cli_path().string(), "canon", prog.string()});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.out, "");
+  EXPECT_NE(r.err.find(prog.string() + ":1:5: not a text file"), std::string::npos) << r.err;
+}
+
+TEST(CanonCli, UsageErrors) {
+  auto none = run_process({cli_path().string(), "canon"});
+  EXPECT_EQ(none.exit_code, 2);
+  auto missing = run_process({cli_path().string(), "canon", "/nonexistent/p.ngc"});
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_NE(missing.err.find("/nonexistent/p.ngc: cannot open file"), std::string::npos);
+  const auto dir = scratch_dir();
+  const auto tools = write(dir, "t.tbl", "T1 P1 Zx\n");
+  const auto prog = write(dir, "p.ngc", "M2\n");
+  auto bad_tools =
+      run_process({cli_path().string(), "canon", "--tool-table", tools.string(), prog.string()});
+  EXPECT_EQ(bad_tools.exit_code, 2);
+  EXPECT_NE(bad_tools.err.find(tools.string() + ":1:7:"), std::string::npos) << bad_tools.err;
+  auto help = run_process({cli_path().string(), "canon", "--help"});
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.out.find("usage: truecut canon"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace truecut::test

@@ -1,0 +1,105 @@
+// Bad input: every error names file:line:column and stops the program.
+#include <gtest/gtest.h>
+
+#include "interp_test_util.hpp"
+
+namespace truecut::interp::testing {
+namespace {
+
+struct Case {
+  const char* text;
+  int line;
+  int column;
+  const char* message_part;
+};
+
+class BadInput : public ::testing::TestWithParam<Case> {};
+
+TEST_P(BadInput, IsLocated) {
+  const Case& c = GetParam();
+  GcodeError e = error_of(c.text);
+  EXPECT_EQ(e.where().file, "test.ngc");
+  EXPECT_EQ(e.where().line, c.line) << e.what();
+  EXPECT_EQ(e.where().column, c.column) << e.what();
+  EXPECT_NE(e.message().find(c.message_part), std::string::npos) << e.what();
+  const std::string prefix =
+      "test.ngc:" + std::to_string(c.line) + ":" + std::to_string(c.column) + ": ";
+  EXPECT_EQ(std::string(e.what()).rfind(prefix, 0), 0u) << e.what();
+}
+
+INSTANTIATE_TEST_SUITE_P(Words, BadInput,
+                         ::testing::Values(Case{"G0 X1\nG0 X2 W3\nM2\n", 2, 7, "unknown word W"},
+                                           Case{"G0 X1 $\nM2\n", 1, 7, "unknown character '$'"},
+                                           Case{"G12.5 X1\nM2\n", 1, 1, "unknown G code G12.5"},
+                                           Case{"M123\nM2\n", 1, 1, "M123 is not supported"},
+                                           Case{"G0 X1 X2\nM2\n", 1, 7, "two X words"},
+                                           Case{"G41 X1\nM2\n", 1, 1, "not supported"},
+                                           Case{"G81 X1 Z-1 R1\nM2\n", 1, 1, "canned cycles"},
+                                           Case{"G0 X1 D3\nM2\n", 1, 7, "word D"},
+                                           Case{"G1.3 X1\nM2\n", 1, 1, "unknown G code"},
+                                           Case{"G0 X\nM2\n", 1, 4, "has no value"},
+                                           Case{"X1\nM2\n", 1, 1, "no motion mode"},
+                                           Case{"G0 I1 X2\nM2\n", 1, 4, "I word with no G2 or G3"},
+                                           Case{"G0 X1 Y2 % \nM2\n", 1, 10, "unknown character"}));
+
+INSTANTIATE_TEST_SUITE_P(
+    ModalConflicts, BadInput,
+    ::testing::Values(Case{"G0 G1 X1 F100\nM2\n", 1, 4, "same modal group on one line: G0 and G1"},
+                      Case{"G17 G18\nM2\n", 1, 5, "same modal group"},
+                      Case{"G20 G21\nM2\n", 1, 5, "same modal group"},
+                      Case{"G90 G91\nM2\n", 1, 5, "same modal group"},
+                      Case{"M3 M5\nM2\n", 1, 4, "same modal group on one line: M3 and M5"},
+                      Case{"G4 P1 G92 X0\nM2\n", 1, 7, "two non-modal"}));
+
+INSTANTIATE_TEST_SUITE_P(
+    Arcs, BadInput,
+    ::testing::Values(Case{"F100\nG2 X10 Y0\nM2\n", 2, 1, "missing arc data"},
+                      Case{"F100\nG2 X10 Y0 R5 I5\nM2\n", 2, 11, "both R and I/J/K"},
+                      Case{"F100\nG2 X10 Y0 I4 J0\nM2\n", 2, 11, "radius mismatch"},
+                      Case{"F100\nG2 X30 Y0 R5\nM2\n", 2, 11, "too small"},
+                      Case{"F100\nG2 X0 Y0 R5\nM2\n", 2, 10, "cannot end where it starts"},
+                      Case{"F100\nG2 X10 I5 K1\nM2\n", 2, 11, "K word given for an arc in the XY"},
+                      Case{"F100\nG2 X10 I5 P0\nM2\n", 2, 11, "turns P"}));
+
+INSTANTIATE_TEST_SUITE_P(
+    Feed, BadInput,
+    ::testing::Values(Case{"G1 X10\nM2\n", 1, 1, "zero feed rate"},
+                      Case{"G0 X1\nG3 X0 Y1 I-1\nM2\n", 2, 1, "zero feed rate"},
+                      Case{"G93 G1 X1 F10\nG1 X2\nM2\n", 2, 1, "needs an F word"},
+                      Case{"G1 X1 F-5\nM2\n", 1, 7, "negative feed"}));
+
+INSTANTIATE_TEST_SUITE_P(
+    Expressions, BadInput,
+    ::testing::Values(Case{"G0 X[1 + [2]\nM2\n", 1, 5, "unbalanced brackets"},
+                      Case{"G0 X[1 + 2]]\nM2\n", 1, 12, "unbalanced brackets"},
+                      Case{"#1 = 0\nG0 X[4 / #1]\nM2\n", 2, 8, "division by zero"},
+                      Case{"G0 X[4 MOD 0]\nM2\n", 2 - 1, 8, "division by zero"},
+                      Case{"#1 5\nM2\n", 1, 5, "expected '='"},
+                      Case{"G0 X1 (unclosed\nM2\n", 1, 7, "unclosed comment"},
+                      Case{"G0 X1 (a (b) c)\nM2\n", 1, 10, "nested comment"}));
+
+INSTANTIATE_TEST_SUITE_P(Program, BadInput,
+                         ::testing::Values(Case{"G0 X1\nG0 X2\n", 2, 1, "no program end"},
+                                           Case{"G0 X1\n%\nM2\n", 2, 1, "'%'"},
+                                           Case{"G0 X1\nT9 M6\nM2\n", 2, 1,
+                                                "not in the tool table"},
+                                           Case{"G43 H8\nM2\n", 1, 5, "not in the tool table"}));
+
+TEST(BadInput, NotTextIsRejectedBeforeAnything) {
+  const std::string binary("\x89PNG\r\n\x1a\n\0\0\0\rIHDR", 16);
+  try {
+    run(binary);
+    FAIL() << "binary accepted";
+  } catch (const GcodeError& e) {
+    EXPECT_EQ(e.where().line, 2);
+    EXPECT_NE(e.message().find("not a text file"), std::string::npos);
+  }
+}
+
+TEST(BadInput, NoPartialResult) {
+  // The API returns nothing for a program with an error: run_text throws.
+  EXPECT_THROW(run("G0 X1\nG0 X2\nG2 X1\nM2\n"), GcodeError);
+}
+
+}  // namespace
+}  // namespace truecut::interp::testing

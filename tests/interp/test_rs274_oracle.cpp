@@ -1,0 +1,239 @@
+// The oracle: the same programs through LinuxCNC's standalone interpreter
+// `rs274` and through `truecut canon` must give the same canonical calls
+// (positions, arc centres, feeds, planes, offsets, tools, comments).
+//
+// rs274 comes from Debian's linuxcnc-uspace package, fetched and unpacked at
+// test time by fetch_rs274.sh (skipped with a message when it cannot be had).
+// LinuxCNC's sample programs are GPL: they are read from that package only.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <set>
+
+#include "rs274_compare.hpp"
+#include "run_process.hpp"
+#include "test_paths.hpp"
+
+namespace truecut::interp::testing {
+namespace {
+
+namespace fs = std::filesystem;
+using truecut::test::binary_dir;
+using truecut::test::cli_path;
+using truecut::test::run_process;
+using truecut::test::source_dir;
+
+// Sample programs rs274 runs but truecut rejects on purpose (docs/gcode.md
+// lists them). Keyed by "<folder>/<file>".
+const std::map<std::string, std::string>& out_of_scope() {
+  static const std::map<std::string, std::string> kList = {
+      {"ncfiles/comp-g1.ngc", "cutter radius compensation G41/G42"},
+      {"ncfiles/comp.ngc", "cutter radius compensation G41/G42 (D word)"},
+      {"ncfiles/comp311.ngc", "cutter radius compensation G41/G42"},
+      {"ncfiles/comp311_2.ngc", "cutter radius compensation G41/G42"},
+      {"ncfiles/gmoccapy_2_tools_with_cutter_radius_compensation.ngc",
+       "cutter radius compensation G41/G42"},
+      {"ncfiles/useful-subroutines.ngc", "cutter radius compensation G41/G42"},
+      {"ncfiles/lathe_g70_71_demo.ngc", "lathe cycles G70/G71 (D word)"},
+      {"ncfiles/lathe_g7x_face_boring.ngc", "lathe cycles G70-G72 (D word)"},
+      {"ncfiles/lathe_g7x_quadrants.ngc", "lathe cycles G70-G72 (D word)"},
+      {"ncfiles/lathe_pawn.ngc", "lathe radius/diameter mode G7/G8"},
+      {"millturn/example.ngc", "lathe radius/diameter mode G7/G8"},
+      {"ncfiles/gridprobe.ngc", "probing G38.x"},
+      {"ncfiles/smartprobe.ngc", "probing G38.x"},
+      {"ncfiles/x-trim.ngc", "probing G38.x (in the touchoff subroutine)"},
+      {"ncfiles/hole-circle.ngc", "polar coordinates (@ ^) and canned cycles"},
+      {"ncfiles/spiral.ngc", "polar coordinates (@ ^)"},
+      {"ncfiles/mmount.ngc", "canned cycles G81-G89"},
+      {"ncfiles/polar.ngc", "canned cycles G81-G89"},
+      {"ncfiles/systems.ngc", "quadratic B-spline G5.1"},
+      {"nc_files/tcdemo.ngc", "quadratic B-spline G5.1"},
+      {"ncfiles/threading.ngc", "spindle-synchronized motion G33"},
+      {"ncfiles/m70m72-demo.ngc", "modal state save/restore M70-M73"},
+      {"ncfiles/m73-demo.ngc", "modal state save/restore M70-M73"},
+      {"ncfiles/toplevel.ngc", "modal state save/restore M70-M73"}};
+  return kList;
+}
+
+struct Oracle {
+  fs::path rs274;  // wrapper script
+  fs::path share;  // .../root/usr/share
+  fs::path work;   // tool tables, filtered copies
+};
+
+// Fetches rs274 once per test run; nullopt (with the reason) when unavailable.
+const std::optional<Oracle>& oracle(std::string& why) {
+  static std::string reason;
+  static const std::optional<Oracle> o = [&]() -> std::optional<Oracle> {
+    const fs::path dir = binary_dir() / "rs274-oracle";
+    auto r = run_process(
+        {"/bin/bash", (source_dir() / "tests/interp/fetch_rs274.sh").string(), dir.string()});
+    if (r.exit_code != 0) {
+      reason = r.err.empty() ? "fetch_rs274.sh failed" : r.err;
+      return std::nullopt;
+    }
+    Oracle out{dir / "rs274", dir / "root/usr/share", dir / "work"};
+    fs::create_directories(out.work);
+    // The same tools twice: rs274 without an INI reads its table in inches,
+    // truecut's is in mm.
+    std::ofstream inch(out.work / "tools-inch.tbl"), mm(out.work / "tools-mm.tbl");
+    char line[160];
+    for (int t : {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 99, 100}) {
+      const double z = 0.1 * t, d = 0.0625 * (t <= 20 ? t : 1), x = t == 2 ? 0.05 : 0.0;
+      std::snprintf(line, sizeof line, "T%d P%d X%.6f Z%.6f D%.6f ;tool %d\n", t, t, x, z, d, t);
+      inch << line;
+      std::snprintf(line, sizeof line, "T%d P%d X%.6f Z%.6f D%.6f ;tool %d\n", t, t, x * 25.4,
+                    z * 25.4, d * 25.4, t);
+      mm << line;
+    }
+    return out;
+  }();
+  why = reason;
+  return o;
+}
+
+struct Outcome {
+  bool rs274_runs = false;
+  bool truecut_runs = false;
+  std::string truecut_error;
+  std::optional<std::string> difference;
+};
+
+// The 5-axis demos switch kinematics with M428-M430 remaps that need a
+// running HAL: those lines are dropped for both interpreters.
+fs::path without_kinematics_remaps(const Oracle& o, const fs::path& program) {
+  std::ifstream in(program);
+  std::string text, line;
+  bool dropped = false;
+  static const std::regex remap(R"(^\s*[mM]4(28|29|30)\b.*)");
+  while (std::getline(in, line)) {
+    if (std::regex_match(line, remap)) {
+      dropped = true;
+      continue;
+    }
+    text += line + "\n";
+  }
+  if (!dropped) return program;
+  const fs::path copy = o.work / "filtered" / program.parent_path().filename() / program.filename();
+  fs::create_directories(copy.parent_path());
+  std::ofstream(copy) << text;
+  return copy;
+}
+
+Outcome run_both(const Oracle& o, const fs::path& original) {
+  const fs::path program = without_kinematics_remaps(o, original);
+  const fs::path dir = program.parent_path();
+  Outcome out;
+  auto r = run_process({o.rs274.string(), "-g", "-t", (o.work / "tools-inch.tbl").string(),
+                        program.filename().string()},
+                       dir);
+  out.rs274_runs = r.exit_code == 0;
+  auto t = run_process({cli_path().string(), "canon", "--decimals", "8", "--b-axis", "--tool-table",
+                        (o.work / "tools-mm.tbl").string(), program.filename().string()},
+                       dir);
+  out.truecut_runs = t.exit_code == 0;
+  if (!out.truecut_runs) {
+    out.truecut_error = t.err;
+    // Bad input: a located message, exit 2 and nothing on stdout.
+    static const std::regex located(R"(^[^:]+:\d+:\d+: .+\n$)");
+    EXPECT_EQ(t.exit_code, 2) << program;
+    EXPECT_TRUE(std::regex_match(t.err, located)) << program << ": " << t.err;
+    EXPECT_EQ(t.out, "") << program;
+  }
+  if (out.rs274_runs && out.truecut_runs)
+    out.difference = compare_listings(parse_listing(r.out), parse_listing(t.out));
+  return out;
+}
+
+std::string key_of(const fs::path& p) {
+  return p.parent_path().filename().string() + "/" + p.filename().string();
+}
+
+std::vector<fs::path> programs_under(const fs::path& dir) {
+  std::vector<fs::path> out;
+  if (!fs::exists(dir)) return out;
+  // Directory symlinks are not followed: the package links nc_files to ncfiles.
+  for (auto it = fs::recursive_directory_iterator(dir); it != fs::recursive_directory_iterator();
+       ++it) {
+    if (it->is_directory() && it->path().filename() == "remap_subs") {
+      it.disable_recursion_pending();  // subroutine libraries, not programs
+      continue;
+    }
+    if (it->is_regular_file() && it->path().extension() == ".ngc") out.push_back(it->path());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+#define REQUIRE_ORACLE(o)      \
+  std::string why;             \
+  const auto& o = oracle(why); \
+  if (!o) GTEST_SKIP() << "LinuxCNC rs274 is not available: " << why;
+
+TEST(Rs274Oracle, OwnCorpusMatches) {
+  REQUIRE_ORACLE(o);
+  int compared = 0;
+  for (const auto& p : programs_under(source_dir() / "tests/interp/corpus")) {
+    if (p.filename().string().rfind("sinumerik", 0) == 0) continue;  // not LinuxCNC G-code
+    const Outcome r = run_both(*o, p);
+    EXPECT_TRUE(r.rs274_runs) << p << ": rs274 rejects the program";
+    EXPECT_TRUE(r.truecut_runs) << p << ": " << r.truecut_error;
+    EXPECT_EQ(r.difference, std::nullopt) << p;
+    ++compared;
+  }
+  EXPECT_GE(compared, 6);
+}
+
+TEST(Rs274Oracle, FiveAxisDemosMatch) {
+  REQUIRE_ORACLE(o);
+  const fs::path demos = o->share /
+                         "doc/linuxcnc/examples/sample-configs/sim/axis/vismach/5axis/"
+                         "table-rotary-tilting/demos";
+  for (const char* name : {"boat-xyzac.ngc", "impeller-7bl-xyzac.ngc"}) {
+    const Outcome r = run_both(*o, demos / name);
+    ASSERT_TRUE(r.rs274_runs) << name;
+    ASSERT_TRUE(r.truecut_runs) << name << ": " << r.truecut_error;
+    EXPECT_EQ(r.difference, std::nullopt) << name;
+  }
+}
+
+TEST(Rs274Oracle, LinuxCncSamplePrograms) {
+  REQUIRE_ORACLE(o);
+  std::vector<fs::path> programs = programs_under(o->share / "linuxcnc/ncfiles");
+  for (const auto& p : programs_under(o->share / "doc/linuxcnc/examples"))
+    programs.push_back(p);
+  int matched = 0, rejected = 0, not_runnable = 0;
+  std::set<std::string> seen_out_of_scope;
+  for (const auto& p : programs) {
+    const Outcome r = run_both(*o, p);
+    if (!r.rs274_runs) {
+      ++not_runnable;  // needs an INI, a HAL, remaps or user M codes
+      continue;
+    }
+    const auto scope = out_of_scope().find(key_of(p));
+    if (!r.truecut_runs) {
+      EXPECT_NE(scope, out_of_scope().end())
+          << p << " runs in rs274 but truecut rejects it: " << r.truecut_error;
+      seen_out_of_scope.insert(key_of(p));
+      ++rejected;
+      continue;
+    }
+    EXPECT_EQ(r.difference, std::nullopt) << p;
+    if (!r.difference) ++matched;
+  }
+  std::printf(
+      "rs274 oracle: %d sample programs match, %d out of scope, %d not runnable by "
+      "rs274 alone\n",
+      matched, rejected, not_runnable);
+  EXPECT_GE(matched, 150) << "too few sample programs compared";
+  for (const auto& [key, reason] : out_of_scope())
+    EXPECT_TRUE(seen_out_of_scope.count(key)) << key << " (" << reason << ") is listed as out "
+                                              << "of scope but was not rejected";
+}
+
+}  // namespace
+}  // namespace truecut::interp::testing
