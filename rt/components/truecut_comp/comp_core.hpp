@@ -1,0 +1,203 @@
+// The servo-cycle logic of truecut_comp, free of the HAL: one call per cycle
+// takes the inputs and the state, returns the correction. Called in this
+// order inside step():
+//   1. sanitise the tunables
+//   2. switch source (new field, new tool) if no cross-fade is running
+//   3. evaluate the current and the outgoing source at the TCP
+//   4. fault handling: a failing source holds its last good correction
+//   5. advance the fades, cross-fade
+//   6. clamp the magnitude, then limit the rate
+// Real-time safe: noexcept, no allocation, at most two field evaluations.
+#pragma once
+
+#include <cstdint>
+
+#include "comp_math.hpp"
+#include "truecut/rt/correction_field.hpp"
+
+namespace truecut::comp {
+
+// The `fault` pin. When several apply, the lowest-numbered wins except that
+// input and parameter faults are reported before field faults.
+enum class Fault : int32_t {
+  none = 0,
+  no_field = 1,          // no field loaded
+  no_layer = 2,          // the field has no layer for the tool
+  outside_grid = 3,      // the TCP is outside the field's grid
+  input_not_finite = 4,  // NaN/Inf on a position or axis input
+  field_not_finite = 5,  // the field evaluated to NaN/Inf
+  bad_parameter = 6,     // max-correction, max-rate or fade-time NaN/Inf or < 0
+  kinematics = 7,        // joint mode: joint A outside [a-min, a-max]
+};
+
+inline const char* to_string(Fault f) noexcept {
+  switch (f) {
+    case Fault::none:
+      return "none";
+    case Fault::no_field:
+      return "no-field";
+    case Fault::no_layer:
+      return "no-layer";
+    case Fault::outside_grid:
+      return "outside-grid";
+    case Fault::input_not_finite:
+      return "input-not-finite";
+    case Fault::field_not_finite:
+      return "field-not-finite";
+    case Fault::bad_parameter:
+      return "bad-parameter";
+    case Fault::kinematics:
+      return "kinematics";
+  }
+  return "unknown";
+}
+
+// One source of correction: a field layer, faded in by u.
+struct Channel {
+  const rt::CorrectionField* field = nullptr;
+  int32_t tool = 0;
+  Vec3 held = Vec3::Zero();  // last good (weighted) correction of this source
+  double u = 0.0;            // fade progress in [0, 1]
+  bool frozen = false;       // failed: outputs `held` until faded out or replaced
+};
+
+struct CompState {
+  Channel current;             // the source being faded in (or held)
+  Channel outgoing;            // the source being faded out; idle when u == 0
+  Vec3 output = Vec3::Zero();  // correction output by the last cycle, mm
+};
+
+struct CycleInput {
+  bool enable = false;
+  int32_t tool = 0;
+  Vec3 tcp_mm = Vec3::Zero();  // workpiece frame
+  // A fault of the inputs (input_not_finite, kinematics) or none.
+  Fault input_fault = Fault::none;
+  // A validated field waiting to be adopted (nullptr: none). Adopted, and
+  // then owned by the state, when out.adopted is set.
+  const rt::CorrectionField* candidate = nullptr;
+  bool swap_inhibit = false;  // keep a candidate that would replace a field waiting
+};
+
+struct CycleOutput {
+  Vec3 correction_mm = Vec3::Zero();
+  Fault fault = Fault::none;
+  bool limited = false;  // the magnitude clamp or the rate limit acted
+  bool active = false;   // a correction is applied or fading
+  double fade = 0.0;     // gain of the current source, 0..1
+  bool adopted = false;  // the candidate became the current field
+  // A field no longer referenced by the state: retire it (free it outside
+  // the servo thread). At most one per cycle.
+  const rt::CorrectionField* released = nullptr;
+};
+
+namespace detail {
+
+struct Evaluated {
+  Vec3 value = Vec3::Zero();
+  Fault fault = Fault::none;
+};
+
+inline Fault fault_of(rt::FieldStatus status) noexcept {
+  switch (status) {
+    case rt::FieldStatus::ok:
+      return Fault::none;
+    case rt::FieldStatus::outside_grid:
+      return Fault::outside_grid;
+    case rt::FieldStatus::no_layer_for_tool:
+      return Fault::no_layer;
+    case rt::FieldStatus::non_finite:
+      return Fault::field_not_finite;
+  }
+  return Fault::field_not_finite;
+}
+
+inline Evaluated evaluate(const Channel& ch, const Vec3& tcp_mm, Fault input_fault) noexcept {
+  if (input_fault != Fault::none) return {ch.held, input_fault};
+  if (ch.field == nullptr) return {ch.held, Fault::no_field};
+  const rt::FieldSample s = ch.field->evaluate(ch.tool, tcp_mm);
+  const Fault f = fault_of(s.status);
+  if (f != Fault::none) return {ch.held, f};
+  return {s.correction_mm, Fault::none};
+}
+
+// The value a channel contributes this cycle; a failure freezes it.
+inline Vec3 channel_value(Channel& ch, const Evaluated& e) noexcept {
+  if (e.fault != Fault::none) ch.frozen = true;
+  if (ch.frozen) return ch.held;
+  ch.held = e.value;
+  return e.value;
+}
+
+}  // namespace detail
+
+inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& raw_limits,
+                        double dt_s) noexcept {
+  CycleOutput out;
+  CompLimits lim;
+  const bool limits_ok = sanitize(raw_limits, lim);
+
+  // 2. A new field or tool starts a cross-fade from the current source; a
+  // second change waits until the first cross-fade has finished.
+  const bool outgoing_idle = s.outgoing.u <= 0.0;
+  const bool new_field =
+      in.candidate != nullptr && (!in.swap_inhibit || s.current.field == nullptr);
+  const bool new_tool = in.tool != s.current.tool;
+  if (outgoing_idle && (new_field || new_tool)) {
+    if (s.current.u > 0.0)
+      s.outgoing = s.current;
+    else if (new_field && s.current.field != in.candidate)
+      out.released = s.current.field;  // nothing to blend from
+    Channel next;
+    next.field = new_field ? in.candidate : s.current.field;
+    next.tool = in.tool;
+    s.current = next;
+    out.adopted = new_field;
+  }
+
+  // 3./4. Evaluate. A current source that recovers from a failure while still
+  // partly faded in cross-fades from its held value to its live value.
+  const detail::Evaluated cur = detail::evaluate(s.current, in.tcp_mm, in.input_fault);
+  if (s.current.frozen && cur.fault == Fault::none) {
+    if (s.current.u <= 0.0) {
+      s.current.frozen = false;
+    } else if (s.outgoing.u <= 0.0) {
+      s.outgoing = s.current;
+      s.current.u = 0.0;
+      s.current.frozen = false;
+    }
+  }
+  const Vec3 v_cur = detail::channel_value(s.current, cur);
+  Vec3 v_out = Vec3::Zero();
+  if (s.outgoing.u > 0.0)
+    v_out =
+        detail::channel_value(s.outgoing, detail::evaluate(s.outgoing, in.tcp_mm, in.input_fault));
+
+  // 5. Fade and blend.
+  const bool wanted = in.enable && limits_ok && !s.current.frozen;
+  s.current.u = advance_fade(s.current.u, wanted ? 1.0 : 0.0, dt_s, lim.fade_time_s);
+  s.outgoing.u = advance_fade(s.outgoing.u, 0.0, dt_s, lim.fade_time_s);
+  const Vec3 blended = fade_gain(s.current.u) * v_cur + fade_gain(s.outgoing.u) * v_out;
+  if (s.outgoing.u <= 0.0) {
+    if (s.outgoing.field != nullptr && s.outgoing.field != s.current.field)
+      out.released = s.outgoing.field;
+    s.outgoing = Channel{};
+  }
+
+  // 6. Clamp, then rate-limit against last cycle's output.
+  const Limited m = limit_magnitude(blended, lim.max_correction_mm);
+  Limited r = limit_rate(m.value, s.output, lim.max_rate_mm_per_s * dt_s);
+  if (!r.value.allFinite()) r = {s.output, true};  // cannot happen; never pass NaN on
+  s.output = r.value;
+
+  out.correction_mm = r.value;
+  out.limited = m.limited || r.limited;
+  out.fade = fade_gain(s.current.u);
+  out.active = s.current.u > 0.0 || s.outgoing.u > 0.0 || !s.output.isZero(0.0);
+  out.fault = in.input_fault != Fault::none ? in.input_fault
+              : !limits_ok                  ? Fault::bad_parameter
+                                            : cur.fault;
+  return out;
+}
+
+}  // namespace truecut::comp

@@ -1,0 +1,79 @@
+// The per-cycle arithmetic of truecut_comp as pure functions: fade ramp,
+// magnitude clamp, rate limit, parameter sanitising. No state, no HAL, no
+// allocation; noexcept.
+#pragma once
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+
+namespace truecut::comp {
+
+using Vec3 = Eigen::Vector3d;
+
+// Fade gain of a fade progress u in [0, 1]: the quintic "smootherstep"
+// 6u^5 - 15u^4 + 10u^3. Its first and second derivatives vanish at both ends,
+// so a linear ramp of u gives a correction that starts and stops with zero
+// velocity and zero acceleration (C2 in time): a servo sees no kink.
+// g(1 - u) = 1 - g(u), so a cross-fade of two sources keeps the sum of gains 1.
+inline double fade_gain(double u) noexcept {
+  u = std::clamp(u, 0.0, 1.0);
+  return u * u * u * (u * (u * 6.0 - 15.0) + 10.0);
+}
+
+// Largest slope of fade_gain (at u = 1/2): 15/8.
+inline constexpr double kFadeGainMaxSlope = 1.875;
+
+// Moves the fade progress `u` towards `target` (0 or 1) by one cycle: a full
+// fade takes fade_time_s. fade_time_s == 0 jumps (the rate limit still acts).
+inline double advance_fade(double u, double target, double dt_s, double fade_time_s) noexcept {
+  if (!(fade_time_s > 0.0) || u == target) return target;
+  const double step = dt_s / fade_time_s;
+  const double next = u < target ? u + step : u - step;
+  // Within rounding of the target counts as there, so that a fade of
+  // fade_time / dt cycles ends on its last cycle.
+  if (std::abs(target - next) <= 1e-9 * step || (next - target) * (u - target) < 0.0) return target;
+  return next;
+}
+
+struct Limited {
+  Vec3 value;
+  bool limited;  // the limit changed the value
+};
+
+// Scales `c` down to length max_mm, keeping its direction.
+inline Limited limit_magnitude(const Vec3& c, double max_mm) noexcept {
+  const double n = c.norm();
+  if (n <= max_mm) return {c, false};
+  return {c * (max_mm / n), true};  // n > max_mm >= 0
+}
+
+// Moves from `previous` towards `target` by at most max_step_mm (Euclidean):
+// the vector rate limit, so the correction never steps further than
+// max rate x period, in any direction.
+inline Limited limit_rate(const Vec3& target, const Vec3& previous, double max_step_mm) noexcept {
+  const Vec3 d = target - previous;
+  const double n = d.norm();
+  if (n <= max_step_mm) return {target, false};
+  return {previous + d * (max_step_mm / n), true};  // n > max_step_mm >= 0
+}
+
+// The three tunables, as the pins hold them.
+struct CompLimits {
+  double max_correction_mm = 1.0;   // length of the correction vector
+  double max_rate_mm_per_s = 10.0;  // speed of the correction vector
+  double fade_time_s = 1.0;         // duration of a full fade in or out
+};
+
+// Replaces each invalid tunable (not finite, or negative) by its safe value:
+// max correction 0 (the correction goes to zero), max rate 0 (the correction
+// holds), fade time 0. Returns whether all were valid.
+inline bool sanitize(const CompLimits& raw, CompLimits& safe) noexcept {
+  auto ok = [](double v) { return std::isfinite(v) && v >= 0.0; };
+  safe.max_correction_mm = ok(raw.max_correction_mm) ? raw.max_correction_mm : 0.0;
+  safe.max_rate_mm_per_s = ok(raw.max_rate_mm_per_s) ? raw.max_rate_mm_per_s : 0.0;
+  safe.fade_time_s = ok(raw.fade_time_s) ? raw.fade_time_s : 0.0;
+  return ok(raw.max_correction_mm) && ok(raw.max_rate_mm_per_s) && ok(raw.fade_time_s);
+}
+
+}  // namespace truecut::comp

@@ -1,0 +1,337 @@
+// truecut_comp: applies the correction field to the tool-centre point every
+// servo cycle. A shared-library HAL component:
+//
+//   loadrt truecut_comp [field=FILE.tcf] [mode=tcp|joint] [tools=T,T...]
+//                       [count=N | names=A,B]
+//
+// Pins, fault codes and the hand-over protocol: docs/compensation.md. This
+// file is the HAL edge only: it reads pins, calls comp::step() (comp_core.hpp)
+// and writes pins; the field is loaded and freed by field_source.cpp in the
+// component's non-real-time service.
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "comp_core.hpp"
+#include "field_source.hpp"
+#include "joint_mode.hpp"
+#include "truecut/rt/component_support.hpp"
+
+namespace {
+
+using namespace truecut;
+using comp::Fault;
+using comp::Vec3;
+
+enum class Mode { tcp, joint };
+
+struct Pins {
+  bool* enable;
+  int32_t* tool;
+  double* max_correction;  // mm
+  double* max_rate;        // mm/s
+  double* fade_time;       // s
+  bool* reload;
+  bool* swap_inhibit;
+  std::array<double*, 3> tcp_in;  // tcp mode, mm
+  std::array<double*, 3> axis_in;
+  std::array<double*, 5> joint_in;  // joint mode: x y z (mm) a c (deg)
+  std::array<double*, 5> joint_out;
+  double* x_rot_point;  // joint mode kinematics, as xyzac-trt-kins
+  double* y_rot_point;
+  double* z_rot_point;
+  double* y_offset;
+  double* z_offset;
+  double* tool_offset;
+  bool* conventional_directions;
+  double* a_min;  // deg
+  double* a_max;
+  std::array<double*, 3> tcp_out;
+  std::array<double*, 3> axis_out;
+  std::array<double*, 3> corr;  // mm, workpiece frame
+  double* corr_mag;
+  bool* active;
+  int32_t* fault;
+  bool* limited;
+  double* fade;
+  int32_t* field_generation;
+  int32_t* load_errors;
+};
+
+struct Instance {
+  Instance(std::string name_, Mode mode_, std::string path, std::vector<int32_t> tools)
+      : name(std::move(name_)), mode(mode_), source(std::move(path), std::move(tools)) {}
+  ~Instance() {
+    const rt::CorrectionField* fields[] = {core.current.field, core.outgoing.field, pending};
+    for (int i = 0; i < 3; ++i) {
+      bool seen = false;
+      for (int k = 0; k < i; ++k)
+        seen = seen || fields[k] == fields[i];
+      if (!seen) delete fields[i];
+    }
+    for (const rt::CorrectionField* f : backlog)
+      delete f;
+  }
+
+  std::string name;
+  Mode mode;
+  Pins p{};
+  comp::CompState core;
+  comp::FieldSource source;
+  const rt::CorrectionField* pending = nullptr;         // taken from the hand-over, not adopted yet
+  std::array<const rt::CorrectionField*, 4> backlog{};  // retired while the queue was full
+  bool reload_before = false;
+  const tc_hal_api_t* api = nullptr;
+  tc_hal_t* hal = nullptr;
+};
+
+struct Module {
+  std::vector<std::unique_ptr<Instance>> instances;
+};
+
+Vec3 read3(const std::array<double*, 3>& pins) {
+  return {*pins[0], *pins[1], *pins[2]};
+}
+void write3(const std::array<double*, 3>& pins, const Vec3& v) {
+  for (int i = 0; i < 3; ++i)
+    *pins[i] = v[i];
+}
+
+// Retires a field the core let go of; keeps it for later if the queue is full.
+void retire(Instance& s, const rt::CorrectionField* field) noexcept {
+  if (field == nullptr) return;
+  if (s.source.handover().retire(field)) return;
+  for (auto& slot : s.backlog)
+    if (slot == nullptr) {
+      slot = field;
+      return;
+    }
+}
+
+bool backlog_empty(Instance& s) noexcept {
+  bool empty = true;
+  for (auto& slot : s.backlog)
+    if (slot != nullptr && !s.source.handover().retire(slot)) empty = false;
+  return empty;
+}
+
+rt::AcTrtParams kinematics(const Pins& p) noexcept {
+  rt::AcTrtParams k;
+  k.x_rot_point_mm = *p.x_rot_point;
+  k.y_rot_point_mm = *p.y_rot_point;
+  k.z_rot_point_mm = *p.z_rot_point;
+  k.y_offset_mm = *p.y_offset;
+  k.z_offset_mm = *p.z_offset;
+  k.tool_length_mm = *p.tool_offset;
+  k.conventional_directions = *p.conventional_directions;
+  k.a_min_deg = *p.a_min;
+  k.a_max_deg = *p.a_max;
+  return k;
+}
+
+void update(void* arg, long period_ns) {
+  Instance& s = *static_cast<Instance*>(arg);
+  const Pins& p = s.p;
+
+  const bool reload = *p.reload;
+  if (reload && !s.reload_before) s.source.request_reload();
+  s.reload_before = reload;
+  // A new field is offered to the core only when anything it might release
+  // can be retired.
+  const bool can_swap = backlog_empty(s);
+  if (can_swap) s.source.handover().take_latest(s.pending);
+
+  comp::CycleInput in;
+  in.enable = *p.enable;
+  in.tool = *p.tool;
+  in.candidate = can_swap ? s.pending : nullptr;
+  in.swap_inhibit = *p.swap_inhibit;
+
+  rt::AcTrtParams kins;
+  rt::AcJoints joints;
+  rt::ToolPose pose;
+  if (s.mode == Mode::tcp) {
+    pose.tcp_mm = read3(p.tcp_in);
+    pose.axis = read3(p.axis_in);
+    if (!pose.tcp_mm.allFinite() || !pose.axis.allFinite())
+      in.input_fault = Fault::input_not_finite;
+  } else {
+    kins = kinematics(p);
+    joints = {*p.joint_in[0], *p.joint_in[1], *p.joint_in[2], *p.joint_in[3], *p.joint_in[4]};
+    if (!comp::joints_finite(joints) || !comp::params_finite(kins)) {
+      in.input_fault = Fault::input_not_finite;
+    } else {
+      pose = rt::forward_ac(kins, joints);
+      // Outside the A travel the inverse kinematics refuses; correct_joints()
+      // still maps the correction while it fades out.
+      if (!(joints.a_deg >= kins.a_min_deg && joints.a_deg <= kins.a_max_deg))
+        in.input_fault = Fault::kinematics;
+    }
+  }
+  in.tcp_mm = pose.tcp_mm;
+
+  const comp::CompLimits limits{*p.max_correction, *p.max_rate, *p.fade_time};
+  const comp::CycleOutput out = comp::step(s.core, in, limits, double(period_ns) * 1e-9);
+  if (out.adopted) {
+    s.pending = nullptr;
+    ++*p.field_generation;
+  }
+  retire(s, out.released);
+
+  write3(p.corr, out.correction_mm);
+  *p.corr_mag = out.correction_mm.norm();
+  *p.active = out.active;
+  *p.fault = static_cast<int32_t>(out.fault);
+  *p.limited = out.limited;
+  *p.fade = out.fade;
+  *p.load_errors = s.source.load_errors();
+  // Position outputs hold their last value while the inputs are unusable.
+  if (in.input_fault == Fault::input_not_finite) return;
+  write3(p.tcp_out, pose.tcp_mm + out.correction_mm);
+  write3(p.axis_out, pose.axis);
+  if (s.mode == Mode::joint) {
+    const rt::AcJoints j = comp::correct_joints(kins, joints, pose, out.correction_mm);
+    const double v[5] = {j.x_mm, j.y_mm, j.z_mm, j.a_deg, j.c_deg};
+    for (int i = 0; i < 5; ++i)
+      *p.joint_out[i] = v[i];
+  }
+}
+
+void service(void* arg) {
+  Instance& s = *static_cast<Instance*>(arg);
+  // No exception may cross the C ABI; FieldSource::service() only lets
+  // allocation failures through.
+  try {
+    const std::string error = s.source.service();
+    if (!error.empty())
+      s.api->message(s.hal, TC_HAL_MSG_ERR, (s.name + ": reload failed: " + error).c_str());
+  } catch (...) {
+  }
+}
+
+std::vector<int32_t> parse_tools(const std::string& text) {
+  std::vector<int32_t> tools;
+  std::string cur;
+  for (char c : text + ",") {
+    if (c != ',') {
+      cur += c;
+      continue;
+    }
+    char* end = nullptr;
+    const long t = std::strtol(cur.c_str(), &end, 10);
+    if (cur.empty() || *end != '\0' || t < 0 || t > INT32_MAX)
+      throw hal::component::InitError("tools='" + text + "': '" + cur + "' is not a tool number");
+    tools.push_back(static_cast<int32_t>(t));
+    cur.clear();
+  }
+  return tools;
+}
+
+void make_pins(hal::component::Builder& b, const std::string& n, Mode mode, Pins& p) {
+  auto in_f = [&](const char* pin, double** ptr) {
+    b.pin(n + "." + pin, TC_HAL_FLOAT, TC_HAL_IN, ptr);
+  };
+  auto out_f = [&](const char* pin, double** ptr) {
+    b.pin(n + "." + pin, TC_HAL_FLOAT, TC_HAL_OUT, ptr);
+  };
+  b.pin(n + ".enable", TC_HAL_BIT, TC_HAL_IN, &p.enable);
+  b.pin(n + ".tool", TC_HAL_S32, TC_HAL_IN, &p.tool);
+  in_f("max-correction", &p.max_correction);
+  in_f("max-rate", &p.max_rate);
+  in_f("fade-time", &p.fade_time);
+  b.pin(n + ".reload", TC_HAL_BIT, TC_HAL_IN, &p.reload);
+  b.pin(n + ".swap-inhibit", TC_HAL_BIT, TC_HAL_IN, &p.swap_inhibit);
+  static const char* const kXyz[] = {"x", "y", "z"};
+  static const char* const kIjk[] = {"i", "j", "k"};
+  static const char* const kJoints[] = {"x", "y", "z", "a", "c"};
+  if (mode == Mode::tcp) {
+    for (int i = 0; i < 3; ++i) {
+      in_f((std::string("tcp-") + kXyz[i]).c_str(), &p.tcp_in[i]);
+      in_f((std::string("axis-") + kIjk[i]).c_str(), &p.axis_in[i]);
+    }
+  } else {
+    for (int i = 0; i < 5; ++i) {
+      in_f((std::string("joint-") + kJoints[i]).c_str(), &p.joint_in[i]);
+      out_f((std::string("joint-") + kJoints[i] + "-out").c_str(), &p.joint_out[i]);
+    }
+    in_f("x-rot-point", &p.x_rot_point);
+    in_f("y-rot-point", &p.y_rot_point);
+    in_f("z-rot-point", &p.z_rot_point);
+    in_f("y-offset", &p.y_offset);
+    in_f("z-offset", &p.z_offset);
+    in_f("tool-offset", &p.tool_offset);
+    b.pin(n + ".conventional-directions", TC_HAL_BIT, TC_HAL_IN, &p.conventional_directions);
+    in_f("a-min", &p.a_min);
+    in_f("a-max", &p.a_max);
+  }
+  for (int i = 0; i < 3; ++i) {
+    out_f((std::string("tcp-") + kXyz[i] + "-out").c_str(), &p.tcp_out[i]);
+    out_f((std::string("axis-") + kIjk[i] + "-out").c_str(), &p.axis_out[i]);
+    out_f((std::string("corr-") + kXyz[i]).c_str(), &p.corr[i]);
+  }
+  out_f("corr-mag", &p.corr_mag);
+  b.pin(n + ".active", TC_HAL_BIT, TC_HAL_OUT, &p.active);
+  b.pin(n + ".fault", TC_HAL_S32, TC_HAL_OUT, &p.fault);
+  b.pin(n + ".limited", TC_HAL_BIT, TC_HAL_OUT, &p.limited);
+  out_f("fade", &p.fade);
+  b.pin(n + ".field-generation", TC_HAL_S32, TC_HAL_OUT, &p.field_generation);
+  b.pin(n + ".load-errors", TC_HAL_S32, TC_HAL_OUT, &p.load_errors);
+
+  const comp::CompLimits defaults;
+  *p.max_correction = defaults.max_correction_mm;
+  *p.max_rate = defaults.max_rate_mm_per_s;
+  *p.fade_time = defaults.fade_time_s;
+  if (mode == Mode::tcp) {
+    *p.axis_in[2] = 1.0;
+  } else {
+    *p.a_min = -180.0;
+    *p.a_max = 180.0;
+  }
+  *p.axis_out[2] = 1.0;
+}
+
+}  // namespace
+
+extern "C" TC_COMPONENT_EXPORT int truecut_component_init(const tc_hal_api_t* api, tc_hal_t* hal,
+                                                          int argc, const char* const* argv,
+                                                          void** module_state) {
+  using namespace truecut::hal::component;
+  return init_guard(api, hal, [&] {
+    Args args(argc, argv);
+    const auto names = instance_names(args, "truecut_comp");
+    const std::string path = args.take_or("field", "");
+    const std::string mode_text = args.take_or("mode", "tcp");
+    const std::string tools_text = args.take_or("tools", "");
+    args.expect_consumed("truecut_comp");
+    if (mode_text != "tcp" && mode_text != "joint")
+      throw InitError("mode='" + mode_text + "' must be tcp or joint");
+    const Mode mode = mode_text == "tcp" ? Mode::tcp : Mode::joint;
+    const std::vector<int32_t> tools =
+        tools_text.empty() ? std::vector<int32_t>{} : parse_tools(tools_text);
+    if (!tools.empty() && path.empty()) throw InitError("tools= needs field=");
+
+    auto module = std::make_unique<Module>();
+    for (const auto& n : names) {
+      auto inst = std::make_unique<Instance>(n, mode, path, tools);
+      inst->api = api;
+      inst->hal = hal;
+      // Every instance reads the file itself: instances never share a field.
+      if (!path.empty()) inst->source.load_now();
+      const int id = new_component(api, hal, n);
+      Builder b(api, hal, id);
+      make_pins(b, n, mode, inst->p);
+      b.funct(n + ".update", update, inst.get());
+      b.service(service, inst.get());
+      api->component_ready(hal, id);
+      module->instances.push_back(std::move(inst));
+    }
+    *module_state = module.release();
+    return 0;
+  });
+}
+
+extern "C" TC_COMPONENT_EXPORT void truecut_component_exit(const tc_hal_api_t*, tc_hal_t*,
+                                                           void* module_state) {
+  delete static_cast<Module*>(module_state);
+}

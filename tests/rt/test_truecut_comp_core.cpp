@@ -1,0 +1,538 @@
+// The per-cycle logic of truecut_comp without the HAL: ramp, limits, and
+// comp::step() on synthetic fields.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <random>
+
+#include "../../rt/components/truecut_comp/comp_core.hpp"
+#include "../../rt/components/truecut_comp/joint_mode.hpp"
+#include "test_truecut_comp_support.hpp"
+
+using namespace truecut;
+using namespace truecut::comp;
+using truecut::test::comp::FieldSpec;
+using truecut::test::comp::make_field;
+
+namespace {
+
+constexpr double kDt = 0.001;  // 1 kHz
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Relative slack for comparing a step with its bound (the limit is computed
+// with a division and a product).
+constexpr double kSlack = 1e-12;
+
+}  // namespace
+
+TEST(CompMath, FadeGainIsAC2RampSymmetricAndBounded) {
+  EXPECT_EQ(0.0, fade_gain(0.0));
+  EXPECT_EQ(1.0, fade_gain(1.0));
+  EXPECT_EQ(0.0, fade_gain(-3.0));
+  EXPECT_EQ(1.0, fade_gain(7.0));
+  EXPECT_EQ(0.5, fade_gain(0.5));
+  const double h = 1e-4;
+  double prev = 0.0;
+  for (int i = 1; i <= 1000; ++i) {
+    const double u = i / 1000.0;
+    const double g = fade_gain(u);
+    EXPECT_GE(g, prev);
+    EXPECT_NEAR(1.0 - g, fade_gain(1.0 - u), 1e-14);
+    const double slope = (fade_gain(u + h) - fade_gain(u - h)) / (2 * h);
+    EXPECT_LE(slope, kFadeGainMaxSlope + 1e-6);
+    prev = g;
+  }
+  // Zero velocity and acceleration at both ends.
+  EXPECT_LT(fade_gain(h) / h, 1e-6);
+  EXPECT_LT((1.0 - fade_gain(1.0 - h)) / h, 1e-6);
+  EXPECT_LT(fade_gain(h) / (h * h), 1e-3);
+}
+
+TEST(CompMath, AdvanceFadeTakesTheFadeTimeAndNeverOvershoots) {
+  double u = 0.0;
+  int cycles = 0;
+  while (u < 1.0 && cycles < 10000) {
+    u = advance_fade(u, 1.0, kDt, 0.25);
+    ++cycles;
+  }
+  EXPECT_EQ(1.0, u);
+  EXPECT_NEAR(250, cycles, 1);
+  EXPECT_EQ(0.0, advance_fade(0.0005, 0.0, kDt, 0.25) > 0.0 ? 1.0 : 0.0);
+  EXPECT_EQ(1.0, advance_fade(0.0, 1.0, kDt, 0.0)) << "fade time 0 jumps";
+  EXPECT_EQ(0.0, advance_fade(1.0, 0.0, kDt, kNaN)) << "a NaN fade time jumps, never NaN";
+}
+
+TEST(CompMath, MagnitudeClampKeepsDirection) {
+  const Vec3 c(3.0, 4.0, 0.0);
+  const Limited a = limit_magnitude(c, 10.0);
+  EXPECT_FALSE(a.limited);
+  EXPECT_EQ(c, a.value);
+  const Limited b = limit_magnitude(c, 1.0);
+  EXPECT_TRUE(b.limited);
+  EXPECT_NEAR(1.0, b.value.norm(), 1e-15);
+  EXPECT_NEAR(0.0, b.value.normalized().cross(c.normalized()).norm(), 1e-15);
+  EXPECT_EQ(Vec3::Zero(), limit_magnitude(c, 0.0).value);
+}
+
+TEST(CompMath, RateLimitBoundsTheStepInAnyDirection) {
+  std::mt19937_64 rng(6);
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::uniform_real_distribution<double> step(0.0, 0.5);
+  for (int i = 0; i < 10000; ++i) {
+    const Vec3 prev(n(rng), n(rng), n(rng)), target(n(rng), n(rng), n(rng));
+    const double max_step = step(rng);
+    const Limited r = limit_rate(target, prev, max_step);
+    ASSERT_LE((r.value - prev).norm(), max_step * (1 + kSlack));
+    ASSERT_EQ(r.limited, (target - prev).norm() > max_step);
+    if (r.limited) {  // moved straight towards the target
+      ASSERT_NEAR(0.0, (r.value - prev).cross(target - prev).norm(), 1e-12);
+    } else {
+      ASSERT_EQ(target, r.value);
+    }
+  }
+}
+
+TEST(CompMath, SanitizeReplacesInvalidTunablesBySafeValues) {
+  CompLimits safe;
+  EXPECT_TRUE(sanitize({0.5, 2.0, 0.3}, safe));
+  EXPECT_EQ(0.5, safe.max_correction_mm);
+  EXPECT_FALSE(sanitize({kNaN, 2.0, 0.3}, safe));
+  EXPECT_EQ(0.0, safe.max_correction_mm);
+  EXPECT_FALSE(sanitize({0.5, -1.0, 0.3}, safe));
+  EXPECT_EQ(0.0, safe.max_rate_mm_per_s);
+  EXPECT_FALSE(sanitize({0.5, 2.0, std::numeric_limits<double>::infinity()}, safe));
+  EXPECT_EQ(0.0, safe.fade_time_s);
+}
+
+namespace {
+
+// Runs comp::step() along a path; checks the contract every cycle.
+struct Driver {
+  CompState state;
+  CompLimits limits{10.0, 1000.0, 0.1};
+  std::vector<const rt::CorrectionField*> released;
+  double max_step_mm = 0.0;
+  bool ever_limited = false;
+
+  CycleOutput cycle(const CycleInput& in) {
+    const Vec3 before = state.output;
+    const CycleOutput o = step(state, in, limits, kDt);
+    EXPECT_TRUE(o.correction_mm.allFinite());
+    max_step_mm = std::max(max_step_mm, (o.correction_mm - before).norm());
+    ever_limited = ever_limited || o.limited;
+    if (o.released) released.push_back(o.released);
+    return o;
+  }
+};
+
+}  // namespace
+
+TEST(CompCore, FadesInAndOutWithoutAJumpAndWithoutTheRateLimit) {
+  const auto field = make_field({});
+  const Vec3 p(1.0, 2.0, 0.5);
+  const Vec3 full = field.evaluate(1, p).correction_mm;
+  Driver d;
+  CycleInput in;
+  in.tool = 1;
+  in.tcp_mm = p;
+  in.candidate = &field;
+  CycleOutput o = d.cycle(in);  // disabled: adopts at once, outputs nothing
+  EXPECT_TRUE(o.adopted);
+  EXPECT_EQ(Vec3::Zero(), o.correction_mm);
+  EXPECT_FALSE(o.active);
+  in.candidate = nullptr;
+  in.enable = true;
+  for (int i = 0; i < 100; ++i) {
+    o = d.cycle(in);
+    const double expect = fade_gain((i + 1) * kDt / d.limits.fade_time_s);
+    ASSERT_NEAR(0.0, (o.correction_mm - expect * full).norm(), 1e-15) << i;
+  }
+  EXPECT_EQ(1.0, o.fade);
+  EXPECT_EQ(full, o.correction_mm);
+  in.enable = false;
+  for (int i = 0; i < 100; ++i)
+    o = d.cycle(in);
+  EXPECT_EQ(Vec3::Zero(), o.correction_mm);
+  EXPECT_FALSE(o.active);
+  EXPECT_FALSE(d.ever_limited) << "the fade alone kept the steps small";
+  EXPECT_LE(d.max_step_mm, kFadeGainMaxSlope * full.norm() * kDt / 0.1 * (1 + kSlack));
+  EXPECT_TRUE(d.released.empty());
+}
+
+TEST(CompCore, ToolChangeCrossFadesFromTheOldLayerToTheNew) {
+  const auto field = make_field({});
+  const Vec3 p(-3.0, 4.0, 1.0);
+  const Vec3 c1 = field.evaluate(1, p).correction_mm, c2 = field.evaluate(2, p).correction_mm;
+  ASSERT_GT((c1 - c2).norm(), 0.02);
+  Driver d;
+  CycleInput in;
+  in.tool = 1;
+  in.tcp_mm = p;
+  in.enable = true;
+  in.candidate = &field;
+  d.cycle(in);
+  in.candidate = nullptr;
+  for (int i = 0; i < 150; ++i)
+    d.cycle(in);
+  EXPECT_EQ(c1, d.state.output);
+  in.tool = 2;
+  CycleOutput o;
+  for (int i = 0; i < 100; ++i) {
+    o = d.cycle(in);
+    const double g = fade_gain((i + 1) * kDt / 0.1);
+    ASSERT_NEAR(0.0, (o.correction_mm - ((1 - g) * c1 + g * c2)).norm(), 1e-14) << i;
+  }
+  EXPECT_EQ(c2, o.correction_mm);
+  EXPECT_FALSE(d.ever_limited);
+  EXPECT_LE(d.max_step_mm,
+            kFadeGainMaxSlope * std::max(c1.norm(), (c1 - c2).norm()) * kDt / 0.1 * (1 + 1e-9));
+}
+
+TEST(CompCore, ASecondChangeWaitsForTheFirstCrossFade) {
+  const auto field = make_field({{1, 2, 3}});
+  const Vec3 p(0.0, 0.0, 0.0);
+  Driver d;
+  CycleInput in;
+  in.tool = 1;
+  in.tcp_mm = p;
+  in.enable = true;
+  in.candidate = &field;
+  d.cycle(in);
+  in.candidate = nullptr;
+  for (int i = 0; i < 100; ++i)
+    d.cycle(in);
+  in.tool = 2;
+  for (int i = 0; i < 30; ++i)
+    d.cycle(in);
+  in.tool = 3;
+  int waited = 0;
+  while (d.state.current.tool != 3 && waited < 1000) {
+    const bool idle_before = d.state.outgoing.u <= 0.0;
+    d.cycle(in);
+    ++waited;
+    ASSERT_EQ(idle_before, d.state.current.tool == 3) << "switches as soon as tool 1 is out";
+  }
+  EXPECT_NEAR(71, waited, 1) << "tool 1 had 70 % of its fade left";
+  EXPECT_EQ(2, d.state.outgoing.tool);
+  for (int i = 0; i < 100; ++i)
+    d.cycle(in);
+  EXPECT_EQ(field.evaluate(3, p).correction_mm, d.state.output);
+  EXPECT_FALSE(d.ever_limited);
+}
+
+TEST(CompCore, FieldSwapBlendsAndReleasesTheOldFieldOnceUnused) {
+  FieldSpec b_spec;
+  b_spec.scale = -1.5;
+  const auto a = make_field({}), b = make_field(b_spec);
+  const Vec3 p(5.0, -5.0, 2.0);
+  Driver d;
+  CycleInput in;
+  in.tool = 1;
+  in.tcp_mm = p;
+  in.enable = true;
+  in.candidate = &a;
+  d.cycle(in);
+  in.candidate = nullptr;
+  for (int i = 0; i < 100; ++i)
+    d.cycle(in);
+  in.candidate = &b;
+  in.swap_inhibit = true;
+  for (int i = 0; i < 10; ++i)
+    EXPECT_FALSE(d.cycle(in).adopted);
+  in.swap_inhibit = false;
+  EXPECT_TRUE(d.cycle(in).adopted);
+  in.candidate = nullptr;
+  for (int i = 0; i < 98; ++i)
+    d.cycle(in);
+  EXPECT_TRUE(d.released.empty()) << "a is still fading out";
+  d.cycle(in);
+  ASSERT_EQ(1u, d.released.size());
+  EXPECT_EQ(&a, d.released[0]);
+  EXPECT_EQ(b.evaluate(1, p).correction_mm, d.state.output);
+  const Vec3 ca = a.evaluate(1, p).correction_mm, cb = b.evaluate(1, p).correction_mm;
+  EXPECT_LE(d.max_step_mm, kFadeGainMaxSlope * (ca - cb).norm() * kDt / 0.1 * (1 + 1e-9));
+  EXPECT_FALSE(d.ever_limited);
+}
+
+TEST(CompCore, SwapWhileDisabledIsImmediate) {
+  const auto a = make_field({}), b = make_field({});
+  Driver d;
+  CycleInput in;
+  in.tool = 1;
+  in.candidate = &a;
+  EXPECT_TRUE(d.cycle(in).adopted);
+  in.candidate = &b;
+  const CycleOutput o = d.cycle(in);
+  EXPECT_TRUE(o.adopted);
+  ASSERT_EQ(1u, d.released.size());
+  EXPECT_EQ(&a, d.released[0]);
+}
+
+TEST(CompCore, ClampAndRateLimit) {
+  FieldSpec big;
+  big.scale = 20.0;  // corrections of a few mm
+  const auto field = make_field(big);
+  const Vec3 p(2.0, 3.0, 1.0);
+  const Vec3 full = field.evaluate(1, p).correction_mm;
+  ASSERT_GT(full.norm(), 1.0);
+  Driver d;
+  d.limits = {0.5, 2.0, 0.0};  // 0.5 mm, 2 mm/s, no fade: the limits do it all
+  CycleInput in;
+  in.tool = 1;
+  in.tcp_mm = p;
+  in.enable = true;
+  in.candidate = &field;
+  for (int i = 1; i <= 400; ++i) {
+    const CycleOutput o = d.cycle(in);
+    in.candidate = nullptr;
+    const double expect = std::min(0.5, i * 2.0 * kDt);
+    ASSERT_NEAR(expect, o.correction_mm.norm(), 1e-12) << i;
+    ASSERT_NEAR(0.0, o.correction_mm.normalized().cross(full.normalized()).norm(), 1e-12);
+    ASSERT_TRUE(o.limited) << "the clamp acts even once the rate limit no longer does";
+  }
+  EXPECT_LE(d.max_step_mm, 2.0 * kDt * (1 + kSlack));
+}
+
+TEST(CompCore, ContinuityAlongRandomPaths) {
+  // Random smooth paths that cross the grid boundary (no fading border, so
+  // leaving the grid is a fault that must fade), random enable toggles, tool
+  // changes to tools with and without a layer, field swaps and NaN bursts.
+  FieldSpec b_spec;
+  b_spec.scale = 3.0;
+  const auto a = make_field({}), b = make_field(b_spec);
+  for (uint64_t seed = 1; seed <= 20; ++seed) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    Driver d;
+    d.limits = {0.4, 0.5 + 4.0 * u(rng), 0.02 + 0.3 * u(rng)};
+    Vec3 amp, freq, phase;
+    for (int k = 0; k < 3; ++k) {
+      amp[k] = 10.0 + 20.0 * u(rng);
+      freq[k] = 0.2 + 2.0 * u(rng);
+      phase[k] = 6.3 * u(rng);
+    }
+    CycleInput in;
+    in.tool = 1;
+    in.candidate = &a;
+    int nan_left = 0;
+    for (int i = 0; i < 6000; ++i) {
+      const double t = i * kDt;
+      for (int k = 0; k < 3; ++k)
+        in.tcp_mm[k] = amp[k] * std::sin(freq[k] * t + phase[k]);
+      const double r = u(rng);
+      if (r < 0.002) in.enable = !in.enable;
+      if (r > 0.998) in.tool = static_cast<int32_t>(u(rng) * 4);  // 0 and 3 have no layer
+      if (r > 0.4995 && r < 0.5) in.candidate = u(rng) < 0.5 ? &a : &b;
+      if (r > 0.3 && r < 0.3005) nan_left = 1 + static_cast<int>(u(rng) * 20);
+      in.input_fault = nan_left-- > 0 ? Fault::input_not_finite : Fault::none;
+      const CycleOutput o = d.cycle(in);
+      if (o.adopted) in.candidate = nullptr;
+      ASSERT_LE(o.correction_mm.norm(), d.limits.max_correction_mm * (1 + kSlack));
+    }
+    EXPECT_LE(d.max_step_mm, d.limits.max_rate_mm_per_s * kDt * (1 + kSlack)) << seed;
+  }
+}
+
+namespace {
+
+struct PathRoughness {
+  double max_step_mm = 0.0;
+  double max_second_difference_mm = 0.0;
+  int outside_cycles = 0;
+  bool limited = false;
+};
+
+// Runs a smooth path that leaves and re-enters a field whose weight fades out
+// before its boundary; measures the correction after the initial fade-in.
+PathRoughness run_smooth_path(rt::FieldInterpolation interpolation) {
+  FieldSpec spec;
+  spec.fading_border = true;
+  spec.interpolation = interpolation;
+  const auto field = make_field(spec);
+  Driver d;
+  d.limits = {10.0, 100.0, 0.05};
+  CycleInput in;
+  in.tool = 2;
+  in.enable = true;
+  in.candidate = &field;
+  PathRoughness r;
+  Vec3 c_1 = Vec3::Zero(), c_2 = Vec3::Zero();
+  for (int i = 0; i < 12000; ++i) {
+    const double t = i * kDt;
+    in.tcp_mm = Vec3(30.0 * std::sin(0.9 * t), 12.0 * std::cos(0.7 * t), 3.0 * std::sin(t));
+    const CycleOutput o = d.cycle(in);
+    in.candidate = nullptr;
+    r.outside_cycles += o.fault == Fault::outside_grid;
+    if (i > 100) {
+      r.max_step_mm = std::max(r.max_step_mm, (o.correction_mm - c_1).norm());
+      r.max_second_difference_mm =
+          std::max(r.max_second_difference_mm, (o.correction_mm - 2 * c_1 + c_2).norm());
+    }
+    c_2 = c_1;
+    c_1 = o.correction_mm;
+  }
+  r.limited = d.ever_limited;
+  return r;
+}
+
+}  // namespace
+
+TEST(CompCore, SmoothPathWithFadingBorderHasNoKinkAndNeedsNoRateLimit) {
+  const PathRoughness r = run_smooth_path(rt::FieldInterpolation::tricubic_bspline);
+  EXPECT_GT(r.outside_cycles, 1000) << "the path leaves the grid";
+  EXPECT_FALSE(r.limited);
+  // Path speed <= 27 mm/s: 0.027 mm per cycle times a gradient below 0.05.
+  EXPECT_LT(r.max_step_mm, 1e-3);
+  // A C1 signal's second difference is O(dt^2); a kink shows a second
+  // difference of the order of the step itself.
+  EXPECT_LT(r.max_second_difference_mm, 0.02 * r.max_step_mm);
+  // The criterion does see kinks: the C0 trilinear baseline has them at
+  // every cell face.
+  const PathRoughness lin = run_smooth_path(rt::FieldInterpolation::trilinear);
+  EXPECT_GT(lin.max_second_difference_mm, 0.02 * lin.max_step_mm);
+}
+
+TEST(CompCore, FaultsFadeTheHeldCorrectionToZero) {
+  const auto field = make_field({});
+  const Vec3 inside(0.0, 0.0, 0.0);
+  struct Case {
+    const char* name;
+    Fault expected;
+    void (*apply)(CycleInput&, Driver&);
+  };
+  const Case cases[] = {
+      {"no layer", Fault::no_layer, [](CycleInput& in, Driver&) { in.tool = 9; }},
+      {"outside grid", Fault::outside_grid,
+       [](CycleInput& in, Driver&) { in.tcp_mm = Vec3(100.0, 0.0, 0.0); }},
+      {"input not finite", Fault::input_not_finite,
+       [](CycleInput& in, Driver&) { in.input_fault = Fault::input_not_finite; }},
+      {"kinematics", Fault::kinematics,
+       [](CycleInput& in, Driver&) { in.input_fault = Fault::kinematics; }},
+      {"bad parameter", Fault::bad_parameter,
+       [](CycleInput&, Driver& d) { d.limits.max_correction_mm = kNaN; }},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    Driver d;
+    d.limits = {10.0, 50.0, 0.05};
+    CycleInput in;
+    in.tool = 1;
+    in.enable = true;
+    in.tcp_mm = inside;
+    in.candidate = &field;
+    d.cycle(in);
+    in.candidate = nullptr;
+    for (int i = 0; i < 60; ++i)
+      d.cycle(in);
+    const Vec3 full = d.state.output;
+    ASSERT_GT(full.norm(), 0.05);
+    c.apply(in, d);
+    CycleOutput o;
+    for (int i = 0; i < 100; ++i) {
+      o = d.cycle(in);
+      ASSERT_EQ(c.expected, o.fault);
+      ASSERT_LE(o.correction_mm.norm(), full.norm() * (1 + kSlack));
+    }
+    EXPECT_EQ(Vec3::Zero(), o.correction_mm);
+    EXPECT_LE(d.max_step_mm, 50.0 * kDt * (1 + kSlack));
+    if (c.expected != Fault::bad_parameter) {  // bad max-correction: the rate limit does it
+      EXPECT_LE(d.max_step_mm, kFadeGainMaxSlope * full.norm() * kDt / 0.05 * (1 + 1e-9));
+    }
+  }
+}
+
+TEST(CompCore, NoFieldIsAFaultAndAFieldArrivingLaterFadesIn) {
+  Driver d;
+  CycleInput in;
+  in.enable = true;
+  in.tool = 1;
+  CycleOutput o = d.cycle(in);
+  EXPECT_EQ(Fault::no_field, o.fault);
+  EXPECT_EQ(Vec3::Zero(), o.correction_mm);
+  const auto field = make_field({});
+  in.candidate = &field;
+  o = d.cycle(in);
+  EXPECT_TRUE(o.adopted);
+  EXPECT_EQ(Fault::none, o.fault);
+  EXPECT_GT(o.fade, 0.0);
+  EXPECT_LT(o.fade, 1e-4);
+}
+
+TEST(CompCore, OverflowingFieldIsAFieldFault) {
+  // Finite node values whose B-spline prefilter overflows: the evaluation is
+  // not finite.
+  rt::FieldGrid g;
+  rt::FieldLayer layer;
+  layer.tool = 1;
+  layer.nodes.assign(8, {1e308, 0.0, 0.0, 1.0});
+  layer.nodes[3].dx_mm = -1e308;
+  const rt::CorrectionField field(g, {layer});
+  ASSERT_EQ(rt::FieldStatus::non_finite, field.evaluate(1, Vec3(0.5, 0.5, 0.5)).status);
+  Driver d;
+  CycleInput in;
+  in.enable = true;
+  in.tool = 1;
+  in.tcp_mm = Vec3(0.5, 0.5, 0.5);
+  in.candidate = &field;
+  const CycleOutput o = d.cycle(in);
+  EXPECT_EQ(Fault::field_not_finite, o.fault);
+  EXPECT_EQ(Vec3::Zero(), o.correction_mm);
+}
+
+TEST(CompCore, RecoveryFromAFaultCrossFadesFromTheHeldValue) {
+  const auto field = make_field({});
+  Driver d;
+  d.limits = {10.0, 1000.0, 0.1};
+  CycleInput in;
+  in.enable = true;
+  in.tool = 1;
+  in.tcp_mm = Vec3(0.0, 0.0, 0.0);
+  in.candidate = &field;
+  d.cycle(in);
+  in.candidate = nullptr;
+  for (int i = 0; i < 100; ++i)
+    d.cycle(in);
+  in.input_fault = Fault::input_not_finite;
+  for (int i = 0; i < 30; ++i)
+    d.cycle(in);
+  in.input_fault = Fault::none;
+  in.tcp_mm = Vec3(10.0, -12.0, 4.0);  // the input comes back somewhere else
+  for (int i = 0; i < 200; ++i)
+    EXPECT_EQ(Fault::none, d.cycle(in).fault);
+  EXPECT_EQ(field.evaluate(1, in.tcp_mm).correction_mm, d.state.output);
+  EXPECT_FALSE(d.ever_limited);
+}
+
+TEST(CompJoint, CorrectedJointsMoveTheTcpByTheCorrection) {
+  rt::AcTrtParams k;
+  k.x_rot_point_mm = 12.0;
+  k.y_rot_point_mm = -7.0;
+  k.z_rot_point_mm = 40.0;
+  k.y_offset_mm = 3.0;
+  k.z_offset_mm = -15.0;
+  k.tool_length_mm = 80.0;
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int i = 0; i < 2000; ++i) {
+    const rt::AcJoints j{100 * u(rng), 100 * u(rng), 100 * u(rng), 110 * u(rng), 360 * u(rng)};
+    const rt::ToolPose pose = rt::forward_ac(k, j);
+    const Vec3 c(0.3 * u(rng), 0.3 * u(rng), 0.3 * u(rng));
+    const rt::AcJoints out = correct_joints(k, j, pose, c);
+    EXPECT_EQ(j.a_deg, out.a_deg);
+    EXPECT_EQ(j.c_deg, out.c_deg);
+    const rt::ToolPose moved = rt::forward_ac(k, out);
+    ASSERT_NEAR(0.0, (moved.tcp_mm - (pose.tcp_mm + c)).norm(), 1e-9) << i;
+    ASSERT_NEAR(0.0, (moved.axis - pose.axis).norm(), 1e-12);
+    // Outside the A travel the inverse refuses; the fallback agrees.
+    rt::AcTrtParams narrow = k;
+    narrow.a_min_deg = narrow.a_max_deg = 1000.0;
+    const rt::AcJoints fb = correct_joints(narrow, j, pose, c);
+    ASSERT_NEAR(0.0, (rt::forward_ac(k, fb).tcp_mm - (pose.tcp_mm + c)).norm(), 1e-9);
+  }
+  const rt::AcJoints j{1, 2, 3, 4, 5};
+  const rt::AcJoints same = correct_joints(k, j, rt::forward_ac(k, j), Vec3::Zero());
+  EXPECT_EQ(0, std::memcmp(&j, &same, sizeof j)) << "zero correction passes joints bit for bit";
+}
