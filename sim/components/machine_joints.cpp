@@ -13,6 +13,11 @@
 //   out  <i>.<j>.f-error         pos-cmd − pos-act, the error the drive acts on
 //   in   <i>.spindle-power-kw    drives thermal_drift with driver "spindle_power"
 //   out  <i>.true-x/-y/-z        linear slides incl. squareness and straightness (mm)
+//   out  <i>.true-tcp-x/-y/-z    true TCP (tool tip) in the workpiece frame (mm), through the
+//                                machine's true kinematics (rotary_location, tool_length_error)
+//   out  <i>.true-tool-i/-j/-k   true tool axis in the workpiece frame (unit, TCP → spindle)
+//   out  <i>.true-tool-length, <i>.true-tool-radius, <i>.true-tool-corner-radius
+//                                the real cutter (mm): nominal tool + tool_*_error
 //   out  <i>.fault               (bit, latched) a non-finite input was held
 //   out  <i>.limit-fault         (bit, latched) a command left the joint's travel
 // Function <i>.update. The model is sim/include/truecut/sim/machine_model.hpp.
@@ -41,6 +46,11 @@ struct Instance {
   JointPins joint[kJointCount];
   double* spindle_power_kw;
   double* true_xyz[3];
+  double* true_tcp[3];
+  double* true_tool_axis[3];
+  double* true_tool_length;
+  double* true_tool_radius;
+  double* true_tool_corner_radius;
   bool* fault;
   bool* limit_fault;
 };
@@ -57,8 +67,15 @@ void update(void* arg, long period_ns) {
     *s.joint[j].vel_act = s.out.vel_act[j];
     *s.joint[j].f_error = s.out.f_error[j];
   }
-  for (int i = 0; i < 3; ++i)
+  for (int i = 0; i < 3; ++i) {
     *s.true_xyz[i] = s.out.xyz_true[i];
+    *s.true_tcp[i] = s.out.tcp_true[i];
+    *s.true_tool_axis[i] = s.out.tool_axis_true[i];
+  }
+  const TrueTool& tool = s.model.true_tool();
+  *s.true_tool_length = tool.length_mm;
+  *s.true_tool_radius = tool.radius_mm;
+  *s.true_tool_corner_radius = tool.corner_radius_mm;
   *s.fault = s.out.fault;
   *s.limit_fault = s.out.limit_fault;
 }
@@ -94,6 +111,13 @@ extern "C" TC_COMPONENT_EXPORT int truecut_component_init(const tc_hal_api_t* ap
       b.pin(n + ".true-x", TC_HAL_FLOAT, TC_HAL_OUT, &s->true_xyz[0]);
       b.pin(n + ".true-y", TC_HAL_FLOAT, TC_HAL_OUT, &s->true_xyz[1]);
       b.pin(n + ".true-z", TC_HAL_FLOAT, TC_HAL_OUT, &s->true_xyz[2]);
+      for (int i = 0; i < 3; ++i) {
+        b.pin(n + ".true-tcp-" + "xyz"[i], TC_HAL_FLOAT, TC_HAL_OUT, &s -> true_tcp[i]);
+        b.pin(n + ".true-tool-" + "ijk"[i], TC_HAL_FLOAT, TC_HAL_OUT, &s -> true_tool_axis[i]);
+      }
+      b.pin(n + ".true-tool-length", TC_HAL_FLOAT, TC_HAL_OUT, &s->true_tool_length);
+      b.pin(n + ".true-tool-radius", TC_HAL_FLOAT, TC_HAL_OUT, &s->true_tool_radius);
+      b.pin(n + ".true-tool-corner-radius", TC_HAL_FLOAT, TC_HAL_OUT, &s->true_tool_corner_radius);
       b.pin(n + ".fault", TC_HAL_BIT, TC_HAL_OUT, &s->fault);
       b.pin(n + ".limit-fault", TC_HAL_BIT, TC_HAL_OUT, &s->limit_fault);
       b.funct(n + ".update", update, s);

@@ -171,6 +171,79 @@ GlobalEffect<StraightnessParams> read_straightness(const JsonNode& n) {
   return e;
 }
 
+GlobalEffect<RotaryLocationParams> read_rotary_location(const JsonNode& n) {
+  n.allow_only({"enabled", "a", "c"}, "key");
+  GlobalEffect<RotaryLocationParams> e;
+  e.enabled = n.child("enabled").boolean();
+  if (n.has("a")) {
+    const JsonNode a = n.child("a");
+    a.allow_only({"e_y0a_um", "e_z0a_um", "e_b0a_urad", "e_c0a_urad", "e_a0a_urad"}, "parameter");
+    RotaryLocationA& p = e.params.a;
+    p.e_y0a_um = optional(a, "e_y0a_um", 0.0, any);
+    p.e_z0a_um = optional(a, "e_z0a_um", 0.0, any);
+    p.e_b0a_urad = optional(a, "e_b0a_urad", 0.0, any);
+    p.e_c0a_urad = optional(a, "e_c0a_urad", 0.0, any);
+    p.e_a0a_urad = optional(a, "e_a0a_urad", 0.0, any);
+  }
+  if (n.has("c")) {
+    const JsonNode c = n.child("c");
+    c.allow_only({"e_x0c_um", "e_y0c_um", "e_a0c_urad", "e_b0c_urad", "e_c0c_urad"}, "parameter");
+    RotaryLocationC& p = e.params.c;
+    p.e_x0c_um = optional(c, "e_x0c_um", 0.0, any);
+    p.e_y0c_um = optional(c, "e_y0c_um", 0.0, any);
+    p.e_a0c_urad = optional(c, "e_a0c_urad", 0.0, any);
+    p.e_b0c_urad = optional(c, "e_b0c_urad", 0.0, any);
+    p.e_c0c_urad = optional(c, "e_c0c_urad", 0.0, any);
+  }
+  return e;
+}
+
+GlobalEffect<ToolLengthErrorParams> read_tool_length_error(const JsonNode& n) {
+  n.allow_only({"enabled", "length_mm"}, "key");
+  GlobalEffect<ToolLengthErrorParams> e;
+  e.enabled = n.child("enabled").boolean();
+  e.params.length_mm = optional(n, "length_mm", 0.0, any);
+  return e;
+}
+
+GlobalEffect<ToolRadiusErrorParams> read_tool_radius_error(const JsonNode& n) {
+  n.allow_only({"enabled", "radius_mm", "corner_radius_mm"}, "key");
+  GlobalEffect<ToolRadiusErrorParams> e;
+  e.enabled = n.child("enabled").boolean();
+  e.params.radius_mm = optional(n, "radius_mm", 0.0, any);
+  e.params.corner_radius_mm = optional(n, "corner_radius_mm", 0.0, any);
+  return e;
+}
+
+KinematicsParams read_kinematics(const JsonNode& n) {
+  n.allow_only({"type", "x_rot_point_mm", "y_rot_point_mm", "z_rot_point_mm", "y_offset_mm",
+                "z_offset_mm", "conventional_directions", "tool"},
+               "key");
+  KinematicsParams k;
+  const JsonNode type = n.child("type");
+  if (const std::string t = type.string(); t != "xyzac-trt")
+    type.fail("unknown kinematics type '" + t + "'; known: xyzac-trt");
+  k.type = KinematicsType::XyzacTrt;
+  k.x_rot_point_mm = optional(n, "x_rot_point_mm", 0.0, any);
+  k.y_rot_point_mm = optional(n, "y_rot_point_mm", 0.0, any);
+  k.z_rot_point_mm = optional(n, "z_rot_point_mm", 0.0, any);
+  k.y_offset_mm = optional(n, "y_offset_mm", 0.0, any);
+  k.z_offset_mm = optional(n, "z_offset_mm", 0.0, any);
+  if (n.has("conventional_directions"))
+    k.conventional_directions = n.child("conventional_directions").boolean();
+  if (n.has("tool")) {
+    const JsonNode t = n.child("tool");
+    t.allow_only({"length_mm", "radius_mm", "corner_radius_mm"}, "parameter");
+    k.tool.length_mm = optional(t, "length_mm", 0.0, non_negative);
+    k.tool.radius_mm = optional(t, "radius_mm", 0.0, non_negative);
+    k.tool.corner_radius_mm = optional(t, "corner_radius_mm", 0.0, non_negative);
+    if (k.tool.corner_radius_mm > k.tool.radius_mm)
+      t.child("corner_radius_mm")
+          .fail("must not exceed radius_mm (" + format_number(k.tool.radius_mm) + ")");
+  }
+  return k;
+}
+
 Effects read_effects(const JsonNode& n) {
   n.allow_only({kEffectNames.begin(), kEffectNames.end()}, "effect");
   Effects e;
@@ -188,7 +261,36 @@ Effects read_effects(const JsonNode& n) {
         read_per_axis<ThermalDriftAxis>(n.child("thermal_drift"), 3, read_thermal_drift);
   if (n.has("squareness")) e.squareness = read_squareness(n.child("squareness"));
   if (n.has("straightness")) e.straightness = read_straightness(n.child("straightness"));
+  if (n.has("rotary_location"))
+    e.rotary_location = read_rotary_location(n.child("rotary_location"));
+  if (n.has("tool_length_error"))
+    e.tool_length_error = read_tool_length_error(n.child("tool_length_error"));
+  if (n.has("tool_radius_error"))
+    e.tool_radius_error = read_tool_radius_error(n.child("tool_radius_error"));
   return e;
+}
+
+// The real tool must still be a tool: radius >= 0, corner radius within it
+// (checked whether the effect is on or off, as its parameters are kept).
+void check_true_tool(const JsonNode& fx, const MachineParams& m) {
+  if (!fx.has("tool_radius_error")) return;
+  const JsonNode n = fx.child("tool_radius_error");
+  const NominalTool& tool = m.kinematics.tool;
+  const ToolRadiusErrorParams& e = m.effects.tool_radius_error.params;
+  const bool ball = is_ball_end_mill(tool);
+  const double radius = tool.radius_mm + e.radius_mm;
+  const double corner = ball ? radius : tool.corner_radius_mm + e.corner_radius_mm;
+  if (radius < 0.0)
+    n.child("radius_mm")
+        .fail("makes the true radius " + format_number(radius) +
+              " negative (kinematics.tool.radius_mm is " + format_number(tool.radius_mm) + ")");
+  if (ball && e.corner_radius_mm != 0.0)
+    n.child("corner_radius_mm")
+        .fail("must be 0: the nominal tool is a ball end mill, its corner follows radius_mm");
+  if (!(corner >= 0.0 && corner <= radius))
+    n.child(n.has("corner_radius_mm") ? "corner_radius_mm" : "radius_mm")
+        .fail("makes the true corner radius " + format_number(corner) + " leave 0 .. " +
+              format_number(radius) + " (the true radius)");
 }
 
 // Rules that join several parts of the file.
@@ -219,6 +321,15 @@ void check_consistency(const JsonNode& root, const MachineParams& m) {
       n.child(detail::friction_keys(j)[1])
           .fail("too large for the joint's inertia (B/m = " + format_number(per_s) + " 1/s)");
   }
+  if (fx.has("rotary_location")) {
+    const JsonNode r = fx.child("rotary_location");
+    for (const int j : {int(kA), int(kC)}) {
+      const std::string name(kJointNames[j]);
+      if (r.has(name) && !m.joints[j].present)
+        r.child(name).fail("joint " + name + " is not listed in joints");
+    }
+  }
+  check_true_tool(fx, m);
 }
 
 }  // namespace
@@ -236,7 +347,7 @@ MachineDescription parse_machine_description(const std::string& json_text,
                                              const std::string& file_name) {
   const nlohmann::json root_value = detail::parse_json_strict(json_text, file_name);
   const JsonNode root(file_name, root_value, "");
-  root.allow_only({"truecut_machine", "name", "joints", "effects"}, "key");
+  root.allow_only({"truecut_machine", "name", "joints", "kinematics", "effects"}, "key");
   const JsonNode version = root.child("truecut_machine");
   if (version.integer() != 1)
     version.fail("unsupported version " + std::to_string(version.integer()) +
@@ -253,6 +364,7 @@ MachineDescription parse_machine_description(const std::string& json_text,
     else
       d.machine.joints[j].drive = default_drive(j);
   }
+  if (root.has("kinematics")) d.machine.kinematics = read_kinematics(root.child("kinematics"));
   if (root.has("effects")) d.machine.effects = read_effects(root.child("effects"));
   check_consistency(root, d.machine);
   return d;

@@ -69,7 +69,43 @@ Json effects_json(const Effects& fx) {
                                         {"reference_mm", c->reference_mm}};
     e["straightness"] = s;
   }
+  if (fx.rotary_location.enabled || fx.rotary_location.params != RotaryLocationParams{}) {
+    const auto& a = fx.rotary_location.params.a;
+    const auto& c = fx.rotary_location.params.c;
+    e["rotary_location"] = Json{{"enabled", fx.rotary_location.enabled},
+                                {"a", Json{{"e_y0a_um", a.e_y0a_um},
+                                           {"e_z0a_um", a.e_z0a_um},
+                                           {"e_b0a_urad", a.e_b0a_urad},
+                                           {"e_c0a_urad", a.e_c0a_urad},
+                                           {"e_a0a_urad", a.e_a0a_urad}}},
+                                {"c", Json{{"e_x0c_um", c.e_x0c_um},
+                                           {"e_y0c_um", c.e_y0c_um},
+                                           {"e_a0c_urad", c.e_a0c_urad},
+                                           {"e_b0c_urad", c.e_b0c_urad},
+                                           {"e_c0c_urad", c.e_c0c_urad}}}};
+  }
+  if (fx.tool_length_error.enabled || fx.tool_length_error.params != ToolLengthErrorParams{})
+    e["tool_length_error"] = Json{{"enabled", fx.tool_length_error.enabled},
+                                  {"length_mm", fx.tool_length_error.params.length_mm}};
+  if (fx.tool_radius_error.enabled || fx.tool_radius_error.params != ToolRadiusErrorParams{})
+    e["tool_radius_error"] =
+        Json{{"enabled", fx.tool_radius_error.enabled},
+             {"radius_mm", fx.tool_radius_error.params.radius_mm},
+             {"corner_radius_mm", fx.tool_radius_error.params.corner_radius_mm}};
   return e;
+}
+
+Json kinematics_json(const KinematicsParams& k) {
+  return Json{{"type", "xyzac-trt"},
+              {"x_rot_point_mm", k.x_rot_point_mm},
+              {"y_rot_point_mm", k.y_rot_point_mm},
+              {"z_rot_point_mm", k.z_rot_point_mm},
+              {"y_offset_mm", k.y_offset_mm},
+              {"z_offset_mm", k.z_offset_mm},
+              {"conventional_directions", k.conventional_directions},
+              {"tool", Json{{"length_mm", k.tool.length_mm},
+                            {"radius_mm", k.tool.radius_mm},
+                            {"corner_radius_mm", k.tool.corner_radius_mm}}}};
 }
 
 }  // namespace
@@ -93,6 +129,8 @@ std::string format_machine_description(const MachineDescription& d) {
                                                               {k[4], p.drive.encoder_resolution}}}};
   }
   root["joints"] = joints;
+  if (d.machine.kinematics != KinematicsParams{})
+    root["kinematics"] = kinematics_json(d.machine.kinematics);
   root["effects"] = effects_json(d.machine.effects);
   return root.dump(2) + "\n";
 }

@@ -34,7 +34,8 @@ ServoParams servo_params(const MachineParams& params, int joint) {
   return s;
 }
 
-MachineModel::MachineModel(const MachineParams& params) : params_(params) {
+MachineModel::MachineModel(const MachineParams& params)
+    : params_(params), kinematics_(sim::true_kinematics(params)), tool_(sim::true_tool(params)) {
   for (int j = 0; j < kJointCount; ++j)
     servo_[j] = servo_params(params, j);
 }
@@ -91,6 +92,10 @@ void MachineModel::step(MachineState& st, const MachineInputs& in, double period
 
   out.xyz_true = apply_geometric_errors(fx.squareness.active(), fx.straightness.active(),
                                         {out.pos_true[kX], out.pos_true[kY], out.pos_true[kZ]});
+  const rt::ToolPose pose =
+      true_tool_pose(kinematics_, out.xyz_true, out.pos_true[kA], out.pos_true[kC]);
+  out.tcp_true = {pose.tcp_mm.x(), pose.tcp_mm.y(), pose.tcp_mm.z()};
+  out.tool_axis_true = {pose.axis.x(), pose.axis.y(), pose.axis.z()};
 
   // Advance to the end of the period.
   for (int j = 0; j < kJointCount; ++j) {

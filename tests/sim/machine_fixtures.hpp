@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <numbers>
 #include <vector>
@@ -11,6 +12,17 @@
 namespace truecut::sim::test {
 
 // All five joints with wide travel and default drives, every effect off.
+// Bit-for-bit equality of every output field (not of the struct's padding).
+inline bool bitwise_equal(const MachineOutputs& a, const MachineOutputs& b) {
+  auto same = [](const auto& x, const auto& y) {
+    return std::memcmp(x.data(), y.data(), sizeof x) == 0;
+  };
+  return same(a.pos_act, b.pos_act) && same(a.pos_true, b.pos_true) && same(a.vel_act, b.vel_act) &&
+         same(a.f_error, b.f_error) && same(a.xyz_true, b.xyz_true) &&
+         same(a.tcp_true, b.tcp_true) && same(a.tool_axis_true, b.tool_axis_true) &&
+         a.fault == b.fault && a.limit_fault == b.limit_fault;
+}
+
 inline MachineParams ideal_params() {
   MachineParams m;
   for (int j = 0; j < kJointCount; ++j) {
@@ -20,6 +32,22 @@ inline MachineParams ideal_params() {
     m.joints[j].drive = default_drive(j);
     m.joints[j].drive.encoder_resolution = 0.0;
   }
+  return m;
+}
+
+// ideal_params() with the pivots of a trunnion table: C axis at (120, -40)
+// with the table top at z = -250, the A axis 30 mm behind it and 60 mm
+// above; an 80 mm tool.
+inline MachineParams trunnion_params(bool conventional_directions = false) {
+  MachineParams m = ideal_params();
+  KinematicsParams& k = m.kinematics;
+  k.x_rot_point_mm = 120.0;
+  k.y_rot_point_mm = -40.0;
+  k.z_rot_point_mm = -250.0;
+  k.y_offset_mm = 30.0;
+  k.z_offset_mm = 60.0;
+  k.conventional_directions = conventional_directions;
+  k.tool = NominalTool{80.0, 5.0, 0.0};
   return m;
 }
 

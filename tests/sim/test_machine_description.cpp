@@ -25,6 +25,9 @@ const char* kBase = R"({
     "a": {"min_deg": -120, "max_deg": 30},
     "c": {"min_deg": -36000, "max_deg": 36000, "drive": {"inertia_kg_m2": 3.5}}
   },
+  "kinematics": {"type": "xyzac-trt", "x_rot_point_mm": 120, "y_rot_point_mm": -40,
+                 "z_rot_point_mm": -250, "y_offset_mm": 30, "z_offset_mm": 60,
+                 "tool": {"length_mm": 80, "radius_mm": 3, "corner_radius_mm": 3}},
   "effects": {
     "servo_lag": {"enabled": true, "x": {"kv_per_s": 30}, "c": {"kv_per_s": 20, "ff1": 0.5}},
     "backlash": {"enabled": true, "x": {"play_mm": 0.01}, "c": {"play_deg": 0.002}},
@@ -34,7 +37,11 @@ const char* kBase = R"({
                       "z": {"gain_mm": -0.02, "tau_s": 900, "driver": "spindle_power",
                             "reference_power_kw": 12}},
     "squareness": {"enabled": true, "xy_urad": 30},
-    "straightness": {"enabled": true, "eyx": {"quadratic_um_per_m2": 20}}
+    "straightness": {"enabled": true, "eyx": {"quadratic_um_per_m2": 20}},
+    "rotary_location": {"enabled": true, "a": {"e_y0a_um": 5, "e_b0a_urad": -12},
+                        "c": {"e_x0c_um": 8, "e_c0c_urad": 30}},
+    "tool_length_error": {"enabled": true, "length_mm": 0.04},
+    "tool_radius_error": {"enabled": true, "radius_mm": -0.1}
   }
 })";
 
@@ -75,12 +82,49 @@ TEST(MachineDescription, ReadsValuesAndDefaults) {
   EXPECT_EQ(20.0, m.effects.straightness.active()->components[kEYX]->quadratic_um_per_m2);
 }
 
+TEST(MachineDescription, ReadsKinematicsAndPoseEffects) {
+  const auto m = parse_machine_description(kBase, "m.json").machine;
+  EXPECT_EQ(KinematicsType::XyzacTrt, m.kinematics.type);
+  EXPECT_EQ(120.0, m.kinematics.x_rot_point_mm);
+  EXPECT_EQ(-40.0, m.kinematics.y_rot_point_mm);
+  EXPECT_EQ(-250.0, m.kinematics.z_rot_point_mm);
+  EXPECT_EQ(30.0, m.kinematics.y_offset_mm);
+  EXPECT_EQ(60.0, m.kinematics.z_offset_mm);
+  EXPECT_FALSE(m.kinematics.conventional_directions);
+  EXPECT_EQ((NominalTool{80.0, 3.0, 3.0}), m.kinematics.tool);
+  const auto* loc = m.effects.rotary_location.active();
+  ASSERT_NE(nullptr, loc);
+  EXPECT_EQ((RotaryLocationA{5.0, 0.0, -12.0, 0.0, 0.0}), loc->a);
+  EXPECT_EQ((RotaryLocationC{8.0, 0.0, 0.0, 0.0, 30.0}), loc->c);
+  EXPECT_EQ(0.04, m.effects.tool_length_error.active()->length_mm);
+  EXPECT_EQ((ToolRadiusErrorParams{-0.1, 0.0}), *m.effects.tool_radius_error.active());
+}
+
+TEST(MachineDescription, KinematicsDefaultsToZeros) {
+  auto d = parse_machine_description(
+      R"({"truecut_machine": 1, "joints": {"x": {"min_mm": 0, "max_mm": 1},
+          "y": {"min_mm": 0, "max_mm": 1}, "z": {"min_mm": 0, "max_mm": 1}},
+          "kinematics": {"type": "xyzac-trt", "conventional_directions": true,
+                         "tool": {"radius_mm": 2}}})",
+      "m.json");
+  KinematicsParams want;
+  want.conventional_directions = true;
+  want.tool.radius_mm = 2.0;
+  EXPECT_EQ(want, d.machine.kinematics);
+  // Written back with every key explicit, and left out when all default.
+  const auto text = format_machine_description(d);
+  EXPECT_NE(std::string::npos, text.find("\"z_offset_mm\": 0")) << text;
+  d.machine.kinematics = {};
+  EXPECT_EQ(std::string::npos, format_machine_description(d).find("kinematics"));
+}
+
 TEST(MachineDescription, WithoutEffectsEverythingIsOff) {
   auto d = parse_machine_description(
       R"({"truecut_machine": 1, "joints": {"x": {"min_mm": 0, "max_mm": 1},
           "y": {"min_mm": 0, "max_mm": 1}, "z": {"min_mm": 0, "max_mm": 1}}})",
       "m.json");
   EXPECT_EQ(Effects{}, d.machine.effects);
+  EXPECT_EQ(KinematicsParams{}, d.machine.kinematics);
   EXPECT_FALSE(d.machine.joints[kA].present);
   EXPECT_EQ(0.0, d.machine.joints[kA].max) << "an absent joint has no travel";
 }
@@ -134,6 +178,21 @@ TEST(MachineDescription, RandomParametersRoundTripExactly) {
     m.effects.straightness.enabled = coin(rng);
     for (auto& c : m.effects.straightness.params.components)
       if (coin(rng)) c = StraightnessComponent{u(rng) * 50, u(rng) * 50 - 25, u(rng) * 100};
+    if (coin(rng)) {
+      auto& k = m.kinematics;
+      k = {KinematicsType::XyzacTrt, u(rng) * 600 - 300, u(rng) * 600 - 300, u(rng) * 600 - 300,
+           u(rng) * 100 - 50,        u(rng) * 100 - 50,  coin(rng),          {}};
+      k.tool.length_mm = u(rng) * 200;
+      k.tool.radius_mm = u(rng) * 10;
+      k.tool.corner_radius_mm = coin(rng) ? k.tool.radius_mm : u(rng) * k.tool.radius_mm;
+    }
+    if (m.joints[kA].present && m.joints[kC].present && coin(rng))
+      m.effects.rotary_location = {
+          coin(rng),
+          {{u(rng) * 40 - 20, u(rng) * 40 - 20, u(rng) * 100 - 50, u(rng) * 100 - 50, u(rng) * 99},
+           {u(rng) * 40 - 20, u(rng) * 40 - 20, u(rng) * 100 - 50, u(rng) * 100 - 50, u(rng)}}};
+    if (coin(rng)) m.effects.tool_length_error = {coin(rng), {u(rng) * 0.4 - 0.2}};
+    if (coin(rng)) m.effects.tool_radius_error = {coin(rng), {u(rng) * 0.1, 0.0}};
     const auto text = format_machine_description(d);
     ASSERT_EQ(d, parse_machine_description(text, "random.json")) << text;
   }
@@ -187,7 +246,8 @@ INSTANTIATE_TEST_SUITE_P(
                 "effects.backlash.x.play_mm: must be >= 0"},
         BadCase{"/effects/backlsh", json::object(), false,
                 "effects.backlsh: unknown effect; known: servo_lag, backlash, reversal_spike, "
-                "pitch_error, thermal_drift, squareness, straightness"},
+                "pitch_error, thermal_drift, squareness, straightness, rotary_location, "
+                "tool_length_error, tool_radius_error"},
         BadCase{"/effects/servo_lag/x/kv", 3, false,
                 "effects.servo_lag.x.kv: unknown parameter; known: kv_per_s, ff1"},
         BadCase{"/effects/thermal_drift/z/tau_s", -5, false,
@@ -222,7 +282,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"/truecut_machine", nullptr, true, "truecut_machine: missing"},
         BadCase{"/name", 5, false, "name: must be a string"},
         BadCase{"/efects", json::object(), false,
-                "efects: unknown key; known: truecut_machine, name, joints, effects"},
+                "efects: unknown key; known: truecut_machine, name, joints, kinematics, effects"},
         BadCase{"/joints/z", nullptr, true, "joints.z: missing"},
         BadCase{"/joints/b", json::object(), false,
                 "joints.b: unknown joint; known: x, y, z, a, c"},
@@ -234,8 +294,70 @@ INSTANTIATE_TEST_SUITE_P(
                 "encoder_resolution_deg"},
         BadCase{"/joints/x/drive", json{{"vel_integral_time_s", 0}}, false,
                 "joints.x.drive.vel_integral_time_s: must be > 0"},
-        BadCase{"/joints/c", nullptr, true,
-                "effects.servo_lag.c: joint c is not listed in joints"}));
+        BadCase{"/joints/c", nullptr, true, "effects.servo_lag.c: joint c is not listed in joints"},
+        BadCase{"/kinematics/type", "xyzbc-trt", false,
+                "kinematics.type: unknown kinematics type 'xyzbc-trt'; known: xyzac-trt"},
+        BadCase{"/kinematics/type", nullptr, true, "kinematics.type: missing"},
+        BadCase{"/kinematics/x_rot_point", 3, false,
+                "kinematics.x_rot_point: unknown key; known: type, x_rot_point_mm, "
+                "y_rot_point_mm, z_rot_point_mm, y_offset_mm, z_offset_mm, "
+                "conventional_directions, tool"},
+        BadCase{"/kinematics/y_offset_mm", "far", false,
+                "kinematics.y_offset_mm: must be a number"},
+        BadCase{"/kinematics/conventional_directions", 1, false,
+                "kinematics.conventional_directions: must be true or false"},
+        BadCase{"/kinematics/tool/radius_mm", -1, false, "kinematics.tool.radius_mm: must be >= 0"},
+        BadCase{"/kinematics/tool/diameter_mm", 6, false,
+                "kinematics.tool.diameter_mm: unknown parameter; known: length_mm, radius_mm, "
+                "corner_radius_mm"},
+        BadCase{"/kinematics/tool/corner_radius_mm", 4, false,
+                "kinematics.tool.corner_radius_mm: must not exceed radius_mm (3)"},
+        BadCase{"/kinematics/tool/length_mm", -80, false,
+                "kinematics.tool.length_mm: must be >= 0"},
+        BadCase{"/effects/rotary_location/c/e_x0c_mm", 0.01, false,
+                "effects.rotary_location.c.e_x0c_mm: unknown parameter; known: e_x0c_um, "
+                "e_y0c_um, e_a0c_urad, e_b0c_urad, e_c0c_urad"},
+        BadCase{"/effects/rotary_location/a/e_x0c_um", 1, false,
+                "effects.rotary_location.a.e_x0c_um: unknown parameter; known: e_y0a_um, "
+                "e_z0a_um, e_b0a_urad, e_c0a_urad, e_a0a_urad"},
+        BadCase{"/effects/rotary_location/b", json::object(), false,
+                "effects.rotary_location.b: unknown key; known: enabled, a, c"},
+        BadCase{"/effects/rotary_location/enabled", nullptr, true,
+                "effects.rotary_location.enabled: missing"},
+        BadCase{"/effects/rotary_location/c/e_c0c_urad", "1 arcsec", false,
+                "effects.rotary_location.c.e_c0c_urad: must be a number"},
+        BadCase{"/joints/a", nullptr, true,
+                "effects.rotary_location.a: joint a is not listed in joints"},
+        BadCase{"/effects/tool_length_error/length", 0.1, false,
+                "effects.tool_length_error.length: unknown key; known: enabled, length_mm"},
+        BadCase{"/effects/tool_length_error/length_mm", "long", false,
+                "effects.tool_length_error.length_mm: must be a number"},
+        BadCase{"/effects/tool_radius_error/radius_mm", -3.5, false,
+                "effects.tool_radius_error.radius_mm: makes the true radius -0.5 negative "
+                "(kinematics.tool.radius_mm is 3)"},
+        BadCase{"/effects/tool_radius_error/corner_radius_mm", 0.1, false,
+                "effects.tool_radius_error.corner_radius_mm: must be 0: the nominal tool is a "
+                "ball end mill"},
+        BadCase{"/effects/tool_radius_error/enabled", "on", false,
+                "effects.tool_radius_error.enabled: must be true or false"}));
+
+TEST(BadInputJson, RealCornerRadiusMustFitTheRealRadius) {
+  json j = json::parse(kBase);
+  j["kinematics"]["tool"]["corner_radius_mm"] = 1.0;  // a bull-nose mill
+  j["effects"]["tool_radius_error"]["radius_mm"] = -2.5;
+  EXPECT_EQ(
+      "m.json: effects.tool_radius_error.radius_mm: makes the true corner radius 1 leave 0 .. "
+      "0.5 (the true radius)",
+      error_of(j));
+  j["effects"]["tool_radius_error"]["radius_mm"] = 0.0;
+  j["effects"]["tool_radius_error"]["corner_radius_mm"] = -1.5;
+  EXPECT_EQ(
+      "m.json: effects.tool_radius_error.corner_radius_mm: makes the true corner radius -0.5 "
+      "leave 0 .. 3 (the true radius)",
+      error_of(j));
+  j["effects"]["tool_radius_error"]["corner_radius_mm"] = 0.5;
+  EXPECT_EQ("(no error)", error_of(j));
+}
 
 TEST(BadInputText, NanInfinityDuplicatesAndSyntax) {
   std::string base = kBase;

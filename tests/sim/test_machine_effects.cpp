@@ -81,7 +81,7 @@ TEST(Determinism, TwoRunsAreBitIdentical) {
   auto b = run(m, 250e-6, 8000, [](double t) { return random_path(t, 11); });
   ASSERT_EQ(a.out.size(), b.out.size());
   for (size_t k = 0; k < a.out.size(); ++k)
-    ASSERT_EQ(0, std::memcmp(&a.out[k], &b.out[k], sizeof(MachineOutputs))) << "cycle " << k;
+    ASSERT_TRUE(bitwise_equal(a.out[k], b.out[k])) << "cycle " << k;
   // And the effects did something.
   double dev = 0.0;
   for (size_t k = 0; k < a.out.size(); ++k)

@@ -7,6 +7,8 @@
 #include "test_paths.hpp"
 #include "truecut/rt/executor.hpp"
 #include "truecut/rt/hal_file.hpp"
+#include "truecut/rt/kinematics_ac.hpp"
+#include "truecut/sim/machine_model.hpp"
 
 using namespace truecut::hal;
 
@@ -30,6 +32,17 @@ const char* kLagOnX = R"({"truecut_machine": 1,
   "effects": {"servo_lag": {"enabled": true, "x": {"kv_per_s": 25}},
               "backlash": {"enabled": true, "y": {"play_mm": 0.01}},
               "squareness": {"enabled": true, "xy_urad": 100}}})";
+
+const char* kTrunnion = R"({"truecut_machine": 1,
+  "joints": {"x": {"min_mm": -1000, "max_mm": 1000}, "y": {"min_mm": -1000, "max_mm": 1000},
+             "z": {"min_mm": -1000, "max_mm": 1000}, "a": {"min_deg": -120, "max_deg": 120},
+             "c": {"min_deg": -720, "max_deg": 720}},
+  "kinematics": {"type": "xyzac-trt", "x_rot_point_mm": 120, "y_rot_point_mm": -40,
+                 "z_rot_point_mm": -250, "y_offset_mm": 30, "z_offset_mm": 60,
+                 "tool": {"length_mm": 80, "radius_mm": 3, "corner_radius_mm": 3}},
+  "effects": {"rotary_location": {"enabled": true, "c": {"e_x0c_um": 20, "e_a0c_urad": 50}},
+              "tool_length_error": {"enabled": true, "length_mm": 0.1},
+              "tool_radius_error": {"enabled": true, "radius_mm": -0.1}}})";
 
 void run_cycles(Hal& hal, uint64_t n) {
   Executor ex(hal);
@@ -119,4 +132,43 @@ TEST(MachineJoints, RunsAreByteForByteRepeatable) {
   }
   EXPECT_GT(traces[0].size(), 8000u * 7);
   EXPECT_EQ(traces[0], traces[1]);
+}
+
+TEST(MachineJoints, OutputsTheTruePoseInTheWorkpieceFrame) {
+  auto dir = truecut::test::scratch_dir();
+  auto machine = write(dir / "m.json", kTrunnion);
+  Hal hal(opts(dir));
+  load_hal_text(hal,
+                "loadrt threads name1=servo period1=1000000\n"
+                "loadrt machine_joints names=m machine=" +
+                    machine.string() +
+                    "\nsetp m.x.pos-cmd 150\nsetp m.y.pos-cmd 20\nsetp m.z.pos-cmd -90\n"
+                    "setp m.a.pos-cmd 35\nsetp m.c.pos-cmd 200\naddf m.update servo\n",
+                "m.hal");
+  run_cycles(hal, 3);
+  using namespace truecut::sim;
+  const auto description = read_machine_description(machine);
+  MachineModel model(description.machine);
+  MachineState state;
+  MachineInputs in;
+  in.pos_cmd = {150.0, 20.0, -90.0, 35.0, 200.0};
+  MachineOutputs out;
+  model.step(state, in, 1e-3, out);
+  const char* tcp[] = {"m.true-tcp-x", "m.true-tcp-y", "m.true-tcp-z"};
+  const char* axis[] = {"m.true-tool-i", "m.true-tool-j", "m.true-tool-k"};
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(out.tcp_true[i], hal.get_pin_or_param(tcp[i]).f) << tcp[i];
+    EXPECT_EQ(out.tool_axis_true[i], hal.get_pin_or_param(axis[i]).f) << axis[i];
+  }
+  // Not the pose the controller believes in: 0.1 mm of tool and 20 µm of C
+  // axis offset.
+  const auto nominal = truecut::rt::forward_ac(nominal_ac_params(description.machine),
+                                               {150.0, 20.0, -90.0, 35.0, 200.0});
+  const Eigen::Vector3d got(out.tcp_true.data());
+  EXPECT_GT((got - nominal.tcp_mm).norm(), 0.05);
+  EXPECT_LT((got - nominal.tcp_mm).norm(), 0.15);
+  EXPECT_NEAR(1.0, Eigen::Vector3d(out.tool_axis_true.data()).norm(), 1e-15);
+  EXPECT_DOUBLE_EQ(80.1, hal.get_pin_or_param("m.true-tool-length").f);
+  EXPECT_DOUBLE_EQ(2.9, hal.get_pin_or_param("m.true-tool-radius").f);
+  EXPECT_DOUBLE_EQ(2.9, hal.get_pin_or_param("m.true-tool-corner-radius").f);
 }

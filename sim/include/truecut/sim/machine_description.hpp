@@ -1,5 +1,6 @@
-// The machine description: joints (travel, drive parameters) and the
-// switchable physics effects of the simulated machine, read from and written
+// The machine description: joints (travel, drive parameters), the nominal
+// kinematics and tool, and the switchable physics effects of the simulated
+// machine, read from and written
 // to JSON (`truecut_machine: 1`, see docs/formats.md). With every effect off
 // the machine is ideal: actual = commanded.
 //
@@ -18,9 +19,13 @@
 #include "truecut/sim/effects/geometric_errors.hpp"
 #include "truecut/sim/effects/pitch_error.hpp"
 #include "truecut/sim/effects/reversal_spike.hpp"
+#include "truecut/sim/effects/rotary_location.hpp"
 #include "truecut/sim/effects/servo_lag.hpp"
 #include "truecut/sim/effects/thermal_drift.hpp"
+#include "truecut/sim/effects/tool_length_error.hpp"
+#include "truecut/sim/effects/tool_radius_error.hpp"
 #include "truecut/sim/joints.hpp"
+#include "truecut/sim/machine_kinematics.hpp"
 
 namespace truecut::sim {
 
@@ -74,16 +79,20 @@ struct Effects {
   PerAxisEffect<ThermalDriftAxis> thermal_drift;  // x, y, z only
   GlobalEffect<SquarenessParams> squareness;
   GlobalEffect<StraightnessParams> straightness;
+  GlobalEffect<RotaryLocationParams> rotary_location;
+  GlobalEffect<ToolLengthErrorParams> tool_length_error;
+  GlobalEffect<ToolRadiusErrorParams> tool_radius_error;
   bool operator==(const Effects&) const = default;
 };
 
 // The effect names as the JSON file spells them, in the order above.
-inline constexpr std::array<const char*, 7> kEffectNames = {
-    "servo_lag",     "backlash",   "reversal_spike", "pitch_error",
-    "thermal_drift", "squareness", "straightness"};
+inline constexpr std::array<const char*, 10> kEffectNames = {
+    "servo_lag",  "backlash",     "reversal_spike",  "pitch_error",       "thermal_drift",
+    "squareness", "straightness", "rotary_location", "tool_length_error", "tool_radius_error"};
 
 struct MachineParams {
   std::array<JointParams, kJointCount> joints;
+  KinematicsParams kinematics;  // nominal; defaults: all zeros
   Effects effects;
   bool operator==(const MachineParams&) const = default;
 };

@@ -5,7 +5,9 @@
 // the joint is ideal (motor at the command, encoder reads the command).
 // Table side (pos_true) = backlash(motor) + pitch_error(motor) + thermal δ.
 // The three linear slides' true positions then get the geometric errors
-// (squareness, straightness) → xyz_true.
+// (squareness, straightness) → xyz_true, and xyz_true with the true A and C
+// go through the true kinematics (true_tool_pose.hpp: rotary_location,
+// tool_length_error) → the true TCP and tool axis in the workpiece frame.
 //
 // Sampling: outputs of cycle k describe the machine at t_k, the instant the
 // command cmd_k belongs to (the encoder is read before the drive acts on
@@ -18,6 +20,7 @@
 
 #include "truecut/sim/machine_description.hpp"
 #include "truecut/sim/servo_model.hpp"
+#include "truecut/sim/true_tool_pose.hpp"
 
 namespace truecut::sim {
 
@@ -32,6 +35,8 @@ struct MachineOutputs {
   std::array<double, kJointCount> vel_act{};   // motor velocity, unit/s
   std::array<double, kJointCount> f_error{};   // cmd − encoder, as the drive sees it
   std::array<double, 3> xyz_true{};            // linear slides with geometric errors, mm
+  std::array<double, 3> tcp_true{};            // true TCP (tool tip), workpiece frame, mm
+  std::array<double, 3> tool_axis_true{};      // true tool axis, workpiece frame, TCP → spindle
   bool fault = false;                          // latched: a non-finite input was seen (and held)
   bool limit_fault = false;                    // latched: a command left the joint's travel
 };
@@ -54,6 +59,8 @@ class MachineModel {
   const MachineParams& params() const noexcept { return params_; }
   const ServoParams& servo(int joint) const noexcept { return servo_[joint]; }
   bool dynamic(int joint) const noexcept { return params_.effects.servo_lag.active(joint); }
+  const TrueKinematics& true_kinematics() const noexcept { return kinematics_; }
+  const TrueTool& true_tool() const noexcept { return tool_; }
 
   // One servo period. The first call places every joint at its command.
   void step(MachineState& state, const MachineInputs& in, double period_s,
@@ -62,6 +69,8 @@ class MachineModel {
  private:
   MachineParams params_;
   std::array<ServoParams, kJointCount> servo_{};
+  TrueKinematics kinematics_{};
+  TrueTool tool_{};
 };
 static_assert(std::is_trivially_destructible_v<MachineModel>);
 static_assert(std::is_trivially_destructible_v<MachineState>);
