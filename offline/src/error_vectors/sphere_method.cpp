@@ -1,0 +1,294 @@
+#include "spatial/kd_tree.hpp"
+#include "truecut/offline/error_vectors.hpp"
+#include "truecut/offline/mesh_geometry.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <Eigen/Eigenvalues>
+
+#include <cmath>
+#include <stdexcept>
+
+namespace truecut::offline {
+
+namespace {
+
+// Triangles whose closest point is this close to the compensation point pass
+// through it.
+constexpr double kThroughPointMm = 1e-7;
+constexpr int kMaxReassignments = 10;
+
+// A nominal plane near the point: a cluster of nominal triangles, and the
+// plane fitted to the cloud points assigned to it.
+struct Plane {
+  Eigen::Vector3d normal_sum = Eigen::Vector3d::Zero();  // of its triangles
+  Eigen::Vector3d nominal_normal = Eigen::Vector3d::Zero();
+  Eigen::Vector3d nominal_origin = Eigen::Vector3d::Zero();
+  bool through_point = false;
+  std::size_t count = 0;
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // fitted, oriented like the nominal
+  bool fitted = false;
+
+  // To the fitted plane, or before fitting to the nominal plane moved by
+  // `shift`.
+  double distance(const Eigen::Vector3d& x, const Eigen::Vector3d& shift) const {
+    return fitted ? std::abs((x - centroid).dot(normal))
+                  : std::abs((x - nominal_origin - shift).dot(nominal_normal));
+  }
+};
+
+struct Scratch {
+  std::vector<std::uint32_t> triangles, cloud;
+  std::vector<Plane> planes;
+  std::vector<int> assigned;
+  Eigen::Vector3d shift = Eigen::Vector3d::Zero();  // local translation estimate
+};
+
+struct Context {
+  const TriangleMesh& nominal;
+  const std::vector<Eigen::Vector3d>& face_normal;
+  const RayScene& nominal_scene;
+  const spatial::KdTree& cloud_tree;
+  std::span<const Eigen::Vector3d> cloud;
+  const SphereMethodOptions& options;
+  double cos_plane;
+};
+
+// Greedy clustering of the nominal triangles within Rs: those through the
+// point first, so every plane through the point has its origin there.
+void cluster_nominal(const Context& c, const Eigen::Vector3d& P, Scratch& s) {
+  s.planes.clear();
+  const double offset_tol = 0.25 * c.options.radius_mm;
+  for (int pass = 0; pass < 2; ++pass) {
+    for (std::uint32_t t : s.triangles) {
+      const auto& [a, b, d] = c.nominal.triangles[t];
+      const Eigen::Vector3d x = closest_point_on_triangle(
+          P, c.nominal.vertices_mm[a], c.nominal.vertices_mm[b], c.nominal.vertices_mm[d]);
+      const bool through = (x - P).norm() <= kThroughPointMm;
+      if (through != (pass == 0)) continue;
+      const Eigen::Vector3d& n = c.face_normal[t];
+      if (n.isZero()) continue;
+      Plane* home = nullptr;
+      for (Plane& p : s.planes) {
+        if (p.nominal_normal.dot(n) >= c.cos_plane &&
+            std::abs((x - p.nominal_origin).dot(p.nominal_normal)) <= offset_tol) {
+          home = &p;
+          break;
+        }
+      }
+      if (!home) {
+        Plane p;
+        p.nominal_origin = through ? P : x;
+        p.through_point = through;
+        s.planes.push_back(p);
+        home = &s.planes.back();
+      }
+      home->normal_sum += n;
+      home->nominal_normal = home->normal_sum.normalized();
+    }
+  }
+}
+
+void fit_planes(const Context& c, Scratch& s) {
+  for (Plane& p : s.planes) {
+    p.count = 0;
+    p.centroid.setZero();
+  }
+  for (std::size_t k = 0; k < s.cloud.size(); ++k) {
+    Plane& p = s.planes[s.assigned[k]];
+    ++p.count;
+    p.centroid += c.cloud[s.cloud[k]];
+  }
+  std::vector<Eigen::Matrix3d> cov(s.planes.size(), Eigen::Matrix3d::Zero());
+  for (Plane& p : s.planes) {
+    if (p.count) p.centroid /= static_cast<double>(p.count);
+  }
+  for (std::size_t k = 0; k < s.cloud.size(); ++k) {
+    const Eigen::Vector3d d = c.cloud[s.cloud[k]] - s.planes[s.assigned[k]].centroid;
+    cov[s.assigned[k]] += d * d.transpose();
+  }
+  for (std::size_t j = 0; j < s.planes.size(); ++j) {
+    Plane& p = s.planes[j];
+    p.fitted = p.count >= 3;
+    if (!p.fitted) continue;
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov[j]);
+    p.normal = eig.eigenvectors().col(0);  // smallest eigenvalue
+    if (p.normal.dot(p.nominal_normal) < 0.0) p.normal = -p.normal;
+  }
+}
+
+// Returns whether any point changed plane.
+bool assign(const Context& c, Scratch& s) {
+  bool changed = false;
+  for (std::size_t k = 0; k < s.cloud.size(); ++k) {
+    const Eigen::Vector3d& x = c.cloud[s.cloud[k]];
+    int best = 0;
+    double best_d = INFINITY;
+    for (std::size_t j = 0; j < s.planes.size(); ++j) {
+      const double d = s.planes[j].distance(x, s.shift);
+      if (d < best_d) {
+        best_d = d;
+        best = static_cast<int>(j);
+      }
+    }
+    changed |= s.assigned[k] != best;
+    s.assigned[k] = best;
+  }
+  return changed;
+}
+
+// The translation that best moves the nominal planes onto their assigned
+// points (point-to-plane least squares, in the directions the planes
+// determine: 1 for a surface, 2 for an edge, 3 for a corner).
+Eigen::Vector3d local_translation(const Context& c, const Scratch& s) {
+  Eigen::Matrix3d N = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d r = Eigen::Vector3d::Zero();
+  for (std::size_t k = 0; k < s.cloud.size(); ++k) {
+    const Plane& p = s.planes[s.assigned[k]];
+    N += p.nominal_normal * p.nominal_normal.transpose();
+    r += p.nominal_normal * (c.cloud[s.cloud[k]] - p.nominal_origin).dot(p.nominal_normal);
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(N);
+  Eigen::Vector3d v = Eigen::Vector3d::Zero();
+  const double top = eig.eigenvalues().maxCoeff();
+  for (int j = 0; j < 3; ++j) {
+    const double lambda = eig.eigenvalues()[j];
+    if (lambda > 1e-6 * top) {
+      const Eigen::Vector3d u = eig.eigenvectors().col(j);
+      v += u * (u.dot(r) / lambda);
+    }
+  }
+  return v;
+}
+
+void one_point(const Context& c, const Eigen::Vector3d& P, const Eigen::Vector3d& normal,
+               Scratch& s, ErrorVectors& e, std::size_t i) {
+  const double Rs = c.options.radius_mm;
+  s.cloud.clear();
+  c.cloud_tree.within(P, Rs, s.cloud);
+  // No sort needed: the tree, and so the order of the points, is fixed by
+  // the input.
+  e.points_in_sphere[i] = static_cast<std::uint32_t>(s.cloud.size());
+  if (s.cloud.size() < c.options.min_points) {
+    e.status[i] = ErrorStatus::too_few_points;
+    return;
+  }
+  s.triangles.clear();
+  c.nominal_scene.triangles_within(P, Rs, s.triangles);
+  cluster_nominal(c, P, s);
+  s.assigned.assign(s.cloud.size(), -1);
+  for (Plane& p : s.planes)
+    p.fitted = false;
+  // Which plane a point belongs to is ambiguous near an edge when the
+  // displacement is as large as the distance to the edge. So points first go
+  // to the nearest nominal plane moved by the local translation estimated
+  // from the current assignment, until nothing moves; then to the nearest
+  // fitted plane, until nothing moves.
+  s.shift.setZero();
+  assign(c, s);
+  if (s.planes.size() > 1) {  // one plane: nothing to sort out
+    for (int round = 0; round < kMaxReassignments; ++round) {
+      s.shift = local_translation(c, s);
+      if (!assign(c, s)) break;
+    }
+    for (int round = 0; round < kMaxReassignments; ++round) {
+      fit_planes(c, s);
+      if (!assign(c, s)) break;
+    }
+  }
+  fit_planes(c, s);
+
+  // Planes through the point: X = P + Aᵀ(AAᵀ)⁻¹(b − AP) is the point of their
+  // intersection nearest to P (1 plane: the projection; 2: the nearest point
+  // on the edge line; 3: the corner). With 4 or more, the least-squares point,
+  // each plane weighted by its point count.
+  Eigen::Matrix<double, Eigen::Dynamic, 3> A(0, 3);
+  Eigen::VectorXd b(0), w(0);
+  int k = 0;
+  for (const Plane& p : s.planes) {
+    if (!p.through_point) continue;
+    if (!p.fitted || p.count < c.options.min_points) {
+      e.status[i] = ErrorStatus::too_few_points;
+      return;
+    }
+    if (p.normal.dot(p.nominal_normal) < c.cos_plane) {
+      e.status[i] = ErrorStatus::plane_tilted;
+      return;
+    }
+    A.conservativeResize(k + 1, 3);
+    b.conservativeResize(k + 1);
+    w.conservativeResize(k + 1);
+    A.row(k) = p.normal.transpose();
+    b[k] = p.normal.dot(p.centroid) - p.normal.dot(P);
+    w[k] = static_cast<double>(p.count);
+    ++k;
+  }
+  e.sphere_case[i] = k == 1   ? SphereCase::surface
+                     : k == 2 ? SphereCase::edge
+                     : k == 3 ? SphereCase::corner
+                              : SphereCase::multi;
+  Eigen::Vector3d v;
+  if (k <= 3) {
+    const Eigen::MatrixXd AAt = A * A.transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(AAt);
+    // Smallest eigenvalue of AAᵀ: sin² of the angle between two planes.
+    if (eig.eigenvalues().minCoeff() < 1e-4) {
+      e.status[i] = ErrorStatus::ill_conditioned;
+      return;
+    }
+    v = A.transpose() * AAt.ldlt().solve(b);
+  } else {
+    const Eigen::Matrix3d N = A.transpose() * w.asDiagonal() * A;
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(N);
+    if (eig.eigenvalues().minCoeff() < 1e-4 * eig.eigenvalues().maxCoeff()) {
+      e.status[i] = ErrorStatus::ill_conditioned;
+      return;
+    }
+    v = N.ldlt().solve(A.transpose() * w.asDiagonal() * b);
+  }
+  if (v.norm() > c.options.max_displacement_ratio * Rs) {
+    e.status[i] = ErrorStatus::beyond_sphere_reach;
+    return;
+  }
+  e.vectors_mm[i] = v;
+  e.normal_mm[i] = v.dot(normal);
+}
+
+}  // namespace
+
+ErrorVectors error_vectors_by_spheres(const TriangleMesh& nominal, const CompensationPoints& points,
+                                      std::span<const Eigen::Vector3d> cloud_mm,
+                                      const SphereMethodOptions& options) {
+  const std::size_t n = points.size();
+  if (points.normals.size() != n) {
+    throw std::invalid_argument("compensation points: positions and normals differ in number");
+  }
+  if (!(options.radius_mm > 0.0)) throw std::invalid_argument("sphere radius must be positive");
+  ErrorVectors e;
+  e.vectors_mm.assign(n, Eigen::Vector3d::Zero());
+  e.status.assign(n, ErrorStatus::valid);
+  e.normal_mm.assign(n, 0.0);
+  e.sphere_case.assign(n, SphereCase::none);
+  e.points_in_sphere.assign(n, 0);
+
+  const std::vector<Eigen::Vector3d> fn = face_normals(nominal);
+  const RayScene nominal_scene(nominal);
+  const spatial::KdTree tree(cloud_mm);
+  const Context c{nominal,
+                  fn,
+                  nominal_scene,
+                  tree,
+                  cloud_mm,
+                  options,
+                  std::cos(options.plane_angle_deg * M_PI / 180.0)};
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 64),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      Scratch s;
+                      for (std::size_t i = r.begin(); i != r.end(); ++i)
+                        one_point(c, points.positions_mm[i], points.normals[i], s, e, i);
+                    });
+  return e;
+}
+
+}  // namespace truecut::offline

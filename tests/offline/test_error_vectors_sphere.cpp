@@ -1,0 +1,185 @@
+// The sphere method on the cases of the model-adaptation source's own test
+// design: a vertex on a surface, on an edge and on a corner of a part whose
+// measured surface is displaced by 0.05–1 mm, scanned at 5–40 pt/mm² with
+// σ = 0.03 mm noise.
+#include "offline_geometry_util.hpp"
+#include "truecut/offline/error_vectors.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace truecut::offline {
+namespace {
+
+constexpr double kSigma = 0.03;
+constexpr double kRs = 2.0;
+const Eigen::Vector3d kLo(0, 0, 0), kSize(20, 20, 20);
+
+TriangleMesh nominal() {
+  return test_geo::box(kLo, kSize, 10);
+}
+
+struct Case {
+  SphereCase kind;
+  std::vector<Eigen::Vector3d> at;  // nominal vertices of this kind
+  std::vector<Eigen::Vector3d> edge_direction;
+  double plane_fraction;  // of the sphere's cross-section each plane holds
+  // RMS error in units of σ/√n (n: points per plane). A surface plane's
+  // offset scatters by σ/√n. On an edge (corner) each plane is extrapolated
+  // from its centroid, 4Rs/3π from the edge line (√2 times that from the
+  // corner), with tilt errors ~σ/(√n·0.27Rs); two (three) such planes
+  // intersect to give ≈ 2.7 (4.3) σ/√n.
+  double rms_factor;
+};
+
+// Vertices of each kind, at least Rs + 1 mm from any other feature.
+std::vector<Case> cases() {
+  Case surface{SphereCase::surface, {}, {}, 1.0, 1.0};
+  Case edge{SphereCase::edge, {}, {}, 0.5, 2.7};
+  Case corner{SphereCase::corner, {}, {}, 0.25, 4.3};
+  for (double x : {6.0, 10.0, 14.0})
+    for (double y : {6.0, 10.0, 14.0})
+      surface.at.emplace_back(x, y, 20.0);
+  for (double t : {6.0, 10.0, 14.0}) {
+    edge.at.emplace_back(20.0, t, 20.0);
+    edge.edge_direction.emplace_back(0, 1, 0);
+    edge.at.emplace_back(t, 0.0, 0.0);
+    edge.edge_direction.emplace_back(1, 0, 0);
+  }
+  for (double x : {0.0, 20.0})
+    for (double y : {0.0, 20.0})
+      for (double z : {0.0, 20.0})
+        corner.at.emplace_back(x, y, z);
+  return {surface, edge, corner};
+}
+
+// What the method should find: a plane sees only the normal component of a
+// displacement d, an edge all but the component along the edge, a corner d.
+Eigen::Vector3d expected(const Case& c, std::size_t i, const Eigen::Vector3d& d) {
+  switch (c.kind) {
+    case SphereCase::surface:
+      return Eigen::Vector3d(0, 0, d.z());
+    case SphereCase::edge: {
+      const Eigen::Vector3d& e = c.edge_direction[i];
+      return d - d.dot(e) * e;
+    }
+    default:
+      return d;
+  }
+}
+
+class SphereMethod : public ::testing::TestWithParam<std::tuple<double, double>> {};
+
+TEST_P(SphereMethod, SurfaceEdgeAndCornerDisplacementsAreRecovered) {
+  const auto [displacement_mm, density] = GetParam();
+  const Eigen::Vector3d d = displacement_mm * Eigen::Vector3d(1, -2, 3).normalized();
+  TriangleMesh machined = nominal();
+  for (Eigen::Vector3d& p : machined.vertices_mm)
+    p += d;
+  const auto seed = static_cast<std::uint32_t>(1000 * displacement_mm + density);
+  const std::vector<Eigen::Vector3d> cloud =
+      test_geo::sample_surface(machined, density, kSigma, seed);
+  SphereMethodOptions o;
+  o.radius_mm = kRs;
+  std::size_t low_density_invalid = 0;
+  for (const Case& c : cases()) {
+    CompensationPoints pts;
+    pts.positions_mm = c.at;
+    pts.normals.assign(c.at.size(), Eigen::Vector3d::UnitZ());
+    pts.surface_ids.assign(c.at.size(), 0);
+    pts.triangles.assign(c.at.size(), 0);
+    const ErrorVectors e = error_vectors_by_spheres(nominal(), pts, cloud, o);
+    // Each plane holds ~density·π·Rs²·fraction points; the bound is 4× the
+    // expected RMS error.
+    const double n_plane = density * M_PI * kRs * kRs * c.plane_fraction;
+    const double tolerance = 4.0 * c.rms_factor * kSigma / std::sqrt(n_plane);
+    for (std::size_t i = 0; i < c.at.size(); ++i) {
+      // Below the source's 20 pt/mm² a corner displaced far keeps only a few
+      // points on a face; the method must then say so, not guess.
+      if (c.kind == SphereCase::corner && density < kRecommendedDensityPerMm2 && !e.valid(i)) {
+        EXPECT_TRUE(e.status[i] == ErrorStatus::too_few_points ||
+                    e.status[i] == ErrorStatus::plane_tilted)
+            << to_string(e.status[i]);
+        ++low_density_invalid;
+        continue;
+      }
+      ASSERT_EQ(e.status[i], ErrorStatus::valid)
+          << to_string(c.kind) << " at " << c.at[i].transpose() << ": " << to_string(e.status[i]);
+      EXPECT_EQ(e.sphere_case[i], c.kind);
+      EXPECT_LT((e.vectors_mm[i] - expected(c, i, d)).norm(), tolerance)
+          << to_string(c.kind) << " at " << c.at[i].transpose() << " found "
+          << e.vectors_mm[i].transpose() << " expected " << expected(c, i, d).transpose();
+    }
+  }
+  if (displacement_mm < 1.0) {
+    EXPECT_EQ(low_density_invalid, 0u);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(DisplacementAndDensity, SphereMethod,
+                         ::testing::Combine(::testing::Values(0.05, 0.2, 1.0),
+                                            ::testing::Values(5.0, 20.0, 40.0)));
+
+CompensationPoints one_point(const Eigen::Vector3d& p) {
+  CompensationPoints c;
+  c.positions_mm = {p};
+  c.normals = {Eigen::Vector3d::UnitZ()};
+  c.surface_ids = {0};
+  c.triangles = {0};
+  return c;
+}
+
+TEST(SphereMethodLimits, FewerThanFivePointsIsInvalid) {
+  const std::vector<Eigen::Vector3d> cloud = {
+      {10, 10, 20}, {10.5, 10, 20}, {10, 10.5, 20}, {9.5, 10, 20}, {20, 20, 20}};
+  SphereMethodOptions o;
+  o.radius_mm = kRs;
+  const ErrorVectors e = error_vectors_by_spheres(nominal(), one_point({10, 10, 20}), cloud, o);
+  EXPECT_EQ(e.status[0], ErrorStatus::too_few_points);
+  EXPECT_EQ(e.points_in_sphere[0], 4u);
+  // A fifth point makes it valid.
+  std::vector<Eigen::Vector3d> more = cloud;
+  more.emplace_back(10, 9.5, 20);
+  EXPECT_EQ(error_vectors_by_spheres(nominal(), one_point({10, 10, 20}), more, o).status[0],
+            ErrorStatus::valid);
+}
+
+TEST(SphereMethodLimits, DisplacementBeyondSevenTenthsOfTheRadiusIsInvalid) {
+  SphereMethodOptions o;
+  o.radius_mm = 1.5;  // reach 1.05 mm
+  for (double lift : {1.0, 1.2}) {
+    TriangleMesh machined = nominal();
+    for (Eigen::Vector3d& p : machined.vertices_mm)
+      p.z() += lift;
+    const auto cloud = test_geo::sample_surface(machined, 40.0, 0.0, 9);
+    const ErrorVectors e = error_vectors_by_spheres(nominal(), one_point({10, 10, 20}), cloud, o);
+    if (lift < 1.05) {
+      ASSERT_EQ(e.status[0], ErrorStatus::valid);
+      EXPECT_NEAR(e.normal_mm[0], lift, 1e-9);
+    } else {
+      EXPECT_EQ(e.status[0], ErrorStatus::beyond_sphere_reach);
+    }
+  }
+}
+
+TEST(SphereMethodLimits, DensityIsReported) {
+  const auto cloud = test_geo::sample_surface(nominal(), 12.0, kSigma, 10);
+  SphereMethodOptions o;
+  o.radius_mm = kRs;
+  CompensationPoints pts;
+  for (double x : {6.0, 8.0, 10.0, 12.0, 14.0}) {
+    pts.positions_mm.emplace_back(x, 10, 20);
+    pts.normals.push_back(Eigen::Vector3d::UnitZ());
+    pts.surface_ids.push_back(0);
+    pts.triangles.push_back(0);
+  }
+  const ErrorVectors e = error_vectors_by_spheres(nominal(), pts, cloud, o);
+  const ErrorVectorSummary s = summarize(e, o.radius_mm);
+  EXPECT_NEAR(s.median_density_per_mm2, 12.0, 12.0 * 0.25);  // Poisson scatter of ~150 points
+  EXPECT_EQ(s.below_recommended_density, 5u);                // 12 < 20 pt/mm²
+  EXPECT_EQ(s.by_case[static_cast<int>(SphereCase::surface)], 5u);
+}
+
+}  // namespace
+}  // namespace truecut::offline

@@ -1,0 +1,129 @@
+#include "offline_geometry_util.hpp"
+#include "truecut/offline/mesh_geometry.hpp"
+#include "truecut/offline/ray_scene.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+namespace truecut::offline {
+namespace {
+
+TEST(RayScene, HitFarFromTheOriginIsExactInDouble) {
+  // One triangle 10 m from the workpiece origin: float32 there resolves only
+  // ~1 µm, the local origin and the double refinement keep the hit exact.
+  const Eigen::Vector3d o(10000.0, -7000.0, 3000.0);
+  TriangleMesh m;
+  m.vertices_mm = {o, o + Eigen::Vector3d(10, 0, 0), o + Eigen::Vector3d(0, 10, 0.5)};
+  m.triangles = {{0, 1, 2}};
+  const RayScene scene(m);
+  const Eigen::Vector3d target = o + 0.2 * (m.vertices_mm[1] - o) + 0.3 * (m.vertices_mm[2] - o);
+  const Eigen::Vector3d dir = Eigen::Vector3d(0.1, -0.2, -1.0).normalized();
+  const Ray ray{target - 1.2345678 * dir, dir, 0.0, 10.0};
+  RayHit hit;
+  scene.intersect({&ray, 1}, {&hit, 1});
+  ASSERT_TRUE(hit.hit());
+  EXPECT_EQ(hit.triangle, 0u);
+  EXPECT_NEAR(hit.distance_mm, 1.2345678, 1e-9);
+  EXPECT_NEAR(hit.u, 0.2, 1e-9);
+  EXPECT_NEAR(hit.v, 0.3, 1e-9);
+  const Eigen::Vector3d n = (m.vertices_mm[1] - o).cross(m.vertices_mm[2] - o).normalized();
+  EXPECT_NEAR((hit.normal - n).norm(), 0.0, 1e-12);
+
+  // Embree's own float result: same triangle, same normal orientation, the
+  // distance only to float precision.
+  RayHit raw;
+  scene.intersect({&ray, 1}, {&raw, 1}, {RayBatch::single, false});
+  ASSERT_TRUE(raw.hit());
+  EXPECT_GT(raw.normal.dot(n), 0.999);
+  EXPECT_NEAR(raw.distance_mm, 1.2345678, 1e-4);
+}
+
+TEST(RayScene, SearchIntervalAndMissesAreHonoured) {
+  const TriangleMesh m = test_geo::plate(10, 10, 4, 4, [](double, double) { return 0.0; });
+  const RayScene scene(m);
+  const std::vector<Ray> rays = {
+      {{5, 5, 1}, {0, 0, -1}, 0.0, 0.99},  // stops short of the plate
+      {{5, 5, 1}, {0, 0, -1}, 1.01, 5.0},  // starts past it
+      {{15, 5, 1}, {0, 0, -1}, 0.0, 5.0},  // beside it
+      {{5, 5, 1}, {0, 0, 1}, 0.0, 5.0},    // away from it
+      {{5, 5, 1}, {0, 0, -1}, 0.0, 1.01},  // hits
+  };
+  std::vector<RayHit> hits(rays.size());
+  scene.intersect(rays, hits);
+  for (int i = 0; i < 4; ++i)
+    EXPECT_FALSE(hits[i].hit()) << i;
+  ASSERT_TRUE(hits[4].hit());
+  EXPECT_NEAR(hits[4].distance_mm, 1.0, 1e-12);
+  // A +z facing plate seen from above: normal opposes the ray.
+  EXPECT_NEAR(hits[4].normal.z(), 1.0, 1e-12);
+}
+
+TEST(RayScene, AllBatchModesGiveIdenticalHits) {
+  const TriangleMesh m = test_geo::plate(40, 30, 80, 60, [](double x, double y) {
+    return 0.5 * std::sin(0.2 * x) * std::cos(0.3 * y);
+  });
+  const RayScene scene(m);
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> xy(-2.0, 42.0), tilt(-0.3, 0.3);
+  std::vector<Ray> rays(1003);  // not a multiple of 16
+  for (Ray& r : rays) {
+    r.origin_mm = {xy(rng), 0.75 * xy(rng), 2.0};
+    r.direction = Eigen::Vector3d(tilt(rng), tilt(rng), -1.0).normalized();
+    r.t_max_mm = 10.0;
+  }
+  std::vector<RayHit> single(rays.size()), packet(rays.size()), stream(rays.size());
+  scene.intersect(rays, single, {RayBatch::single, true});
+  scene.intersect(rays, packet, {RayBatch::packet16, true});
+  scene.intersect(rays, stream, {RayBatch::stream, true});
+  std::size_t hit_count = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    hit_count += single[i].hit();
+    for (const auto* other : {&packet[i], &stream[i]}) {
+      ASSERT_EQ(single[i].triangle, other->triangle) << i;
+      EXPECT_EQ(single[i].distance_mm, other->distance_mm) << i;
+      EXPECT_EQ(single[i].u, other->u) << i;
+      EXPECT_EQ(single[i].normal, other->normal) << i;
+    }
+  }
+  EXPECT_GT(hit_count, 800u);
+  EXPECT_LT(hit_count, rays.size());
+}
+
+TEST(RayScene, TrianglesWithinMatchesBruteForce) {
+  const TriangleMesh m = test_geo::box({-5, -4, -3}, {10, 8, 6}, 6);
+  const RayScene scene(m);
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> c(-6.0, 6.0);
+  for (int q = 0; q < 50; ++q) {
+    const Eigen::Vector3d p(c(rng), c(rng), c(rng));
+    const double r = 0.3 + 0.05 * q;
+    std::vector<std::uint32_t> got;
+    scene.triangles_within(p, r, got);
+    std::vector<std::uint32_t> want;
+    for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+      const auto& [a, b, d] = m.triangles[t];
+      const Eigen::Vector3d x =
+          closest_point_on_triangle(p, m.vertices_mm[a], m.vertices_mm[b], m.vertices_mm[d]);
+      if ((x - p).norm() <= r) want.push_back(static_cast<std::uint32_t>(t));
+    }
+    EXPECT_EQ(got, want) << "query " << q;
+  }
+}
+
+TEST(RayScene, RejectsIndexOutOfRange) {
+  TriangleMesh m;
+  m.vertices_mm = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  m.triangles = {{0, 1, 3}};
+  try {
+    RayScene scene(m);
+    FAIL() << "no exception";
+  } catch (const RayEngineError& e) {
+    EXPECT_NE(std::string(e.what()).find("triangle 0 refers to vertex 3"), std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace truecut::offline
