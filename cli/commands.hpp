@@ -9,6 +9,7 @@ namespace truecut::cli {
 
 int cmd_run(const std::vector<std::string>& args);
 int cmd_canon(const std::vector<std::string>& args);
+int cmd_part(const std::vector<std::string>& args);
 int cmd_iso230(const std::vector<std::string>& args);
 
 }  // namespace truecut::cli

@@ -19,6 +19,7 @@ struct Command {
 const Command kCommands[] = {
     {"run", "run a .hal configuration in the soft-CNC executor", truecut::cli::cmd_run},
     {"canon", "print the canonical calls of a G-code program", truecut::cli::cmd_canon},
+    {"part", "write a benchmark part: nominal STL, CAM program, tools", truecut::cli::cmd_part},
     {"iso230", "ISO 230-2 positioning and ISO 230-4 circular test from a recording", truecut::cli::cmd_iso230},
 };
 
