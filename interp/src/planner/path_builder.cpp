@@ -1,0 +1,357 @@
+// Canonical calls -> moves in the planning space.
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+
+#include "output_map.hpp"
+#include "path.hpp"
+#include "spline_piece.hpp"
+#include "truecut/interp/error.hpp"
+
+namespace truecut::interp::plan {
+
+double norm(const Vec5& v) {
+  double s = 0;
+  for (double x : v)
+    s += x * x;
+  return std::sqrt(s);
+}
+
+Vec5 sub(const Vec5& a, const Vec5& b) {
+  Vec5 r;
+  for (int i = 0; i < 5; ++i)
+    r[i] = a[i] - b[i];
+  return r;
+}
+
+namespace {
+
+constexpr double kMinLength = 1e-9;
+
+double xyz_norm(const Vec5& v) {
+  return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+}
+
+struct Builder {
+  const CanonProgram& program;
+  const PlannerOptions& opt;
+  Path out;
+
+  bool tcp = false;
+  double tcp_tool_length_mm = 0;  // tool length the TCP position `cur` refers to
+  Vec5 cur{};                     // planning-space position (joint space at start: machine zero)
+  double feed_upm = 0;
+  PathMode mode = PathMode::kContinuous;
+  double tolerance_mm = 0;
+
+  struct SplinePoint {
+    Vec5 p;
+    int line;
+    double feed;
+  };
+  SplineMode spline_mode = SplineMode::kNone;
+  std::vector<SplinePoint> spline;  // spline[0] is the start point
+  CallContext spline_ctx;
+
+  Builder(const CanonProgram& p, const PlannerOptions& o) : program(p), opt(o) {}
+
+  [[noreturn]] void fail(const CallContext& ctx, const std::string& what) const {
+    const std::string file = ctx.file < static_cast<int>(program.files.size())
+                                 ? program.files[ctx.file]
+                                 : std::string("program");
+    throw GcodeError({file, ctx.line, 0}, what);
+  }
+
+  int operation_id(const std::string& name) {
+    if (name.empty()) return 0;
+    for (size_t i = 0; i < out.operations.size(); ++i)
+      if (out.operations[i] == name) return static_cast<int>(i) + 1;
+    out.operations.push_back(name);
+    return static_cast<int>(out.operations.size());
+  }
+
+  rt::AcTrtParams kinematics(const CallContext& ctx) const {
+    rt::AcTrtParams k = opt.kinematics;
+    k.tool_length_mm += ctx.tool_offset_mm.z;
+    return k;
+  }
+
+  double scale(const CallContext& ctx) const {
+    return ctx.units == LengthUnits::kInch ? 25.4 : 1.0;
+  }
+
+  // Program position -> planning space. Joint space: the machine position;
+  // TCP mode: the TCP in the workpiece frame (no tool length offset).
+  Vec5 to_planning(const Axes6& p, const CallContext& ctx) const {
+    const Axes6 m = machine_position_mm(p, ctx);
+    const double w = opt.rotary_weight_mm_per_deg;
+    Vec5 r{m.x, m.y, m.z, w * m.a, w * m.c};
+    if (tcp)
+      for (int i = 0; i < 3; ++i)
+        r[i] -= ctx.tool_offset_mm[i];
+    return r;
+  }
+
+  // In TCP mode a new tool length moves the TCP, not the joints: `cur` is
+  // re-expressed for the tool now in use.
+  void rebase(const CallContext& ctx) {
+    if (!tcp) return;
+    const rt::AcTrtParams kin = kinematics(ctx);
+    if (kin.tool_length_mm == tcp_tool_length_mm) return;
+    rt::AcTrtParams old = kin;
+    old.tool_length_mm = tcp_tool_length_mm;
+    const double w = opt.rotary_weight_mm_per_deg;
+    const MappedPoint mp = map_point(true, old, w, cur, {});
+    const rt::ToolPose pose = rt::forward_ac(kin, mp.joints);
+    cur = {pose.tcp_mm.x(), pose.tcp_mm.y(), pose.tcp_mm.z(), cur[3], cur[4]};
+    tcp_tool_length_mm = kin.tool_length_mm;
+  }
+
+  Move base_move(const CallContext& ctx, bool rapid) {
+    Move m;
+    m.tcp = tcp;
+    m.rapid = rapid;
+    m.mode = mode;
+    m.tolerance_mm = tolerance_mm;
+    m.kinematics = kinematics(ctx);
+    m.line = ctx.line;
+    m.tool = ctx.tool;
+    m.operation = operation_id(ctx.operation);
+    m.programmed_feed_mm_per_s = rapid ? 0 : feed_upm * scale(ctx) / 60.0;
+    return m;
+  }
+
+  void set_feed(Move& m, const CallContext& ctx, double xyz_length) {
+    m.metric = xyz_length > kMinLength ? FeedMetric::kXyz : FeedMetric::kRotary;
+    if (m.rapid) {
+      m.feed = opt.rapid_feed_mm_per_s > 0 ? opt.rapid_feed_mm_per_s
+                                           : std::numeric_limits<double>::infinity();
+      if (m.metric == FeedMetric::kRotary) m.feed = std::numeric_limits<double>::infinity();
+      return;
+    }
+    const double f = feed_upm / 60.0;
+    if (!(f > 0)) fail(ctx, "feed move with zero feed rate");
+    m.feed = m.metric == FeedMetric::kXyz ? f * scale(ctx) : f;
+  }
+
+  void add_line(const Vec5& target, const CallContext& ctx, bool rapid) {
+    rebase(ctx);
+    const Vec5 delta = sub(target, cur);
+    const double len = norm(delta);
+    if (len < kMinLength) return;
+    Move m = base_move(ctx, rapid);
+    m.piece.kind = PathPiece::kLine;
+    m.piece.a = cur;
+    for (int i = 0; i < 5; ++i)
+      m.piece.b[i] = delta[i] / len;
+    m.piece.length = len;
+    set_feed(m, ctx, xyz_norm(delta));
+    out.moves.push_back(m);
+    cur = target;
+  }
+
+  void add_arc(const ArcFeed& arc, const CallContext& ctx) {
+    rebase(ctx);
+    int first = 0, second = 1;
+    if (arc.plane == Plane::kXZ) first = 2, second = 0;
+    if (arc.plane == Plane::kYZ) first = 1, second = 2;
+    const Vec5 end = to_planning(arc.end, ctx);
+    // The centre in the plane, through the same offsets as the end point.
+    Axes6 cprog = arc.end;
+    cprog[first] = arc.center[first];
+    cprog[second] = arc.center[second];
+    const Vec5 cplan = to_planning(cprog, ctx);
+    const double sx = cur[first] - cplan[first], sy = cur[second] - cplan[second];
+    const double ex = end[first] - cplan[first], ey = end[second] - cplan[second];
+    const double r0 = std::hypot(sx, sy), r1 = std::hypot(ex, ey);
+    if (r0 < kMinLength) fail(ctx, "arc with zero radius");
+    const double two_pi = 2 * std::numbers::pi;
+    double sweep = std::atan2(ey, ex) - std::atan2(sy, sx);
+    const int turns = std::abs(arc.rotation);
+    if (arc.rotation > 0) {
+      while (sweep <= 1e-12)
+        sweep += two_pi;
+      sweep += two_pi * (turns - 1);
+    } else {
+      while (sweep >= -1e-12)
+        sweep -= two_pi;
+      sweep -= two_pi * (turns - 1);
+    }
+    Move m = base_move(ctx, false);
+    PathPiece& p = m.piece;
+    p.kind = PathPiece::kArc;
+    p.radius = r0;
+    p.radius_end = r1;
+    p.sweep_rad = sweep;
+    p.a = cur;  // off-plane coordinates start where the arc starts
+    p.a[first] = cplan[first];
+    p.a[second] = cplan[second];
+    p.b = {};
+    p.b[first] = sx / r0;
+    p.b[second] = sy / r0;
+    p.c = {};
+    p.c[first] = -p.b[second];
+    p.c[second] = p.b[first];
+    double off2 = 0, off_xyz2 = 0;
+    for (int i = 0; i < 5; ++i) {
+      if (i == first || i == second) continue;
+      const double d = end[i] - cur[i];
+      p.d[i] = d / sweep;
+      off2 += d * d;
+      if (i < 3) off_xyz2 += d * d;
+    }
+    const double arc_len = 0.5 * (r0 + r1) * std::abs(sweep);
+    p.length = std::sqrt(arc_len * arc_len + off2);
+    set_feed(m, ctx, std::sqrt(arc_len * arc_len + off_xyz2));
+    out.moves.push_back(m);
+    cur = evaluate(p, p.length);
+  }
+
+  void add_dwell(double seconds, const CallContext& ctx) {
+    if (seconds <= 0) return;
+    Move m = base_move(ctx, false);
+    m.dwell = true;
+    m.dwell_s = seconds;
+    m.piece.kind = PathPiece::kLine;
+    m.piece.a = cur;
+    m.piece.length = 0;
+    out.moves.push_back(m);
+  }
+
+  void stop_here() {
+    if (!out.moves.empty()) out.moves.back().stop_after = true;
+  }
+
+  void flush_spline() {
+    if (spline.size() < 2) {
+      spline.clear();
+      return;
+    }
+    std::vector<Vec5> pts;
+    for (const auto& s : spline)
+      pts.push_back(s.p);
+    double feed = std::numeric_limits<double>::infinity();
+    for (size_t i = 1; i < spline.size(); ++i)
+      feed = std::min(feed, spline[i].feed);
+    SplineReport report;
+    SplineFit fit = opt.spline_node_insertion
+                        ? fit_spline_within(spline_mode, pts, opt.spline_tolerance_mm, &report)
+                        : fit_spline(spline_mode, pts);
+    if (!opt.spline_node_insertion) {
+      report.mode = spline_mode;
+      report.points = static_cast<int>(pts.size());
+      report.tolerance_mm = opt.spline_tolerance_mm;
+      report.error_before_mm = report.error_after_mm = fit.error_mm;
+    }
+    report.line = spline[1].line;
+    out.splines.push_back(report);
+    const double saved = feed_upm;
+    feed_upm = feed;
+    for (const CubicSpan& span : fit.spans) {
+      PathPiece piece;
+      if (!cubic_piece(span, piece)) continue;
+      Move m = base_move(spline_ctx, false);
+      m.spline = true;
+      m.piece = piece;
+      const Vec5 d = sub(evaluate(piece, piece.length), piece.a);
+      set_feed(m, spline_ctx, xyz_norm(d) + xyz_norm(piece.b));
+      out.moves.push_back(m);
+    }
+    feed_upm = saved;
+    cur = spline.back().p;
+    spline.clear();
+  }
+
+  void feed_point(const StraightFeed& f, const CallContext& ctx) {
+    const Vec5 target = to_planning(f.end, ctx);
+    if (ctx.spline == SplineMode::kNone) {
+      flush_spline();
+      add_line(target, ctx, false);
+      return;
+    }
+    if (!spline.empty() && (ctx.spline != spline_mode)) flush_spline();
+    if (spline.empty()) {
+      rebase(ctx);
+      spline_mode = ctx.spline;
+      spline_ctx = ctx;
+      spline.push_back({cur, ctx.line, feed_upm});
+    }
+    if (norm(sub(target, spline.back().p)) < kMinLength) return;
+    spline.push_back({target, ctx.line, feed_upm});
+  }
+
+  void set_tcp(bool on, const CallContext& ctx) {
+    flush_spline();
+    if (on == tcp) return;
+    rebase(ctx);
+    stop_here();
+    const double w = opt.rotary_weight_mm_per_deg;
+    const rt::AcTrtParams kin = kinematics(ctx);
+    if (on) {
+      const rt::ToolPose pose =
+          rt::forward_ac(kin, rt::AcJoints{cur[0], cur[1], cur[2], cur[3] / w, cur[4] / w});
+      cur = {pose.tcp_mm.x(), pose.tcp_mm.y(), pose.tcp_mm.z(), cur[3], cur[4]};
+    } else {
+      const MappedPoint mp = map_point(true, kin, w, cur, {});
+      cur = {mp.joints.x_mm, mp.joints.y_mm, mp.joints.z_mm, cur[3], cur[4]};
+    }
+    tcp = on;
+    tcp_tool_length_mm = kin.tool_length_mm;
+  }
+
+  void call(const CanonCall& c) {
+    const CallContext& ctx = c.context;
+    if (std::holds_alternative<StraightFeed>(c.op)) {
+      feed_point(std::get<StraightFeed>(c.op), ctx);
+      ++out.programmed_moves;
+      return;
+    }
+    if (std::holds_alternative<SetFeedRate>(c.op)) {
+      feed_upm = std::get<SetFeedRate>(c.op).units_per_minute;
+      if (!spline.empty()) spline.back().feed = std::min(spline.back().feed, feed_upm);
+      return;
+    }
+    if (std::holds_alternative<Comment>(c.op) || std::holds_alternative<Message>(c.op) ||
+        std::holds_alternative<SetFeedMode>(c.op))
+      return;  // do not interrupt a spline
+    flush_spline();
+    if (const auto* t = std::get_if<StraightTraverse>(&c.op)) {
+      add_line(to_planning(t->end, ctx), ctx, true);
+      ++out.programmed_moves;
+    } else if (const auto* a = std::get_if<ArcFeed>(&c.op)) {
+      add_arc(*a, ctx);
+      ++out.programmed_moves;
+    } else if (const auto* d = std::get_if<Dwell>(&c.op)) {
+      add_dwell(d->seconds, ctx);
+    } else if (const auto* mc = std::get_if<SetMotionControlMode>(&c.op)) {
+      mode = mc->mode;
+      tolerance_mm = mc->tolerance * scale(ctx);
+    } else if (const auto* tc = std::get_if<SetTcp>(&c.op)) {
+      set_tcp(tc->on, ctx);
+    } else if (std::holds_alternative<ChangeTool>(c.op) ||
+               std::holds_alternative<ChangeToolNumber>(c.op) ||
+               std::holds_alternative<ProgramStop>(c.op) ||
+               std::holds_alternative<ProgramEnd>(c.op) || std::holds_alternative<Finish>(c.op) ||
+               std::holds_alternative<UseToolLengthOffset>(c.op) ||
+               std::holds_alternative<SetG5xOffset>(c.op) ||
+               std::holds_alternative<SetG92Offset>(c.op)) {
+      // The machine stops: the tool, the program or the coordinates change.
+      stop_here();
+      if (std::holds_alternative<ProgramEnd>(c.op)) set_tcp(false, ctx);
+    }
+  }
+};
+
+}  // namespace
+
+Path build_path(const CanonProgram& program, const PlannerOptions& options) {
+  Builder b(program, options);
+  for (const CanonCall& c : program.calls)
+    b.call(c);
+  b.flush_spline();
+  b.stop_here();
+  return std::move(b.out);
+}
+
+}  // namespace truecut::interp::plan

@@ -1,0 +1,99 @@
+// Feed: the programmed F along the path (TCP path under TRAORI), LinuxCNC's
+// rules for rotary moves, inverse time (G93) and G0.
+#include "planner_test_util.hpp"
+
+namespace truecut::interp::testing {
+namespace {
+
+// Largest speed and the speed held for the longest run of cycles.
+struct FeedProfile {
+  double max = 0;
+  double cruise = 0;
+};
+
+FeedProfile profile(const std::vector<CycleOutput>& s, int line) {
+  FeedProfile f;
+  int run = 0, best = 0;
+  for (size_t n = 1; n < s.size(); ++n) {
+    if (s[n].line != line) continue;
+    f.max = std::max(f.max, s[n].feed_mm_per_s);
+    run = std::abs(s[n].feed_mm_per_s - s[n - 1].feed_mm_per_s) < 1e-9 ? run + 1 : 0;
+    if (run > best) best = run, f.cruise = s[n].feed_mm_per_s;
+  }
+  return f;
+}
+
+TEST(PlannerFeed, CruisesAtTheProgrammedFeed) {
+  const auto s = sample_plan(plan_text("G1 X100 Y50 F1500\nM2\n"), 0.001);
+  const FeedProfile f = profile(s, 1);
+  EXPECT_NEAR(25.0, f.cruise, 1e-6);
+  EXPECT_LE(f.max, 25.0 + 1e-6);
+}
+
+TEST(PlannerFeed, TraoriFeedIsAlongTheToolCentrePath) {
+  // The table turns while the TCP moves in a straight line: with real pivots
+  // the joints travel much further than the TCP, yet the TCP keeps F.
+  PlannerOptions o;
+  o.kinematics.y_rot_point_mm = 10;
+  o.kinematics.z_offset_mm = 50;
+  const std::string prog = "G0 X0 Y0 Z20 A0 C0\nTRAORI\nG1 X60 Y10 Z10 A30 C40 F600\nTRAFOOF\nM2\n";
+  const auto s = sample_plan(plan_text(prog, o), o.servo_period_s);
+  const FeedProfile f = profile(s, 3);
+  EXPECT_NEAR(10.0, f.cruise, 1e-6);
+  EXPECT_LE(f.max, 10.0 + 1e-6);
+  // The TCP stays on the programmed line.
+  double worst = 0;
+  for (const auto& c : s) {
+    if (c.line != 3) continue;
+    const double t = c.tcp_mm[0] / 60.0;
+    worst =
+        std::max({worst, std::abs(c.tcp_mm[1] - 10 * t), std::abs(c.tcp_mm[2] - (20 - 10 * t))});
+  }
+  EXPECT_LT(worst, 1e-9);
+  EXPECT_TRUE(check_limits(s, o.limits, o.servo_period_s).ok());
+}
+
+TEST(PlannerFeed, RotaryOnlyMoveFeedIsInDegreesPerMinute) {
+  const auto s = sample_plan(plan_text("G1 A90 F1800\nM2\n"), 0.001);
+  double top = 0;
+  for (size_t n = 1; n < s.size(); ++n)
+    top = std::max(top, (s[n].joints[3] - s[n - 1].joints[3]) / 0.001);
+  EXPECT_NEAR(30.0, top, 1e-6);  // 1800 deg/min
+}
+
+TEST(PlannerFeed, MixedMoveFeedIsOnTheLinearAxes) {
+  // LinuxCNC: with XYZ motion, F applies to the XYZ length; A follows.
+  const auto s = sample_plan(plan_text("G1 X60 A30 F600\nM2\n"), 0.001);
+  const FeedProfile f = profile(s, 1);
+  EXPECT_NEAR(10.0, f.cruise, 1e-6);
+}
+
+TEST(PlannerFeed, InverseTimeTakesOneOverF) {
+  // G93 F6: the move takes 1/6 min = 10 s at cruise; acceleration and jerk
+  // add a little at either end.
+  const Plan plan = plan_text("G93 G1 X100 F6\nG94\nM2\n");
+  EXPECT_GE(plan.stats.duration_s, 10.0);
+  EXPECT_LE(plan.stats.duration_s, 10.1);
+  const auto s = sample_plan(plan, 0.001);
+  EXPECT_NEAR(10.0, profile(s, 1).cruise, 1e-6);
+}
+
+TEST(PlannerFeed, InverseTimeSequenceKeepsEachMovesRate) {
+  const auto s = sample_plan(plan_text("G61.1 G93\nG1 X10 F30\nG1 X30 F30\nG94\nM2\n"), 0.001);
+  EXPECT_NEAR(5.0, profile(s, 2).cruise, 1e-6);   // 10 mm in 2 s
+  EXPECT_NEAR(10.0, profile(s, 3).cruise, 1e-6);  // 20 mm in 2 s
+}
+
+TEST(PlannerFeed, RapidRunsAtTheAxisLimit) {
+  const auto s = sample_plan(plan_text("G0 X150\nM2\n"), 0.001);
+  EXPECT_NEAR(200.0, profile(s, 1).max, 1e-6);
+}
+
+TEST(PlannerFeed, InchProgramsFeedInInchesPerMinute) {
+  const auto s = sample_plan(plan_text("G20 G1 X4 F30\nM2\n"), 0.001);
+  EXPECT_NEAR(30 * 25.4 / 60, profile(s, 1).cruise, 1e-6);
+  EXPECT_NEAR(4 * 25.4, s.back().joints[0], 1e-9);
+}
+
+}  // namespace
+}  // namespace truecut::interp::testing
