@@ -1,0 +1,65 @@
+// Truss smoothing of compensation vectors on the nominal mesh (the 3D model
+// adaptation source, Sortino et al., CAD 48 (2014)): every mesh edge is a bar
+// of stiffness kb, every vertex with a valid measurement is tied to its
+// measured displacement v_i by a spring of stiffness kc. The equilibrium is
+//
+//   (kb/kc · K + C) d = C v,
+//
+// K the graph Laplacian of the mesh edges (per component, x, y, z solved
+// independently: the bars are zero-length springs, so a constant field has no
+// strain and passes unchanged), C = diag(c_i), c_i = 1 for a valid vertex and
+// 0 for an invalid one. With all vertices valid this is the source's
+// d = (kb/kc · K + I)⁻¹ v; invalid vertices are interpolated by the truss
+// alone. A connected component without a single valid vertex has nothing to
+// hold it: its vertices get d = 0 and are reported unsupported.
+//
+// Sign: the source writes P' = P − d with v the measured error; here v are
+// compensation vectors (already mirrored), so the adapted vertex is P + d.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "truecut/offline/mesh.hpp"
+
+namespace truecut::offline {
+
+enum class TrussEdgeWeight {
+  uniform,         // every bar kb (the source)
+  inverse_length,  // bar i–j: kb · (mean edge length / |Pi − Pj|)
+};
+
+struct TrussOptions {
+  // kb/kc of the source. Larger smooths more (white noise on a regular
+  // triangulation is reduced to about 1/2 at 0.2, 1/3.5 at 1, see
+  // docs/offline.md); the smoothing length is in edges, not mm.
+  double kb_over_kc = 0.2;
+  TrussEdgeWeight edge_weight = TrussEdgeWeight::uniform;
+};
+
+struct TrussResult {
+  std::vector<Eigen::Vector3d> displacement_mm;  // d, one per vertex
+  // 0 where the vertex's component had no valid vertex (d = 0 there).
+  std::vector<std::uint8_t> supported;
+  std::int64_t unsupported_count = 0;
+  std::int64_t edge_count = 0;
+};
+
+// The truss's bars: unique undirected edges (i < j) of the triangles, sorted.
+std::vector<std::array<std::uint32_t, 2>> truss_bars(std::span<const Triangle> triangles);
+
+// vectors_mm and valid have one entry per vertex (valid: nonzero = valid;
+// invalid entries of vectors_mm are ignored and may be NaN). vertices_mm is
+// needed only for TrussEdgeWeight::inverse_length (may be empty otherwise).
+// Throws std::invalid_argument on size mismatch, out-of-range vertex index,
+// negative or non-finite kb_over_kc, or a non-finite valid vector.
+TrussResult smooth_truss(std::span<const Eigen::Vector3d> vertices_mm,
+                         std::span<const Triangle> triangles,
+                         std::span<const Eigen::Vector3d> vectors_mm,
+                         std::span<const std::uint8_t> valid, const TrussOptions& options = {});
+
+}  // namespace truecut::offline

@@ -1,0 +1,219 @@
+#include "truecut/offline/field_fit.hpp"
+
+#include <Eigen/IterativeLinearSolvers>
+#include <Eigen/Sparse>
+
+#include <array>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "field_fit_grid.hpp"
+
+namespace truecut::offline {
+namespace {
+
+using SpMat = Eigen::SparseMatrix<double>;
+using Triplets = std::vector<Eigen::Triplet<double>>;
+
+// Active nodes are the unknowns; everything else is fixed at 0.
+struct Unknowns {
+  std::vector<int64_t> of_node;  // -1 when the node is not an unknown
+  int64_t count = 0;
+};
+
+Unknowns active_nodes(std::span<const float> distance_nodes, double reach_nodes) {
+  Unknowns u;
+  u.of_node.assign(distance_nodes.size(), -1);
+  for (std::size_t n = 0; n < distance_nodes.size(); ++n) {
+    if (distance_nodes[n] <= reach_nodes) u.of_node[n] = u.count++;
+  }
+  return u;
+}
+
+// Rows of first (order 1) or second (order 2) differences along every axis,
+// kept only where every node of the stencil is an unknown and farther than
+// min_distance_nodes from the data.
+SpMat difference_rows(const rt::FieldGrid& g, const Unknowns& u, int order,
+                      std::span<const float> distance_nodes, double min_distance_nodes) {
+  Triplets t;
+  Eigen::Index row = 0;
+  const std::array<double, 3> second{1.0, -2.0, 1.0};
+  const std::array<double, 2> first{-1.0, 1.0};
+  for (int a = 0; a < 3; ++a) {
+    for (int32_t k = 0; k < g.dims[2]; ++k) {
+      for (int32_t j = 0; j < g.dims[1]; ++j) {
+        for (int32_t i = 0; i < g.dims[0]; ++i) {
+          std::array<int32_t, 3> ijk{i, j, k};
+          if (ijk[a] + order >= g.dims[a]) continue;
+          std::array<int64_t, 3> col{};
+          bool all = true;
+          for (int s = 0; s <= order && all; ++s) {
+            std::array<int32_t, 3> q = ijk;
+            q[a] += s;
+            const auto n = static_cast<std::size_t>(g.index(q[0], q[1], q[2]));
+            col[s] = u.of_node[n];
+            all = col[s] >= 0 && distance_nodes[n] > min_distance_nodes;
+          }
+          if (!all) continue;
+          for (int s = 0; s <= order; ++s) {
+            t.emplace_back(row, col[s], order == 2 ? second[s] : first[s]);
+          }
+          ++row;
+        }
+      }
+    }
+  }
+  SpMat d(row, u.count);
+  d.setFromTriplets(t.begin(), t.end());
+  return d;
+}
+
+// Trilinear weights of the valid samples (rows) on the unknowns (columns).
+SpMat trilinear_rows(const rt::FieldGrid& g, const Unknowns& u, std::span<const FitSample> samples,
+                     int64_t valid) {
+  Triplets t;
+  t.reserve(static_cast<std::size_t>(valid) * 8);
+  Eigen::Index row = 0;
+  for (const FitSample& s : samples) {
+    if (!s.valid) continue;
+    const fit_detail::CellPosition c = fit_detail::cell_of(g, s.position_mm);
+    for (int corner = 0; corner < 8; ++corner) {
+      const int di = corner & 1, dj = (corner >> 1) & 1, dk = (corner >> 2) & 1;
+      const double w = (di ? c.t.x() : 1.0 - c.t.x()) * (dj ? c.t.y() : 1.0 - c.t.y()) *
+                       (dk ? c.t.z() : 1.0 - c.t.z());
+      const int64_t col =
+          u.of_node[static_cast<std::size_t>(g.index(c.i + di, c.j + dj, c.k + dk))];
+      if (w != 0.0 && col >= 0) t.emplace_back(row, col, w);
+    }
+    ++row;
+  }
+  SpMat a(row, u.count);
+  a.setFromTriplets(t.begin(), t.end());
+  return a;
+}
+
+rt::FieldLayer make_layer(int32_t tool, const Unknowns& u, const Eigen::MatrixX3d& x,
+                          std::span<const double> weights) {
+  rt::FieldLayer layer;
+  layer.tool = tool;
+  layer.nodes.resize(weights.size());
+  for (std::size_t n = 0; n < weights.size(); ++n) {
+    rt::FieldNode& node = layer.nodes[n];
+    node.weight = weights[n];
+    if (const int64_t c = u.of_node[n]; c >= 0) {
+      node.dx_mm = x(c, 0);
+      node.dy_mm = x(c, 1);
+      node.dz_mm = x(c, 2);
+    }
+  }
+  return layer;
+}
+
+// Residual v − vector(p) of the tricubic evaluator at the valid samples.
+Eigen::MatrixX3d evaluator_residual(const rt::FieldGrid& g, const rt::FieldLayer& layer,
+                                    std::span<const FitSample> samples, int64_t valid) {
+  const rt::CorrectionField field(g, {layer});
+  Eigen::MatrixX3d r(valid, 3);
+  Eigen::Index row = 0;
+  for (const FitSample& s : samples) {
+    if (!s.valid) continue;
+    const rt::FieldSample e = field.evaluate_tricubic(layer.tool, s.position_mm);
+    r.row(row++) = (s.vector_mm - e.vector_mm).transpose();
+  }
+  return r;
+}
+
+double rms(const Eigen::MatrixX3d& r) {
+  return r.rows() == 0 ? 0.0 : std::sqrt(r.rowwise().squaredNorm().mean());
+}
+
+struct FittedLayer {
+  rt::FieldLayer layer;
+  FieldFitLayerStats stats;
+};
+
+FittedLayer fit_layer(const rt::FieldGrid& g, const ToolSamples& tool, const FieldFitOptions& o) {
+  const double reach_nodes = o.support_radius_nodes + o.fade_nodes + 2.0;
+  const std::vector<float> dist = fit_detail::node_distances(g, tool.samples, reach_nodes);
+  const std::vector<double> weights = fit_detail::node_weights(g, dist, o);
+  const Unknowns u = active_nodes(dist, reach_nodes);
+
+  FittedLayer out;
+  out.stats.tool = tool.tool;
+  out.stats.unknown_nodes = u.count;
+  int64_t valid = 0;
+  for (const FitSample& s : tool.samples)
+    valid += s.valid ? 1 : 0;
+  out.stats.valid_samples = valid;
+  if (valid == 0) {
+    out.layer.tool = tool.tool;
+    out.layer.nodes.assign(weights.size(), rt::FieldNode{});
+    return out;
+  }
+
+  int64_t support_nodes = 0;
+  for (float d : dist)
+    support_nodes += d <= o.support_radius_nodes ? 1 : 0;
+  const double rho =
+      static_cast<double>(valid) / static_cast<double>(std::max<int64_t>(support_nodes, 1));
+
+  const SpMat a = trilinear_rows(g, u, tool.samples, valid);
+  const SpMat d2 = difference_rows(g, u, 2, dist, -1.0);
+  const SpMat d1 = difference_rows(g, u, 1, dist, o.support_radius_nodes);
+  const SpMat reg = SpMat(o.smoothness * rho * SpMat(d2.transpose() * d2) +
+                          o.membrane_weight * rho * SpMat(d1.transpose() * d1));
+  const SpMat m = SpMat(SpMat(a.transpose() * a) + reg);
+
+  // A direct factorisation fills in badly on a 3-D grid (seconds for 20k
+  // unknowns); preconditioned CG converges in a few hundred iterations.
+  Eigen::ConjugateGradient<SpMat, Eigen::Lower | Eigen::Upper, Eigen::IncompleteCholesky<double>>
+      solver;
+  solver.setTolerance(1e-10);
+  solver.setMaxIterations(20000);
+  solver.compute(m);
+  if (solver.info() != Eigen::Success) throw std::runtime_error("field fit: preconditioner failed");
+
+  Eigen::MatrixX3d v(valid, 3);
+  Eigen::Index row = 0;
+  for (const FitSample& s : tool.samples) {
+    if (s.valid) v.row(row++) = s.vector_mm.transpose();
+  }
+  Eigen::MatrixX3d x = solver.solve(Eigen::MatrixX3d(a.transpose() * v));
+  out.layer = make_layer(tool.tool, u, x, weights);
+  Eigen::MatrixX3d r = evaluator_residual(g, out.layer, tool.samples, valid);
+  double best = rms(r);
+
+  // Fixed point: Aᵀ(v − T x) = R x, T the tricubic evaluator.
+  for (int it = 0; it < o.refinement_iterations; ++it) {
+    const Eigen::MatrixX3d step = solver.solve(Eigen::MatrixX3d(a.transpose() * r - reg * x));
+    const Eigen::MatrixX3d candidate = x + step;
+    rt::FieldLayer layer = make_layer(tool.tool, u, candidate, weights);
+    Eigen::MatrixX3d rc = evaluator_residual(g, layer, tool.samples, valid);
+    if (rms(rc) >= best) break;
+    best = rms(rc);
+    x = candidate;
+    r = std::move(rc);
+    out.layer = std::move(layer);
+  }
+  out.stats.residual_rms_mm = best;
+  out.stats.residual_max_mm = r.rowwise().norm().maxCoeff();
+  return out;
+}
+
+}  // namespace
+
+FieldFitResult fit_correction_field(std::span<const ToolSamples> tools,
+                                    const FieldFitOptions& options) {
+  const rt::FieldGrid grid = field_fit_grid(tools, options);
+  std::vector<rt::FieldLayer> layers;
+  std::vector<FieldFitLayerStats> stats;
+  for (const ToolSamples& t : tools) {
+    FittedLayer f = fit_layer(grid, t, options);
+    layers.push_back(std::move(f.layer));
+    stats.push_back(f.stats);
+  }
+  return {rt::CorrectionField(grid, std::move(layers)), std::move(stats)};
+}
+
+}  // namespace truecut::offline

@@ -1,0 +1,171 @@
+#include "truecut/offline/truss_smoothing.hpp"
+
+#include <Eigen/Sparse>
+#include <Eigen/SparseCholesky>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+namespace truecut::offline {
+namespace {
+
+using Edge = std::array<std::uint32_t, 2>;
+
+std::uint32_t find_root(std::vector<std::uint32_t>& parent, std::uint32_t i) {
+  while (parent[i] != i) {
+    parent[i] = parent[parent[i]];
+    i = parent[i];
+  }
+  return i;
+}
+
+// Per vertex: does its connected component contain a valid vertex?
+std::vector<std::uint8_t> supported_vertices(std::size_t n, std::span<const Edge> edges,
+                                             std::span<const std::uint8_t> valid) {
+  std::vector<std::uint32_t> parent(n);
+  std::iota(parent.begin(), parent.end(), 0u);
+  for (const Edge& e : edges) {
+    const std::uint32_t a = find_root(parent, e[0]);
+    const std::uint32_t b = find_root(parent, e[1]);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+  std::vector<std::uint8_t> root_has_valid(n, 0);
+  for (std::uint32_t i = 0; i < n; ++i) {
+    if (valid[i]) root_has_valid[find_root(parent, i)] = 1;
+  }
+  std::vector<std::uint8_t> supported(n);
+  for (std::uint32_t i = 0; i < n; ++i)
+    supported[i] = root_has_valid[find_root(parent, i)];
+  return supported;
+}
+
+std::vector<double> bar_stiffness(std::span<const Eigen::Vector3d> vertices_mm,
+                                  std::span<const Edge> edges, const TrussOptions& options) {
+  std::vector<double> k(edges.size(), options.kb_over_kc);
+  if (options.edge_weight == TrussEdgeWeight::uniform || edges.empty()) return k;
+  std::vector<double> length_mm(edges.size());
+  double sum_mm = 0.0;
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    length_mm[e] = (vertices_mm[edges[e][0]] - vertices_mm[edges[e][1]]).norm();
+    sum_mm += length_mm[e];
+  }
+  const double mean_mm = sum_mm / static_cast<double>(edges.size());
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    // A zero-length bar would be infinitely stiff; cap it at 1000× the mean.
+    k[e] *= mean_mm / std::max(length_mm[e], 1e-3 * mean_mm);
+  }
+  return k;
+}
+
+void check_inputs(std::span<const Eigen::Vector3d> vertices_mm, std::span<const Triangle> triangles,
+                  std::span<const Eigen::Vector3d> vectors_mm, std::span<const std::uint8_t> valid,
+                  const TrussOptions& options) {
+  const std::size_t n = vectors_mm.size();
+  if (valid.size() != n) {
+    throw std::invalid_argument("smooth_truss: " + std::to_string(n) + " vectors but " +
+                                std::to_string(valid.size()) + " valid flags");
+  }
+  if (options.edge_weight == TrussEdgeWeight::inverse_length && vertices_mm.size() != n) {
+    throw std::invalid_argument("smooth_truss: inverse_length needs one vertex per vector");
+  }
+  if (!std::isfinite(options.kb_over_kc) || options.kb_over_kc < 0.0) {
+    throw std::invalid_argument("smooth_truss: kb_over_kc must be finite and >= 0");
+  }
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    for (std::uint32_t v : triangles[t]) {
+      if (v >= n) {
+        throw std::invalid_argument("smooth_truss: triangle " + std::to_string(t) +
+                                    " refers to vertex " + std::to_string(v) + " of " +
+                                    std::to_string(n));
+      }
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (valid[i] && !vectors_mm[i].allFinite()) {
+      throw std::invalid_argument("smooth_truss: valid vector " + std::to_string(i) +
+                                  " is not finite");
+    }
+  }
+}
+
+}  // namespace
+
+std::vector<Edge> truss_bars(std::span<const Triangle> triangles) {
+  std::vector<Edge> edges;
+  edges.reserve(triangles.size() * 3);
+  for (const Triangle& t : triangles) {
+    for (int c = 0; c < 3; ++c) {
+      const std::uint32_t a = t[c];
+      const std::uint32_t b = t[(c + 1) % 3];
+      if (a != b) edges.push_back({std::min(a, b), std::max(a, b)});
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  return edges;
+}
+
+TrussResult smooth_truss(std::span<const Eigen::Vector3d> vertices_mm,
+                         std::span<const Triangle> triangles,
+                         std::span<const Eigen::Vector3d> vectors_mm,
+                         std::span<const std::uint8_t> valid, const TrussOptions& options) {
+  check_inputs(vertices_mm, triangles, vectors_mm, valid, options);
+  const std::size_t n = vectors_mm.size();
+  const std::vector<Edge> edges = truss_bars(triangles);
+  const std::vector<double> k = bar_stiffness(vertices_mm, edges, options);
+
+  TrussResult result;
+  result.edge_count = static_cast<std::int64_t>(edges.size());
+  result.supported = supported_vertices(n, edges, valid);
+  result.displacement_mm.assign(n, Eigen::Vector3d::Zero());
+  if (n == 0) return result;
+
+  // Unsupported vertices keep c_i = 1 and v_i = 0: their block solves to
+  // d = 0 exactly and the whole matrix stays positive definite.
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(n + 4 * edges.size());
+  Eigen::MatrixX3d rhs = Eigen::MatrixX3d::Zero(static_cast<Eigen::Index>(n), 3);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto ii = static_cast<Eigen::Index>(i);
+    if (valid[i]) {
+      triplets.emplace_back(ii, ii, 1.0);
+      rhs.row(ii) = vectors_mm[i].transpose();
+    } else if (!result.supported[i]) {
+      triplets.emplace_back(ii, ii, 1.0);
+      ++result.unsupported_count;
+    }
+  }
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    const auto a = static_cast<Eigen::Index>(edges[e][0]);
+    const auto b = static_cast<Eigen::Index>(edges[e][1]);
+    triplets.emplace_back(a, a, k[e]);
+    triplets.emplace_back(b, b, k[e]);
+    triplets.emplace_back(a, b, -k[e]);
+    triplets.emplace_back(b, a, -k[e]);
+  }
+  Eigen::SparseMatrix<double> a(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+  a.setFromTriplets(triplets.begin(), triplets.end());
+
+  // kb_over_kc = 0 leaves invalid-but-supported vertices with an empty row;
+  // they are then exactly what the (absent) truss says: nothing. Give them
+  // d = 0 rather than a singular solve.
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto ii = static_cast<Eigen::Index>(i);
+    if (a.coeff(ii, ii) == 0.0) a.coeffRef(ii, ii) = 1.0;
+  }
+
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(a);
+  if (solver.info() != Eigen::Success) {
+    throw std::runtime_error("smooth_truss: factorisation failed");
+  }
+  const Eigen::MatrixX3d d = solver.solve(rhs);
+  for (std::size_t i = 0; i < n; ++i) {
+    result.displacement_mm[i] = d.row(static_cast<Eigen::Index>(i)).transpose();
+  }
+  return result;
+}
+
+}  // namespace truecut::offline
