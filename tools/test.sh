@@ -7,7 +7,7 @@ cd "$(dirname "$0")/.."
 tools/install-deps.sh
 dir=build type=RelWithDebInfo sanitize=OFF
 if [ "${1:-}" = "--sanitize" ]; then
-  dir=build-asan type=Debug sanitize=ON
+  dir=build-asan type=RelWithDebInfo sanitize=ON
   export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
   export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 fi
