@@ -9,6 +9,7 @@
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/interpreter.hpp"
 #include "truecut/interp/operations.hpp"
+#include "truecut/interp/planner.hpp"
 #include "truecut/interp/rs274_format.hpp"
 
 namespace truecut::cli {
@@ -33,6 +34,9 @@ const char* kCanonHelp =
     "  --annotate          append '; file:line op=NAME tool=T ...' to each call\n"
     "  --operation NAME    print only the moves of CAM operation NAME\n"
     "  --list-operations   print the operation names found in comments\n"
+    "  --spline-report     for each BSPLINE/CSPLINE run: contour error Er against the\n"
+    "                      programmed polyline before and after node insertion\n"
+    "  --spline-tolerance MM  node insertion tolerance (default 0.025, the CAM tolerance)\n"
     "  --help              this text\n";
 
 std::string annotation(const interp::CanonProgram& prog, const interp::CanonCall& c) {
@@ -48,6 +52,24 @@ std::string annotation(const interp::CanonProgram& prog, const interp::CanonCall
   return s;
 }
 
+int print_spline_report(const interp::CanonProgram& program, const ParsedArgs& a) {
+  interp::PlannerOptions options;
+  options.spline_tolerance_mm = a.number("spline-tolerance", 0.025, 1e-6, 10.0);
+  const interp::Plan plan = interp::plan_program(program, options);
+  if (plan.splines.empty()) {
+    std::printf("no BSPLINE or CSPLINE runs in this program\n");
+    return kExitOk;
+  }
+  std::printf("%6s %-8s %7s %9s %14s %14s %14s\n", "line", "mode", "points", "inserted",
+              "Er before mm", "Er after mm", "tolerance mm");
+  for (const auto& r : plan.splines)
+    std::printf("%6d %-8s %7d %9d %14.6f %14.6f %14.6f%s\n", r.line,
+                r.mode == interp::SplineMode::kBspline ? "BSPLINE" : "CSPLINE", r.points,
+                r.nodes_inserted, r.error_before_mm, r.error_after_mm, r.tolerance_mm,
+                r.within_tolerance() ? "" : "  NOT within tolerance");
+  return kExitOk;
+}
+
 }  // namespace
 
 int cmd_canon(const std::vector<std::string>& argv) {
@@ -58,6 +80,8 @@ int cmd_canon(const std::vector<std::string>& argv) {
                       {"annotate", false},
                       {"operation", true},
                       {"list-operations", false},
+                      {"spline-report", false},
+                      {"spline-tolerance", true},
                       {"help", false}});
   if (a.flag("help")) {
     std::fputs(kCanonHelp, stdout);
@@ -84,6 +108,7 @@ int cmd_canon(const std::vector<std::string>& argv) {
       std::printf("%s\n", name.c_str());
     return kExitOk;
   }
+  if (a.flag("spline-report")) return print_spline_report(program, a);
   const auto only = a.value("operation");
   const bool annotate = a.flag("annotate");
   std::string out;

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <sstream>
 
 #include "run_process.hpp"
 #include "test_paths.hpp"
@@ -89,4 +90,37 @@ TEST(CanonCli, UsageErrors) {
 }
 
 }  // namespace
+TEST(CanonCli, SplineReportShowsErBeforeAndAfterNodeInsertion) {
+  const auto dir = scratch_dir();
+  const auto prog = write(dir, "s.ngc",
+                          "G21 G90 G17 G94 F1200\nG0 X0 Y0 Z5\nG1 Z0\nBSPLINE\nX10 Y0\n"
+                          "X20 Y8\nX30 Y0\nX40 Y10\nX50 Y0\nCSPLINE\nX60 Y10\nX70 Y0\n"
+                          "X80 Y12\nX90 Y0\nG1 X100\nM2\n");
+  for (double tol : {0.025, 0.005}) {
+    auto r = run_process({cli_path().string(), "canon", "--spline-report", "--spline-tolerance",
+                          std::to_string(tol), prog.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    std::istringstream lines(r.out);
+    std::string header, line;
+    std::getline(lines, header);
+    EXPECT_NE(header.find("Er before mm"), std::string::npos) << r.out;
+    int runs = 0;
+    while (std::getline(lines, line)) {
+      std::istringstream f(line);
+      int line_no = 0, points = 0, inserted = 0;
+      std::string mode;
+      double before = 0, after = 0, tolerance = 0;
+      f >> line_no >> mode >> points >> inserted >> before >> after >> tolerance;
+      ASSERT_TRUE(f) << line;
+      EXPECT_EQ(runs == 0 ? "BSPLINE" : "CSPLINE", mode);
+      EXPECT_GT(before, tol) << "the plain spline cuts the corners";
+      EXPECT_LE(after, tol) << line;
+      EXPECT_GT(inserted, 0);
+      EXPECT_NEAR(tol, tolerance, 1e-9);
+      ++runs;
+    }
+    EXPECT_EQ(2, runs) << r.out;
+  }
+}
+
 }  // namespace truecut::test
