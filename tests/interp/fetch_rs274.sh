@@ -15,6 +15,11 @@ mkdir -p "$dir/debs" "$dir/root" "$dir/home" || exit 1
 dir=$(cd "$dir" && pwd)
 wrapper=$dir/rs274
 
+# Several tests call this at once (ctest -j): one fetches, the others wait
+# for it and then find rs274 working.
+exec 9>"$dir/.lock"
+flock 9
+
 works() {
   [ -x "$wrapper" ] || return 1
   printf 'G0 X1\nM2\n' > "$dir/probe.ngc"
