@@ -6,6 +6,7 @@
 // test time by fetch_rs274.sh (skipped with a message when it cannot be had).
 // LinuxCNC's sample programs are GPL: they are read from that package only.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -76,7 +77,9 @@ const std::optional<Oracle>& oracle(std::string& why) {
       reason = r.err.empty() ? "fetch_rs274.sh failed" : r.err;
       return std::nullopt;
     }
-    Oracle out{dir / "rs274", dir / "root/usr/share", dir / "work"};
+    // ctest runs the tests of this file as parallel processes: each writes
+    // its tool tables and filtered copies into a folder of its own.
+    Oracle out{dir / "rs274", dir / "root/usr/share", dir / "work" / std::to_string(getpid())};
     fs::create_directories(out.work);
     // The same tools twice: rs274 without an INI reads its table in inches,
     // truecut's is in mm.
