@@ -11,7 +11,7 @@
 # These packages are GPL: they are used at test time only, never committed.
 set -u
 dir=${1:?usage: fetch_rs274.sh DIR}
-mkdir -p "$dir/debs" "$dir/root" "$dir/home" || exit 1
+mkdir -p "$dir/debs" "$dir/root" || exit 1
 dir=$(cd "$dir" && pwd)
 wrapper=$dir/rs274
 
@@ -27,6 +27,24 @@ works() {
   "$wrapper" -g -t "$dir/probe.tbl" "$dir/probe.ngc" 2>/dev/null | grep -q 'STRAIGHT_TRAVERSE(1.0000'
 }
 
+# Each run gets a HOME of its own: rs274 keeps its tool table in
+# $HOME/.tool.mmap, which parallel runs would otherwise share and corrupt.
+# Written beside and renamed over the old one: other tests may be running it.
+write_wrapper() {
+  cat > "$wrapper.tmp" <<WRAP
+#!/bin/bash
+export LD_LIBRARY_PATH="$dir/root/usr/lib:$dir/root/usr/lib/x86_64-linux-gnu:$dir/root/lib/x86_64-linux-gnu\${LD_LIBRARY_PATH:+:\$LD_LIBRARY_PATH}"
+home=\$(mktemp -d "$dir/home.XXXXXX") || exit 1
+HOME=\$home "$dir/root/usr/bin/rs274" "\$@"
+rc=\$?
+rm -rf "\$home"
+exit \$rc
+WRAP
+  chmod +x "$wrapper.tmp"
+  if cmp -s "$wrapper.tmp" "$wrapper"; then rm -f "$wrapper.tmp"; else mv -f "$wrapper.tmp" "$wrapper"; fi
+}
+
+[ -x "$dir/root/usr/bin/rs274" ] && write_wrapper
 if works; then exit 0; fi
 command -v apt-get >/dev/null && command -v dpkg >/dev/null || {
   echo "apt-get/dpkg not available: cannot fetch linuxcnc-uspace" >&2; exit 1; }
@@ -47,13 +65,7 @@ download linuxcnc-uspace libboost-python1.74.0 || {
   exit 1; }
 unpack || { echo "dpkg -x failed" >&2; exit 1; }
 
-cat > "$wrapper" <<WRAP
-#!/bin/bash
-export LD_LIBRARY_PATH="$dir/root/usr/lib:$dir/root/usr/lib/x86_64-linux-gnu:$dir/root/lib/x86_64-linux-gnu\${LD_LIBRARY_PATH:+:\$LD_LIBRARY_PATH}"
-export HOME="$dir/home"
-exec "$dir/root/usr/bin/rs274" "\$@"
-WRAP
-chmod +x "$wrapper"
+write_wrapper
 
 # Runtime libraries missing on this machine, by soname -> Debian package.
 declare -A provider=(

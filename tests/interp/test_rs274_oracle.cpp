@@ -101,6 +101,7 @@ const std::optional<Oracle>& oracle(std::string& why) {
 
 struct Outcome {
   bool rs274_runs = false;
+  std::string rs274_error;
   bool truecut_runs = false;
   std::string truecut_error;
   std::optional<std::string> difference;
@@ -135,6 +136,7 @@ Outcome run_both(const Oracle& o, const fs::path& original) {
                         program.filename().string()},
                        dir);
   out.rs274_runs = r.exit_code == 0;
+  out.rs274_error = r.err.substr(0, 400);
   auto t = run_process({cli_path().string(), "canon", "--decimals", "8", "--b-axis", "--tool-table",
                         (o.work / "tools-mm.tbl").string(), program.filename().string()},
                        dir);
@@ -183,7 +185,7 @@ TEST(Rs274Oracle, OwnCorpusMatches) {
   for (const auto& p : programs_under(source_dir() / "tests/interp/corpus")) {
     if (p.filename().string().rfind("sinumerik", 0) == 0) continue;  // not LinuxCNC G-code
     const Outcome r = run_both(*o, p);
-    EXPECT_TRUE(r.rs274_runs) << p << ": rs274 rejects the program";
+    EXPECT_TRUE(r.rs274_runs) << p << ": rs274 rejects the program: " << r.rs274_error;
     EXPECT_TRUE(r.truecut_runs) << p << ": " << r.truecut_error;
     EXPECT_EQ(r.difference, std::nullopt) << p;
     ++compared;
@@ -198,7 +200,7 @@ TEST(Rs274Oracle, FiveAxisDemosMatch) {
                          "table-rotary-tilting/demos";
   for (const char* name : {"boat-xyzac.ngc", "impeller-7bl-xyzac.ngc"}) {
     const Outcome r = run_both(*o, demos / name);
-    ASSERT_TRUE(r.rs274_runs) << name;
+    ASSERT_TRUE(r.rs274_runs) << name << ": " << r.rs274_error;
     ASSERT_TRUE(r.truecut_runs) << name << ": " << r.truecut_error;
     EXPECT_EQ(r.difference, std::nullopt) << name;
   }
