@@ -126,4 +126,9 @@ int cmd_canon(const std::vector<std::string>& argv) {
   return kExitOk;
 }
 
+namespace {
+const CommandRegistration kRegistration{"canon", "print the canonical calls of a G-code program",
+                                        cmd_canon, 20};
+}  // namespace
+
 }  // namespace truecut::cli

@@ -235,4 +235,9 @@ int cmd_iso230(const std::vector<std::string>& argv) {
   return kExitOk;
 }
 
+namespace {
+const CommandRegistration kRegistration{
+    "iso230", "ISO 230-2 positioning and ISO 230-4 circular test from a recording", cmd_iso230, 80};
+}  // namespace
+
 }  // namespace truecut::cli

@@ -1,5 +1,5 @@
 // truecut part NAME --out DIR: write a benchmark part (nominal STL, CAM
-// program, tool table, metadata).
+// program, tool table, metadata, the machine it is machined on).
 #include <algorithm>
 #include <cstdio>
 #include <string>
@@ -7,7 +7,9 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "truecut/interp/interpreter.hpp"
 #include "truecut/sim/benchmark_parts.hpp"
+#include "truecut/sim/program_travel.hpp"
 
 namespace truecut::cli {
 namespace {
@@ -17,9 +19,13 @@ const char* kPartHelp =
     "\n"
     "Writes a benchmark part into DIR: nominal.stl (binary, mm, workpiece frame),\n"
     "program.ngc (CAM program, operations named in comments), tools.tbl (LinuxCNC\n"
-    "tool table) and part.json (stock, tools, surfaces, operations). Parts:\n"
-    "  implant    1.6 mm square shaft, 17 mm cantilever, face (peripheral + face milling)\n"
-    "  freeform   warped 60 x 40 mm surface, ball end mill, 3+2 and TRAORI 5-axis\n"
+    "tool table), part.json (stock, tools, surfaces, operations), machine.json (the\n"
+    "machine with the part's hidden physics) and machine_ideal.json (the same\n"
+    "machine, every effect off). Parts:\n"
+    "  implant        1.6 mm square shaft, 17 mm cantilever, face (peripheral + face milling)\n"
+    "  benchmark004   D100 x 55 mm stepped cylinder with a R20 hemisphere (end and ball\n"
+    "                 mills, 3-axis and a 5-axis cap)\n"
+    "  freeform       warped 60 x 40 mm surface, ball end mill, 3+2 and TRAORI 5-axis\n"
     "Geometry and operations: docs/parts.md.\n"
     "\n"
     "options:\n"
@@ -43,9 +49,12 @@ int cmd_part(const std::vector<std::string>& argv) {
     std::fputs(kPartHelp, stdout);
     return kExitOk;
   }
-  if (a.positionals().size() != 1) throw UsageError("expected one part NAME (implant, freeform)");
+  std::string known;
+  for (sim::PartId p : sim::kAllParts)
+    known += (known.empty() ? "" : ", ") + std::string(sim::part_name(p));
+  if (a.positionals().size() != 1) throw UsageError("expected one part NAME (" + known + ")");
   const auto id = sim::part_from_name(a.positionals()[0]);
-  if (!id) throw UsageError("unknown part '" + a.positionals()[0] + "' (implant, freeform)");
+  if (!id) throw UsageError("unknown part '" + a.positionals()[0] + "' (" + known + ")");
   const auto out = a.value("out");
   if (!out) throw UsageError("--out DIR is required");
   sim::PartOptions opt;
@@ -54,13 +63,36 @@ int cmd_part(const std::vector<std::string>& argv) {
   opt.point_spacing_mm = a.number("point-spacing", opt.point_spacing_mm, 0.001, 100);
   opt.step_down_mm = a.number("step-down", opt.step_down_mm, 0.001, 100);
   const sim::BenchmarkPart part = sim::make_part(*id, opt);
+  // The program must stay inside the travel of its machine; a part that does
+  // not is a generator bug, reported before anything is written.
+  interp::InterpreterOptions io;
+  io.tools = interp::ToolTable::parse(sim::tool_table_text(part.metadata), "tools.tbl");
+  const sim::MachineDescription machine = sim::part_machine(part);
+  const sim::ProgramTravel travel =
+      sim::program_travel(interp::Interpreter(io).run_text(part.program, "program.ngc"),
+                          machine.machine, "program.ngc");
+  if (!travel.inside()) {
+    std::fprintf(stderr, "truecut part: %s\n", travel.first_excursion->message.c_str());
+    return kExitFailure;
+  }
   sim::write_part(part, *out);
   std::printf(
-      "%s: %zu triangles, %zu program lines -> %s/{nominal.stl,program.ngc,tools.tbl,part.json}\n",
+      "%s: %zu triangles, %zu program lines -> "
+      "%s/{nominal.stl,program.ngc,tools.tbl,part.json,machine.json,machine_ideal.json}\n",
       std::string(sim::part_name(*id)).c_str(), part.mesh.triangles.size(),
       static_cast<size_t>(std::count(part.program.begin(), part.program.end(), '\n')),
       out->c_str());
+  std::printf("joints over the program (inside machine.json's travel):");
+  for (int j = 0; j < sim::kJointCount; ++j) {
+    std::printf(" %c %.1f..%.1f", "XYZAC"[j], travel.min[j], travel.max[j]);
+  }
+  std::printf("\n");
   return kExitOk;
 }
+
+namespace {
+const CommandRegistration kRegistration{
+    "part", "write a benchmark part: nominal STL, CAM program, tools", cmd_part, 5};
+}  // namespace
 
 }  // namespace truecut::cli

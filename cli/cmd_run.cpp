@@ -11,6 +11,8 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "run_machine.hpp"
+#include "run_support.hpp"
 #include "truecut/rt/executor.hpp"
 #include "truecut/rt/hal_file.hpp"
 
@@ -19,6 +21,7 @@ namespace {
 
 const char* kRunHelp =
     "usage: truecut run CONFIG.hal [options]\n"
+    "       truecut run MACHINE.json PROGRAM.ngc --out DIR [options]  (see --help there)\n"
     "\n"
     "Loads a .hal wiring file (loadrt, net, setp, addf, ...) and runs its threads.\n"
     "Without --time or --cycles it runs until a component stops it or Ctrl-C.\n"
@@ -40,35 +43,6 @@ const char* kRunHelp =
     "\n"
     "Components are looked for built in, then as NAME.so in --component-path,\n"
     "$TRUECUT_COMPONENT_PATH (':'-separated) and the folders beside the truecut binary.\n";
-
-hal::Hal* g_running_hal = nullptr;
-void on_sigint(int) {
-  if (g_running_hal) g_running_hal->request_stop();
-}
-
-std::vector<std::filesystem::path> component_path(const ParsedArgs& a) {
-  std::vector<std::filesystem::path> path;
-  for (const auto& d : a.values("component-path"))
-    path.emplace_back(d);
-  if (const char* env = std::getenv("TRUECUT_COMPONENT_PATH")) {
-    std::string s = env, cur;
-    for (char c : s + ":") {
-      if (c != ':') {
-        cur += c;
-      } else if (!cur.empty()) {
-        path.emplace_back(cur);
-        cur.clear();
-      }
-    }
-  }
-  std::error_code ec;
-  auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    path.push_back(exe.parent_path() / "components");
-    path.push_back(exe.parent_path().parent_path() / "lib" / "truecut" / "components");
-  }
-  return path;
-}
 
 std::string us(int64_t ns) {
   char buf[32];
@@ -95,26 +69,15 @@ void print_show(const hal::Hal& h) {
                 h.get_signal(s.name).to_text().c_str());
 }
 
-struct Progress {
-  int64_t total_ns;
-  bool tty;
-  int64_t last_ns = -1;
-};
-
-void print_progress(void* user, int64_t t_ns) {
-  auto& p = *static_cast<Progress*>(user);
-  if (p.last_ns >= 0 && t_ns - p.last_ns < 1'000'000'000) return;  // at most once per second
-  p.last_ns = t_ns;
-  if (p.total_ns > 0)
-    std::fprintf(stderr, "%s  %.1f / %.1f s (%3.0f%%)%s", p.tty ? "\r" : "", t_ns * 1e-9,
-                 p.total_ns * 1e-9, 100.0 * double(t_ns) / double(p.total_ns), p.tty ? "" : "\n");
-  else
-    std::fprintf(stderr, "%s  %.1f s%s", p.tty ? "\r" : "", t_ns * 1e-9, p.tty ? "" : "\n");
-}
-
 }  // namespace
 
 int cmd_run(const std::vector<std::string>& argv) {
+  // `truecut run MACHINE.json PROGRAM.ngc ...` machines a part (run_machine.cpp).
+  for (const auto& arg : argv) {
+    if (arg.rfind("--", 0) == 0) continue;
+    if (arg.size() > 5 && arg.compare(arg.size() - 5, 5, ".json") == 0) return run_machine(argv);
+    break;
+  }
   ParsedArgs a(argv, {{"ini", true},
                       {"time", true},
                       {"cycles", true},
@@ -197,12 +160,7 @@ int cmd_run(const std::vector<std::string>& argv) {
   if (limits.duration_ns == 0 && limits.max_cycles == 0)
     std::fprintf(stderr, "running until a component stops or Ctrl-C (--time S to limit)\n");
 
-  hal::Executor exec(h);
-  g_running_hal = &h;
-  auto previous = std::signal(SIGINT, on_sigint);
-  hal::RunReport r = realtime ? exec.run_wall_clock(limits, wall) : exec.run_simulated(limits);
-  std::signal(SIGINT, previous);
-  g_running_hal = nullptr;
+  hal::RunReport r = run_interruptible(h, limits, realtime, wall);
   if (progress.tty && progress.last_ns >= 0) std::fputs("\n", stderr);
 
   std::printf("truecut run %s\n", config.c_str());
@@ -228,5 +186,10 @@ int cmd_run(const std::vector<std::string>& argv) {
   }
   return kExitOk;
 }
+
+namespace {
+const CommandRegistration kRegistration{"run", "run a .hal configuration in the soft-CNC executor",
+                                        cmd_run, 10};
+}  // namespace
 
 }  // namespace truecut::cli

@@ -1,5 +1,7 @@
-// The truecut subcommands. Each takes the arguments after its name and
-// returns an exit code (0 ok, 1 runtime failure, 2 usage or input error).
+// The truecut subcommands. Each cmd_<name>.cpp registers itself with a
+// static CommandRegistration, so adding a command touches no shared file.
+// A command takes the arguments after its name and returns an exit code
+// (0 ok, 1 runtime failure, 2 usage or input error).
 #pragma once
 
 #include <string>
@@ -7,9 +9,20 @@
 
 namespace truecut::cli {
 
-int cmd_run(const std::vector<std::string>& args);
-int cmd_canon(const std::vector<std::string>& args);
-int cmd_part(const std::vector<std::string>& args);
-int cmd_iso230(const std::vector<std::string>& args);
+using CommandFunction = int (*)(const std::vector<std::string>& args);
+
+struct Command {
+  const char* name;
+  const char* summary;
+  CommandFunction run;
+  int order;  // position in `truecut --help` (the data flow's order)
+};
+
+// Every registered command, sorted by order.
+const std::vector<Command>& commands();
+
+struct CommandRegistration {
+  CommandRegistration(const char* name, const char* summary, CommandFunction run, int order);
+};
 
 }  // namespace truecut::cli

@@ -10,25 +10,12 @@
 
 namespace {
 
-struct Command {
-  const char* name;
-  const char* summary;
-  int (*run)(const std::vector<std::string>&);
-};
-
-const Command kCommands[] = {
-    {"run", "run a .hal configuration in the soft-CNC executor", truecut::cli::cmd_run},
-    {"canon", "print the canonical calls of a G-code program", truecut::cli::cmd_canon},
-    {"part", "write a benchmark part: nominal STL, CAM program, tools", truecut::cli::cmd_part},
-    {"iso230", "ISO 230-2 positioning and ISO 230-4 circular test from a recording", truecut::cli::cmd_iso230},
-};
-
 void print_usage(std::FILE* to) {
   std::fprintf(to,
                "usage: truecut <command> [options]\n"
                "       truecut <command> --help\n\n"
                "commands:\n");
-  for (const auto& c : kCommands)
+  for (const auto& c : truecut::cli::commands())
     std::fprintf(to, "  %-10s %s\n", c.name, c.summary);
   std::fprintf(to, "\nexit codes: 0 ok, 1 runtime failure, 2 usage or input error\n");
 }
@@ -49,7 +36,7 @@ int main(int argc, char** argv) {
     std::printf("truecut 0.1.0\n");
     return truecut::cli::kExitOk;
   }
-  for (const auto& c : kCommands) {
+  for (const auto& c : truecut::cli::commands()) {
     if (args[0] != c.name) continue;
     try {
       return c.run(std::vector<std::string>(args.begin() + 1, args.end()));

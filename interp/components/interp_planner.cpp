@@ -4,14 +4,17 @@
 //
 //   loadrt interp_planner program=FILE.ngc [tool-table=FILE] [names=NAME]
 //          [period-ns=1000000] [spline-tolerance=0.025] [rotary-weight=1]
-//          [vmax=X,Y,Z,A,C] [amax=X,Y,Z,A,C] [jmax=X,Y,Z,A,C]
+//          [vmax=X,Y,Z,A,C] [amax=X,Y,Z,A,C] [jmax=X,Y,Z,A,C] [start=X,Y,Z,A,C]
 //          [x-rot-point=0] [y-rot-point=0] [z-rot-point=0] [y-offset=0]
 //          [z-offset=0] [tool-offset=0] [conventional-directions=0]
 //
 // Pins (docs/formats.md): out tcp-x/y/z (mm), axis-i/j/k, joint-x/y/z (mm),
-// joint-a/c (deg), feed (mm/s), line, tool, operation (s32), tcp-mode,
-// done, underrun (bit). Function <name>.update; at the end of the program
-// `done` goes true and the component asks the executor to stop.
+// joint-a/c (deg), feed (mm/s), spindle-rpm (commanded, 0 when stopped),
+// tool-length (mm, the G43 offset the kinematics use), line, tool, operation (s32), tcp-mode,
+// done, underrun (bit); parameter (ro) program-time (s, the planned
+// duration of the whole program, for progress reports). Function <name>.update; at the end of the
+// program `done` goes true and the component asks the executor to stop.
+#include <cmath>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -33,6 +36,8 @@ struct Pins {
   double* axis[3];
   double* joint[5];
   double* feed;
+  double* spindle_rpm;
+  double* tool_length;
   int32_t* line;
   int32_t* tool;
   int32_t* operation;
@@ -50,6 +55,7 @@ struct Instance {
   const tc_hal_api_t* api = nullptr;
   tc_hal_t* hal = nullptr;
   bool stop_requested = false;
+  double program_time_s = 0;
 };
 
 struct Module {
@@ -73,6 +79,8 @@ void update(void* arg, long period_ns) {
   for (int i = 0; i < 5; ++i)
     *s.p.joint[i] = o.joints[i];
   *s.p.feed = o.feed_mm_per_s;
+  *s.p.spindle_rpm = o.spindle_rpm;
+  *s.p.tool_length = o.tool_length_mm;
   *s.p.line = o.line;
   *s.p.tool = o.tool;
   *s.p.operation = o.operation;
@@ -85,7 +93,7 @@ void update(void* arg, long period_ns) {
   }
 }
 
-std::vector<double> five(hal::component::Args& args, const std::string& key) {
+std::vector<double> five(hal::component::Args& args, const std::string& key, bool positive = true) {
   auto v = args.take(key);
   if (!v) return {};
   std::vector<double> out;
@@ -94,8 +102,9 @@ std::vector<double> five(hal::component::Args& args, const std::string& key) {
   while (std::getline(ss, item, ',')) {
     char* end = nullptr;
     const double d = std::strtod(item.c_str(), &end);
-    if (item.empty() || *end != '\0' || !(d > 0))
-      throw hal::component::InitError(key + "='" + *v + "': expected 5 positive numbers X,Y,Z,A,C");
+    if (item.empty() || *end != '\0' || !std::isfinite(d) || (positive && !(d > 0)))
+      throw hal::component::InitError(key + "='" + *v + "': expected 5 " +
+                                      (positive ? "positive " : "") + "numbers X,Y,Z,A,C");
     out.push_back(d);
   }
   if (out.size() != 5)
@@ -108,6 +117,8 @@ PlannerOptions planner_options(hal::component::Args& args) {
   o.servo_period_s = double(args.take_long("period-ns", 1'000'000, 1000, 1'000'000'000)) * 1e-9;
   o.spline_tolerance_mm = args.take_double("spline-tolerance", o.spline_tolerance_mm);
   o.rotary_weight_mm_per_deg = args.take_double("rotary-weight", o.rotary_weight_mm_per_deg);
+  if (const auto start = five(args, "start", false); !start.empty())
+    std::copy(start.begin(), start.end(), o.start_joints.begin());
   const auto vmax = five(args, "vmax"), amax = five(args, "amax"), jmax = five(args, "jmax");
   for (int i = 0; i < kAxisCount; ++i) {
     if (!vmax.empty()) o.limits.axis[i].max_velocity = vmax[i];
@@ -167,12 +178,17 @@ extern "C" TC_COMPONENT_EXPORT int truecut_component_init(const tc_hal_api_t* ap
       for (int i = 0; i < 5; ++i)
         b.pin(n + ".joint-" + joints[i], TC_HAL_FLOAT, TC_HAL_OUT, &p.joint[i]);
       b.pin(n + ".feed", TC_HAL_FLOAT, TC_HAL_OUT, &p.feed);
+      b.pin(n + ".spindle-rpm", TC_HAL_FLOAT, TC_HAL_OUT, &p.spindle_rpm);
+      b.pin(n + ".tool-length", TC_HAL_FLOAT, TC_HAL_OUT, &p.tool_length);
       b.pin(n + ".line", TC_HAL_S32, TC_HAL_OUT, &p.line);
       b.pin(n + ".tool", TC_HAL_S32, TC_HAL_OUT, &p.tool);
       b.pin(n + ".operation", TC_HAL_S32, TC_HAL_OUT, &p.operation);
       b.pin(n + ".tcp-mode", TC_HAL_BIT, TC_HAL_OUT, &p.tcp_mode);
       b.pin(n + ".done", TC_HAL_BIT, TC_HAL_OUT, &p.done);
       b.pin(n + ".underrun", TC_HAL_BIT, TC_HAL_OUT, &p.underrun);
+      for (const PlanSegment& seg : inst->plan.segments)
+        inst->program_time_s += seg.law.duration_s;
+      b.param(n + ".program-time", TC_HAL_FLOAT, TC_HAL_RO, &inst->program_time_s);
       *p.axis[2] = 1.0;
       b.funct(n + ".update", update, inst.get());
       b.service(refill, inst.get());

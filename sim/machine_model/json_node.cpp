@@ -60,6 +60,14 @@ double JsonNode::number() const {
   return v;
 }
 
+std::array<double, 3> JsonNode::vector3() const {
+  if (!value_->is_array() || value_->size() != 3) fail("must be an array of 3 numbers [x, y, z]");
+  std::array<double, 3> v;
+  for (size_t i = 0; i < 3; ++i)
+    v[i] = JsonNode(*file_, (*value_)[i], path_ + "[" + std::to_string(i) + "]").number();
+  return v;
+}
+
 bool JsonNode::boolean() const {
   if (!value_->is_boolean()) fail("must be true or false");
   return value_->get<bool>();

@@ -3,6 +3,7 @@
 // public headers).
 #pragma once
 
+#include <array>
 #include <initializer_list>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -26,7 +27,8 @@ class JsonNode {
   bool has(const std::string& key) const;
   JsonNode child(const std::string& key) const;  // fails when missing
 
-  double number() const;  // finite
+  double number() const;                  // finite
+  std::array<double, 3> vector3() const;  // [x, y, z], finite
   bool boolean() const;
   std::string string() const;
   long integer() const;

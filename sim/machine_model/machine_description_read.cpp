@@ -8,6 +8,7 @@
 #include "machine_description_keys.hpp"
 #include "truecut/sim/machine_description.hpp"
 #include "truecut/sim/machine_model.hpp"
+#include "truecut/sim/true_tool_pose.hpp"
 
 namespace truecut::sim {
 
@@ -215,6 +216,32 @@ GlobalEffect<ToolRadiusErrorParams> read_tool_radius_error(const JsonNode& n) {
   return e;
 }
 
+GlobalEffect<ToolDeflectionParams> read_tool_deflection(const JsonNode& n) {
+  n.allow_only({"enabled", "stiffness_n_per_um", "stickout_mm"}, "key");
+  GlobalEffect<ToolDeflectionParams> e;
+  e.enabled = n.child("enabled").boolean();
+  e.params.stiffness_n_per_um = positive(n.child("stiffness_n_per_um"));
+  if (n.has("stickout_mm")) e.params.stickout_mm = positive(n.child("stickout_mm"));
+  return e;
+}
+
+GlobalEffect<WorkpieceDeflectionParams> read_workpiece_deflection(const JsonNode& n) {
+  n.allow_only({"enabled", "stiffness_n_per_um", "reference_length_mm", "clamp_point_mm", "axis"},
+               "key");
+  GlobalEffect<WorkpieceDeflectionParams> e;
+  e.enabled = n.child("enabled").boolean();
+  WorkpieceDeflectionParams& p = e.params;
+  p.stiffness_n_per_um = positive(n.child("stiffness_n_per_um"));
+  p.reference_length_mm = positive(n.child("reference_length_mm"));
+  if (n.has("clamp_point_mm")) p.clamp_point_mm = n.child("clamp_point_mm").vector3();
+  if (n.has("axis")) {
+    const JsonNode a = n.child("axis");
+    p.axis = a.vector3();
+    if (p.axis == std::array<double, 3>{}) a.fail("must not be [0, 0, 0]");
+  }
+  return e;
+}
+
 KinematicsParams read_kinematics(const JsonNode& n) {
   n.allow_only({"type", "x_rot_point_mm", "y_rot_point_mm", "z_rot_point_mm", "y_offset_mm",
                 "z_offset_mm", "conventional_directions", "tool"},
@@ -267,6 +294,10 @@ Effects read_effects(const JsonNode& n) {
     e.tool_length_error = read_tool_length_error(n.child("tool_length_error"));
   if (n.has("tool_radius_error"))
     e.tool_radius_error = read_tool_radius_error(n.child("tool_radius_error"));
+  if (n.has("tool_deflection"))
+    e.tool_deflection = read_tool_deflection(n.child("tool_deflection"));
+  if (n.has("workpiece_deflection"))
+    e.workpiece_deflection = read_workpiece_deflection(n.child("workpiece_deflection"));
   return e;
 }
 
@@ -330,6 +361,13 @@ void check_consistency(const JsonNode& root, const MachineParams& m) {
     }
   }
   check_true_tool(fx, m);
+  // Without stickout_mm the tool's cantilever is the whole real tool.
+  if (fx.has("tool_deflection") && !m.effects.tool_deflection.params.stickout_mm &&
+      !(true_tool(m).length_mm > 0.0))
+    fx.child("tool_deflection")
+        .fail("needs stickout_mm: the real tool length (kinematics.tool.length_mm" +
+              std::string(m.effects.tool_length_error.enabled ? " + tool_length_error" : "") +
+              ") is " + format_number(true_tool(m).length_mm));
 }
 
 }  // namespace

@@ -92,6 +92,23 @@ Json effects_json(const Effects& fx) {
         Json{{"enabled", fx.tool_radius_error.enabled},
              {"radius_mm", fx.tool_radius_error.params.radius_mm},
              {"corner_radius_mm", fx.tool_radius_error.params.corner_radius_mm}};
+  if (fx.tool_deflection.enabled || fx.tool_deflection.params != ToolDeflectionParams{}) {
+    const auto& p = fx.tool_deflection.params;
+    Json t =
+        Json{{"enabled", fx.tool_deflection.enabled}, {"stiffness_n_per_um", p.stiffness_n_per_um}};
+    if (p.stickout_mm) t["stickout_mm"] = *p.stickout_mm;  // absent: the tool length
+    e["tool_deflection"] = t;
+  }
+  if (fx.workpiece_deflection.enabled ||
+      fx.workpiece_deflection.params != WorkpieceDeflectionParams{}) {
+    const auto& p = fx.workpiece_deflection.params;
+    auto xyz = [](const std::array<double, 3>& v) { return Json::array({v[0], v[1], v[2]}); };
+    e["workpiece_deflection"] = Json{{"enabled", fx.workpiece_deflection.enabled},
+                                     {"stiffness_n_per_um", p.stiffness_n_per_um},
+                                     {"reference_length_mm", p.reference_length_mm},
+                                     {"clamp_point_mm", xyz(p.clamp_point_mm)},
+                                     {"axis", xyz(p.axis)}};
+  }
   return e;
 }
 

@@ -1,11 +1,29 @@
 #include "truecut/sim/machine_model.hpp"
 
+#include <Eigen/Core>
 #include <cmath>
 #include <numbers>
 
 namespace truecut::sim {
 
 namespace {
+
+using Vec = Eigen::Vector3d;
+
+Vec vec(const std::array<double, 3>& a) noexcept {
+  return {a[0], a[1], a[2]};
+}
+std::array<double, 3> arr(const Vec& v) noexcept {
+  return {v.x(), v.y(), v.z()};
+}
+
+// Takes a vector input when all of it is finite; otherwise keeps the last
+// one and reports false.
+bool take_finite(std::array<double, 3>& held, const std::array<double, 3>& in) noexcept {
+  if (!(std::isfinite(in[0]) && std::isfinite(in[1]) && std::isfinite(in[2]))) return false;
+  held = in;
+  return true;
+}
 
 // Force (N) per kg → mm/s²; torque (N·m) per kg·m² → deg/s².
 double accel_per_force_over_inertia(int joint) {
@@ -38,6 +56,7 @@ MachineModel::MachineModel(const MachineParams& params)
     : params_(params), kinematics_(sim::true_kinematics(params)), tool_(sim::true_tool(params)) {
   for (int j = 0; j < kJointCount; ++j)
     servo_[j] = servo_params(params, j);
+  stickout_mm_ = params.effects.tool_deflection.params.stickout_mm.value_or(tool_.length_mm);
 }
 
 void MachineModel::step(MachineState& st, const MachineInputs& in, double period_s,
@@ -55,6 +74,8 @@ void MachineModel::step(MachineState& st, const MachineInputs& in, double period
     st.spindle_power_kw = in.spindle_power_kw;
   else
     st.fault = true;
+  if (!take_finite(st.cut_force_n, in.cut_force_n)) st.fault = true;
+  if (!take_finite(st.cut_contact_mm, in.cut_contact_mm)) st.fault = true;
   if (!st.started) {
     for (int j = 0; j < kJointCount; ++j)
       st.joints[j] = servo_start(cmd[j]);
@@ -92,10 +113,41 @@ void MachineModel::step(MachineState& st, const MachineInputs& in, double period
 
   out.xyz_true = apply_geometric_errors(fx.squareness.active(), fx.straightness.active(),
                                         {out.pos_true[kX], out.pos_true[kY], out.pos_true[kZ]});
+  TrueKinematics kinematics = kinematics_;
+  double stickout_mm = stickout_mm_;
+  out.tool_true = tool_;
+  const NominalTool& t = in.tool;
+  const bool tool_ok = t.length_mm >= 0 && t.radius_mm >= 0 && t.corner_radius_mm >= 0 &&
+                       std::isfinite(t.length_mm) && std::isfinite(t.radius_mm) &&
+                       std::isfinite(t.corner_radius_mm);
+  if (in.tool_given && !tool_ok) st.fault = true;  // the description's tool stays in use
+  if (in.tool_given && tool_ok) {
+    out.tool_true = sim::true_tool(in.tool, fx);
+    kinematics.tool_length_mm = out.tool_true.length_mm;
+    stickout_mm = fx.tool_deflection.params.stickout_mm.value_or(out.tool_true.length_mm);
+  }
   const rt::ToolPose pose =
-      true_tool_pose(kinematics_, out.xyz_true, out.pos_true[kA], out.pos_true[kC]);
-  out.tcp_true = {pose.tcp_mm.x(), pose.tcp_mm.y(), pose.tcp_mm.z()};
-  out.tool_axis_true = {pose.axis.x(), pose.axis.y(), pose.axis.z()};
+      true_tool_pose(kinematics, out.xyz_true, out.pos_true[kA], out.pos_true[kC]);
+
+  // Deflections under the cutting force, about the undeflected true pose.
+  const Vec force = vec(st.cut_force_n), contact = vec(st.cut_contact_mm);
+  Vec tcp = pose.tcp_mm, axis = pose.axis, tool_shift = Vec::Zero(), part_shift = Vec::Zero();
+  if (const auto* e = fx.tool_deflection.active()) {
+    const ToolBend bend = tool_bend(e->stiffness_n_per_um, stickout_mm, force, pose.axis,
+                                    (contact - pose.tcp_mm).dot(pose.axis));
+    tool_shift = bend.tip_mm;
+    tcp += tool_shift;
+    // The tip leans out along F⊥: the axis (tip → spindle) tilts towards −F⊥.
+    axis = pose.axis * std::cos(bend.slope_rad) - bend.direction * std::sin(bend.slope_rad);
+  }
+  if (const auto* e = fx.workpiece_deflection.active()) {
+    part_shift = workpiece_deflection_mm(*e, force, contact);
+    tcp += part_shift;
+  }
+  out.tcp_true = arr(tcp);
+  out.tool_axis_true = arr(axis);
+  out.tool_deflection_mm = arr(tool_shift);
+  out.workpiece_deflection_mm = arr(part_shift);
 
   // Advance to the end of the period.
   for (int j = 0; j < kJointCount; ++j) {

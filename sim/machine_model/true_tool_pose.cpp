@@ -51,10 +51,13 @@ rt::AcTrtParams nominal_ac_params(const MachineParams& m) noexcept {
 }
 
 TrueTool true_tool(const MachineParams& m) noexcept {
-  const NominalTool& n = m.kinematics.tool;
+  return true_tool(m.kinematics.tool, m.effects);
+}
+
+TrueTool true_tool(const NominalTool& n, const Effects& effects) noexcept {
   TrueTool t{n.length_mm, n.radius_mm, n.corner_radius_mm};
-  if (const auto* e = m.effects.tool_length_error.active()) t.length_mm += e->length_mm;
-  if (const auto* e = m.effects.tool_radius_error.active()) {
+  if (const auto* e = effects.tool_length_error.active()) t.length_mm += e->length_mm;
+  if (const auto* e = effects.tool_radius_error.active()) {
     t.radius_mm += e->radius_mm;
     t.corner_radius_mm =
         is_ball_end_mill(n) ? t.radius_mm : n.corner_radius_mm + e->corner_radius_mm;

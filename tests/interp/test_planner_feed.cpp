@@ -97,3 +97,36 @@ TEST(PlannerFeed, InchProgramsFeedInInchesPerMinute) {
 
 }  // namespace
 }  // namespace truecut::interp::testing
+
+namespace truecut::interp::testing {
+namespace {
+
+TEST(PlannerSpindle, FollowsSWordsAndM3M5WithoutStopping) {
+  const auto s = sample_plan(
+      plan_text("G1 X10 F600\nS8000 M3\nG1 X20\nS12000\nG1 X30\nM5\nG1 X40\nM2\n"), 0.001);
+  double on_line3 = -1, on_line5 = -1, on_line7 = -1, on_line1 = -1;
+  for (const CycleOutput& c : s) {
+    if (c.line == 1) on_line1 = c.spindle_rpm;
+    if (c.line == 3) on_line3 = c.spindle_rpm;
+    if (c.line == 5) on_line5 = c.spindle_rpm;
+    if (c.line == 7) on_line7 = c.spindle_rpm;
+  }
+  EXPECT_EQ(0.0, on_line1);  // no M3 yet
+  EXPECT_EQ(8000.0, on_line3);
+  EXPECT_EQ(12000.0, on_line5);
+  EXPECT_EQ(0.0, on_line7);  // after M5
+}
+
+TEST(PlannerToolLength, ReportsTheG43LengthInUse) {
+  InterpreterOptions io;
+  io.tools = ToolTable::parse("T1 P1 Z35 D6\n", "tools.tbl");
+  const auto s = sample_plan(
+      plan_program(Interpreter(io).run_text("T1 M6\nG43 H1\nG0 Z100\nG1 X10 F600\nM2\n", "t.ngc"),
+                   PlannerOptions{}),
+      0.001);
+  ASSERT_FALSE(s.empty());
+  EXPECT_EQ(35.0, s.back().tool_length_mm);
+}
+
+}  // namespace
+}  // namespace truecut::interp::testing

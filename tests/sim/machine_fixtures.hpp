@@ -20,7 +20,9 @@ inline bool bitwise_equal(const MachineOutputs& a, const MachineOutputs& b) {
   return same(a.pos_act, b.pos_act) && same(a.pos_true, b.pos_true) && same(a.vel_act, b.vel_act) &&
          same(a.f_error, b.f_error) && same(a.xyz_true, b.xyz_true) &&
          same(a.tcp_true, b.tcp_true) && same(a.tool_axis_true, b.tool_axis_true) &&
-         a.fault == b.fault && a.limit_fault == b.limit_fault;
+         same(a.tool_deflection_mm, b.tool_deflection_mm) &&
+         same(a.workpiece_deflection_mm, b.workpiece_deflection_mm) && a.fault == b.fault &&
+         a.limit_fault == b.limit_fault;
 }
 
 inline MachineParams ideal_params() {

@@ -11,6 +11,7 @@
 #include <numbers>
 #include <set>
 
+#include "part_test_support.hpp"
 #include "test_paths.hpp"
 #include "truecut/interp/interpreter.hpp"
 #include "truecut/interp/operations.hpp"
@@ -22,6 +23,10 @@ using truecut::interp::ArcFeed;
 using truecut::interp::CanonCall;
 using truecut::interp::CanonProgram;
 using truecut::interp::StraightFeed;
+using truecut::sim::test::expect_closed_and_consistent;
+using truecut::sim::test::feed_end;
+using truecut::sim::test::interpret;
+using truecut::sim::test::tool_axis;
 
 namespace {
 
@@ -29,35 +34,6 @@ constexpr double kPi = std::numbers::pi;
 
 PartOptions coarse() {
   return {2.0, 0.8, 1.0, 2.0};
-}
-
-CanonProgram interpret(const BenchmarkPart& part) {
-  truecut::interp::InterpreterOptions o;
-  o.tools = truecut::interp::ToolTable::parse(tool_table_text(part.metadata), "tools.tbl");
-  return truecut::interp::Interpreter(o).run_text(part.program, "program.ngc");
-}
-
-const truecut::interp::Axes6* feed_end(const CanonCall& c) {
-  if (const auto* f = std::get_if<StraightFeed>(&c.op)) return &f->end;
-  if (const auto* a = std::get_if<ArcFeed>(&c.op)) return &a->end;
-  return nullptr;
-}
-
-// Every undirected edge in exactly two triangles, every directed edge once
-// (neighbours traverse their shared edge in opposite directions).
-void expect_closed_and_consistent(const truecut::offline::TriangleMesh& mesh) {
-  std::map<std::pair<std::uint32_t, std::uint32_t>, int> directed;
-  for (const auto& t : mesh.triangles) {
-    ASSERT_TRUE(t[0] != t[1] && t[1] != t[2] && t[0] != t[2]);
-    for (int k = 0; k < 3; ++k)
-      ++directed[{t[k], t[(k + 1) % 3]}];
-  }
-  int bad = 0;
-  for (const auto& [edge, count] : directed) {
-    const auto back = directed.find({edge.second, edge.first});
-    if (count != 1 || back == directed.end() || back->second != 1) ++bad;
-  }
-  EXPECT_EQ(bad, 0) << "edges not shared by exactly two consistently oriented triangles";
 }
 
 // Foot point (x, y) of p on the free-form top (Newton on the tangential part).
@@ -80,15 +56,10 @@ double distance_to_freeform(const Eigen::Vector3d& p) {
   return (p - Eigen::Vector3d(f.x(), f.y(), freeform_height_mm(f.x(), f.y()))).norm();
 }
 
-Eigen::Vector3d tool_axis(double a_deg, double c_deg) {
-  const double a = a_deg * kPi / 180, c = c_deg * kPi / 180;
-  return {std::sin(a) * std::sin(c), std::sin(a) * std::cos(c), std::cos(a)};
-}
-
 }  // namespace
 
 TEST(BenchmarkParts, NamesRoundTrip) {
-  for (PartId id : {PartId::kImplant, PartId::kFreeform}) {
+  for (PartId id : kAllParts) {
     EXPECT_EQ(part_from_name(part_name(id)), id);
   }
   EXPECT_FALSE(part_from_name("bracket").has_value());
@@ -308,13 +279,15 @@ TEST(FreeformPart, FiveAxisMovesFollowTheNormalContinuouslyWithinTravel) {
 }
 
 TEST(BenchmarkParts, GenerationIsDeterministic) {
-  for (PartId id : {PartId::kImplant, PartId::kFreeform}) {
+  for (PartId id : kAllParts) {
     const BenchmarkPart a = make_part(id, coarse());
     const BenchmarkPart b = make_part(id, coarse());
     EXPECT_EQ(a.program, b.program);
     EXPECT_EQ(a.mesh.vertices_mm, b.mesh.vertices_mm);
     EXPECT_EQ(a.mesh.triangles, b.mesh.triangles);
     EXPECT_EQ(part_json(a), part_json(b));
+    EXPECT_EQ(format_machine_description(part_machine(a)),
+              format_machine_description(part_machine(b)));
   }
 }
 
@@ -329,6 +302,8 @@ TEST(BenchmarkParts, WritePartWritesAllFilesAndNoTemporaries) {
   const std::string json = truecut::test::read_file(dir / "part.json");
   EXPECT_NE(json.find("\"SHAFT_PERIPHERAL\""), std::string::npos);
   EXPECT_NE(json.find("\"shaft_top\""), std::string::npos);
+  EXPECT_EQ(read_machine_description(dir / "machine.json"), part_machine(part));
+  EXPECT_EQ(read_machine_description(dir / "machine_ideal.json"), part_machine_ideal(part));
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {
     EXPECT_NE(entry.path().extension(), ".tmp") << entry.path();
   }

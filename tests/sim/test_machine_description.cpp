@@ -247,7 +247,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"/effects/backlsh", json::object(), false,
                 "effects.backlsh: unknown effect; known: servo_lag, backlash, reversal_spike, "
                 "pitch_error, thermal_drift, squareness, straightness, rotary_location, "
-                "tool_length_error, tool_radius_error"},
+                "tool_length_error, tool_radius_error, tool_deflection, workpiece_deflection"},
         BadCase{"/effects/servo_lag/x/kv", 3, false,
                 "effects.servo_lag.x.kv: unknown parameter; known: kv_per_s, ff1"},
         BadCase{"/effects/thermal_drift/z/tau_s", -5, false,

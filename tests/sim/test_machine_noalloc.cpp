@@ -1,4 +1,5 @@
-// machine_joints' servo function allocates nothing, with every effect on.
+// machine_joints' servo function allocates nothing, with every effect on
+// (the deflections driven by a turning cutting force).
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -39,22 +40,31 @@ const char* kMachine = R"({"truecut_machine": 1,
                         "c": {"e_x0c_um": 8, "e_y0c_um": 2, "e_a0c_urad": -6, "e_b0c_urad": 9,
                               "e_c0c_urad": 15}},
     "tool_length_error": {"enabled": true, "length_mm": 0.05},
-    "tool_radius_error": {"enabled": true, "radius_mm": -0.1, "corner_radius_mm": 0.02}}})";
+    "tool_radius_error": {"enabled": true, "radius_mm": -0.1, "corner_radius_mm": 0.02},
+    "tool_deflection": {"enabled": true, "stiffness_n_per_um": 1.5, "stickout_mm": 20},
+    "workpiece_deflection": {"enabled": true, "stiffness_n_per_um": 0.04,
+                             "reference_length_mm": 17, "clamp_point_mm": [20, -10, -200],
+                             "axis": [0, 0, 1]}}})";
 
 std::string chain(const std::filesystem::path& machine) {
   return "loadrt threads name1=servo-thread period1=1000000\n"
          "loadrt siggen names=p\n"
          "loadrt machine_joints names=m machine=" +
          machine.string() +
-         "\nloadrt recorder file=trace.csv columns=x_cmd,x_act,c_act,tx,tcpx,toolk\n"
+         "\nloadrt recorder file=trace.csv columns=x_cmd,x_act,c_act,tx,tcpx,toolk,tdx,wdx\n"
          "setp p.amplitude 40\nsetp p.frequency 2\nsetp m.spindle-power-kw 7\n"
-         "net xc p.sine => m.x.pos-cmd m.y.pos-cmd recorder.0.x_cmd\n"
-         "net cc p.cosine => m.c.pos-cmd m.a.pos-cmd m.z.pos-cmd\n"
+         // The sine also drives a turning cutting force (N) acting 10 mm above
+         // the clamp.
+         "net xc p.sine => m.x.pos-cmd m.y.pos-cmd recorder.0.x_cmd m.cut-force-x\n"
+         "net cc p.cosine => m.c.pos-cmd m.a.pos-cmd m.z.pos-cmd m.cut-force-y\n"
          "net xa m.x.pos-act => recorder.0.x_act\n"
          "net ca m.c.pos-act => recorder.0.c_act\n"
          "net tx m.true-x => recorder.0.tx\n"
          "net tcpx m.true-tcp-x => recorder.0.tcpx\n"
          "net toolk m.true-tool-k => recorder.0.toolk\n"
+         "setp m.cut-contact-x 20\nsetp m.cut-contact-y -10\nsetp m.cut-contact-z -190\n"
+         "net tdx m.tool-deflection-x => recorder.0.tdx\n"
+         "net wdx m.workpiece-deflection-x => recorder.0.wdx\n"
          "addf p.update servo-thread\naddf m.update servo-thread\n"
          "addf recorder.0.sample servo-thread\n";
 }
@@ -85,4 +95,6 @@ TEST(MachineNoAlloc, ServoCyclesAllocateNothing) {
   EXPECT_NE(hal.get_pin_or_param("m.x.pos-act").f, hal.get_pin_or_param("m.x.pos-cmd").f)
       << "the effects were running";
   EXPECT_NE(0.0, hal.get_pin_or_param("m.true-tcp-x").f) << "the true pose was computed";
+  EXPECT_NE(0.0, hal.get_pin_or_param("m.workpiece-deflection-x").f) << "the part bent";
+  EXPECT_NE(0.0, hal.get_pin_or_param("m.tool-deflection-y").f) << "the tool bent";
 }

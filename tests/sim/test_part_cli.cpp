@@ -3,21 +3,43 @@
 
 #include "run_process.hpp"
 #include "test_paths.hpp"
+#include "truecut/sim/machine_description.hpp"
 
 using namespace truecut::test;
 
 TEST(PartCli, WritesAllFilesAndTheProgramInterprets) {
   const auto out = scratch_dir() / "implant";
-  auto r = run_process({cli_path().string(), "part", "implant", "--out", out.string(),
-                        "--step-down", "4"});
+  auto r = run_process(
+      {cli_path().string(), "part", "implant", "--out", out.string(), "--step-down", "4"});
   ASSERT_EQ(0, r.exit_code) << r.err;
-  for (const char* f : {"nominal.stl", "program.ngc", "tools.tbl", "part.json"})
+  for (const char* f : {"nominal.stl", "program.ngc", "tools.tbl", "part.json", "machine.json",
+                        "machine_ideal.json"})
     EXPECT_TRUE(std::filesystem::is_regular_file(out / f)) << f;
-  auto canon = run_process({cli_path().string(), "canon", "--tool-table",
-                            (out / "tools.tbl").string(), "--list-operations",
-                            (out / "program.ngc").string()});
+  auto canon =
+      run_process({cli_path().string(), "canon", "--tool-table", (out / "tools.tbl").string(),
+                   "--list-operations", (out / "program.ngc").string()});
   ASSERT_EQ(0, canon.exit_code) << canon.err;
   EXPECT_EQ("SHAFT_TOP_FACE\nSHAFT_PERIPHERAL\n", canon.out);
+}
+
+TEST(PartCli, Benchmark004WritesAllFilesTheProgramInterpretsAndTheMachineReadsBack) {
+  const auto out = scratch_dir() / "benchmark004";
+  auto r = run_process({cli_path().string(), "part", "benchmark004", "--out", out.string(),
+                        "--mesh-edge", "3", "--stepover", "2", "--point-spacing", "2",
+                        "--step-down", "5"});
+  ASSERT_EQ(0, r.exit_code) << r.err;
+  EXPECT_NE(std::string::npos, r.out.find("benchmark004: ")) << r.out;
+  for (const char* f : {"nominal.stl", "program.ngc", "tools.tbl", "part.json", "machine.json",
+                        "machine_ideal.json"})
+    EXPECT_TRUE(std::filesystem::is_regular_file(out / f)) << f;
+  auto canon =
+      run_process({cli_path().string(), "canon", "--tool-table", (out / "tools.tbl").string(),
+                   "--list-operations", (out / "program.ngc").string()});
+  ASSERT_EQ(0, canon.exit_code) << canon.err;
+  EXPECT_EQ("WALLS\nSTEP_FACES\nHEMISPHERE_3AXIS\nHEMISPHERE_CAP_5AXIS\n", canon.out);
+  const auto machine = truecut::sim::read_machine_description(out / "machine.json");
+  EXPECT_TRUE(machine.machine.effects.tool_radius_error.enabled);
+  EXPECT_DOUBLE_EQ(machine.machine.effects.tool_radius_error.params.radius_mm, -0.1);
 }
 
 TEST(PartCli, BadArgumentsAreUsageErrorsAndWriteNothing) {

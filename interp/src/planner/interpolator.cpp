@@ -59,6 +59,8 @@ void Interpolator::evaluate_current() noexcept {
   out_.joints = {mp.joints.x_mm, mp.joints.y_mm, mp.joints.z_mm, mp.joints.a_deg, mp.joints.c_deg};
   out_.line = current_.line;
   out_.tool = current_.tool;
+  out_.spindle_rpm = current_.spindle_rpm;
+  out_.tool_length_mm = current_.kinematics.tool_length_mm;
   out_.operation = current_.operation;
   out_.tcp_mode = current_.tcp;
 }

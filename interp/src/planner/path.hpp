@@ -32,6 +32,7 @@ struct Move {
   rt::AcTrtParams kinematics;
   int line = 0, tool = 0, operation = 0;
   double programmed_feed_mm_per_s = 0;
+  double spindle_rpm = 0;  // 0 while the spindle is stopped
 };
 
 struct Path {

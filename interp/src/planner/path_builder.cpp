@@ -40,8 +40,10 @@ struct Builder {
 
   bool tcp = false;
   double tcp_tool_length_mm = 0;  // tool length the TCP position `cur` refers to
-  Vec5 cur{};                     // planning-space position (joint space at start: machine zero)
+  Vec5 cur{};                     // planning-space position (joint space at start)
   double feed_upm = 0;
+  double spindle_rpm = 0;   // last S word
+  bool spindle_on = false;  // M3/M4 until M5
   PathMode mode = PathMode::kContinuous;
   double tolerance_mm = 0;
 
@@ -54,7 +56,10 @@ struct Builder {
   std::vector<SplinePoint> spline;  // spline[0] is the start point
   CallContext spline_ctx;
 
-  Builder(const CanonProgram& p, const PlannerOptions& o) : program(p), opt(o) {}
+  Builder(const CanonProgram& p, const PlannerOptions& o) : program(p), opt(o) {
+    const auto& s = o.start_joints;
+    cur = {s[0], s[1], s[2], s[3] * o.rotary_weight_mm_per_deg, s[4] * o.rotary_weight_mm_per_deg};
+  }
 
   [[noreturn]] void fail(const CallContext& ctx, const std::string& what) const {
     const std::string file = ctx.file < static_cast<int>(program.files.size())
@@ -119,6 +124,7 @@ struct Builder {
     m.tool = ctx.tool;
     m.operation = operation_id(ctx.operation);
     m.programmed_feed_mm_per_s = rapid ? 0 : feed_upm * scale(ctx) / 60.0;
+    m.spindle_rpm = spindle_on ? spindle_rpm : 0.0;
     return m;
   }
 
@@ -310,6 +316,16 @@ struct Builder {
     if (std::holds_alternative<SetFeedRate>(c.op)) {
       feed_upm = std::get<SetFeedRate>(c.op).units_per_minute;
       if (!spline.empty()) spline.back().feed = std::min(spline.back().feed, feed_upm);
+      return;
+    }
+    // The spindle changes with the motion (no stop), as on a machine whose
+    // spindle follows S and M3/M4/M5 on the fly.
+    if (const auto* s = std::get_if<SetSpindleSpeed>(&c.op)) {
+      spindle_rpm = s->rpm;
+      return;
+    }
+    if (std::holds_alternative<StartSpindle>(c.op) || std::holds_alternative<StopSpindle>(c.op)) {
+      spindle_on = std::holds_alternative<StartSpindle>(c.op);
       return;
     }
     if (std::holds_alternative<Comment>(c.op) || std::holds_alternative<Message>(c.op) ||

@@ -106,6 +106,7 @@ Plan plan_program(const CanonProgram& program, const PlannerOptions& opt) {
     seg.tool = m.tool;
     seg.operation = m.operation;
     seg.programmed_feed_mm_per_s = m.programmed_feed_mm_per_s;
+    seg.spindle_rpm = m.spindle_rpm;
     if (m.dwell) {
       seg.kind = SegmentKind::kDwell;
       seg.law = make_hold(m.dwell_s);

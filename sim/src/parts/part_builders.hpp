@@ -8,6 +8,7 @@ namespace truecut::sim::parts {
 class ProgramWriter;
 
 BenchmarkPart make_implant(const PartOptions& options);
+BenchmarkPart make_benchmark004(const PartOptions& options);
 BenchmarkPart make_freeform(const PartOptions& options);
 
 // Program preamble (units, plane, modes) and tool change with length offset.

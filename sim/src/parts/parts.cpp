@@ -15,6 +15,8 @@ std::string_view part_name(PartId id) {
   switch (id) {
     case PartId::kImplant:
       return "implant";
+    case PartId::kBenchmark004:
+      return "benchmark004";
     case PartId::kFreeform:
       return "freeform";
   }
@@ -22,7 +24,7 @@ std::string_view part_name(PartId id) {
 }
 
 std::optional<PartId> part_from_name(std::string_view name) {
-  for (PartId id : {PartId::kImplant, PartId::kFreeform}) {
+  for (PartId id : kAllParts) {
     if (part_name(id) == name) return id;
   }
   return std::nullopt;
@@ -94,6 +96,8 @@ BenchmarkPart make_part(PartId id, const PartOptions& options) {
   switch (id) {
     case PartId::kImplant:
       return parts::make_implant(options);
+    case PartId::kBenchmark004:
+      return parts::make_benchmark004(options);
     case PartId::kFreeform:
       return parts::make_freeform(options);
   }
@@ -163,6 +167,8 @@ void write_part(const BenchmarkPart& part, const std::filesystem::path& dir) {
   write_atomic(dir / "program.ngc", part.program);
   write_atomic(dir / "tools.tbl", tool_table_text(part.metadata));
   write_atomic(dir / "part.json", part_json(part));
+  write_machine_description(dir / "machine.json", part_machine(part));
+  write_machine_description(dir / "machine_ideal.json", part_machine_ideal(part));
 }
 
 double signed_volume_mm3(const offline::TriangleMesh& mesh) {

@@ -70,6 +70,7 @@ struct PlanSegment {
   std::int32_t tool = 0;
   std::int32_t operation = 0;  // 1-based index into Plan::operations, 0 = none
   double programmed_feed_mm_per_s = 0;
+  double spindle_rpm = 0;  // commanded spindle speed, 0 while stopped
 };
 
 }  // namespace truecut::interp

@@ -23,6 +23,8 @@
 //     at both ends) per segment.
 #pragma once
 
+#include <array>
+
 #include <string>
 #include <vector>
 
@@ -51,6 +53,10 @@ struct PlannerOptions {
   bool spline_node_insertion = true;
   // Feed of G0 moves; 0 = as fast as the axis limits allow.
   double rapid_feed_mm_per_s = 0;
+  // Where the machine stands when the program starts: joints x y z (mm),
+  // a c (deg). Machine zero by default; a machine whose zero is inside the
+  // part starts from a safe height instead.
+  std::array<double, 5> start_joints{};
 };
 
 struct PlanStats {

@@ -1,11 +1,13 @@
 // Benchmark parts: nominal geometry (a closed STL in the workpiece frame),
 // the CAM program that machines it (LinuxCNC RS274/NGC plus TRAORI/TRAFOOF,
 // operations named by `(OPERATION: NAME)` comments) and the metadata the
-// compensation chain needs (surfaces, stock, tools). See docs/parts.md.
+// compensation chain needs (surfaces, stock, tools), plus the machine each
+// part is machined on (machine.json). See docs/parts.md.
 #pragma once
 
 #include <Eigen/Core>
 
+#include <array>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -13,10 +15,15 @@
 #include <vector>
 
 #include "truecut/offline/mesh.hpp"
+#include "truecut/sim/machine_description.hpp"
 
 namespace truecut::sim {
 
-enum class PartId { kImplant, kFreeform };
+enum class PartId { kImplant, kBenchmark004, kFreeform };
+
+// Every part, in the order of the documentation.
+inline constexpr std::array<PartId, 3> kAllParts = {PartId::kImplant, PartId::kBenchmark004,
+                                                    PartId::kFreeform};
 
 std::string_view part_name(PartId id);
 std::optional<PartId> part_from_name(std::string_view name);
@@ -47,14 +54,14 @@ struct PartTool {
 struct PartSurface {
   int id = 0;
   std::string name;
-  std::string kind;         // "plane", "freeform"
+  std::string kind;         // "plane", "cylinder", "sphere", "freeform"
   bool compensate = false;  // a surface the compensation and the CMM judge
 };
 
 struct PartOperation {
   std::string name;  // as in the `(OPERATION: NAME)` comment
   int tool = 0;
-  std::string strategy;  // "face", "peripheral", "3+2", "5-axis"
+  std::string strategy;  // "face", "peripheral", "3-axis", "3+2", "5-axis"
   std::vector<int> surface_ids;
 };
 
@@ -95,8 +102,18 @@ std::string tool_table_text(const PartMetadata& metadata);
 // part.json: metadata, options, per-triangle surface ids, mesh volume.
 std::string part_json(const BenchmarkPart& part);
 
-// Writes nominal.stl (binary), program.ngc, tools.tbl and part.json into
-// `dir` (created if missing). Each file is written to NAME.tmp and renamed.
+// The machine the part is machined on (docs/parts.md, "Machines"): the
+// same 5-axis A/C table-table machine for every part — joint travels that
+// contain the program, drives, nominal kinematics with the part's judged
+// tool — and, switched on, the part's hidden physics (servo_lag,
+// tool_radius_error, rotary_location on the 5-axis part).
+MachineDescription part_machine(const BenchmarkPart& part);
+// The same machine with every effect off: the model the controller believes.
+MachineDescription part_machine_ideal(const BenchmarkPart& part);
+
+// Writes nominal.stl (binary), program.ngc, tools.tbl, part.json,
+// machine.json and machine_ideal.json into `dir` (created if missing). Each
+// file is written to NAME.tmp and renamed.
 void write_part(const BenchmarkPart& part, const std::filesystem::path& dir);
 
 // The free-form surface of the `freeform` part: z = height(x, y) over

@@ -1,6 +1,7 @@
 // The machine description: joints (travel, drive parameters), the nominal
 // kinematics and tool, and the switchable physics effects of the simulated
-// machine, read from and written
+// machine (joint errors, geometric errors, tool errors, tool and workpiece
+// deflection under the cutting force), read from and written
 // to JSON (`truecut_machine: 1`, see docs/formats.md). With every effect off
 // the machine is ideal: actual = commanded.
 //
@@ -22,8 +23,10 @@
 #include "truecut/sim/effects/rotary_location.hpp"
 #include "truecut/sim/effects/servo_lag.hpp"
 #include "truecut/sim/effects/thermal_drift.hpp"
+#include "truecut/sim/effects/tool_deflection.hpp"
 #include "truecut/sim/effects/tool_length_error.hpp"
 #include "truecut/sim/effects/tool_radius_error.hpp"
+#include "truecut/sim/effects/workpiece_deflection.hpp"
 #include "truecut/sim/joints.hpp"
 #include "truecut/sim/machine_kinematics.hpp"
 
@@ -82,13 +85,16 @@ struct Effects {
   GlobalEffect<RotaryLocationParams> rotary_location;
   GlobalEffect<ToolLengthErrorParams> tool_length_error;
   GlobalEffect<ToolRadiusErrorParams> tool_radius_error;
+  GlobalEffect<ToolDeflectionParams> tool_deflection;
+  GlobalEffect<WorkpieceDeflectionParams> workpiece_deflection;
   bool operator==(const Effects&) const = default;
 };
 
 // The effect names as the JSON file spells them, in the order above.
-inline constexpr std::array<const char*, 10> kEffectNames = {
-    "servo_lag",  "backlash",     "reversal_spike",  "pitch_error",       "thermal_drift",
-    "squareness", "straightness", "rotary_location", "tool_length_error", "tool_radius_error"};
+inline constexpr std::array<const char*, 12> kEffectNames = {
+    "servo_lag",         "backlash",          "reversal_spike",  "pitch_error",
+    "thermal_drift",     "squareness",        "straightness",    "rotary_location",
+    "tool_length_error", "tool_radius_error", "tool_deflection", "workpiece_deflection"};
 
 struct MachineParams {
   std::array<JointParams, kJointCount> joints;

@@ -8,6 +8,10 @@
 // (squareness, straightness) → xyz_true, and xyz_true with the true A and C
 // go through the true kinematics (true_tool_pose.hpp: rotary_location,
 // tool_length_error) → the true TCP and tool axis in the workpiece frame.
+// Last, the cutting force bends the tool (tool_deflection: TCP shift and
+// axis tilt) and the part (workpiece_deflection: TCP shift relative to the
+// workpiece frame). The force is the cutting stage's output of the previous
+// cycle, so the deflection lags the force by one period (quasi-static).
 //
 // Sampling: outputs of cycle k describe the machine at t_k, the instant the
 // command cmd_k belongs to (the encoder is read before the drive acts on
@@ -27,6 +31,13 @@ namespace truecut::sim {
 struct MachineInputs {
   std::array<double, kJointCount> pos_cmd{};  // mm, deg
   double spindle_power_kw = 0.0;
+  std::array<double, 3> cut_force_n{};     // cutting force on the tool, workpiece frame, N
+  std::array<double, 3> cut_contact_mm{};  // where it acts (contact centroid), workpiece frame
+  // The nominal tool in the spindle (tool table / G43 length), replacing the
+  // description's kinematics.tool when tool_given; the effects' tool errors
+  // apply to it. Lets one machine change tools during a program.
+  bool tool_given = false;
+  NominalTool tool;
 };
 
 struct MachineOutputs {
@@ -37,14 +48,19 @@ struct MachineOutputs {
   std::array<double, 3> xyz_true{};            // linear slides with geometric errors, mm
   std::array<double, 3> tcp_true{};            // true TCP (tool tip), workpiece frame, mm
   std::array<double, 3> tool_axis_true{};      // true tool axis, workpiece frame, TCP → spindle
-  bool fault = false;                          // latched: a non-finite input was seen (and held)
-  bool limit_fault = false;                    // latched: a command left the joint's travel
+  std::array<double, 3> tool_deflection_mm{};  // tool tip shift by tool_deflection (in tcp_true)
+  std::array<double, 3> workpiece_deflection_mm{};
+  TrueTool tool_true;  // the real cutter in the spindle this cycle  // tool shift relative to the bent part
+  bool fault = false;        // latched: a non-finite input was seen (and held)
+  bool limit_fault = false;  // latched: a command left the joint's travel
 };
 
 struct MachineState {
   std::array<ServoState, kJointCount> joints{};
   std::array<double, kJointCount> thermal_mm{};
   double spindle_power_kw = 0.0;
+  std::array<double, 3> cut_force_n{};  // last finite inputs
+  std::array<double, 3> cut_contact_mm{};
   uint64_t cycles = 0;
   bool started = false;
   bool fault = false;
@@ -61,6 +77,8 @@ class MachineModel {
   bool dynamic(int joint) const noexcept { return params_.effects.servo_lag.active(joint); }
   const TrueKinematics& true_kinematics() const noexcept { return kinematics_; }
   const TrueTool& true_tool() const noexcept { return tool_; }
+  // L of tool_deflection: its stickout_mm, or the true tool length.
+  double tool_stickout_mm() const noexcept { return stickout_mm_; }
 
   // One servo period. The first call places every joint at its command.
   void step(MachineState& state, const MachineInputs& in, double period_s,
@@ -71,6 +89,7 @@ class MachineModel {
   std::array<ServoParams, kJointCount> servo_{};
   TrueKinematics kinematics_{};
   TrueTool tool_{};
+  double stickout_mm_ = 0.0;
 };
 static_assert(std::is_trivially_destructible_v<MachineModel>);
 static_assert(std::is_trivially_destructible_v<MachineState>);

@@ -50,6 +50,9 @@ struct TrueKinematics {
 rt::AcTrtParams nominal_ac_params(const MachineParams& params) noexcept;
 
 TrueTool true_tool(const MachineParams& params) noexcept;
+// The real cutter for a nominal tool (the tool in the spindle): nominal +
+// tool_length_error + tool_radius_error of the effects.
+TrueTool true_tool(const NominalTool& nominal, const Effects& effects) noexcept;
 
 TrueKinematics true_kinematics(const MachineParams& params) noexcept;
 

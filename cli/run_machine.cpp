@@ -1,0 +1,136 @@
+// truecut run MACHINE.json PROGRAM.ngc --out DIR: machine a part on the
+// simulated machine (sim/include/truecut/sim/soft_cnc.hpp).
+#include "run_machine.hpp"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include "run_support.hpp"
+#include "truecut/rt/hal_file.hpp"
+#include "truecut/sim/machine_description.hpp"
+#include "truecut/sim/soft_cnc.hpp"
+
+namespace truecut::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+const char* kHelp =
+    "usage: truecut run MACHINE.json PROGRAM.ngc --out DIR [options]\n"
+    "\n"
+    "Machines PROGRAM on the simulated 5-axis A/C machine MACHINE (a machine\n"
+    "description, docs/formats.md) in simulated time: interpreter/planner ->\n"
+    "truecut_comp -> machine joints with their physics -> cutting -> recorder.\n"
+    "DIR receives soft_cnc.hal and run.ini (the exact wiring and settings used;\n"
+    "`truecut run DIR/soft_cnc.hal --ini DIR/run.ini --out DIR` repeats the run),\n"
+    "machined.stl and machined.ply (the machined surface) and trace.csv (t,\n"
+    "<j>_cmd, <j>_act, feed, spindle_power, line, tool, true TCP).\n"
+    "\n"
+    "The part is found beside the program, as `truecut part` writes it\n"
+    "(nominal.stl, part.json, tools.tbl), unless given:\n"
+    "  --nominal FILE.stl     nominal part: where the cutting model's dexels sit\n"
+    "  --part FILE.json       part.json: stock and tools\n"
+    "  --tools FILE.tbl       LinuxCNC tool table\n"
+    "options:\n"
+    "  --out DIR              output folder (created)\n"
+    "  --field FILE.tcf       correction field for truecut_comp (real-time compensation)\n"
+    "  --max-correction MM    truecut_comp magnitude limit (default 0.5)\n"
+    "  --max-rate MM_PER_S    truecut_comp rate limit (default 5)\n"
+    "  --fade-time S          truecut_comp fade in/out (default 0.2)\n"
+    "  --period-us US         servo period (default 1000)\n"
+    "  --record-every N       record every N-th cycle (default 1)\n"
+    "  --component-path DIR   also search DIR for components (repeatable)\n"
+    "  --help                 this text\n";
+
+fs::path existing(const std::optional<std::string>& given, const fs::path& beside,
+                  const char* default_name, const char* option) {
+  const fs::path p = given ? fs::path(*given) : beside / default_name;
+  if (!fs::is_regular_file(p))
+    throw UsageError(
+        p.string() + ": no such file" +
+        (given ? std::string() : std::string(" (looked beside the program; give ") + option + ")"));
+  return p;
+}
+
+}  // namespace
+
+int run_machine(const std::vector<std::string>& argv) {
+  ParsedArgs a(argv, {{"out", true},
+                      {"nominal", true},
+                      {"part", true},
+                      {"tools", true},
+                      {"field", true},
+                      {"max-correction", true},
+                      {"max-rate", true},
+                      {"fade-time", true},
+                      {"period-us", true},
+                      {"record-every", true},
+                      {"component-path", true, true},
+                      {"help", false}});
+  if (a.flag("help")) {
+    std::fputs(kHelp, stdout);
+    return kExitOk;
+  }
+  if (a.positionals().size() != 2) throw UsageError("expected MACHINE.json PROGRAM.ngc");
+  const auto out = a.value("out");
+  if (!out) throw UsageError("--out DIR is required");
+  sim::SoftCncJob job;
+  job.machine = a.positionals()[0];
+  job.program = a.positionals()[1];
+  if (!fs::is_regular_file(job.machine)) throw UsageError(job.machine.string() + ": no such file");
+  if (!fs::is_regular_file(job.program)) throw UsageError(job.program.string() + ": no such file");
+  const fs::path beside = job.program.has_parent_path() ? job.program.parent_path() : ".";
+  job.nominal = existing(a.value("nominal"), beside, "nominal.stl", "--nominal");
+  job.part = existing(a.value("part"), beside, "part.json", "--part");
+  job.tools = existing(a.value("tools"), beside, "tools.tbl", "--tools");
+  if (auto f = a.value("field")) {
+    if (!fs::is_regular_file(*f)) throw UsageError(*f + ": no such file");
+    job.field = *f;
+  }
+  job.out_dir = *out;
+  job.period_us = a.number("period-us", 1000.0, 50.0, 100000.0);
+  job.record_every = a.integer("record-every", 1, 1, 1000000);
+  job.max_correction_mm = a.number("max-correction", 0.5, 0.0, 10.0);
+  job.max_rate_mm_per_s = a.number("max-rate", 5.0, 0.0, 1000.0);
+  job.fade_time_s = a.number("fade-time", 0.2, 0.0, 60.0);
+  job.component_path = component_path(a);
+
+  Progress progress;
+  progress.tty = isatty(STDERR_FILENO) != 0;
+  sim::SoftCncResult r;
+  try {
+    std::fprintf(stderr, "machining %s on %s\n", job.program.string().c_str(),
+                 job.machine.string().c_str());
+    r = sim::run_soft_cnc(job, [&](double t_s, double program_s) {
+      progress.total_ns = static_cast<int64_t>(program_s * 1e9);
+      print_progress(&progress, static_cast<int64_t>(t_s * 1e9));
+    });
+  } catch (const sim::MachineDescriptionError& e) {
+    std::fprintf(stderr, "truecut run: %s\n", e.what());
+    return kExitUsage;
+  } catch (const hal::HalFileError& e) {
+    std::fprintf(stderr, "truecut run: %s\n", e.what());
+    return kExitUsage;
+  }
+  if (progress.tty && progress.last_ns >= 0) std::fputs("\n", stderr);
+  if (!r.finished) {
+    std::fprintf(stderr, "truecut run: the program did not reach its end\n");
+    return kExitFailure;
+  }
+  if (r.limit_fault) {
+    std::fprintf(stderr, "truecut run: a joint command left the machine's travel\n");
+    return kExitFailure;
+  }
+  std::printf("truecut run %s %s\n", job.machine.string().c_str(), job.program.string().c_str());
+  std::printf("  time        %.3f s machined in %.3f s wall (%.1fx real time)\n", r.simulated_s,
+              r.wall_s, r.wall_s > 0 ? r.simulated_s / r.wall_s : 0.0);
+  std::printf("  output      %s/{machined.stl,machined.ply,trace.csv,soft_cnc.hal,run.ini}\n",
+              job.out_dir.string().c_str());
+  return kExitOk;
+}
+
+}  // namespace truecut::cli

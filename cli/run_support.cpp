@@ -1,0 +1,68 @@
+#include "run_support.hpp"
+
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+namespace truecut::cli {
+namespace {
+
+hal::Hal* g_running_hal = nullptr;
+void on_sigint(int) {
+  if (g_running_hal) g_running_hal->request_stop();
+}
+
+}  // namespace
+
+std::vector<std::filesystem::path> component_path(const ParsedArgs& a) {
+  std::vector<std::filesystem::path> path;
+  for (const auto& d : a.values("component-path"))
+    path.emplace_back(d);
+  if (const char* env = std::getenv("TRUECUT_COMPONENT_PATH")) {
+    std::string s = env, cur;
+    for (char c : s + ":") {
+      if (c != ':') {
+        cur += c;
+      } else if (!cur.empty()) {
+        path.emplace_back(cur);
+        cur.clear();
+      }
+    }
+  }
+  std::error_code ec;
+  auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    path.push_back(exe.parent_path() / "components");
+    path.push_back(exe.parent_path().parent_path() / "lib" / "truecut" / "components");
+  }
+  return path;
+}
+
+void print_progress(void* user, int64_t t_ns) {
+  auto& p = *static_cast<Progress*>(user);
+  if (p.last_ns >= 0 && t_ns - p.last_ns < 1'000'000'000) return;  // at most once per second
+  if (p.total_ns > 0 && !p.tty) {  // a log file: one line per tenth of the run
+    const int64_t tenth = p.last_ns < 0 ? -1 : p.last_ns * 10 / p.total_ns;
+    if (tenth == t_ns * 10 / p.total_ns) return;
+  }
+  p.last_ns = t_ns;
+  if (p.total_ns > 0)
+    std::fprintf(stderr, "%s  %.1f / %.1f s (%3.0f%%)%s", p.tty ? "\r" : "", t_ns * 1e-9,
+                 p.total_ns * 1e-9, 100.0 * double(t_ns) / double(p.total_ns), p.tty ? "" : "\n");
+  else
+    std::fprintf(stderr, "%s  %.1f s%s", p.tty ? "\r" : "", t_ns * 1e-9, p.tty ? "" : "\n");
+}
+
+hal::RunReport run_interruptible(hal::Hal& h, const hal::RunLimits& limits, bool wall_clock,
+                                 const hal::WallClockOptions& wall) {
+  hal::Executor exec(h);
+  g_running_hal = &h;
+  auto previous = std::signal(SIGINT, on_sigint);
+  hal::RunReport r = wall_clock ? exec.run_wall_clock(limits, wall) : exec.run_simulated(limits);
+  std::signal(SIGINT, previous);
+  g_running_hal = nullptr;
+  return r;
+}
+
+}  // namespace truecut::cli

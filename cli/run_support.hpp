@@ -1,0 +1,32 @@
+// Pieces both forms of `truecut run` share: where components are found, the
+// progress line on stderr, Ctrl-C handling.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <vector>
+
+#include "args.hpp"
+#include "truecut/rt/executor.hpp"
+#include "truecut/rt/hal.hpp"
+
+namespace truecut::cli {
+
+// --component-path folders, then $TRUECUT_COMPONENT_PATH, then the folders
+// beside the truecut binary.
+std::vector<std::filesystem::path> component_path(const ParsedArgs& a);
+
+// Progress on stderr at most once per second of run time: "t / total (p%)"
+// (a carriage-return line on a terminal, one line per report otherwise).
+struct Progress {
+  int64_t total_ns = 0;
+  bool tty = false;
+  int64_t last_ns = -1;
+};
+void print_progress(void* user, int64_t time_ns);
+
+// Runs the executor with Ctrl-C asking the HAL to stop.
+hal::RunReport run_interruptible(hal::Hal& h, const hal::RunLimits& limits, bool wall_clock,
+                                 const hal::WallClockOptions& wall);
+
+}  // namespace truecut::cli

@@ -1,0 +1,171 @@
+// DexelModel::cut: the swept cutter lowers the dexels it meets. Runs in the
+// servo cycle: no allocation, no exception, bounded loops.
+#include <algorithm>
+#include <cmath>
+
+#include "tool_solid.hpp"
+#include "truecut/sim/cutting/dexel_model.hpp"
+
+namespace truecut::sim::cutting {
+
+namespace {
+
+bool finite(const Eigen::Vector3d& v) {
+  return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z());
+}
+
+// Sub-steps so the union of tool instances is within `tol` of the swept
+// solid: a smooth profile of radius r moved by δ between instances leaves a
+// cusp of δ²/(8r); a sharp edge (the flat bottom moving along the axis, or
+// tilting) leaves a step of δ. Smooth steps are halved (cusp ≤ tol/4 at
+// radius r) because away from the path the tool's section is smaller than r
+// (a ball at lateral offset d: √(r² − d²)).
+double substeps_needed(const CutterShape& s, const Eigen::Vector3d& d, const Eigen::Vector3d& a,
+                       double angle_rad, double tol) {
+  const double da = std::abs(d.dot(a));
+  const double dp = (d - d.dot(a) * a).norm();
+  const double rc = s.corner_radius_mm;
+  const double lateral = 0.5 * std::sqrt(8 * s.radius_mm * tol);
+  double n = dp / lateral;
+  if (rc > 0)
+    n = std::max(n, da / (0.5 * std::sqrt(8 * rc * tol)));
+  else if (dp > 0)
+    n = std::max(n, da / tol);
+  else
+    n = std::max(n, da / (0.5 * s.flute_length_mm));  // a plunge: instances must overlap
+  const double reach = std::hypot(s.flute_length_mm, s.radius_mm);
+  n = std::max(n, angle_rad * reach / (0.5 * std::sqrt(8 * (rc > 0 ? rc : s.radius_mm) * tol)));
+  if (rc < s.radius_mm) n = std::max(n, angle_rad * (s.radius_mm - rc) / tol);
+  return n;
+}
+
+}  // namespace
+
+bool valid(const CutterShape& s) noexcept {
+  return std::isfinite(s.radius_mm) && std::isfinite(s.corner_radius_mm) &&
+         std::isfinite(s.flute_length_mm) && s.radius_mm > 0 && s.corner_radius_mm >= 0 &&
+         s.corner_radius_mm <= s.radius_mm && s.flute_length_mm > 0 &&
+         s.flute_length_mm >= s.corner_radius_mm;
+}
+
+bool valid(const CutterPose& p) noexcept {
+  if (!finite(p.tip_mm) || !finite(p.axis)) return false;
+  const double len = p.axis.norm();
+  return len >= 0.5 && len <= 2.0;
+}
+
+Engagement DexelModel::cut(const CutterShape& shape, const CutterPose& from, const CutterPose& to,
+                           bool include_start) noexcept {
+  Engagement e;
+  if (!valid(shape) || !valid(from) || !valid(to)) {
+    e.invalid_input = true;
+    return e;
+  }
+  if (++epoch_ == 0) {  // wrapped: forget old stamps
+    std::fill(stamp_.begin(), stamp_.end(), 0u);
+    epoch_ = 1;
+  }
+  const Eigen::Vector3d a0 = from.axis.normalized(), a1 = to.axis.normalized();
+  const double angle = std::atan2(a0.cross(a1).norm(), a0.dot(a1));
+  const double sin_angle = std::sin(angle);
+  Eigen::Vector3d mean_axis = a0 + a1;
+  mean_axis = mean_axis.norm() > 1e-6 ? mean_axis.normalized() : a0;
+  const Eigen::Vector3d d = to.tip_mm - from.tip_mm;
+
+  const double need = substeps_needed(shape, d, mean_axis, angle, options_.tolerance_mm);
+  int steps = 1;
+  if (need > options_.max_substeps) {
+    steps = options_.max_substeps;
+    e.substeps_capped = true;
+  } else {
+    steps = std::max(1, static_cast<int>(std::ceil(need)));
+  }
+
+  Eigen::Vector3d normal_sum = Eigen::Vector3d::Zero(), contact_sum = Eigen::Vector3d::Zero();
+  e.axial_min_mm = detail::kInf;
+  e.axial_max_mm = -detail::kInf;
+  for (int k = include_start ? 0 : 1; k <= steps; ++k) {
+    const double s = double(k) / double(steps);
+    const Eigen::Vector3d tip = k == steps ? to.tip_mm : from.tip_mm + s * d;
+    Eigen::Vector3d axis;
+    if (k == steps)
+      axis = a1;
+    else if (sin_angle > 1e-9)
+      axis = ((std::sin((1 - s) * angle) * a0 + std::sin(s * angle) * a1) / sin_angle).normalized();
+    else
+      axis = angle < 1.0 ? ((1 - s) * a0 + s * a1).normalized() : (s < 0.5 ? a0 : a1);
+    apply_instance(shape, tip, axis, e, normal_sum, contact_sum);
+    ++e.substeps;
+  }
+  if (e.removed_mm3 > 0) {
+    const double len = normal_sum.norm();
+    if (len > 0) e.normal = normal_sum / len;
+    e.contact_mm = contact_sum / e.removed_mm3;
+  } else {
+    e.axial_min_mm = e.axial_max_mm = 0;
+  }
+  return e;
+}
+
+void DexelModel::apply_instance(const CutterShape& shape, const Eigen::Vector3d& tip,
+                                const Eigen::Vector3d& axis, Engagement& e,
+                                Eigen::Vector3d& normal_sum,
+                                Eigen::Vector3d& contact_sum) noexcept {
+  if (cell_start_.empty()) return;
+  const detail::ToolGeometry g{shape.radius_mm, shape.corner_radius_mm,
+                               shape.radius_mm - shape.corner_radius_mm, shape.flute_length_mm};
+  // Bounding box of the tool: its axis segment widened by the rim disk.
+  const Eigen::Vector3d top = tip + shape.flute_length_mm * axis;
+  Eigen::Vector3d lo_box = tip.cwiseMin(top), hi_box = tip.cwiseMax(top);
+  for (int i = 0; i < 3; ++i) {
+    const double r = shape.radius_mm * std::sqrt(std::max(0.0, 1 - axis[i] * axis[i])) + 1e-9;
+    lo_box[i] -= r;
+    hi_box[i] += r;
+  }
+  int c0[3], c1[3];
+  for (int i = 0; i < 3; ++i) {
+    const double a = std::floor((lo_box[i] - grid_origin_mm_[i]) / cell_mm_);
+    const double b = std::floor((hi_box[i] - grid_origin_mm_[i]) / cell_mm_);
+    if (b < 0 || a >= grid_dims_[i]) return;
+    c0[i] = static_cast<int>(std::max(a, 0.0));
+    c1[i] = static_cast<int>(std::min(b, double(grid_dims_[i] - 1)));
+  }
+  ++visit_epoch_;
+  if (visit_epoch_ == 0) {
+    std::fill(visit_.begin(), visit_.end(), 0u);
+    visit_epoch_ = 1;
+  }
+  for (int z = c0[2]; z <= c1[2]; ++z) {
+    for (int y = c0[1]; y <= c1[1]; ++y) {
+      const std::size_t row = (std::size_t(z) * grid_dims_[1] + y) * grid_dims_[0];
+      const std::uint32_t first = cell_start_[row + c0[0]];
+      const std::uint32_t last = cell_start_[row + c1[0] + 1];
+      for (std::uint32_t it = first; it < last; ++it) {
+        const std::uint32_t d = cell_items_[it];
+        if (visit_[d] == visit_epoch_) continue;
+        visit_[d] = visit_epoch_;
+        const double h = height_[d], floor = floor_[d];
+        if (h <= floor) continue;
+        const Eigen::Vector3d& p = line_origin_[d];
+        const Eigen::Vector3d& n = normal_[d];
+        const detail::Span span = detail::tool_span(p - tip, n, axis, g, floor, h);
+        if (span.empty() || !(span.t0 < h) || !(span.t1 > floor)) continue;
+        const double new_h = std::max(span.t0, floor);
+        const double removed = (h - new_h) * area_[d];
+        height_[d] = new_h;
+        e.removed_mm3 += removed;
+        normal_sum += removed * n;
+        contact_sum += removed * (p + (0.5 * (h + new_h)) * n);
+        const double w = (p + new_h * n - tip).dot(axis);
+        e.axial_min_mm = std::min(e.axial_min_mm, w);
+        e.axial_max_mm = std::max(e.axial_max_mm, w);
+        if (stamp_[d] != epoch_) {
+          stamp_[d] = epoch_;
+          ++e.dexels_touched;
+        }
+      }
+    }
+  }
+}
+
+}  // namespace truecut::sim::cutting

@@ -1,0 +1,119 @@
+// Normal-dexel material removal. Dexels sit on the nominal part surface (an
+// even sampling of its triangles); each holds the material height h along its
+// outward surface normal. A cutter swept between two poses lowers h where its
+// solid meets the dexel line. See docs/cutting.md for the model and its
+// limits.
+//
+//   auto model = DexelModel::build(mesh, triangle_surface_ids, stock, options);
+//   Engagement e = model.cut(shape, pose_from, pose_to);   // no allocation
+//   model.write_machined(dir);                             // machined.stl/.ply
+#pragma once
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <filesystem>
+#include <span>
+#include <vector>
+
+#include "truecut/offline/mesh.hpp"
+#include "truecut/sim/benchmark_parts.hpp"
+#include "truecut/sim/cutting/cutter.hpp"
+
+namespace truecut::sim::cutting {
+
+struct DexelOptions {
+  double spacing_mm = 0.1;     // longest distance between neighbouring dexels of a triangle
+  double max_stock_mm = 3.0;   // initial h is capped here (material beyond it is ignored)
+  double max_depth_mm = 0.5;   // how far below the nominal surface a dexel can be cut (gouge)
+  double tolerance_mm = 1e-3;  // sweep sampling error (between sub-step instances)
+  int max_substeps = 4096;     // per cut() call; a longer move is sampled more coarsely
+  double cell_mm = 0;          // spatial grid cell; 0 = automatic
+  std::vector<int> surfaces;   // surface ids to model; empty = all
+};
+
+// What one cut() removed. Weights are removed volumes (Δh × dexel area).
+struct Engagement {
+  double removed_mm3 = 0;
+  // Mean outward surface normal of the removed material (unit; zero when
+  // nothing was removed). It points from the part towards the tool.
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  Eigen::Vector3d contact_mm = Eigen::Vector3d::Zero();  // centroid of the removed material
+  // Engaged height along the tool axis, from the tip of the instance that cut
+  // (mm); both 0 when nothing was removed.
+  double axial_min_mm = 0;
+  double axial_max_mm = 0;
+  std::uint32_t dexels_touched = 0;  // distinct dexels lowered
+  std::uint32_t substeps = 0;        // tool instances tested
+  bool substeps_capped = false;      // the move needed more than max_substeps
+  bool invalid_input = false;        // shape or pose not valid(): nothing was cut
+};
+
+class DexelModel {
+ public:
+  DexelModel() = default;
+  // `triangle_surface` gives the surface id of each triangle of `nominal`
+  // (outward normals, mm). Throws std::invalid_argument on bad options or a
+  // size mismatch, std::length_error beyond 50 million dexels.
+  static DexelModel build(const offline::TriangleMesh& nominal,
+                          std::span<const int> triangle_surface, std::span<const StockBox> stock,
+                          const DexelOptions& options = {});
+
+  // Sweeps the cutter from `from` to `to` (tip moves linearly, the axis turns
+  // at constant rate in the plane of the two axes), sub-stepped so the swept
+  // surface is sampled to options.tolerance_mm. With include_start = false the
+  // instance at `from` is skipped (it was the previous call's end). Allocates
+  // nothing, throws nothing; work is bounded by max_substeps × the dexels in
+  // the grid cells under one tool instance.
+  Engagement cut(const CutterShape& shape, const CutterPose& from, const CutterPose& to,
+                 bool include_start = true) noexcept;
+
+  // Nominal topology subdivided at the dexels, vertices at p + h·n; triangles
+  // of surfaces that are not modelled are copied unchanged.
+  offline::TriangleMesh machined_mesh() const;
+  // machined.stl (binary) and machined.ply (binary) into `dir`, each atomic.
+  void write_machined(const std::filesystem::path& dir, const std::string& comment = {}) const;
+
+  std::size_t size() const { return height_.size(); }
+  const Eigen::Vector3d& position(std::size_t i) const { return position_[i]; }
+  const Eigen::Vector3d& normal(std::size_t i) const { return normal_[i]; }
+  double height_mm(std::size_t i) const { return height_[i]; }
+  double initial_height_mm(std::size_t i) const { return initial_height_[i]; }
+  double area_mm2(std::size_t i) const { return area_[i]; }
+  int surface(std::size_t i) const { return surface_[i]; }
+  // Σ (initial h − h) × area.
+  double removed_total_mm3() const;
+
+ private:
+  void apply_instance(const CutterShape& shape, const Eigen::Vector3d& tip,
+                      const Eigen::Vector3d& axis, Engagement& e, Eigen::Vector3d& normal_sum,
+                      Eigen::Vector3d& contact_sum) noexcept;
+
+  // Per dexel (structure of arrays).
+  std::vector<Eigen::Vector3d> position_;     // on the nominal surface (output mesh)
+  std::vector<Eigen::Vector3d> line_origin_;  // where the line is tested (inset on sharp edges)
+  std::vector<Eigen::Vector3d> normal_;
+  std::vector<double> height_;
+  std::vector<double> initial_height_;
+  std::vector<double> floor_;  // −max_depth_mm
+  std::vector<double> area_;
+  std::vector<int> surface_;
+  std::vector<std::uint32_t> stamp_;  // last cut() that lowered the dexel
+  std::uint32_t epoch_ = 0;
+  std::vector<std::uint32_t> visit_;  // last tool instance that tested the dexel
+  std::uint32_t visit_epoch_ = 0;
+  // Output topology: triangles over dexels, plus the unmodelled triangles.
+  std::vector<offline::Triangle> triangles_;
+  std::vector<Eigen::Vector3d> fixed_vertices_;
+  std::vector<offline::Triangle> fixed_triangles_;
+  // Uniform grid: dexel indices per cell (CSR); a dexel is listed in every
+  // cell its line [p + floor·n, p + h0·n] passes near.
+  Eigen::Vector3d grid_origin_mm_ = Eigen::Vector3d::Zero();
+  double cell_mm_ = 1;
+  Eigen::Vector3i grid_dims_ = Eigen::Vector3i::Zero();
+  std::vector<std::uint32_t> cell_start_;
+  std::vector<std::uint32_t> cell_items_;
+  DexelOptions options_;
+};
+
+}  // namespace truecut::sim::cutting

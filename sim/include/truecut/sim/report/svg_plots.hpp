@@ -1,0 +1,27 @@
+// Small inline-SVG plots for the self-contained HTML reports.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace truecut::sim::report {
+
+struct HistogramSeries {
+  std::string label;
+  std::string colour;  // CSS colour
+  std::vector<double> values;
+};
+
+// Relative-frequency histogram (percent per bin) of each series, overlaid as
+// step lines, over [-range, +range] in `bins` bins; values beyond the range
+// go into the outermost bins. Dashed lines mark ±tolerance when > 0.
+std::string histogram_svg(const std::vector<HistogramSeries>& series, double range, int bins,
+                          double tolerance, const std::string& unit);
+
+// A horizontal colour bar of deviation_colour() from -limit to +limit.
+std::string colour_bar_svg(double limit, double tolerance, const std::string& unit);
+
+// Escapes text for HTML/SVG content.
+std::string html_escape(const std::string& text);
+
+}  // namespace truecut::sim::report

@@ -1,0 +1,59 @@
+// The soft-CNC loop of the simulated machine, as `truecut run MACHINE.json
+// PROGRAM.ngc` and the closed-loop demo run it: the shipped wiring
+// sim/hal/soft_cnc.hal (interpreter/planner -> truecut_comp -> tool geometry
+// -> machine joints -> cutting -> recorder) with a run.ini written for the
+// job, in simulated time.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "truecut/sim/machine_description.hpp"
+
+namespace truecut::sim {
+
+struct SoftCncJob {
+  std::filesystem::path machine;  // machine description (JSON)
+  std::filesystem::path program;  // G-code
+  std::filesystem::path nominal;  // nominal part STL: where the cutting model's dexels sit
+  std::filesystem::path part;     // part.json: stock and tools
+  std::filesystem::path tools;    // LinuxCNC tool table
+  std::optional<std::filesystem::path> field;  // correction field for truecut_comp
+  std::filesystem::path out_dir;
+  double period_us = 1000.0;
+  long record_every = 1;
+  double max_correction_mm = 0.5;
+  double max_rate_mm_per_s = 5.0;
+  double fade_time_s = 0.2;
+  std::vector<std::filesystem::path> component_path;  // where the components' .so are
+};
+
+struct SoftCncResult {
+  double program_s = 0.0;    // planned duration of the program
+  double simulated_s = 0.0;  // time the loop ran
+  double wall_s = 0.0;
+  bool finished = false;     // the planner reached the program end
+  bool limit_fault = false;  // a joint command left the machine's travel
+};
+
+// The shipped wiring, compiled in (sim/hal/soft_cnc.hal).
+const std::string& soft_cnc_hal_text();
+// The run.ini the wiring reads for this job (absolute paths).
+std::string soft_cnc_ini_text(const SoftCncJob& job, const MachineDescription& machine);
+
+// Called on the non-real-time side with the simulated time reached and the
+// program's planned duration.
+using SoftCncProgress = std::function<void(double time_s, double program_s)>;
+
+// Writes soft_cnc.hal and run.ini into job.out_dir, loads them and runs until
+// the program ends. The HAL shuts down before this returns, so machined.stl,
+// machined.ply and trace.csv are in out_dir. Throws MachineDescriptionError
+// (bad machine file), hal::HalFileError (a component refused the job: the
+// message names the file and line) and std::runtime_error.
+SoftCncResult run_soft_cnc(const SoftCncJob& job, const SoftCncProgress& progress = {});
+
+}  // namespace truecut::sim

@@ -1,0 +1,78 @@
+// The wiring text and the run.ini of a soft-CNC job.
+#include <sstream>
+
+#include "truecut/sim/soft_cnc.hpp"
+
+namespace truecut::sim {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string absolute_text(const fs::path& p) {
+  return fs::absolute(p).lexically_normal().string();
+}
+
+std::string number_text(double v) {
+  std::ostringstream s;
+  s.precision(17);
+  s << v;
+  return s.str();
+}
+
+// INI text in the order written, one [SECTION] header per run of keys.
+class IniText {
+ public:
+  void set(const std::string& section, const std::string& key, const std::string& value) {
+    if (section != section_) {
+      text_ += (text_.empty() ? "[" : "\n[") + section + "]\n";
+      section_ = section;
+    }
+    text_ += key + " = " + value + "\n";
+  }
+  std::string text() const { return text_; }
+
+ private:
+  std::string text_;
+  std::string section_;
+};
+
+}  // namespace
+
+const std::string& soft_cnc_hal_text() {
+  static const std::string text =
+#include "soft_cnc_hal.inc"
+      ;
+  return text;
+}
+
+std::string soft_cnc_ini_text(const SoftCncJob& job, const MachineDescription& machine) {
+  const KinematicsParams& k = machine.machine.kinematics;
+  IniText ini;
+  ini.set("RUN", "MACHINE", absolute_text(job.machine));
+  ini.set("RUN", "PROGRAM", absolute_text(job.program));
+  ini.set("RUN", "TOOL_TABLE", absolute_text(job.tools));
+  ini.set("RUN", "PART", absolute_text(job.part));
+  ini.set("RUN", "NOMINAL", absolute_text(job.nominal));
+  ini.set("RUN", "OUT_DIR", absolute_text(job.out_dir));
+  ini.set("RUN", "SERVO_PERIOD_NS",
+          std::to_string(static_cast<long long>(job.period_us * 1000 + 0.5)));
+  ini.set("RUN", "RECORD_EVERY", std::to_string(job.record_every));
+  // The program starts with the tool at a safe height: 10 mm below the top
+  // of the Z travel (machine zero may lie inside the part).
+  const JointParams& z = machine.machine.joints[2];
+  ini.set("RUN", "START", "0,0," + number_text(z.present ? z.max - 10.0 : 0.0) + ",0,0");
+  ini.set("KINS", "X_ROT_POINT", number_text(k.x_rot_point_mm));
+  ini.set("KINS", "Y_ROT_POINT", number_text(k.y_rot_point_mm));
+  ini.set("KINS", "Z_ROT_POINT", number_text(k.z_rot_point_mm));
+  ini.set("KINS", "Y_OFFSET", number_text(k.y_offset_mm));
+  ini.set("KINS", "Z_OFFSET", number_text(k.z_offset_mm));
+  ini.set("KINS", "CONVENTIONAL_DIRECTIONS", k.conventional_directions ? "1" : "0");
+  ini.set("COMP", "FIELD", job.field ? absolute_text(*job.field) : "");
+  ini.set("COMP", "ENABLE", job.field ? "1" : "0");
+  ini.set("COMP", "MAX_CORRECTION", number_text(job.max_correction_mm));
+  ini.set("COMP", "MAX_RATE", number_text(job.max_rate_mm_per_s));
+  ini.set("COMP", "FADE_TIME", number_text(job.fade_time_s));
+  return "# Written by truecut run for soft_cnc.hal beside it (docs/soft-cnc.md).\n" + ini.text();
+}
+
+}  // namespace truecut::sim
