@@ -23,7 +23,8 @@ const char* kHelp =
     "usage: truecut run MACHINE.json PROGRAM.ngc --out DIR [options]\n"
     "\n"
     "Machines PROGRAM on the simulated 5-axis A/C machine MACHINE (a machine\n"
-    "description, docs/formats.md) in simulated time: interpreter/planner ->\n"
+    "description, docs/formats.md) in simulated time (or, with --realtime, against\n"
+    "the wall clock): interpreter/planner ->\n"
     "truecut_comp -> machine joints with their physics -> cutting -> recorder.\n"
     "DIR receives soft_cnc.hal and run.ini (the exact wiring and settings used;\n"
     "`truecut run DIR/soft_cnc.hal --ini DIR/run.ini --out DIR` repeats the run),\n"
@@ -44,6 +45,10 @@ const char* kHelp =
     "  --period-us US         servo period (default 1000)\n"
     "  --record-every N       record every N-th cycle (default 1)\n"
     "  --component-path DIR   also search DIR for components (repeatable)\n"
+    "  --realtime             run against the wall clock instead of simulated time\n"
+    "                         (same outputs; prints cycle timing and overruns)\n"
+    "  --cpu N                with --realtime: pin the servo thread to CPU N\n"
+    "  --fifo PRIO            with --realtime: SCHED_FIFO priority 1..99 when permitted\n"
     "  --help                 this text\n";
 
 fs::path existing(const std::optional<std::string>& given, const fs::path& beside,
@@ -70,6 +75,9 @@ int run_machine(const std::vector<std::string>& argv) {
                       {"period-us", true},
                       {"record-every", true},
                       {"component-path", true, true},
+                      {"realtime", false},
+                      {"cpu", true},
+                      {"fifo", true},
                       {"help", false}});
   if (a.flag("help")) {
     std::fputs(kHelp, stdout);
@@ -98,6 +106,11 @@ int run_machine(const std::vector<std::string>& argv) {
   job.max_rate_mm_per_s = a.number("max-rate", 5.0, 0.0, 1000.0);
   job.fade_time_s = a.number("fade-time", 0.2, 0.0, 60.0);
   job.component_path = component_path(a);
+  job.wall_clock = a.flag("realtime");
+  if (!job.wall_clock && (a.value("cpu") || a.value("fifo")))
+    throw UsageError("--cpu and --fifo need --realtime");
+  job.wall_clock_options.cpu = static_cast<int>(a.integer("cpu", -1, 0, 1023));
+  job.wall_clock_options.fifo_priority = static_cast<int>(a.integer("fifo", 0, 1, 99));
 
   Progress progress;
   progress.tty = isatty(STDERR_FILENO) != 0;
@@ -128,6 +141,19 @@ int run_machine(const std::vector<std::string>& argv) {
   std::printf("truecut run %s %s\n", job.machine.string().c_str(), job.program.string().c_str());
   std::printf("  time        %.3f s machined in %.3f s wall (%.1fx real time)\n", r.simulated_s,
               r.wall_s, r.wall_s > 0 ? r.simulated_s / r.wall_s : 0.0);
+  if (job.wall_clock) {
+    for (const auto& note : r.report.notes)
+      std::printf("  realtime    %s\n", note.c_str());
+    for (const auto& t : r.report.threads)
+      std::printf(
+          "  %-11s %llu cycles of %lld us, %llu overruns; latency median %.1f us, p99 %.1f us, "
+          "max %.1f us; compute median %.1f us, max %.1f us\n",
+          t.name.c_str(), static_cast<unsigned long long>(t.cycles),
+          static_cast<long long>(t.period_ns / 1000), static_cast<unsigned long long>(t.overruns),
+          double(t.latency.percentile_ns(0.5)) * 1e-3, double(t.latency.percentile_ns(0.99)) * 1e-3,
+          double(t.latency.max_ns()) * 1e-3, double(t.compute.percentile_ns(0.5)) * 1e-3,
+          double(t.compute.max_ns()) * 1e-3);
+  }
   std::printf("  output      %s/{machined.stl,machined.ply,trace.csv,soft_cnc.hal,run.ini}\n",
               job.out_dir.string().c_str());
   return kExitOk;

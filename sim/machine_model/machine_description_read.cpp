@@ -361,13 +361,10 @@ void check_consistency(const JsonNode& root, const MachineParams& m) {
     }
   }
   check_true_tool(fx, m);
-  // Without stickout_mm the tool's cantilever is the whole real tool.
-  if (fx.has("tool_deflection") && !m.effects.tool_deflection.params.stickout_mm &&
-      !(true_tool(m).length_mm > 0.0))
-    fx.child("tool_deflection")
-        .fail("needs stickout_mm: the real tool length (kinematics.tool.length_mm" +
-              std::string(m.effects.tool_length_error.enabled ? " + tool_length_error" : "") +
-              ") is " + format_number(true_tool(m).length_mm));
+  // Without stickout_mm the tool's cantilever is the whole real tool: the
+  // description's, or (kinematics.tool.length_mm = 0) the tool in the spindle
+  // during the run (machine_joints' tool-length pin); a tool of length 0
+  // does not bend.
 }
 
 }  // namespace

@@ -3,12 +3,14 @@
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/Sparse>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
 #include "field_fit_grid.hpp"
+#include "multilevel_bspline.hpp"
 
 namespace truecut::offline {
 namespace {
@@ -133,8 +135,40 @@ struct FittedLayer {
   FieldFitLayerStats stats;
 };
 
+// Below this many unknowns CG converges fast enough from zero.
+constexpr int64_t kCoarseStartUnknowns = 4000;
+
+FittedLayer fit_layer(const rt::FieldGrid& g, const ToolSamples& tool, const FieldFitOptions& o);
+
+// Initial guess from the same fit on a grid of twice the spacing (itself
+// started the same way): CG then only has to resolve the fine detail, not
+// the smooth extension into the fade region, which takes it most iterations.
+Eigen::MatrixX3d coarse_guess(const rt::FieldGrid& g, const Unknowns& u, const ToolSamples& tool,
+                              const FieldFitOptions& o) {
+  FieldFitOptions oc = o;
+  oc.spacing_mm = 2.0 * o.spacing_mm;
+  oc.refinement_iterations = 0;
+  const ToolSamples one[] = {tool};
+  const rt::FieldGrid gc = field_fit_grid(one, oc);
+  FittedLayer coarse = fit_layer(gc, tool, oc);
+  const rt::CorrectionField field(gc, {std::move(coarse.layer)});
+  Eigen::MatrixX3d x0 = Eigen::MatrixX3d::Zero(u.count, 3);
+  for (int32_t k = 0; k < g.dims[2]; ++k)
+    for (int32_t j = 0; j < g.dims[1]; ++j)
+      for (int32_t i = 0; i < g.dims[0]; ++i) {
+        const int64_t c = u.of_node[static_cast<std::size_t>(g.index(i, j, k))];
+        if (c < 0) continue;
+        const rt::FieldSample e = field.evaluate_tricubic(tool.tool, g.node_position_mm(i, j, k));
+        if (e.status == rt::FieldStatus::ok) x0.row(c) = e.vector_mm.transpose();
+      }
+  return x0;
+}
+
 FittedLayer fit_layer(const rt::FieldGrid& g, const ToolSamples& tool, const FieldFitOptions& o) {
-  const double reach_nodes = o.support_radius_nodes + o.fade_nodes + 2.0;
+  // The multilevel fit needs distances only for the weights.
+  const double reach_nodes = o.method == FieldFitMethod::multilevel_bspline
+                                 ? o.support_radius_nodes + o.fade_nodes
+                                 : o.support_radius_nodes + o.fade_nodes + 2.0;
   const std::vector<float> dist = fit_detail::node_distances(g, tool.samples, reach_nodes);
   const std::vector<double> weights = fit_detail::node_weights(g, dist, o);
   const Unknowns u = active_nodes(dist, reach_nodes);
@@ -150,6 +184,16 @@ FittedLayer fit_layer(const rt::FieldGrid& g, const ToolSamples& tool, const Fie
     out.layer.tool = tool.tool;
     out.layer.nodes.assign(weights.size(), rt::FieldNode{});
     return out;
+  }
+
+  if (o.method == FieldFitMethod::multilevel_bspline) {
+    const std::vector<Eigen::Vector3d> values =
+        fit_detail::multilevel_bspline_nodes(g, tool.samples, o);
+    out.layer.tool = tool.tool;
+    out.layer.nodes.resize(weights.size());
+    for (std::size_t n = 0; n < weights.size(); ++n)
+      out.layer.nodes[n] = {values[n].x(), values[n].y(), values[n].z(), weights[n]};
+    return out;  // residual statistics: from the finished field, see below
   }
 
   int64_t support_nodes = 0;
@@ -179,14 +223,22 @@ FittedLayer fit_layer(const rt::FieldGrid& g, const ToolSamples& tool, const Fie
   for (const FitSample& s : tool.samples) {
     if (s.valid) v.row(row++) = s.vector_mm.transpose();
   }
-  Eigen::MatrixX3d x = solver.solve(Eigen::MatrixX3d(a.transpose() * v));
+  const Eigen::MatrixX3d rhs = a.transpose() * v;
+  Eigen::MatrixX3d x =
+      u.count > kCoarseStartUnknowns
+          ? Eigen::MatrixX3d(solver.solveWithGuess(rhs, coarse_guess(g, u, tool, o)))
+          : Eigen::MatrixX3d(solver.solve(rhs));
   out.layer = make_layer(tool.tool, u, x, weights);
   Eigen::MatrixX3d r = evaluator_residual(g, out.layer, tool.samples, valid);
   double best = rms(r);
 
   // Fixed point: Aᵀ(v − T x) = R x, T the tricubic evaluator.
   for (int it = 0; it < o.refinement_iterations; ++it) {
-    const Eigen::MatrixX3d step = solver.solve(Eigen::MatrixX3d(a.transpose() * r - reg * x));
+    const Eigen::MatrixX3d b = a.transpose() * r - reg * x;
+    // The step is small: solve it to the accuracy of the first solve, not
+    // relative to its own (small) right-hand side.
+    solver.setTolerance(std::min(1e-2, 1e-10 * rhs.norm() / std::max(b.norm(), 1e-300)));
+    const Eigen::MatrixX3d step = solver.solve(b);
     const Eigen::MatrixX3d candidate = x + step;
     rt::FieldLayer layer = make_layer(tool.tool, u, candidate, weights);
     Eigen::MatrixX3d rc = evaluator_residual(g, layer, tool.samples, valid);
@@ -213,7 +265,25 @@ FieldFitResult fit_correction_field(std::span<const ToolSamples> tools,
     layers.push_back(std::move(f.layer));
     stats.push_back(f.stats);
   }
-  return {rt::CorrectionField(grid, std::move(layers)), std::move(stats)};
+  rt::CorrectionField field(grid, std::move(layers));
+  if (options.method == FieldFitMethod::multilevel_bspline) {
+    for (std::size_t t = 0; t < tools.size(); ++t) {
+      double sum2 = 0.0, max2 = 0.0;
+      for (const FitSample& s : tools[t].samples) {
+        if (!s.valid) continue;
+        const double e2 =
+            (s.vector_mm - field.evaluate_tricubic(tools[t].tool, s.position_mm).vector_mm)
+                .squaredNorm();
+        sum2 += e2;
+        max2 = std::max(max2, e2);
+      }
+      if (stats[t].valid_samples > 0) {
+        stats[t].residual_rms_mm = std::sqrt(sum2 / static_cast<double>(stats[t].valid_samples));
+        stats[t].residual_max_mm = std::sqrt(max2);
+      }
+    }
+  }
+  return {std::move(field), std::move(stats)};
 }
 
 }  // namespace truecut::offline

@@ -1,5 +1,7 @@
 #include "field_fit_grid.hpp"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -33,24 +35,48 @@ std::vector<float> node_distances(const rt::FieldGrid& grid, std::span<const Fit
   std::vector<float> d2(static_cast<std::size_t>(grid.node_count()),
                         std::numeric_limits<float>::infinity());
   const double h = grid.spacing_mm.x();
+  // Samples in node units, bucketed by node layer (z) so that the layers can
+  // be filled in parallel, each from the samples within reach of it.
+  std::vector<Eigen::Vector3d> u;
   for (const FitSample& s : samples) {
-    if (!s.valid) continue;
-    const Eigen::Vector3d u = (s.position_mm - grid.origin_mm) / h;
-    std::array<int32_t, 3> lo{}, hi{};
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = std::max(0, static_cast<int32_t>(std::ceil(u[a] - reach_nodes)));
-      hi[a] = std::min(grid.dims[a] - 1, static_cast<int32_t>(std::floor(u[a] + reach_nodes)));
-    }
-    for (int32_t k = lo[2]; k <= hi[2]; ++k) {
-      for (int32_t j = lo[1]; j <= hi[1]; ++j) {
-        for (int32_t i = lo[0]; i <= hi[0]; ++i) {
-          const double dist2 = (Eigen::Vector3d(i, j, k) - u).squaredNorm();
-          float& slot = d2[static_cast<std::size_t>(grid.index(i, j, k))];
-          slot = std::min(slot, static_cast<float>(dist2));
+    if (s.valid) u.push_back((s.position_mm - grid.origin_mm) / h);
+  }
+  const int32_t layers = grid.dims[2];
+  std::vector<std::vector<std::uint32_t>> in_layer(static_cast<std::size_t>(layers));
+  for (std::size_t p = 0; p < u.size(); ++p) {
+    const auto k = std::clamp(static_cast<int32_t>(std::floor(u[p].z())), 0, layers - 1);
+    in_layer[static_cast<std::size_t>(k)].push_back(static_cast<std::uint32_t>(p));
+  }
+  const double reach2 = reach_nodes * reach_nodes;
+  const auto reach_layers = static_cast<int32_t>(std::ceil(reach_nodes)) + 1;
+  tbb::parallel_for(int32_t{0}, layers, [&](int32_t k) {
+    const int32_t b0 = std::max(0, k - reach_layers), b1 = std::min(layers - 1, k + reach_layers);
+    for (int32_t b = b0; b <= b1; ++b) {
+      for (std::uint32_t p : in_layer[static_cast<std::size_t>(b)]) {
+        const Eigen::Vector3d& q = u[p];
+        const double dz2 = (k - q.z()) * (k - q.z());
+        if (dz2 > reach2) continue;
+        // Only the nodes within the ball of radius reach_nodes: beyond it
+        // the distance is not needed.
+        const double ry = std::sqrt(reach2 - dz2);
+        const int32_t j0 = std::max(0, static_cast<int32_t>(std::ceil(q.y() - ry)));
+        const int32_t j1 = std::min(grid.dims[1] - 1, static_cast<int32_t>(std::floor(q.y() + ry)));
+        for (int32_t j = j0; j <= j1; ++j) {
+          const double dyz2 = dz2 + (j - q.y()) * (j - q.y());
+          if (dyz2 > reach2) continue;
+          const double rx = std::sqrt(reach2 - dyz2);
+          const int32_t i0 = std::max(0, static_cast<int32_t>(std::ceil(q.x() - rx)));
+          const int32_t i1 =
+              std::min(grid.dims[0] - 1, static_cast<int32_t>(std::floor(q.x() + rx)));
+          float* row = d2.data() + grid.index(0, j, k);
+          for (int32_t i = i0; i <= i1; ++i) {
+            const double dx = i - q.x();
+            row[i] = std::min(row[i], static_cast<float>(dyz2 + dx * dx));
+          }
         }
       }
     }
-  }
+  });
   for (float& v : d2)
     v = std::sqrt(v);
   return d2;

@@ -101,15 +101,19 @@ MachineDescription part_machine(const BenchmarkPart& part) {
     e.rotary_location.params.c = RotaryLocationC{10.0, -6.0, 12.0, -8.0, 25.0};
   }
 
-  // ---- tool_deflection / workpiece_deflection: to be switched on here ----
-  // The lead switches these on once the machine model's deflection effects
-  // are in (issue 4, point 3). Planned magnitudes (docs/parts.md, "Machines"),
-  // beam theory k = 3EI/L³ with the holder and spindle in series:
-  //   tool_deflection.stiffness_n_per_um: implant Ø2 × 22 mm end mill 0.054;
-  //     benchmark004 Ø6 × 30 mm ball 1.6 (Ø10 end mill 5.9); freeform ball 1.6.
-  //   workpiece_deflection (implant only): stiffness_n_per_um 0.038 at
-  //     reference_length_mm 17, clamp_point_mm (0, 0, 0), axis (0, 0, 1).
-  // ------------------------------------------------------------------------
+  // Cutting forces bend the tool and, on the implant, the slender shaft.
+  // Beam theory k = 3EI/L³ with holder and spindle in series (docs/parts.md,
+  // "Machines"); the stiffness is the judged tool's, the stick-out follows
+  // the length of the tool in the spindle.
+  e.tool_deflection.enabled = true;
+  e.tool_deflection.params.stiffness_n_per_um = part.id == PartId::kImplant ? 0.054 : 1.6;
+  if (part.id == PartId::kImplant) {
+    e.workpiece_deflection.enabled = true;
+    e.workpiece_deflection.params.stiffness_n_per_um = 0.038;
+    e.workpiece_deflection.params.reference_length_mm = 17.0;
+    e.workpiece_deflection.params.clamp_point_mm = {0.0, 0.0, 0.0};
+    e.workpiece_deflection.params.axis = {0.0, 0.0, 1.0};
+  }
   return d;
 }
 

@@ -24,8 +24,15 @@ RgbImage render_mesh(const offline::TriangleMesh& mesh, const std::vector<double
   u.normalize();
   const Eigen::Vector3d v = u.cross(w);
 
+  // Fit the view to the vertices that carry a value (the judged surfaces),
+  // or to the whole mesh when none does.
+  std::size_t valued = 0;
+  for (std::size_t i = 0; i < mesh.vertices_mm.size() && i < vertex_values.size(); ++i)
+    valued += std::isfinite(vertex_values[i]) ? 1 : 0;
   double umin = std::numeric_limits<double>::max(), umax = -umin, vmin = umin, vmax = -umin;
-  for (const auto& p : mesh.vertices_mm) {
+  for (std::size_t i = 0; i < mesh.vertices_mm.size(); ++i) {
+    if (valued >= 3 && !(i < vertex_values.size() && std::isfinite(vertex_values[i]))) continue;
+    const Eigen::Vector3d& p = mesh.vertices_mm[i];
     umin = std::min(umin, p.dot(u)), umax = std::max(umax, p.dot(u));
     vmin = std::min(vmin, p.dot(v)), vmax = std::max(vmax, p.dot(v));
   }

@@ -23,21 +23,55 @@ void write_text(const fs::path& path, const std::string& text) {
   fs::rename(tmp, path);
 }
 
-struct ProgressHook {
+void copy_file_atomically(const fs::path& from, const fs::path& to) {
+  const fs::path tmp = to.string() + ".tmp";
+  fs::copy_file(from, tmp, fs::copy_options::overwrite_existing);
+  fs::rename(tmp, to);
+}
+
+// Runs at every service point on the non-real-time side: the progress
+// report and the field swaps (file replaced, then a reload pulse: raised at
+// one service point, lowered at the next).
+struct ServiceHook {
   const SoftCncProgress* callback;
   double program_s;
+  hal::Hal* hal;
+  const std::vector<SoftCncFieldSwap>* swaps;
+  fs::path field_file;
+  std::size_t next_swap = 0;
+  bool reload_high = false;
 };
 
-void report_progress(void* user, int64_t time_ns) {
-  auto& hook = *static_cast<ProgressHook*>(user);
-  (*hook.callback)(double(time_ns) * 1e-9, hook.program_s);
+void on_service(void* user, int64_t time_ns) {
+  auto& hook = *static_cast<ServiceHook*>(user);
+  const double t_s = double(time_ns) * 1e-9;
+  if (hook.reload_high) {
+    hook.hal->set_pin_or_param("comp.reload", "0");
+    hook.reload_high = false;
+  } else if (hook.next_swap < hook.swaps->size() && t_s >= (*hook.swaps)[hook.next_swap].time_s) {
+    copy_file_atomically((*hook.swaps)[hook.next_swap].field, hook.field_file);
+    hook.hal->set_pin_or_param("comp.reload", "1");
+    hook.reload_high = true;
+    ++hook.next_swap;
+  }
+  if (*hook.callback) (*hook.callback)(t_s, hook.program_s);
 }
 
 }  // namespace
 
-SoftCncResult run_soft_cnc(const SoftCncJob& job, const SoftCncProgress& progress) {
-  const MachineDescription machine = read_machine_description(job.machine);
-  fs::create_directories(job.out_dir);
+SoftCncResult run_soft_cnc(const SoftCncJob& given, const SoftCncProgress& progress) {
+  const MachineDescription machine = read_machine_description(given.machine);
+  if (!given.field_swaps.empty() && !given.field)
+    throw std::runtime_error("field swaps need a field to start with");
+  for (const auto& swap : given.field_swaps)
+    if (!fs::is_regular_file(swap.field))
+      throw std::runtime_error(swap.field.string() + ": no such file (field swap)");
+  fs::create_directories(given.out_dir);
+  SoftCncJob job = given;
+  if (!job.field_swaps.empty()) {
+    job.field = job.out_dir / "field.tcf";
+    copy_file_atomically(*given.field, *job.field);
+  }
   const fs::path hal_file = job.out_dir / "soft_cnc.hal", ini_file = job.out_dir / "run.ini";
   write_text(hal_file, soft_cnc_hal_text());
   write_text(ini_file, soft_cnc_ini_text(job, machine));
@@ -55,17 +89,23 @@ SoftCncResult run_soft_cnc(const SoftCncJob& job, const SoftCncProgress& progres
   // The planner stops the run at the program end; the limit only guards a
   // plan that never ends.
   limits.duration_ns = static_cast<int64_t>((result.program_s * 1.5 + 10.0) * 1e9);
-  ProgressHook hook{&progress, result.program_s};
-  if (progress) {
-    limits.progress = report_progress;
+  ServiceHook hook{&progress, result.program_s, &h, &job.field_swaps,
+                   job.field ? *job.field : fs::path()};
+  if (progress || !job.field_swaps.empty()) {
+    limits.progress = on_service;
     limits.progress_user = &hook;
   }
+  limits.cycle_probe = job.cycle_probe;
+  limits.cycle_probe_user = job.cycle_probe_user;
   hal::Executor executor(h);
-  const hal::RunReport report = executor.run_simulated(limits);
-  result.simulated_s = double(report.simulated_ns) * 1e-9;
-  result.wall_s = report.wall_s;
+  result.report = job.wall_clock ? executor.run_wall_clock(limits, job.wall_clock_options)
+                                 : executor.run_simulated(limits);
+  result.simulated_s = double(result.report.simulated_ns) * 1e-9;
+  result.wall_s = result.report.wall_s;
   result.finished = h.get_pin_or_param("planner.done").as_double() != 0;
   result.limit_fault = h.get_pin_or_param("machine.limit-fault").as_double() != 0;
+  result.field_generation = h.get_pin_or_param("comp.field-generation").s;
+  result.field_load_errors = h.get_pin_or_param("comp.load-errors").s;
   return result;  // ~Hal: the recorder and the cutting write their files
 }
 

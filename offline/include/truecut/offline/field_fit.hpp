@@ -2,17 +2,30 @@
 // compensation vectors, one layer per tool.
 //
 // The caller's responsibility: every sample's position_mm must already be
-// the tool-centre point of that tool when it cuts the measured point (contact
-// point + tool/corner radius along the nominal normal, tool axis from the
-// program), in the workpiece frame. The field is looked up by the controller
-// at the tool-centre point; this fit does not move anything.
+// the tool-centre point (TCP = programmed point = tool tip) of that tool when
+// it cuts the measured point, in the workpiece frame
+// (tool_centre_placement.hpp finds it from the program). The field is looked
+// up by the controller at the TCP; this fit does not move anything.
 //
 // Grid: one for all tools, axis-aligned, spacing_mm on every axis, covering
 // the valid samples' bounding box plus a margin of
 //   (support_radius_nodes + fade_nodes + 2) · spacing_mm
 // so the weighted region and the two zero outer node layers fit inside.
 //
-// Node vectors N (per component, per tool) minimise
+// Method multilevel_bspline (the default; docs/offline.md, "Field fit"):
+// per tool, an affine part fitted by least squares (gradient only along
+// directions in which the samples spread by >= one spacing), then cubic
+// B-spline control lattices of spacing 2^l · spacing_mm aligned with the
+// grid, coarse to fine, each fitted to the residual of the previous ones with
+// the closed-form local weights of Lee, Wolberg & Shin (1997), then
+// refinement_iterations more passes on the finest lattice; the control
+// values of the finest lattice are damped by the ridge
+// smoothness × (mean Σ w² of the control points with data). The node values
+// are the affine part plus all lattices evaluated at the nodes: the same C2
+// function the tricubic evaluator interpolates from them. O(samples), no
+// linear system; membrane_weight is not used.
+//
+// Method least_squares: node vectors N (per component, per tool) minimise
 //
 //   Σ_p |T(p) N − v_p|²  +  λ ρ Σ_nodes Σ_axes |Δ²_axis N|²  +  μ ρ Σ_far edges |Δ N|²
 //
@@ -30,7 +43,8 @@
 // same factorised system and added.
 //
 // Unknowns: only nodes within (support + fade + 2) · spacing of a sample;
-// the rest stay 0 (their weight is 0).
+// the rest stay 0 (their weight is 0). Exact, but CG needs thousands of
+// iterations at 1e5 unknowns (minutes at the source's scale).
 //
 // Weight: node weight 1 within support_radius_nodes · spacing of a valid
 // sample, falling with a smoothstep of the distance to 0 over a further
@@ -62,7 +76,13 @@ struct ToolSamples {
   std::vector<FitSample> samples;
 };
 
+enum class FieldFitMethod {
+  multilevel_bspline,  // default: O(samples), see the top of this file
+  least_squares,       // the regularised system above, solved by CG
+};
+
 struct FieldFitOptions {
+  FieldFitMethod method = FieldFitMethod::multilevel_bspline;
   double spacing_mm = 1.0;
   double smoothness = 0.1;        // λ
   double membrane_weight = 1e-4;  // μ
@@ -74,8 +94,8 @@ struct FieldFitOptions {
 struct FieldFitLayerStats {
   std::int32_t tool = 0;
   std::int64_t valid_samples = 0;
-  std::int64_t unknown_nodes = 0;
-  double residual_rms_mm = 0.0;  // |field(p) − v_p| over valid samples, final evaluator
+  std::int64_t unknown_nodes = 0;  // nodes within reach of the data (see the top)
+  double residual_rms_mm = 0.0;    // |field(p) − v_p| over valid samples, final evaluator
   double residual_max_mm = 0.0;
 };
 

@@ -2,7 +2,7 @@
 // PROGRAM.ngc` and the closed-loop demo run it: the shipped wiring
 // sim/hal/soft_cnc.hal (interpreter/planner -> truecut_comp -> tool geometry
 // -> machine joints -> cutting -> recorder) with a run.ini written for the
-// job, in simulated time.
+// job, in simulated time or, on request, against the wall clock.
 #pragma once
 
 #include <cstdint>
@@ -12,9 +12,19 @@
 #include <string>
 #include <vector>
 
+#include "truecut/rt/executor.hpp"
 #include "truecut/sim/machine_description.hpp"
 
 namespace truecut::sim {
+
+// A field taken into use while the program runs: at the first service point
+// at or after time_s (simulated time, or wall time since the start in
+// wall-clock mode), `field` replaces the file truecut_comp reads and
+// comp.reload is pulsed; the component cross-fades to it over the fade time.
+struct SoftCncFieldSwap {
+  double time_s = 0.0;
+  std::filesystem::path field;
+};
 
 struct SoftCncJob {
   std::filesystem::path machine;  // machine description (JSON)
@@ -30,14 +40,29 @@ struct SoftCncJob {
   double max_rate_mm_per_s = 5.0;
   double fade_time_s = 0.2;
   std::vector<std::filesystem::path> component_path;  // where the components' .so are
+
+  // Field swaps in time order; they need `field`. With swaps the component
+  // reads out_dir/field.tcf, a copy of `field` that each swap replaces.
+  std::vector<SoftCncFieldSwap> field_swaps;
+  // Wall-clock mode: the servo thread sleeps to real deadlines with
+  // `wall_clock_options` (CPU pinning, SCHED_FIFO, spin); the outputs are the
+  // same as in simulated time, only the timing statistics differ.
+  bool wall_clock = false;
+  hal::WallClockOptions wall_clock_options;
+  // RunLimits::cycle_probe, for tests that watch the servo cycles.
+  void (*cycle_probe)(void* user, int phase) = nullptr;
+  void* cycle_probe_user = nullptr;
 };
 
 struct SoftCncResult {
   double program_s = 0.0;    // planned duration of the program
   double simulated_s = 0.0;  // time the loop ran
   double wall_s = 0.0;
-  bool finished = false;     // the planner reached the program end
-  bool limit_fault = false;  // a joint command left the machine's travel
+  bool finished = false;         // the planner reached the program end
+  bool limit_fault = false;      // a joint command left the machine's travel
+  int32_t field_generation = 0;  // fields truecut_comp took into use
+  int32_t field_load_errors = 0;
+  hal::RunReport report;  // cycles, overruns, compute time and latency, notes
 };
 
 // The shipped wiring, compiled in (sim/hal/soft_cnc.hal).

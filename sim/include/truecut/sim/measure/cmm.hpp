@@ -91,5 +91,7 @@ std::vector<CmmPoint> read_cmm_points(const std::filesystem::path& file);
 // point and normal; deviation "nan" when not valid). Written to FILE.tmp
 // and renamed; refuses to replace anything but a regular file.
 void write_cmm_csv(const std::filesystem::path& file, std::span<const CmmMeasurement> measurements);
+// Reads a cmm.csv back (the header must name deviation_mm and valid).
+std::vector<CmmMeasurement> read_cmm_measurements(const std::filesystem::path& file);
 
 }  // namespace truecut::sim::measure

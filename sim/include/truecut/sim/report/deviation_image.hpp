@@ -32,7 +32,8 @@ struct MeshView {
   int height_px = 360;
 };
 
-// Renders the mesh as seen along view.view_direction, fitted to the image.
+// Renders the mesh as seen along view.view_direction, fitted to the image
+// around the vertices that carry a value (all vertices when none does).
 // vertex_values: one per vertex (NaN = no value, drawn grey); triangles with
 // any NaN vertex are drawn grey. colour_limit is the value that saturates
 // the colour scale.

@@ -1,0 +1,181 @@
+// truecut demo [--part NAME|all] [--out DIR]: the closed loop end to end.
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "demo_part.hpp"
+#include "truecut/sim/report/closed_loop_report.hpp"
+
+namespace truecut::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+const char* kHelp =
+    "usage: truecut demo [--part implant|benchmark004|freeform|all] [--out DIR] [options]\n"
+    "\n"
+    "The closed loop, per part: machine part 1 on a machine with hidden physics\n"
+    "(tool and workpiece deflection, a tool radius error, servo lag, rotary location\n"
+    "errors on the 5-axis part), scan it, build the correction field, machine part 2\n"
+    "with the real-time compensation and part 3 with the rewritten G-code, measure\n"
+    "every part with the virtual CMM, then scan part 2 and machine a 2nd iteration.\n"
+    "Every step is a truecut command; DIR/<part>/commands.sh lists them, demo.log\n"
+    "holds their output. Writes DIR/report.html and DIR/results.json.\n"
+    "\n"
+    "options:\n"
+    "  --part NAME        implant, benchmark004, freeform or all (default implant)\n"
+    "  --out DIR          output folder (default out/demo)\n"
+    "  --sigma-um S       scanner noise, 5..50 (default 20)\n"
+    "  --tolerance-um T   tolerance drawn in the report (default 20)\n"
+    "  --iterations N     real-time iterations, 1 or 2 (default 2)\n"
+    "  --no-rewrite       skip the G-code rewrite stage\n"
+    "  --mesh-edge MM     nominal mesh edge (default 0.5)\n"
+    "  --stepover MM      tool path stepover (default 0.5)\n"
+    "  --cmm-spacing MM   CMM point spacing (default 1)\n"
+    "  --resolution MM    correction field grid (default 1)\n"
+    "  --seed N           noise seed (default 1)\n"
+    "  --help             this text\n";
+
+void write_atomic(const fs::path& path, const std::string& text) {
+  const fs::path tmp = path.string() + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    out << text;
+    if (!out.flush()) throw std::runtime_error(tmp.string() + ": cannot write");
+  }
+  fs::rename(tmp, path);
+}
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+nlohmann::ordered_json stats_json(const sim::measure::SurfaceDeviationStats& s) {
+  return {{"points", s.valid},      {"rms_um", s.rms_um}, {"max_um", s.max_abs_um},
+          {"p95_um", s.p95_abs_um}, {"std_um", s.std_um}, {"mean_um", s.mean_um}};
+}
+
+}  // namespace
+
+int cmd_demo(const std::vector<std::string>& argv) {
+  ParsedArgs a(argv, {{"part", true},
+                      {"out", true},
+                      {"sigma-um", true},
+                      {"tolerance-um", true},
+                      {"iterations", true},
+                      {"no-rewrite", false},
+                      {"mesh-edge", true},
+                      {"stepover", true},
+                      {"cmm-spacing", true},
+                      {"resolution", true},
+                      {"seed", true},
+                      {"help", false}});
+  if (a.flag("help")) {
+    std::fputs(kHelp, stdout);
+    return kExitOk;
+  }
+  if (!a.positionals().empty())
+    throw UsageError("unexpected argument '" + a.positionals()[0] + "'");
+  DemoOptions o;
+  o.out_dir = a.value("out").value_or("out/demo");
+  o.sigma_um = a.number("sigma-um", 20.0, 5.0, 50.0);
+  o.iterations = static_cast<int>(a.integer("iterations", 2, 1, 2));
+  o.rewrite = !a.flag("no-rewrite");
+  o.mesh_edge_mm = a.number("mesh-edge", 0.5, 0.05, 10.0);
+  o.stepover_mm = a.number("stepover", 0.5, 0.05, 10.0);
+  o.cmm_spacing_mm = a.number("cmm-spacing", 1.0, 0.05, 20.0);
+  o.field_resolution_mm = a.number("resolution", 1.0, 0.1, 20.0);
+  o.seed = static_cast<std::uint64_t>(a.integer("seed", 1, 0, 1'000'000'000));
+  const double tolerance_um = a.number("tolerance-um", 20.0, 0.1, 10000.0);
+  const std::string which = a.value("part").value_or("implant");
+  std::vector<std::string> parts;
+  if (which == "all")
+    parts = {"implant", "benchmark004", "freeform"};
+  else if (which == "implant" || which == "benchmark004" || which == "freeform")
+    parts = {which};
+  else
+    throw UsageError("--part must be implant, benchmark004, freeform or all, not '" + which + "'");
+
+  fs::create_directories(o.out_dir);
+  std::vector<DemoPartResult> results;
+  for (const auto& p : parts)
+    results.push_back(run_demo_part(p, o));
+
+  std::vector<sim::report::ReportPart> report_parts;
+  nlohmann::ordered_json json;
+  json["truecut_demo"] = 1;
+  json["scanner_sigma_um"] = o.sigma_um;
+  json["tolerance_um"] = tolerance_um;
+  std::printf("%-13s %-28s %9s %9s %9s %9s %10s\n", "part", "stage", "RMS um", "max um", "P95 um",
+              "std um", "RMS cut");
+  for (const auto& r : results) {
+    sim::report::ReportPart rp;
+    rp.name = r.part;
+    rp.nominal_stl = r.dir / "part" / "nominal.stl";
+    {
+      std::ifstream in(r.dir / "part" / "part.json");
+      rp.triangle_surface_ids =
+          nlohmann::json::parse(in).at("triangle_surface_ids").get<std::vector<int>>();
+    }
+    for (const auto& s : r.surfaces)
+      rp.surfaces.push_back({s.id, s.name, s.compensate});
+    rp.field_tcf = r.first_field_dir / "field.tcf";
+    rp.audit_json = read_text(r.first_field_dir / "audit.json");
+    rp.commands = read_text(r.dir / "commands.sh");
+    nlohmann::ordered_json pj;
+    pj["part"] = r.part;
+    pj["wall_s"] = r.wall_s;
+    double reference_rms = 0;
+    for (const auto& st : r.stages) {
+      rp.stages.push_back({st.key, st.title, st.dir / "machined.stl", st.cmm});
+      const auto stats = sim::report::judged_statistics(st.cmm, rp.surfaces);
+      const auto& all = stats.back();
+      if (st.key == "uncompensated") reference_rms = all.rms_um;
+      nlohmann::ordered_json sj;
+      sj["title"] = st.title;
+      sj["all_judged"] = stats_json(all);
+      for (std::size_t i = 0; i + 1 < stats.size(); ++i) {
+        std::string name = std::to_string(stats[i].surface);
+        for (const auto& s : r.surfaces)
+          if (s.id == stats[i].surface) name = s.name;
+        sj["surfaces"][name] = stats_json(stats[i]);
+      }
+      if (st.key != "uncompensated" && reference_rms > 0)
+        sj["rms_reduction_percent"] = 100.0 * (1.0 - all.rms_um / reference_rms);
+      pj["stages"][st.key] = sj;
+      std::printf("%-13s %-28s %9.1f %9.1f %9.1f %9.1f %9s\n", r.part.c_str(), st.title.c_str(),
+                  all.rms_um, all.max_abs_um, all.p95_abs_um, all.std_um,
+                  st.key == "uncompensated" ? "-"
+                                            : (std::to_string(static_cast<int>(std::lround(
+                                                   100.0 * (1.0 - all.rms_um / reference_rms)))) +
+                                               " %")
+                                                  .c_str());
+    }
+    json["parts"].push_back(pj);
+    report_parts.push_back(std::move(rp));
+  }
+  sim::report::ReportOptions ro;
+  ro.tolerance_um = tolerance_um;
+  ro.scanner_sigma_um = o.sigma_um;
+  std::fprintf(stderr, "demo: writing the report\n");
+  write_atomic(o.out_dir / "report.html", sim::report::closed_loop_html(report_parts, ro));
+  write_atomic(o.out_dir / "results.json", json.dump(2) + "\n");
+  std::printf("report: %s\nresults: %s\n", (o.out_dir / "report.html").string().c_str(),
+              (o.out_dir / "results.json").string().c_str());
+  return kExitOk;
+}
+
+namespace {
+const CommandRegistration kRegistration{
+    "demo", "the closed loop end to end: machine, scan, compensate, measure", cmd_demo, 1};
+}  // namespace
+
+}  // namespace truecut::cli

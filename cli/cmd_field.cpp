@@ -1,0 +1,392 @@
+// truecut field NOMINAL.stl SCAN --program PART.ngc --tools TOOLS.tbl --out DIR:
+// the offline chain from a scan to a correction field (docs/offline.md,
+// "truecut field").
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "truecut/interp/error.hpp"
+#include "truecut/interp/interpreter.hpp"
+#include "truecut/offline/field_outputs.hpp"
+#include "truecut/offline/field_pipeline.hpp"
+#include "truecut/offline/mesh_io.hpp"
+#include "truecut/rt/field_file.hpp"
+
+namespace truecut::cli {
+namespace {
+
+namespace fs = std::filesystem;
+using offline::ToolShape;
+
+const char* kFieldHelp =
+    "usage: truecut field NOMINAL.stl SCAN.{ply,stl,xyz,csv} --program PART.ngc\n"
+    "                     --tools TOOLS.tbl --out DIR [options]\n"
+    "\n"
+    "Registers the scan to the nominal model, measures error vectors at the\n"
+    "compensation points, mirrors and smooths them, places each one where the\n"
+    "tool centre is when the program cuts that point, and fits the correction\n"
+    "field (one layer per tool). Writes into DIR, all or nothing:\n"
+    "  field.tcf  compensation_matrix.csv  adapted.stl  audit.json\n"
+    "Progress goes to stderr, a summary to stdout. Exit codes: 0 ok; 1 refused\n"
+    "(correction above --max-correction) or runtime failure; 2 usage or input\n"
+    "error (the message names the file and element). On 1 or 2 DIR is untouched.\n"
+    "\n"
+    "inputs:\n"
+    "  --program FILE        the CAM program (RS274/NGC, TRAORI for 5-axis)\n"
+    "  --tools FILE          LinuxCNC tool table (D = diameter, Z = length)\n"
+    "  --part FILE           part.json of a benchmark part: surface ids per\n"
+    "                        triangle, compensated surfaces, tool shapes\n"
+    "  --out DIR             output folder (created if missing)\n"
+    "  --base FIELD.tcf      a further iteration: the field the scanned part was cut\n"
+    "                        with; the new field is it plus the new compensation\n"
+    "options:\n"
+    "  --method ray|sphere   error vectors: rays to a scanned mesh (default when the\n"
+    "                        scan has faces) or plane fits in spheres (point clouds)\n"
+    "  --spacing MM          compensation points: even sampling at this spacing\n"
+    "                        (default 0 = the nominal vertices)\n"
+    "  --surfaces ID,...     compensated surfaces (default: part.json's, else all)\n"
+    "  --datum ID,...        register on these surfaces only (default: all)\n"
+    "  --no-register         the scan is already in the workpiece frame\n"
+    "  --remove-rbm          remove the rigid-body motion left in the error vectors\n"
+    "  --sphere-radius MM    sphere method radius Rs (default 1.5)\n"
+    "  --max-distance MM     ray method search distance each way (default 1)\n"
+    "  --kb-kc X             truss smoothing kb/kc (default 0.2)\n"
+    "  --resolution MM       field grid spacing (default 1)\n"
+    "  --smoothness X        field fit regularisation lambda (default 0.1)\n"
+    "  --path-step MM        tool path sampling step (default 0.1)\n"
+    "  --contact-tolerance MM  a tool cuts a point within this of its surface (0.05)\n"
+    "  --corner-radius T=MM  corner radius of tool T (repeatable; default 0, or part.json)\n"
+    "  --cutting-length T=MM cutting length of tool T (default: part.json's flute\n"
+    "                        length, else the table's Z length, else 10 x radius)\n"
+    "  --max-correction MM   refuse (exit 1) above this correction (default 0.2)\n"
+    "  --force               write although the correction exceeds --max-correction\n"
+    "  --quiet               no progress on stderr\n"
+    "  --help                this text\n";
+
+// An input error: exit 2 with the message (which names the file).
+struct InputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+std::vector<std::int32_t> id_list(const std::string& option, const std::string& text) {
+  std::vector<std::int32_t> ids;
+  std::size_t pos = 0;
+  while (pos <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', pos), text.size());
+    const std::string item = text.substr(pos, comma - pos);
+    char* end = nullptr;
+    const long v = std::strtol(item.c_str(), &end, 10);
+    if (item.empty() || *end != '\0' || v < 0 || v > 1'000'000)
+      throw UsageError("--" + option + ": '" + item + "' is not a surface id");
+    ids.push_back(static_cast<std::int32_t>(v));
+    pos = comma + 1;
+  }
+  return ids;
+}
+
+// "T=MM" pairs of a repeatable option.
+std::map<int, double> tool_values(const ParsedArgs& a, const std::string& option) {
+  std::map<int, double> out;
+  for (const std::string& v : a.values(option)) {
+    const std::size_t eq = v.find('=');
+    char *e1 = nullptr, *e2 = nullptr;
+    const std::string t = v.substr(0, eq), x = eq == std::string::npos ? "" : v.substr(eq + 1);
+    const long tool = std::strtol(t.c_str(), &e1, 10);
+    const double mm = std::strtod(x.c_str(), &e2);
+    if (eq == std::string::npos || t.empty() || x.empty() || *e1 || *e2 || tool < 0 ||
+        !(mm >= 0 && mm < 1e4))
+      throw UsageError("--" + option + " '" + v + "': expected TOOL=MM");
+    out[static_cast<int>(tool)] = mm;
+  }
+  return out;
+}
+
+struct PartFile {
+  std::vector<std::int32_t> triangle_surface_ids;
+  std::vector<std::int32_t> compensated;
+  std::map<int, ToolShape> tools;
+};
+
+PartFile read_part_file(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError(file.string() + ": cannot open");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(file.string() + ": not valid JSON: " + e.what());
+  }
+  PartFile p;
+  try {
+    for (const auto& id : j.at("triangle_surface_ids"))
+      p.triangle_surface_ids.push_back(id.get<std::int32_t>());
+    for (const auto& s : j.at("surfaces"))
+      if (s.value("compensate", false)) p.compensated.push_back(s.at("id").get<std::int32_t>());
+    for (const auto& t : j.at("tools")) {
+      ToolShape s;
+      s.tool = t.at("number").get<std::int32_t>();
+      s.radius_mm = t.at("radius_mm").get<double>();
+      s.corner_radius_mm = t.value("corner_radius_mm", 0.0);
+      s.cutting_length_mm = t.value("flute_length_mm", 0.0);
+      p.tools[s.tool] = s;
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(file.string() + ": " + e.what());
+  }
+  return p;
+}
+
+std::vector<ToolShape> tool_shapes(const interp::ToolTable& table, const fs::path& table_file,
+                                   const std::optional<PartFile>& part, const ParsedArgs& a) {
+  const std::map<int, double> corner = tool_values(a, "corner-radius");
+  const std::map<int, double> cutting = tool_values(a, "cutting-length");
+  std::vector<ToolShape> shapes;
+  for (const interp::ToolEntry& e : table.entries()) {
+    ToolShape s;
+    s.tool = e.number;
+    s.radius_mm = 0.5 * e.diameter_mm;
+    if (part && part->tools.count(e.number)) {
+      const ToolShape& p = part->tools.at(e.number);
+      s.corner_radius_mm = p.corner_radius_mm;
+      s.cutting_length_mm = p.cutting_length_mm;
+    }
+    if (corner.count(e.number)) s.corner_radius_mm = corner.at(e.number);
+    if (cutting.count(e.number)) s.cutting_length_mm = cutting.at(e.number);
+    if (s.cutting_length_mm <= 0) s.cutting_length_mm = e.offset_mm.z > 0 ? e.offset_mm.z : 0;
+    if (s.cutting_length_mm <= 0) s.cutting_length_mm = 10 * s.radius_mm;
+    s.cutting_length_mm = std::max(s.cutting_length_mm, s.corner_radius_mm);
+    if (!(s.radius_mm > 0)) continue;  // a tool without a diameter cannot be placed
+    if (s.corner_radius_mm > s.radius_mm)
+      throw InputError(table_file.string() + ": tool " + std::to_string(s.tool) +
+                       ": corner radius " + std::to_string(s.corner_radius_mm) +
+                       " mm exceeds the radius " + std::to_string(s.radius_mm) + " mm");
+    shapes.push_back(s);
+  }
+  return shapes;
+}
+
+offline::TriangleMesh read_input_mesh(const fs::path& file) {
+  try {
+    return offline::read_mesh(file);
+  } catch (const offline::MeshIoError& e) {
+    throw InputError(e.what());
+  }
+}
+
+struct Inputs {
+  offline::TriangleMesh nominal, scan;
+  interp::CanonProgram program;
+  interp::ToolTable tools;
+  std::optional<PartFile> part;
+  std::optional<rt::CorrectionField> base;
+  std::vector<offline::FileDigest> digests;
+};
+
+Inputs read_inputs(const ParsedArgs& a, const fs::path& program_file, const fs::path& tools_file) {
+  Inputs in;
+  const fs::path nominal_file = a.positionals()[0], scan_file = a.positionals()[1];
+  in.nominal = read_input_mesh(nominal_file);
+  in.scan = read_input_mesh(scan_file);
+  try {
+    interp::InterpreterOptions io;
+    in.tools = interp::ToolTable::load(tools_file);
+    io.tools = in.tools;
+    in.program = interp::Interpreter(std::move(io)).run_file(program_file);
+  } catch (const interp::GcodeError& e) {
+    throw InputError(e.what());
+  }
+  if (auto p = a.value("part")) in.part = read_part_file(*p);
+  in.digests.push_back(offline::digest_file("nominal", nominal_file));
+  in.digests.push_back(offline::digest_file("scan", scan_file));
+  for (std::size_t i = 0; i < in.program.files.size(); ++i)
+    in.digests.push_back(
+        offline::digest_file(i == 0 ? "program" : "subroutine", in.program.files[i]));
+  in.digests.push_back(offline::digest_file("tools", tools_file));
+  if (auto p = a.value("part")) in.digests.push_back(offline::digest_file("part", *p));
+  if (auto b = a.value("base")) {
+    try {
+      in.base = rt::read_field_file(*b).field;
+    } catch (const std::exception& e) {
+      throw InputError(e.what());
+    }
+    in.digests.push_back(offline::digest_file("base_field", *b));
+  }
+  return in;
+}
+
+offline::FieldPipelineOptions pipeline_options(const ParsedArgs& a, const Inputs& in) {
+  offline::FieldPipelineOptions o;
+  const std::string method =
+      a.value("method").value_or(in.scan.triangles.empty() ? "sphere" : "ray");
+  if (method == "ray") {
+    o.method = offline::ErrorMethod::ray;
+  } else if (method == "sphere") {
+    o.method = offline::ErrorMethod::sphere;
+  } else {
+    throw UsageError("--method must be ray or sphere, not '" + method + "'");
+  }
+  if (o.method == offline::ErrorMethod::ray && in.scan.triangles.empty())
+    throw InputError(a.positionals()[1] +
+                     ": the scan has no faces; the ray method needs a mesh (use --method sphere)");
+  o.spacing_mm = a.number("spacing", 0.0, 0.0, 100.0);
+  if (auto s = a.value("surfaces")) {
+    o.surfaces = id_list("surfaces", *s);
+  } else if (in.part) {
+    o.surfaces = in.part->compensated;
+  }
+  if (auto d = a.value("datum")) o.datum_surfaces = id_list("datum", *d);
+  o.register_scan = !a.flag("no-register");
+  o.remove_rigid_body_motion = a.flag("remove-rbm");
+  o.sphere.radius_mm = a.number("sphere-radius", o.sphere.radius_mm, 0.01, 100.0);
+  o.ray.max_distance_mm = a.number("max-distance", o.ray.max_distance_mm, 0.001, 100.0);
+  o.truss.kb_over_kc = a.number("kb-kc", o.truss.kb_over_kc, 0.0, 1e6);
+  o.fit.spacing_mm = a.number("resolution", o.fit.spacing_mm, 0.05, 100.0);
+  o.fit.smoothness = a.number("smoothness", o.fit.smoothness, 0.0, 1e6);
+  o.path.step_mm = a.number("path-step", o.path.step_mm, 0.001, 10.0);
+  o.placement.contact_tolerance_mm =
+      a.number("contact-tolerance", o.placement.contact_tolerance_mm, 1e-6, 10.0);
+  return o;
+}
+
+void print_summary(const offline::FieldPipelineResult& r,
+                   const std::vector<offline::FileDigest>& out, bool forced) {
+  if (r.registration)
+    std::printf(
+        "registration: %d iterations, RMS residual %.4f mm, translation %.4f %.4f %.4f mm, "
+        "rotation %.4f deg\n",
+        r.registration->iterations, r.registration->rms_after_mm,
+        r.registration->transform.translation_mm.x(), r.registration->transform.translation_mm.y(),
+        r.registration->transform.translation_mm.z(), r.registration->transform.rotation_angle_deg);
+  const auto& e = r.error_statistics;
+  std::printf(
+      "error vectors: %zu points, %.1f %% invalid, mean %.4f mm, RMS %.4f mm, max %.4f mm\n",
+      e.points, e.percent_invalid, e.mean_length_mm, e.rms_length_mm, e.max_length_mm);
+  const auto& c = r.compensation_statistics;
+  std::printf("compensation (smoothed): RMS %.4f mm, max %.4f mm; max correction %.4f mm%s\n",
+              c.rms_length_mm, c.max_length_mm, r.max_correction_mm, forced ? " (FORCED)" : "");
+  for (const auto& l : r.fit->layers)
+    std::printf("layer T%d: %lld samples, residual RMS %.4f mm, max %.4f mm\n", l.tool,
+                static_cast<long long>(l.valid_samples), l.residual_rms_mm, l.residual_max_mm);
+  std::printf("points cut by no tool: %lld of %zu\n",
+              static_cast<long long>(r.placement.uncut_points), r.points.size());
+  for (const auto& d : out)
+    std::printf("wrote %s (%ju bytes, sha256 %.16s...)\n", d.path.string().c_str(), d.bytes,
+                d.sha256.c_str());
+  std::printf("total %.3f s\n", r.total_wall_s);
+}
+
+int run_field(const ParsedArgs& a, const std::vector<std::string>& argv) {
+  if (a.positionals().size() != 2) throw UsageError("expected NOMINAL and SCAN files");
+  const auto program = a.value("program"), tools = a.value("tools"), out = a.value("out");
+  if (!program) throw UsageError("--program FILE is required");
+  if (!tools) throw UsageError("--tools FILE is required");
+  if (!out) throw UsageError("--out DIR is required");
+  const double max_correction = a.number("max-correction", 0.2, 0.0, 100.0);
+  const bool quiet = a.flag("quiet");
+
+  Inputs in = read_inputs(a, *program, *tools);
+  const offline::FieldPipelineOptions options = pipeline_options(a, in);
+  offline::FieldPipelineInputs pin;
+  pin.nominal = &in.nominal;
+  pin.scan = &in.scan;
+  pin.program = &in.program;
+  pin.tools = tool_shapes(in.tools, *tools, in.part, a);
+  if (in.base) pin.base_field = &*in.base;
+  if (in.part) {
+    if (in.part->triangle_surface_ids.size() != in.nominal.triangles.size())
+      throw InputError(*a.value("part") + ": " +
+                       std::to_string(in.part->triangle_surface_ids.size()) +
+                       " triangle_surface_ids for " + std::to_string(in.nominal.triangles.size()) +
+                       " triangles in " + a.positionals()[0]);
+    pin.triangle_surface_ids = in.part->triangle_surface_ids;
+  }
+  auto progress = [quiet](const std::string& stage, double s, const std::string& detail) {
+    if (!quiet)
+      std::fprintf(stderr, "field: %-34s %8.3f s  %s\n", stage.c_str(), s, detail.c_str());
+  };
+  offline::FieldPipelineResult result;
+  try {
+    result = offline::run_field_pipeline(pin, options, progress);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(e.what());
+  }
+
+  const bool exceeded = result.max_correction_mm > max_correction;
+  if (exceeded && !a.flag("force")) {
+    std::fprintf(stderr,
+                 "truecut field: the correction reaches %.4f mm, above --max-correction %.4f mm; "
+                 "nothing written (--force writes it and records that in audit.json)\n",
+                 result.max_correction_mm, max_correction);
+    return kExitFailure;
+  }
+  offline::AuditContext ctx;
+  ctx.inputs = in.digests;
+  ctx.command_line.push_back("truecut");
+  ctx.command_line.push_back("field");
+  ctx.command_line.insert(ctx.command_line.end(), argv.begin(), argv.end());
+  ctx.tools = pin.tools;
+  ctx.max_correction_limit_mm = max_correction;
+  ctx.forced = exceeded;
+  const auto written = offline::write_field_outputs(*out, result, options, ctx);
+  if (exceeded)
+    std::fprintf(stderr,
+                 "truecut field: WARNING: correction %.4f mm above %.4f mm, written (--force)\n",
+                 result.max_correction_mm, max_correction);
+  print_summary(result, written, exceeded);
+  return kExitOk;
+}
+
+}  // namespace
+
+int cmd_field(const std::vector<std::string>& argv) {
+  ParsedArgs a(argv, {{"program", true},
+                      {"tools", true},
+                      {"part", true},
+                      {"out", true},
+                      {"method", true},
+                      {"spacing", true},
+                      {"surfaces", true},
+                      {"datum", true},
+                      {"no-register", false},
+                      {"remove-rbm", false},
+                      {"sphere-radius", true},
+                      {"max-distance", true},
+                      {"kb-kc", true},
+                      {"resolution", true},
+                      {"smoothness", true},
+                      {"path-step", true},
+                      {"contact-tolerance", true},
+                      {"corner-radius", true, true},
+                      {"cutting-length", true, true},
+                      {"max-correction", true},
+                      {"force", false},
+                      {"base", true},
+                      {"quiet", false},
+                      {"help", false}});
+  if (a.flag("help")) {
+    std::fputs(kFieldHelp, stdout);
+    return kExitOk;
+  }
+  try {
+    return run_field(a, argv);
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "truecut field: %s\n", e.what());
+    return kExitUsage;
+  }
+}
+
+namespace {
+const CommandRegistration kRegistration{
+    "field", "scan + nominal + program -> correction field, matrix, adapted STL, audit", cmd_field,
+    40};
+}  // namespace
+
+}  // namespace truecut::cli

@@ -1,0 +1,311 @@
+// truecut rewrite IN.ngc --matrix COMP.csv | --field FIELD.tcf --operation NAME ...:
+// the G-code rewriting fallback (docs/rewrite.md).
+#include <sys/stat.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "truecut/interp/error.hpp"
+#include "truecut/interp/rewrite.hpp"
+#include "truecut/rt/field_file.hpp"
+#include "truecut/sim/machine_description.hpp"
+
+namespace truecut::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+const char* kRewriteHelp =
+    "usage: truecut rewrite IN.ngc (--matrix COMP.csv | --field FIELD.tcf) --operation NAME\n"
+    "                       --type peripheral|face|ball --tool-radius R --out OUT.ngc [options]\n"
+    "\n"
+    "Writes the compensation into the program, for controllers that cannot run the\n"
+    "real-time module: the moves of operation NAME are densified to --step, each\n"
+    "point is shifted by the compensation there (the 3 nearest compensation points\n"
+    "of the matrix blended by eqs. 2-5 of the optical-compensation source, or the\n"
+    "correction field's layer of the operation's tool) and written as G1 moves with\n"
+    "the original feed (G93 F recomputed). Every other line is copied byte for byte.\n"
+    "OUT is written atomically; OUT.audit.json records inputs, options, SHA-256\n"
+    "digests and the summary. Method and file formats: docs/rewrite.md.\n"
+    "\n"
+    "options:\n"
+    "  --matrix FILE        compensation matrix CSV (x,y,z,dx,dy,dz[,valid,surface_id])\n"
+    "  --field FILE         correction field .tcf (instead of --matrix)\n"
+    "  --operation NAME     the CAM operation, as in (OPERATION: NAME)\n"
+    "  --type T             peripheral (flat end mill, side), face (flat end mill,\n"
+    "                       bottom) or ball (ball end mill)\n"
+    "  --tool-radius MM     cutter radius R\n"
+    "  --step MM            densification distance (default 0.5)\n"
+    "  --reach MM           farthest compensation point from the cutting edge that\n"
+    "                       is used (default: 2 x median point spacing)\n"
+    "  --surfaces ID,ID     use only compensation points of these surface ids\n"
+    "  --tools FILE         tool table (LinuxCNC format, mm)\n"
+    "  --machine FILE       machine description JSON: kinematics pivots for moves\n"
+    "                       outside TRAORI (default: all pivots 0)\n"
+    "  --decimals N         digits after the point in X Y Z A C (default 4)\n"
+    "  --rewrite-all        densify every feed move of the operation, also those\n"
+    "                       that get no compensation\n"
+    "  --out FILE           the rewritten program\n"
+    "  --help               this text\n"
+    "\n"
+    "exit codes: 0 ok, 1 runtime failure, 2 usage or input error (nothing written)\n";
+
+std::string read_bytes(const std::string& path, const char* what) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) throw UsageError(std::string(what) + " " + path + " is a folder");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw UsageError(std::string("cannot open ") + what + " " + path);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+interp::CutType cut_type(const std::string& s) {
+  if (s == "peripheral") return interp::CutType::kPeripheral;
+  if (s == "face") return interp::CutType::kFace;
+  if (s == "ball") return interp::CutType::kBall;
+  throw UsageError("--type '" + s + "': expected peripheral, face or ball");
+}
+
+std::vector<std::int32_t> surface_list(const std::string& s) {
+  std::vector<std::int32_t> out;
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    char* end = nullptr;
+    const long v = std::strtol(item.c_str(), &end, 10);
+    if (item.empty() || *end != '\0') throw UsageError("--surfaces: '" + item + "' is not an id");
+    out.push_back(static_cast<std::int32_t>(v));
+  }
+  return out;
+}
+
+std::string json_string(const std::string& s) {
+  std::string o = "\"";
+  for (unsigned char c : s) {
+    if (c == '"' || c == '\\') {
+      o += '\\';
+      o += static_cast<char>(c);
+    } else if (c < 0x20) {
+      char b[8];
+      std::snprintf(b, sizeof b, "\\u%04x", c);
+      o += b;
+    } else {
+      o += static_cast<char>(c);
+    }
+  }
+  return o + "\"";
+}
+
+std::string number(double v) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", v);
+  return b;
+}
+
+// Atomic write: PATH.tmp, fsync'ed by close, renamed over PATH. Refuses to
+// replace anything but a regular file.
+void write_atomic(const std::string& path, const std::string& bytes) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
+    throw UsageError(path + " exists and is not a regular file: not replaced");
+  const std::string tmp = path + ".tmp";
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f) throw std::runtime_error("cannot write " + tmp + ": " + std::strerror(errno));
+  const bool ok = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size() &&
+                  std::fflush(f) == 0 && ::fsync(fileno(f)) == 0;
+  if (std::fclose(f) != 0 || !ok) {
+    std::remove(tmp.c_str());
+    throw std::runtime_error("cannot write " + tmp + ": " + std::strerror(errno));
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const int e = errno;
+    std::remove(tmp.c_str());
+    throw std::runtime_error("cannot rename " + tmp + " to " + path + ": " + std::strerror(e));
+  }
+}
+
+std::string utc_now() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char b[32];
+  std::strftime(b, sizeof b, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return b;
+}
+
+struct Input {
+  std::string role, path, sha256;
+  size_t bytes = 0;
+};
+
+}  // namespace
+
+int cmd_rewrite(const std::vector<std::string>& argv) {
+  ParsedArgs a(argv, {{"matrix", true},
+                      {"field", true},
+                      {"operation", true},
+                      {"type", true},
+                      {"tool-radius", true},
+                      {"step", true},
+                      {"reach", true},
+                      {"surfaces", true},
+                      {"tools", true},
+                      {"machine", true},
+                      {"decimals", true},
+                      {"rewrite-all", false},
+                      {"out", true},
+                      {"help", false}});
+  if (a.flag("help")) {
+    std::fputs(kRewriteHelp, stdout);
+    return kExitOk;
+  }
+  if (a.positionals().size() != 1) throw UsageError("expected one program IN.ngc");
+  const std::string in_path = a.positionals()[0];
+  const auto matrix_path = a.value("matrix"), field_path = a.value("field");
+  if (!matrix_path == !field_path) throw UsageError("give exactly one of --matrix and --field");
+  const auto operation = a.value("operation");
+  if (!operation) throw UsageError("--operation NAME is required");
+  const auto type = a.value("type");
+  if (!type) throw UsageError("--type peripheral|face|ball is required");
+  if (!a.value("tool-radius")) throw UsageError("--tool-radius MM is required");
+  const auto out_path = a.value("out");
+  if (!out_path) throw UsageError("--out OUT.ngc is required");
+
+  interp::RewriteOptions o;
+  o.operation = *operation;
+  o.type = cut_type(*type);
+  o.tool_radius_mm = a.number("tool-radius", 0, 0, 1000);
+  if (auto s = a.value("step")) {
+    char* end = nullptr;
+    const double v = std::strtod(s->c_str(), &end);
+    if (s->empty() || *end != '\0') throw UsageError("--step '" + *s + "' is not a number");
+    if (!(v > 0)) throw UsageError("--step must be > 0 mm (got " + *s + ")");
+    o.step_mm = a.number("step", 0.5, 1e-4, 1000);
+  }
+  o.reach_mm = a.number("reach", 0, 1e-6, 1000);
+  if (auto s = a.value("surfaces")) o.surfaces = surface_list(*s);
+  o.decimals = static_cast<int>(a.integer("decimals", 4, 3, 9));
+  o.keep_unchanged_moves = !a.flag("rewrite-all");
+
+  std::vector<Input> inputs;
+  auto add_input = [&](const std::string& role, const std::string& path, const std::string& bytes) {
+    inputs.push_back({role, path, interp::sha256_hex(bytes), bytes.size()});
+  };
+  const std::string program = read_bytes(in_path, "program");
+  add_input("program", in_path, program);
+
+  interp::RewriteResult result;
+  try {
+    if (auto t = a.value("tools")) {
+      add_input("tools", *t, read_bytes(*t, "tool table"));
+      o.interpreter.tools = interp::ToolTable::load(*t);
+    }
+    if (auto m = a.value("machine")) {
+      add_input("machine", *m, read_bytes(*m, "machine description"));
+      const auto k = sim::read_machine_description(*m).machine.kinematics;
+      o.kinematics.x_rot_point_mm = k.x_rot_point_mm;
+      o.kinematics.y_rot_point_mm = k.y_rot_point_mm;
+      o.kinematics.z_rot_point_mm = k.z_rot_point_mm;
+      o.kinematics.y_offset_mm = k.y_offset_mm;
+      o.kinematics.z_offset_mm = k.z_offset_mm;
+      o.kinematics.conventional_directions = k.conventional_directions;
+    }
+    if (matrix_path) {
+      const std::string bytes = read_bytes(*matrix_path, "compensation matrix");
+      add_input("matrix", *matrix_path, bytes);
+      const auto matrix = interp::parse_compensation_matrix(bytes, *matrix_path);
+      result = interp::rewrite_program(program, in_path, matrix, o);
+    } else {
+      const std::string bytes = read_bytes(*field_path, "correction field");
+      add_input("field", *field_path, bytes);
+      const auto field = rt::decode_field_file(bytes, *field_path);
+      result = interp::rewrite_program(program, in_path, field.field, o);
+    }
+  } catch (const interp::GcodeError& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return kExitUsage;
+  } catch (const interp::RewriteError& e) {
+    std::fprintf(stderr, "truecut rewrite: %s\n", e.what());
+    return kExitUsage;
+  } catch (const rt::FieldFileError& e) {
+    std::fprintf(stderr, "truecut rewrite: %s\n", e.what());
+    return kExitUsage;
+  } catch (const sim::MachineDescriptionError& e) {
+    std::fprintf(stderr, "truecut rewrite: %s\n", e.what());
+    return kExitUsage;
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+
+  const interp::RewriteSummary& s = result.summary;
+  const std::string audit_path = *out_path + ".audit.json";
+  std::string j = "{\n  \"truecut_rewrite_audit\": 1,\n";
+  j += "  \"created\": " + json_string(utc_now()) + ",\n";
+  j += "  \"frame\": \"workpiece\",\n  \"units\": \"mm\",\n  \"inputs\": [\n";
+  for (size_t i = 0; i < inputs.size(); ++i)
+    j += "    {\"role\": " + json_string(inputs[i].role) +
+         ", \"path\": " + json_string(inputs[i].path) +
+         ", \"bytes\": " + std::to_string(inputs[i].bytes) +
+         ", \"sha256\": " + json_string(inputs[i].sha256) + "}" +
+         (i + 1 < inputs.size() ? ",\n" : "\n");
+  j += "  ],\n  \"options\": {\"operation\": " + json_string(o.operation) +
+       ", \"type\": " + json_string(interp::to_string(o.type)) +
+       ", \"tool_radius_mm\": " + number(o.tool_radius_mm) + ", \"step_mm\": " + number(o.step_mm) +
+       ", \"reach_mm\": " + number(s.reach_mm) + ", \"surfaces\": [";
+  for (size_t i = 0; i < o.surfaces.size(); ++i)
+    j += (i ? ", " : "") + std::to_string(o.surfaces[i]);
+  j += "], \"decimals\": " + std::to_string(o.decimals) +
+       ", \"rewrite_all\": " + (o.keep_unchanged_moves ? "false" : "true") + "},\n";
+  j += "  \"output\": {\"path\": " + json_string(*out_path) +
+       ", \"bytes\": " + std::to_string(result.text.size()) +
+       ", \"sha256\": " + json_string(interp::sha256_hex(result.text)) + "},\n";
+  j += "  \"summary\": {\"moves_read\": " + std::to_string(s.moves_read) +
+       ", \"moves_rewritten\": " + std::to_string(s.moves_rewritten) +
+       ", \"moves_kept\": " + std::to_string(s.moves_kept) +
+       ", \"points_written\": " + std::to_string(s.points_written) +
+       ", \"points_compensated\": " + std::to_string(s.points_compensated) +
+       ", \"blend_points\": [" + std::to_string(s.blend_points[0]) + ", " +
+       std::to_string(s.blend_points[1]) + ", " + std::to_string(s.blend_points[2]) + ", " +
+       std::to_string(s.blend_points[3]) +
+       "], \"max_compensation_mm\": " + number(s.max_compensation_mm) +
+       ", \"mean_compensation_mm\": " + number(s.mean_compensation_mm) +
+       ", \"lines_in\": " + std::to_string(s.lines_in) +
+       ", \"lines_out\": " + std::to_string(s.lines_out) + "}\n}\n";
+
+  write_atomic(*out_path, result.text);
+  write_atomic(audit_path, j);
+
+  std::printf("operation %s (%s, R %g mm, step %g mm, reach %.4g mm, %s %s)\n", o.operation.c_str(),
+              interp::to_string(o.type), o.tool_radius_mm, o.step_mm, s.reach_mm,
+              matrix_path ? "matrix" : "field", (matrix_path ? *matrix_path : *field_path).c_str());
+  std::printf("  moves read            %d\n", s.moves_read);
+  std::printf("  moves rewritten       %d\n", s.moves_rewritten);
+  std::printf("  moves kept            %d\n", s.moves_kept);
+  std::printf("  points written        %ld\n", s.points_written);
+  std::printf("  points compensated    %ld\n", s.points_compensated);
+  if (matrix_path)
+    std::printf("  blend 3/2/1/0 points  %ld / %ld / %ld / %ld\n", s.blend_points[3],
+                s.blend_points[2], s.blend_points[1], s.blend_points[0]);
+  std::printf("  max compensation      %.4f mm\n", s.max_compensation_mm);
+  std::printf("  mean compensation     %.4f mm\n", s.mean_compensation_mm);
+  std::printf("  lines                 %d -> %d\n", s.lines_in, s.lines_out);
+  std::printf("wrote %s and %s\n", out_path->c_str(), audit_path.c_str());
+  return kExitOk;
+}
+
+namespace {
+const CommandRegistration kRegistration{
+    "rewrite", "write the compensation into a G-code program (fallback)", cmd_rewrite, 50};
+}  // namespace
+
+}  // namespace truecut::cli

@@ -1,0 +1,190 @@
+#include "demo_part.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+#include "subprocess.hpp"
+
+namespace truecut::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct PartInfo {
+  std::vector<DemoSurface> surfaces;
+  struct Operation {
+    std::string name, strategy;
+    int tool = 0;
+    std::vector<int> surfaces;
+  };
+  std::vector<Operation> operations;
+  struct Tool {
+    std::string kind;
+    double radius_mm = 0;
+  };
+  std::map<int, Tool> tools;
+};
+
+PartInfo read_part_info(const fs::path& file) {
+  std::ifstream in(file);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  PartInfo p;
+  for (const auto& s : j.at("surfaces"))
+    p.surfaces.push_back(
+        {s.at("id").get<int>(), s.at("name").get<std::string>(), s.at("compensate").get<bool>()});
+  for (const auto& o : j.at("operations"))
+    p.operations.push_back({o.at("name").get<std::string>(), o.at("strategy").get<std::string>(),
+                            o.at("tool").get<int>(), o.at("surface_ids").get<std::vector<int>>()});
+  for (const auto& t : j.at("tools"))
+    p.tools[t.at("number").get<int>()] = {t.at("kind").get<std::string>(),
+                                          t.at("radius_mm").get<double>()};
+  return p;
+}
+
+std::string num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
+class Steps {
+ public:
+  Steps(fs::path dir, std::string part) : dir_(std::move(dir)), part_(std::move(part)) {
+    fs::create_directories(dir_);
+    script_.open(dir_ / "commands.sh", std::ios::trunc);
+    script_ << "#!/bin/sh\n# The steps of `truecut demo` for " << part_
+            << ", as run (each one's output is in demo.log).\nset -e\ncd \"$(dirname \"$0\")\"\n";
+  }
+  // Runs `truecut ARGS` in the part folder (paths relative to it).
+  void run(const std::string& what, std::vector<std::string> args) {
+    std::fprintf(stderr, "demo %-12s %s\n", part_.c_str(), what.c_str());
+    script_ << "\n# " << what << "\ntruecut " << shell_words(args) << "\n";
+    script_.flush();
+    args.insert(args.begin(), self_executable().string());
+    const fs::path log = dir_ / "demo.log";
+    const fs::path cwd = fs::current_path();
+    fs::current_path(dir_);
+    int rc = -1;
+    try {
+      rc = run_logged(args, "demo.log");
+    } catch (...) {
+      fs::current_path(cwd);
+      throw;
+    }
+    fs::current_path(cwd);
+    if (rc != 0)
+      throw std::runtime_error(part_ + ": step '" + what + "' failed (exit " + std::to_string(rc) +
+                               "); its output is in " + log.string());
+  }
+  const fs::path& dir() const { return dir_; }
+
+ private:
+  fs::path dir_;
+  std::string part_;
+  std::ofstream script_;
+};
+
+std::string rewrite_type(const PartInfo::Operation& op, const PartInfo::Tool& tool) {
+  if (tool.kind == "ball_end_mill") return "ball";
+  if (op.strategy == "face") return "face";
+  return "peripheral";
+}
+
+}  // namespace
+
+DemoPartResult run_demo_part(const std::string& part, const DemoOptions& o) {
+  const auto start = std::chrono::steady_clock::now();
+  DemoPartResult r;
+  r.part = part;
+  r.dir = fs::absolute(o.out_dir / part);
+  Steps s(r.dir, part);
+  const std::string sigma = num(o.sigma_um), cmm_sigma = num(o.cmm_sigma_um),
+                    spacing = num(o.cmm_spacing_mm);
+  uint64_t seed = o.seed * 100;
+  auto next_seed = [&] { return std::to_string(++seed); };
+
+  s.run("generate the part", {"part", part, "--out", "part", "--mesh-edge", num(o.mesh_edge_mm),
+                              "--stepover", num(o.stepover_mm)});
+  const PartInfo info = read_part_info(r.dir / "part" / "part.json");
+  r.surfaces = info.surfaces;
+  const std::vector<std::string> part_files{"--nominal",      "part/nominal.stl", "--part",
+                                            "part/part.json", "--tools",          "part/tools.tbl"};
+
+  auto machine = [&](const std::string& key, const std::string& title, const std::string& program,
+                     const std::string& field) {
+    std::vector<std::string> args{"run", "part/machine.json", program, "--out", key};
+    args.insert(args.end(), part_files.begin(), part_files.end());
+    if (!field.empty()) args.insert(args.end(), {"--field", field});
+    s.run("machine (" + title + ")", args);
+    s.run("measure (" + title + ") with the CMM",
+          {"cmm", key + "/machined.stl", "--nominal", "part/nominal.stl", "--part",
+           "part/part.json", "--spacing", spacing, "--sigma-um", cmm_sigma, "--seed", next_seed(),
+           "--out", key + "/cmm.csv"});
+    DemoStage st;
+    st.key = key;
+    st.title = title;
+    st.dir = r.dir / key;
+    st.cmm = sim::measure::read_cmm_measurements(st.dir / "cmm.csv");
+    r.stages.push_back(std::move(st));
+  };
+  auto scan_and_field = [&](const std::string& key, const std::string& field_dir,
+                            const std::string& base) {
+    s.run("scan " + key + " (sigma " + sigma + " um)",
+          {"scan", key + "/machined.stl", "--out", key + "/scan.ply", "--mesh-out",
+           key + "/scan_mesh.ply", "--sigma-um", sigma, "--seed", next_seed()});
+    std::vector<std::string> args{"field",
+                                  "part/nominal.stl",
+                                  key + "/scan_mesh.ply",
+                                  "--program",
+                                  "part/program.ngc",
+                                  "--tools",
+                                  "part/tools.tbl",
+                                  "--part",
+                                  "part/part.json",
+                                  "--resolution",
+                                  num(o.field_resolution_mm),
+                                  "--out",
+                                  field_dir};
+    if (!base.empty()) args.insert(args.end(), {"--base", base});
+    s.run("correction field from the scan of " + key, args);
+  };
+
+  machine("uncompensated", "uncompensated", "part/program.ngc", "");
+  scan_and_field("uncompensated", "field_1", "");
+  r.first_field_dir = r.dir / "field_1";
+  machine("realtime", "real-time compensation", "part/program.ngc", "field_1/field.tcf");
+
+  if (o.rewrite) {
+    fs::create_directories(r.dir / "rewrite");
+    std::string program = "part/program.ngc";
+    int n = 0;
+    for (const auto& op : info.operations) {
+      bool judged = false;
+      for (int sid : op.surfaces)
+        for (const auto& sf : info.surfaces)
+          judged = judged || (sf.id == sid && sf.compensate);
+      if (!judged) continue;
+      const auto& tool = info.tools.at(op.tool);
+      const std::string out = "rewrite/program_" + std::to_string(++n) + ".ngc";
+      s.run("rewrite operation " + op.name,
+            {"rewrite", program, "--matrix", "field_1/compensation_matrix.csv", "--operation",
+             op.name, "--tool-radius", num(tool.radius_mm), "--type", rewrite_type(op, tool),
+             "--tools", "part/tools.tbl", "--out", out});
+      program = out;
+    }
+    machine("rewrite", "G-code rewrite", program, "");
+  }
+  if (o.iterations >= 2) {
+    scan_and_field("realtime", "field_2", "field_1/field.tcf");
+    machine("realtime_2", "real-time, 2nd iteration", "part/program.ngc", "field_2/field.tcf");
+  }
+  r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return r;
+}
+
+}  // namespace truecut::cli

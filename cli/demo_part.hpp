@@ -1,0 +1,53 @@
+// The closed-loop demo of one benchmark part (truecut demo): every step is a
+// truecut command run as a child process, logged with its command line in
+// DIR/<part>/commands.sh, so a user can repeat any step by hand.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "truecut/sim/measure/cmm.hpp"
+
+namespace truecut::cli {
+
+struct DemoOptions {
+  std::filesystem::path out_dir = "out/demo";
+  double sigma_um = 20.0;  // scanner noise
+  double cmm_sigma_um = 2.0;
+  double cmm_spacing_mm = 1.0;
+  double mesh_edge_mm = 0.5;  // part generation
+  double stepover_mm = 0.5;
+  double field_resolution_mm = 1.0;
+  int iterations = 2;  // real-time iterations (1 or 2)
+  bool rewrite = true;
+  std::uint64_t seed = 1;
+};
+
+struct DemoStage {
+  std::string key;    // uncompensated, realtime, rewrite, realtime_2
+  std::string title;  // for people
+  std::filesystem::path dir;
+  std::vector<sim::measure::CmmMeasurement> cmm;
+};
+
+struct DemoSurface {
+  int id = 0;
+  std::string name;
+  bool compensate = false;
+};
+
+struct DemoPartResult {
+  std::string part;
+  std::filesystem::path dir;
+  std::vector<DemoSurface> surfaces;
+  std::vector<DemoStage> stages;
+  std::filesystem::path first_field_dir;  // field.tcf, audit.json, compensation_matrix.csv
+  double wall_s = 0;
+};
+
+// Runs the steps; throws std::runtime_error naming the failed step and its
+// log when a command fails.
+DemoPartResult run_demo_part(const std::string& part, const DemoOptions& options);
+
+}  // namespace truecut::cli

@@ -1,0 +1,23 @@
+// Runs another program (truecut itself, for the demo's steps) with its
+// output appended to a log file.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace truecut::cli {
+
+// The running truecut executable.
+std::filesystem::path self_executable();
+
+// Runs argv[0] with argv, stdout and stderr appended to `log`; returns the
+// exit code (-1 when killed by a signal). Throws std::runtime_error when the
+// program cannot be started.
+int run_logged(const std::vector<std::string>& argv, const std::filesystem::path& log);
+
+// argv as a shell command line (arguments quoted where needed), for logs
+// and the demo's commands.sh.
+std::string shell_words(const std::vector<std::string>& argv);
+
+}  // namespace truecut::cli

@@ -1,0 +1,97 @@
+// The G-code rewriting fallback (`truecut rewrite`, docs/rewrite.md): for a
+// controller that cannot take the real-time compensation module, the
+// correction is written into the program. The moves of one CAM operation are
+// densified, each point is shifted by the compensation at the tool there
+// (compensation matrix, eqs. 2-5 of the optical-compensation source, or the
+// real-time correction field) and written back as G1 moves; every other
+// line is copied byte for byte.
+//
+//   RewriteOptions o;
+//   o.operation = "SHAFT_PERIPHERAL"; o.type = CutType::kPeripheral;
+//   o.tool_radius_mm = 1.0; o.interpreter.tools = ToolTable::load("tools.tbl");
+//   RewriteResult r = rewrite_program(text, "program.ngc", matrix, o);
+//   // r.text: the new program; r.summary: counts and compensation figures
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "truecut/interp/interpreter.hpp"
+#include "truecut/interp/rewrite_blend.hpp"
+#include "truecut/interp/rewrite_matrix.hpp"
+#include "truecut/rt/correction_field.hpp"
+#include "truecut/rt/kinematics_ac.hpp"
+
+namespace truecut::interp {
+
+// Which part of the tool cuts, and so which compensation points belong to a
+// tool point (docs/rewrite.md, "Nearest points considering the tool"):
+// peripheral: the flat end mill's bottom cutting circle (radius R around
+//   the axis at the tip); face: its bottom disc; ball: the ball (centre =
+//   tip + R * axis).
+enum class CutType { kPeripheral, kFace, kBall };
+
+const char* to_string(CutType type);
+
+struct RewriteOptions {
+  std::string operation;  // CAM operation name, as in (OPERATION: NAME)
+  CutType type = CutType::kPeripheral;
+  double tool_radius_mm = 0;  // >= 0 (> 0 for ball)
+  double step_mm = 0.5;       // densification distance, > 0
+  // Compensation points farther than this from the cutting part of the tool
+  // are not used (infeed, retract and moves off the part stay unchanged).
+  // 0: twice the median distance between neighbouring compensation points.
+  double reach_mm = 0;
+  // Use only the compensation points of these surfaces (empty: all).
+  std::vector<std::int32_t> surfaces;
+  // Machine kinematics for moves outside TRAORI (pivots; tool_length_mm is
+  // added to the G43 tool length offset, as the planner does).
+  rt::AcTrtParams kinematics;
+  InterpreterOptions interpreter;  // tool table, block delete, ...
+  int decimals = 4;                // digits after the point of X Y Z A C words
+  // A move whose every point keeps a zero correction is copied unchanged
+  // (false: every feed move of the operation is densified and rewritten).
+  bool keep_unchanged_moves = true;
+};
+
+struct RewriteSummary {
+  int moves_read = 0;           // motion calls of the operation (G0 G1 G2 G3)
+  int moves_rewritten = 0;      // feed moves written as densified G1
+  int moves_kept = 0;           // motion lines of the operation copied unchanged
+  int rapids_rewritten = 0;     // G0 after a compensated point, written with all of X Y Z
+  long points_written = 0;      // G1 points written
+  long points_compensated = 0;  // points with a correction from >= 1 point / field weight > 0
+  std::array<long, 4> blend_points{};  // points by BlendResult::points_used (matrix mode)
+  double max_compensation_mm = 0;
+  double mean_compensation_mm = 0;  // over compensated points
+  double reach_mm = 0;              // the reach used
+  int lines_in = 0, lines_out = 0;
+};
+
+struct RewriteResult {
+  std::string text;
+  RewriteSummary summary;
+};
+
+// Throws GcodeError (file:line:column) for a program error or a move that
+// cannot be rewritten, RewriteError for an unknown operation, an empty
+// matrix selection or a field without the operation's tool, and
+// std::invalid_argument for bad options. Before returning, the new text is
+// interpreted again and checked: outside the rewritten lines it must give
+// the same calls as the original, and the written points must come out as
+// intended.
+RewriteResult rewrite_program(std::string_view program_text, const std::string& program_name,
+                              const CompensationMatrixData& matrix, const RewriteOptions& options);
+// Field mode: the correction at each tool tip is the real-time evaluator's
+// (CorrectionField::evaluate, layer of the operation's tool), as the
+// compensation component would apply it.
+RewriteResult rewrite_program(std::string_view program_text, const std::string& program_name,
+                              const rt::CorrectionField& field, const RewriteOptions& options);
+
+// SHA-256 of bytes as 64 lower-case hex digits (for audit records).
+std::string sha256_hex(std::string_view bytes);
+
+}  // namespace truecut::interp

@@ -1,0 +1,150 @@
+#include "line_words.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+
+#include "line_lexer.hpp"
+
+namespace truecut::interp::rewrite {
+
+namespace {
+
+bool keep_g(int code) {  // code x10
+  static const int kKeep[] = {170, 180, 190, 200, 210, 400, 430, 490, 540, 550, 560, 570, 580, 590,
+                              591, 592, 593, 610, 611, 640, 900, 901, 911, 930, 940, 970, 980, 990};
+  return std::find(std::begin(kKeep), std::end(kKeep), code) != std::end(kKeep);
+}
+
+bool keep_m(int code) {  // M3 M4 M5 M6 M7 M8 M9, x10
+  return code >= 30 && code <= 90 && code % 10 == 0;
+}
+
+std::string code_name(char letter, int code) {
+  std::string s(1, letter);
+  s += std::to_string(code / 10);
+  if (code % 10) s += "." + std::to_string(code % 10);
+  return s;
+}
+
+}  // namespace
+
+LineWords split_move_line(const std::string& source, const std::string& file, int line_no) {
+  const LexedLine lx = lex_line(source, file, line_no);
+  const std::string& t = lx.text;
+  auto column = [&](size_t i) { return i < lx.column.size() ? lx.column[i] : lx.end_column; };
+  auto fail = [&](size_t i, const std::string& what) -> void {
+    throw GcodeError({file, line_no, column(i)}, what + ": this move cannot be rewritten");
+  };
+  struct Span {
+    size_t begin, end;  // in t
+    char letter;
+    int code;  // G/M code x10
+  };
+  std::vector<Span> words;
+  LineWords out;
+  size_t pos = 0;
+  if (pos < t.size() && t[pos] == '/') out.block_delete = true, ++pos;
+  while (pos < t.size()) {
+    const char ch = t[pos];
+    if (ch == '(') {
+      pos = t.find(')', pos);
+      pos = pos == std::string::npos ? t.size() : pos + 1;
+      continue;
+    }
+    if (ch == ';') break;
+    if (!std::isalpha(static_cast<unsigned char>(ch))) fail(pos, "parameter setting or expression");
+    const size_t begin = pos++;
+    while (pos < t.size() && (t[pos] == '+' || t[pos] == '-'))
+      ++pos;
+    const size_t num = pos;
+    while (pos < t.size() && (std::isdigit(static_cast<unsigned char>(t[pos])) || t[pos] == '.'))
+      ++pos;
+    if (pos == num || (pos < t.size() && (t[pos] == '#' || t[pos] == '[')))
+      fail(begin, std::string("word ") + static_cast<char>(std::toupper(ch)) +
+                      " with a parameter or expression");
+    int code = 0;
+    if (ch == 'g' || ch == 'm')
+      code = static_cast<int>(
+          std::lround(std::strtod(t.substr(num, pos - num).c_str(), nullptr) * 10));
+    words.push_back({begin, pos, ch, code});
+  }
+  bool g64 = false;
+  for (const Span& w : words)
+    if (w.letter == 'g' && w.code == 640) g64 = true;
+
+  std::vector<bool> remove(words.size(), false);
+  bool keeps_something =
+      !lx.sinumerik.empty() || t.find('(') != std::string::npos || t.find(';') != std::string::npos;
+  for (size_t k = 0; k < words.size(); ++k) {
+    const Span& w = words[k];
+    switch (w.letter) {
+      case 'g':
+        if (w.code == 0 || w.code == 10 || w.code == 20 || w.code == 30) {
+          remove[k] = true;
+          out.explicit_motion = true;
+        } else if (w.code == 910) {
+          fail(w.begin, "G91 (incremental distance)");
+        } else if (!keep_g(w.code)) {
+          fail(w.begin, code_name('G', w.code) + " beside a move");
+        }
+        break;
+      case 'm':
+        if (!keep_m(w.code)) fail(w.begin, code_name('M', w.code) + " beside a move");
+        break;
+      case 'x':
+      case 'y':
+      case 'z':
+      case 'i':
+      case 'j':
+      case 'k':
+      case 'r':
+      case 'f':
+        remove[k] = true;
+        break;
+      case 'a':
+        remove[k] = true;
+        out.has_a = true;
+        break;
+      case 'c':
+        remove[k] = true;
+        out.has_c = true;
+        break;
+      case 'p':
+        remove[k] = !g64;
+        break;
+      case 'n':
+      case 's':
+      case 't':
+      case 'h':
+      case 'q':
+        break;
+      default:
+        fail(w.begin,
+             std::string("word ") + static_cast<char>(std::toupper(w.letter)) + " beside a move");
+    }
+    if (!remove[k] && w.letter != 'n') keeps_something = true;
+  }
+  if (!keeps_something) return out;
+  // Cut the removed words out of the source text by their columns.
+  std::vector<bool> drop(source.size(), false);
+  for (size_t k = 0; k < words.size(); ++k) {
+    if (!remove[k]) continue;
+    const int from = column(words[k].begin) - 1, to = column(words[k].end - 1);  // [from, to)
+    int c = std::max(from, 0);
+    for (; c < to && c < static_cast<int>(source.size()); ++c)
+      drop[c] = true;
+    // and the blanks after it, so "N40 G1 X8 (cut)" leaves "N40 (cut)"
+    while (c < static_cast<int>(source.size()) && (source[c] == ' ' || source[c] == '\t'))
+      drop[c++] = true;
+  }
+  for (size_t c = 0; c < source.size(); ++c)
+    if (!drop[c]) out.residual.push_back(source[c]);
+  while (!out.residual.empty() &&
+         (out.residual.back() == ' ' || out.residual.back() == '\t' || out.residual.back() == '\r'))
+    out.residual.pop_back();
+  return out;
+}
+
+}  // namespace truecut::interp::rewrite

@@ -1,0 +1,29 @@
+// The words of a program line that carries a move to be rewritten, with
+// their source columns, so the move's words can be cut out and the rest of
+// the line (modal codes, spindle, coolant, comments ...) kept as written.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "truecut/interp/error.hpp"
+
+namespace truecut::interp::rewrite {
+
+struct LineWords {
+  bool block_delete = false;     // the line starts with '/'
+  bool explicit_motion = false;  // G0 G1 G2 G3 on the line
+  // The source line without the words of the move (G0..G3, X Y Z A C,
+  // I J K R, P of an arc, F), trailing blanks removed; empty when nothing
+  // but an N number would remain.
+  std::string residual;
+  bool has_a = false, has_c = false;  // A or C word on the line
+};
+
+// `source` is the line without its terminator. Throws GcodeError at the
+// offending column for anything that cannot stay beside a rewritten move:
+// parameters and expressions, G91, G53, G4, G10, G28, G30, G92, M0 M1 M2
+// M30 M60 and unknown words.
+LineWords split_move_line(const std::string& source, const std::string& file, int line);
+
+}  // namespace truecut::interp::rewrite

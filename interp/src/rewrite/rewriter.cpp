@@ -1,0 +1,397 @@
+// rewrite_program: the source's G-code adaptation (docs/rewrite.md).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <functional>
+#include <map>
+#include <set>
+#include <stdexcept>
+
+#include "line_words.hpp"
+#include "neighbours.hpp"
+#include "raw_lines.hpp"
+#include "self_check.hpp"
+#include "tool_path.hpp"
+#include "truecut/interp/error.hpp"
+#include "truecut/interp/operations.hpp"
+#include "truecut/interp/rewrite.hpp"
+
+namespace truecut::interp {
+
+const char* to_string(CutType type) {
+  switch (type) {
+    case CutType::kPeripheral:
+      return "peripheral";
+    case CutType::kFace:
+      return "face";
+    case CutType::kBall:
+      return "ball";
+  }
+  return "?";
+}
+
+namespace rewrite {
+namespace {
+
+struct Correction {
+  Eigen::Vector3d shift_mm = Eigen::Vector3d::Zero();
+  bool compensated = false;
+  int points_used = -1;  // matrix mode: 0..3; field mode: -1
+};
+
+using CorrectionFn = std::function<Correction(const ToolPoint&, const CallContext&)>;
+
+std::string fixed(double v, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  std::string s = buf;
+  if (s[0] == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);
+  return s;
+}
+
+// The shortest decimal that reads back to the same double (written ends of
+// rapids reproduce the original position exactly).
+std::string exact(double v) {
+  char buf[40];
+  for (int digits = 1; digits <= 17; ++digits) {
+    std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+    if (std::strtod(buf, nullptr) == v) break;
+  }
+  std::string s = buf;
+  if (s.find('e') != std::string::npos || s.find('E') != std::string::npos) {
+    std::snprintf(buf, sizeof buf, "%.12f", v);
+    s = buf;
+  }
+  if (s == "-0") s = "0";
+  return s;
+}
+
+// A feed with up to 4 decimals and no trailing zeros ("F500", "F1234.5").
+std::string feed_text(double v) {
+  std::string s = fixed(v, 4);
+  if (s.find('.') != std::string::npos) {
+    while (s.back() == '0')
+      s.pop_back();
+    if (s.back() == '.') s.pop_back();
+  }
+  return s;
+}
+
+int motion_mode(const CanonOp& op) {  // 0 G0, 1 G1, 2 G2, 3 G3
+  if (std::holds_alternative<StraightTraverse>(op)) return 0;
+  if (const auto* a = std::get_if<ArcFeed>(&op)) return a->rotation < 0 ? 2 : 3;
+  return 1;
+}
+
+void check_options(const RewriteOptions& o) {
+  if (o.operation.empty()) throw std::invalid_argument("no operation name given");
+  if (!(o.step_mm > 0) || !std::isfinite(o.step_mm))
+    throw std::invalid_argument("step must be > 0 mm (got " + std::to_string(o.step_mm) + ")");
+  if (!(o.tool_radius_mm >= 0) || !std::isfinite(o.tool_radius_mm))
+    throw std::invalid_argument("tool radius must be >= 0 mm");
+  if (o.type == CutType::kBall && !(o.tool_radius_mm > 0))
+    throw std::invalid_argument("a ball end mill needs a tool radius > 0");
+  if (!(o.reach_mm >= 0) || !std::isfinite(o.reach_mm))
+    throw std::invalid_argument("reach must be >= 0 mm (0: automatic)");
+  if (o.decimals < 3 || o.decimals > 9) throw std::invalid_argument("decimals must be 3..9");
+}
+
+// Path length of the point the compensation is looked up for, plus what
+// the cutting edge sweeps when the axis turns (R per radian).
+double move_length_mm(const ToolPath& path, const ToolPath::Move& m, const CallContext& ctx,
+                      const RewriteOptions& o) {
+  constexpr int kSamples = 64;
+  double len = 0;
+  ToolPoint prev = path.tool_point(m.start, ctx);
+  auto ref = [&](const ToolPoint& t) -> Eigen::Vector3d {
+    return o.type == CutType::kBall ? Eigen::Vector3d(t.tip_mm + o.tool_radius_mm * t.axis)
+                                    : t.tip_mm;
+  };
+  for (int k = 1; k <= kSamples; ++k) {
+    const ToolPoint t = path.tool_point(ToolPath::at(m, static_cast<double>(k) / kSamples), ctx);
+    len += (ref(t) - ref(prev)).norm();
+    const double c = std::clamp(t.axis.dot(prev.axis), -1.0, 1.0);
+    len += o.tool_radius_mm * std::acos(c);
+    prev = t;
+  }
+  return len;
+}
+
+struct PlannedLine {               // what replaces one program line
+  std::string residual;            // the line without its move, "" for none
+  std::vector<std::string> moves;  // G1 lines, without terminators
+};
+
+Axes6 end_of(const CanonOp& op) {
+  if (const auto* a = std::get_if<ArcFeed>(&op)) return a->end;
+  if (const auto* f = std::get_if<StraightFeed>(&op)) return f->end;
+  return std::get<StraightTraverse>(op).end;
+}
+
+RewriteResult run(std::string_view text, const std::string& name, const RewriteOptions& o,
+                  const CorrectionFn& correction, double reach_mm) {
+  const Interpreter interpreter(o.interpreter);
+  const CanonProgram program = interpreter.run_text(text, name);
+  const auto names = operation_names(program);
+  if (std::find(names.begin(), names.end(), o.operation) == names.end()) {
+    std::string list;
+    for (const auto& n : names)
+      list += (list.empty() ? "" : ", ") + n;
+    throw RewriteError(
+        name + ": operation '" + o.operation + "' is not in the program (" +
+        (list.empty() ? std::string("no (OPERATION: NAME) comments") : "operations: " + list) +
+        ")");
+  }
+  const std::vector<RawLine> raw = split_raw_lines(text);
+
+  // Motion calls per line of the main file: a rewritten line must make one.
+  std::map<int, int> motions_per_line;
+  for (const CanonCall& c : program.calls)
+    if (is_motion(c.op) && c.context.file == 0) ++motions_per_line[c.context.line];
+
+  RewriteSummary s;
+  s.reach_mm = reach_mm;
+  s.lines_in = static_cast<int>(raw.size());
+  double sum_mm = 0;
+  std::map<int, PlannedLine> plan;  // by 1-based line
+  std::map<int, RewrittenLine> expected;
+  ToolPath path(o.kinematics);
+  double feed_upm = 0;
+  // The feed in force before the current line: the output has the same
+  // there, since every line before was copied or written with that feed.
+  double feed_before_line = 0;
+  int line_file = -1, line_no = -1;
+  int orig_mode = -1, out_mode = -1;
+  bool displaced = false;  // the output's position differs from the original's
+
+  for (const CanonCall& c : program.calls) {
+    const CallContext& ctx = c.context;
+    path.observe(c);
+    if (c.context.file != line_file || c.context.line != line_no) {
+      line_file = c.context.file;
+      line_no = c.context.line;
+      feed_before_line = feed_upm;
+    }
+    if (const auto* f = std::get_if<SetFeedRate>(&c.op)) feed_upm = f->units_per_minute;
+    if (!is_motion(c.op)) continue;
+    path.rebase(ctx);
+    const ToolPath::Move move = std::holds_alternative<ArcFeed>(c.op)
+                                    ? path.arc_to(std::get<ArcFeed>(c.op), ctx)
+                                    : path.line_to(end_of(c.op), ctx);
+    const int mode_before = orig_mode;
+    orig_mode = motion_mode(c.op);
+    const bool in_op = ctx.operation == o.operation;
+    const bool feed = !std::holds_alternative<StraightTraverse>(c.op);
+    if (in_op) ++s.moves_read;
+    const std::string file =
+        ctx.file < static_cast<int>(program.files.size()) ? program.files[ctx.file] : name;
+    if (in_op && !feed && displaced) {
+      // A rapid after a compensated point: written with all of X Y Z, so
+      // the axes it does not name come back to the original position.
+      if (ctx.file != 0 || motions_per_line[ctx.line] != 1)
+        throw GcodeError({file, ctx.line, 0},
+                         "rapid after a compensated move makes several moves (loop, subroutine "
+                         "or G28/G30): it cannot be rewritten");
+      const LineWords words = split_move_line(raw[ctx.line - 1].content, file, ctx.line);
+      const Axes6 end = end_of(c.op);
+      PlannedLine pl;
+      pl.residual = words.residual;
+      RewrittenLine rl;
+      rl.context = ctx;
+      rl.traverse = true;
+      Axes6 expect = end;
+      std::string line = words.block_delete ? "/G0" : "G0";
+      const char letters[] = {'X', 'Y', 'Z', 'A', 'B', 'C'};
+      for (int ax : {0, 1, 2, 3, 5}) {
+        if (ax == 3 && !words.has_a) continue;
+        if (ax == 5 && !words.has_c) continue;
+        const std::string v = exact(end[ax]);
+        line += std::string(" ") + letters[ax] + v;
+        expect[ax] = std::strtod(v.c_str(), nullptr);
+      }
+      pl.moves.push_back(line);
+      rl.expected.push_back(expect);
+      plan[ctx.line] = std::move(pl);
+      expected[ctx.line] = std::move(rl);
+      ++s.rapids_rewritten;
+      path.finish(move);
+      out_mode = 0;
+      displaced = false;
+      continue;
+    }
+    if (!in_op || !feed) {
+      path.finish(move);
+      if (in_op) ++s.moves_kept;
+      out_mode = orig_mode;
+      displaced = false;
+      continue;
+    }
+    if (ctx.file != 0)
+      throw GcodeError({file, ctx.line, 0},
+                       "move of operation '" + o.operation +
+                           "' in a subroutine file: only the main program is rewritten");
+    if (ctx.spline != SplineMode::kNone)
+      throw GcodeError({file, ctx.line, 0},
+                       "BSPLINE/CSPLINE point: spline moves cannot be rewritten as G1 moves");
+    if (motions_per_line[ctx.line] != 1)
+      throw GcodeError({file, ctx.line, 0},
+                       "line makes several moves (loop, subroutine or G28/G30): it cannot be "
+                       "rewritten");
+
+    // Densify and compensate.
+    const double len = move_length_mm(path, move, ctx, o);
+    const int n = std::max(1, static_cast<int>(std::ceil(len / o.step_mm - 1e-9)));
+    std::vector<Vec5> points(n);
+    std::vector<Correction> corrections(n);
+    bool all_zero = true;
+    for (int k = 1; k <= n; ++k) {
+      const Vec5 p = ToolPath::at(move, static_cast<double>(k) / n);
+      const Correction corr = correction(path.tool_point(p, ctx), ctx);
+      corrections[k - 1] = corr;
+      if (corr.shift_mm != Eigen::Vector3d::Zero()) all_zero = false;
+      points[k - 1] =
+          corr.shift_mm == Eigen::Vector3d::Zero() ? p : path.shifted(p, ctx, corr.shift_mm);
+    }
+    const std::string& source = raw[ctx.line - 1].content;
+    if (o.keep_unchanged_moves && all_zero && !displaced) {
+      bool explicit_motion = false;
+      try {
+        explicit_motion = split_move_line(source, file, ctx.line).explicit_motion;
+      } catch (const GcodeError&) {
+      }
+      if (explicit_motion || mode_before == out_mode) {
+        path.finish(move);
+        ++s.moves_kept;
+        out_mode = orig_mode;
+        continue;
+      }
+    }
+
+    for (const Correction& corr : corrections) {
+      if (corr.points_used >= 0) ++s.blend_points[corr.points_used];
+      if (!corr.compensated) continue;
+      ++s.points_compensated;
+      const double mag = corr.shift_mm.norm();
+      s.max_compensation_mm = std::max(s.max_compensation_mm, mag);
+      sum_mm += mag;
+    }
+    const LineWords words = split_move_line(source, file, ctx.line);
+    PlannedLine pl;
+    pl.residual = words.residual;
+    RewrittenLine rl;
+    rl.context = ctx;
+    const Axes6 original_end = end_of(c.op);
+    const Axes6 start_prog = path.to_program(move.start, ctx);
+    const Axes6 end_prog = path.to_program(move.end, ctx);
+    const bool write_a = words.has_a || start_prog.a != end_prog.a;
+    const bool write_c = words.has_c || start_prog.c != end_prog.c;
+    const bool inverse_time = ctx.feed_mode == FeedMode::kInverseTime;
+    for (int k = 0; k < n; ++k) {
+      const Axes6 q = path.to_program(points[k], ctx);
+      std::string line = words.block_delete ? "/" : "";
+      if (k == 0 && out_mode != 1) line += "G1 ";
+      Axes6 expect = original_end;
+      auto word = [&](char letter, int axis, bool write) {
+        if (!write) return;
+        const std::string v = fixed(q[axis], o.decimals);
+        if (!line.empty() && line.back() != ' ' && line.back() != '/') line += ' ';
+        line += letter + v;
+        expect[axis] = std::strtod(v.c_str(), nullptr);
+      };
+      word('X', 0, true);
+      word('Y', 1, true);
+      word('Z', 2, true);
+      word('A', 3, write_a);
+      word('C', 5, write_c);
+      // G93: each piece takes its share 1/n of the move's time 1/F.
+      if (inverse_time)
+        line += " F" + feed_text(ctx.inverse_time_f * n);
+      else if (k == 0 && feed_before_line != feed_upm)
+        line += " F" + feed_text(feed_upm);
+      pl.moves.push_back(line);
+      rl.expected.push_back(expect);
+    }
+    s.points_written += n;
+    ++s.moves_rewritten;
+    plan[ctx.line] = std::move(pl);
+    expected[ctx.line] = std::move(rl);
+    out_mode = 1;
+    displaced = points.back() != move.end;
+    path.finish(move);
+  }
+  s.mean_compensation_mm = s.points_compensated > 0 ? sum_mm / s.points_compensated : 0.0;
+
+  // Assemble: every other line byte for byte.
+  RewriteResult r;
+  std::vector<OutputLine> origin;
+  for (size_t i = 0; i < raw.size(); ++i) {
+    const int line = static_cast<int>(i) + 1;
+    auto it = plan.find(line);
+    if (it == plan.end()) {
+      r.text += raw[i].content;
+      r.text += raw[i].terminator;
+      origin.push_back({line, OutputLine::kVerbatim});
+      continue;
+    }
+    const std::string& term = raw[i].terminator;
+    const std::string inner = term.empty() ? "\n" : term;
+    if (!it->second.residual.empty()) {
+      r.text += it->second.residual + inner;
+      origin.push_back({line, OutputLine::kResidual});
+    }
+    const auto& moves = it->second.moves;
+    for (size_t k = 0; k < moves.size(); ++k) {
+      r.text += moves[k];
+      r.text += k + 1 < moves.size() ? inner : term;
+      origin.push_back({line, OutputLine::kMove});
+    }
+  }
+  s.lines_out = static_cast<int>(origin.size());
+  check_rewrite(r.text, CheckInput{program, expected, origin, o.interpreter, name});
+  r.summary = s;
+  return r;
+}
+
+}  // namespace
+}  // namespace rewrite
+
+RewriteResult rewrite_program(std::string_view text, const std::string& name,
+                              const CompensationMatrixData& matrix, const RewriteOptions& o) {
+  rewrite::check_options(o);
+  const rewrite::NeighbourSearch search(matrix, o.surfaces, o.type, o.tool_radius_mm, o.reach_mm);
+  auto fn = [&](const rewrite::ToolPoint& tp, const CallContext&) {
+    const rewrite::Nearest nn = search.nearest(tp);
+    Eigen::Vector3d p[3], v[3];
+    for (int i = 0; i < nn.count; ++i) {
+      p[i] = search.position(nn.index[i]);
+      v[i] = search.vector(nn.index[i]);
+    }
+    const BlendResult b =
+        blend_compensation(std::span(p, nn.count), std::span(v, nn.count), nn.query_mm);
+    return rewrite::Correction{b.correction_mm, b.points_used > 0, b.points_used};
+  };
+  return rewrite::run(text, name, o, fn, search.reach_mm());
+}
+
+RewriteResult rewrite_program(std::string_view text, const std::string& name,
+                              const rt::CorrectionField& field, const RewriteOptions& o) {
+  rewrite::check_options(o);
+  auto fn = [&](const rewrite::ToolPoint& tp, const CallContext& ctx) {
+    const rt::FieldSample s = field.evaluate(ctx.tool, tp.tip_mm);
+    if (s.status == rt::FieldStatus::no_layer_for_tool)
+      throw RewriteError("the correction field has no layer for tool " + std::to_string(ctx.tool) +
+                         " (operation '" + o.operation + "')");
+    if (s.status == rt::FieldStatus::non_finite)
+      throw RewriteError("the correction field gave a non-finite correction");
+    rewrite::Correction c;
+    if (s.status == rt::FieldStatus::ok && s.weight > 0) {
+      c.shift_mm = s.correction_mm;
+      c.compensated = true;
+    }
+    return c;
+  };
+  return rewrite::run(text, name, o, fn, 0.0);
+}
+
+}  // namespace truecut::interp

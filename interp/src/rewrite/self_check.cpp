@@ -1,0 +1,108 @@
+#include "self_check.hpp"
+
+#include <cmath>
+
+#include "truecut/interp/error.hpp"
+#include "truecut/interp/rs274_format.hpp"
+
+namespace truecut::interp::rewrite {
+
+namespace {
+
+bool same_context(const CallContext& a, const CallContext& b) {
+  return a.file == b.file && a.line == b.line && a.operation == b.operation && a.tool == b.tool &&
+         a.units == b.units && a.feed_mode == b.feed_mode && a.inverse_time_f == b.inverse_time_f &&
+         a.spline == b.spline && a.tcp == b.tcp && a.g5x_mm == b.g5x_mm && a.g92_mm == b.g92_mm &&
+         a.tool_offset_mm == b.tool_offset_mm;
+}
+
+struct Entry {
+  const CanonCall* call;
+  double feed;  // SET_FEED_RATE in force
+};
+
+}  // namespace
+
+void check_rewrite(const std::string& text, const CheckInput& in) {
+  const CanonProgram out = Interpreter(in.options).run_text(text, in.name);
+  auto fail = [&](int line, const std::string& what) {
+    throw GcodeError({in.name, line, 0}, "cannot be rewritten: " + what);
+  };
+
+  std::vector<Entry> kept_in, kept_out;
+  double feed = 0;
+  for (const CanonCall& c : in.original.calls) {
+    if (const auto* f = std::get_if<SetFeedRate>(&c.op)) feed = f->units_per_minute;
+    if (c.context.file == 0 && in.rewritten.count(c.context.line)) continue;
+    kept_in.push_back({&c, feed});
+  }
+  std::map<int, std::vector<const CanonCall*>> moves_out;  // by original line
+  std::vector<CanonCall> mapped;
+  mapped.reserve(out.calls.size());
+  feed = 0;
+  std::vector<double> feeds;
+  for (const CanonCall& c : out.calls) {
+    if (const auto* f = std::get_if<SetFeedRate>(&c.op)) feed = f->units_per_minute;
+    if (c.context.file != 0 || c.context.line < 1 ||
+        c.context.line > static_cast<int>(in.origin.size())) {
+      mapped.push_back(c);
+      feeds.push_back(feed);
+      continue;
+    }
+    const OutputLine& o = in.origin.at(c.context.line - 1);
+    if (o.kind == OutputLine::kVerbatim) {
+      CanonCall m = c;
+      m.context.line = o.source_line;
+      mapped.push_back(std::move(m));
+      feeds.push_back(feed);
+    } else if (o.kind == OutputLine::kMove && is_motion(c.op)) {
+      moves_out[o.source_line].push_back(&c);
+    }
+  }
+  for (size_t i = 0; i < mapped.size(); ++i)
+    kept_out.push_back({&mapped[i], feeds[i]});
+
+  FormatOptions fmt;
+  fmt.decimals = 9;
+  const size_t n = std::min(kept_in.size(), kept_out.size());
+  for (size_t i = 0; i < n; ++i) {
+    const CanonCall& a = *kept_in[i].call;
+    const CanonCall& b = *kept_out[i].call;
+    const bool same = format_rs274(a.op, fmt) == format_rs274(b.op, fmt) &&
+                      same_context(a.context, b.context) &&
+                      (!is_motion(a.op) || kept_in[i].feed == kept_out[i].feed);
+    if (!same)
+      fail(a.context.line, "the new program does not reproduce " + format_rs274(a.op, fmt) +
+                               " of this line (got " + format_rs274(b.op, fmt) + " at line " +
+                               std::to_string(b.context.line) +
+                               "); a modal state set by the rewritten moves differs");
+  }
+  if (kept_in.size() != kept_out.size())
+    fail(n < kept_in.size() ? kept_in[n].call->context.line : 0,
+         "the new program makes " + std::to_string(kept_out.size()) +
+             " calls outside the rewritten lines, the original " + std::to_string(kept_in.size()));
+
+  for (const auto& [line, rw] : in.rewritten) {
+    const auto it = moves_out.find(line);
+    const size_t got = it == moves_out.end() ? 0 : it->second.size();
+    if (got != rw.expected.size())
+      fail(line, std::to_string(got) + " moves from the written G1 lines, expected " +
+                     std::to_string(rw.expected.size()));
+    for (size_t k = 0; k < got; ++k) {
+      const CanonCall& c = *it->second[k];
+      const auto* f = std::get_if<StraightFeed>(&c.op);
+      const auto* t = std::get_if<StraightTraverse>(&c.op);
+      if (rw.traverse ? !t : !f) fail(line, "a written line made another kind of move");
+      const Axes6& end = rw.traverse ? t->end : f->end;
+      for (int ax = 0; ax < 6; ++ax)
+        if (std::fabs(end[ax] - rw.expected[k][ax]) > 1e-9 * std::max(1.0, std::fabs(end[ax])))
+          fail(line, "a written G1 point comes out at " + format_rs274(c.op, fmt) +
+                         " (incremental distance mode G91 active?)");
+      if (c.context.tcp != rw.context.tcp || c.context.feed_mode != rw.context.feed_mode ||
+          c.context.operation != rw.context.operation || c.context.tool != rw.context.tool)
+        fail(line, "the written G1 lines run in another mode than the original move");
+    }
+  }
+}
+
+}  // namespace truecut::interp::rewrite

@@ -1,0 +1,164 @@
+#include "tool_path.hpp"
+
+#include <cmath>
+#include <numbers>
+
+namespace truecut::interp::rewrite {
+
+rt::AcTrtParams ToolPath::kinematics(const CallContext& ctx) const {
+  rt::AcTrtParams k = base_;
+  k.tool_length_mm += ctx.tool_offset_mm.z;
+  return k;
+}
+
+Vec5 ToolPath::to_planning(const Axes6& p, const CallContext& ctx) const {
+  const Axes6 m = machine_position_mm(p, ctx);
+  Vec5 r{m.x, m.y, m.z, m.a, m.c};
+  if (tcp_)
+    for (int i = 0; i < 3; ++i)
+      r[i] -= ctx.tool_offset_mm[i];
+  return r;
+}
+
+Axes6 ToolPath::to_program(const Vec5& p, const CallContext& ctx) const {
+  const double scale = ctx.units == LengthUnits::kInch ? 25.4 : 1.0;
+  Axes6 out;
+  for (int i = 0; i < 3; ++i) {
+    const double tool = tcp_ ? 0.0 : ctx.tool_offset_mm[i];
+    out[i] = (p[i] - ctx.g5x_mm[i] - ctx.g92_mm[i] - tool) / scale;
+  }
+  out.a = p[3] - ctx.g5x_mm.a - ctx.g92_mm.a - ctx.tool_offset_mm.a;
+  out.c = p[4] - ctx.g5x_mm.c - ctx.g92_mm.c - ctx.tool_offset_mm.c;
+  return out;
+}
+
+ToolPoint ToolPath::tool_point(const Vec5& p, const CallContext& ctx) const {
+  const rt::AcTrtParams k = kinematics(ctx);
+  if (tcp_) {
+    const rt::ToolPose pose = rt::forward_ac(k, rt::AcJoints{0, 0, 0, p[3], p[4]});
+    return {Eigen::Vector3d(p[0], p[1], p[2]), pose.axis};
+  }
+  const rt::ToolPose pose = rt::forward_ac(k, rt::AcJoints{p[0], p[1], p[2], p[3], p[4]});
+  return {pose.tcp_mm, pose.axis};
+}
+
+Vec5 ToolPath::shifted(const Vec5& p, const CallContext& ctx,
+                       const Eigen::Vector3d& shift_mm) const {
+  Vec5 out = p;
+  if (tcp_) {
+    for (int i = 0; i < 3; ++i)
+      out[i] += shift_mm[i];
+    return out;
+  }
+  // For fixed A and C the tip is an affine function of X Y Z with an
+  // orthonormal linear part R: joints move by R^T * shift.
+  const rt::AcTrtParams k = kinematics(ctx);
+  const rt::AcJoints j{p[0], p[1], p[2], p[3], p[4]};
+  const Eigen::Vector3d t0 = rt::forward_ac(k, j).tcp_mm;
+  Eigen::Matrix3d r;
+  for (int i = 0; i < 3; ++i) {
+    rt::AcJoints ji = j;
+    (i == 0 ? ji.x_mm : i == 1 ? ji.y_mm : ji.z_mm) += 1.0;
+    r.col(i) = rt::forward_ac(k, ji).tcp_mm - t0;
+  }
+  const Eigen::Vector3d d = r.transpose() * shift_mm;
+  for (int i = 0; i < 3; ++i)
+    out[i] += d[i];
+  return out;
+}
+
+void ToolPath::rebase(const CallContext& ctx) {
+  if (!tcp_) return;
+  const rt::AcTrtParams kin = kinematics(ctx);
+  if (kin.tool_length_mm == tcp_tool_length_mm_) return;
+  rt::AcTrtParams old = kin;
+  old.tool_length_mm = tcp_tool_length_mm_;
+  const rt::ToolPose pose_old = rt::forward_ac(old, rt::AcJoints{0, 0, 0, cur_[3], cur_[4]});
+  rt::ToolPose tip_old{Eigen::Vector3d(cur_[0], cur_[1], cur_[2]), pose_old.axis};
+  const rt::AcJoints joints =
+      rt::inverse_ac(old, tip_old, rt::AcJoints{0, 0, 0, cur_[3], cur_[4]}).joints;
+  const rt::ToolPose pose = rt::forward_ac(kin, joints);
+  cur_ = {pose.tcp_mm.x(), pose.tcp_mm.y(), pose.tcp_mm.z(), cur_[3], cur_[4]};
+  tcp_tool_length_mm_ = kin.tool_length_mm;
+}
+
+void ToolPath::set_tcp(bool on, const CallContext& ctx) {
+  if (on == tcp_) return;
+  rebase(ctx);
+  const rt::AcTrtParams kin = kinematics(ctx);
+  if (on) {
+    const rt::ToolPose pose =
+        rt::forward_ac(kin, rt::AcJoints{cur_[0], cur_[1], cur_[2], cur_[3], cur_[4]});
+    cur_ = {pose.tcp_mm.x(), pose.tcp_mm.y(), pose.tcp_mm.z(), cur_[3], cur_[4]};
+  } else {
+    const rt::ToolPose axis = rt::forward_ac(kin, rt::AcJoints{0, 0, 0, cur_[3], cur_[4]});
+    const rt::ToolPose tip{Eigen::Vector3d(cur_[0], cur_[1], cur_[2]), axis.axis};
+    const rt::AcJoints j = rt::inverse_ac(kin, tip, rt::AcJoints{0, 0, 0, cur_[3], cur_[4]}).joints;
+    cur_ = {j.x_mm, j.y_mm, j.z_mm, cur_[3], cur_[4]};
+  }
+  tcp_ = on;
+  tcp_tool_length_mm_ = kin.tool_length_mm;
+}
+
+void ToolPath::observe(const CanonCall& c) {
+  if (const auto* t = std::get_if<SetTcp>(&c.op)) set_tcp(t->on, c.context);
+  if (std::holds_alternative<ProgramEnd>(c.op)) set_tcp(false, c.context);
+}
+
+ToolPath::Move ToolPath::line_to(const Axes6& end, const CallContext& ctx) const {
+  Move m;
+  m.start = cur_;
+  m.end = to_planning(end, ctx);
+  return m;
+}
+
+ToolPath::Move ToolPath::arc_to(const ArcFeed& arc, const CallContext& ctx) const {
+  Move m;
+  m.arc = true;
+  m.start = cur_;
+  m.end = to_planning(arc.end, ctx);
+  if (arc.plane == Plane::kXZ) m.first = 2, m.second = 0;
+  if (arc.plane == Plane::kYZ) m.first = 1, m.second = 2;
+  Axes6 cprog = arc.end;
+  cprog[m.first] = arc.center[m.first];
+  cprog[m.second] = arc.center[m.second];
+  m.centre = to_planning(cprog, ctx);
+  const double sx = cur_[m.first] - m.centre[m.first], sy = cur_[m.second] - m.centre[m.second];
+  const double ex = m.end[m.first] - m.centre[m.first], ey = m.end[m.second] - m.centre[m.second];
+  m.r0 = std::hypot(sx, sy);
+  m.r1 = std::hypot(ex, ey);
+  m.start_angle = std::atan2(sy, sx);
+  const double two_pi = 2 * std::numbers::pi;
+  double sweep = std::atan2(ey, ex) - m.start_angle;
+  const int turns = std::abs(arc.rotation);
+  if (arc.rotation > 0) {
+    while (sweep <= 1e-12)
+      sweep += two_pi;
+    sweep += two_pi * (turns - 1);
+  } else {
+    while (sweep >= -1e-12)
+      sweep -= two_pi;
+    sweep -= two_pi * (turns - 1);
+  }
+  m.sweep_rad = sweep;
+  return m;
+}
+
+Vec5 ToolPath::at(const Move& m, double f) {
+  if (f >= 1.0) return m.end;
+  Vec5 out{};
+  if (!m.arc) {
+    for (int i = 0; i < 5; ++i)
+      out[i] = m.start[i] + f * (m.end[i] - m.start[i]);
+    return out;
+  }
+  const double th = m.start_angle + m.sweep_rad * f;
+  const double r = m.r0 + (m.r1 - m.r0) * f;
+  for (int i = 0; i < 5; ++i)
+    out[i] = m.start[i] + f * (m.end[i] - m.start[i]);
+  out[m.first] = m.centre[m.first] + r * std::cos(th);
+  out[m.second] = m.centre[m.second] + r * std::sin(th);
+  return out;
+}
+
+}  // namespace truecut::interp::rewrite

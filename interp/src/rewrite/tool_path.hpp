@@ -1,0 +1,67 @@
+// The tool path as truecut's planner moves it (planner/path_builder.cpp),
+// so the densified points lie where the machine would be: in joint space
+// (no TRAORI) a point is the machine position (X Y Z A C) and moves are
+// straight in all five axes, arcs in their plane with the other axes
+// linear in the angle; under TRAORI a point is (tip in the workpiece frame,
+// A, C) with A and C interpolated along the tip's path.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "neighbours.hpp"
+#include "truecut/interp/canon.hpp"
+#include "truecut/rt/kinematics_ac.hpp"
+
+namespace truecut::interp::rewrite {
+
+using Vec5 = std::array<double, 5>;  // x y z (mm) a c (deg)
+
+class ToolPath {
+ public:
+  explicit ToolPath(const rt::AcTrtParams& kinematics) : base_(kinematics) {}
+
+  // Follows the non-motion calls that move the planning point (TRAORI on or
+  // off, a new tool length under TRAORI, the program end).
+  void observe(const CanonCall& call);
+
+  const Vec5& current() const { return cur_; }
+  bool tcp() const { return tcp_; }
+  // Re-expresses the current point for the tool now in use (TRAORI only).
+  void rebase(const CallContext& ctx);
+
+  Vec5 to_planning(const Axes6& program, const CallContext& ctx) const;
+  // Program coordinates (program units, degrees) of a planning point.
+  Axes6 to_program(const Vec5& p, const CallContext& ctx) const;
+  // Tip and tool axis in the workpiece frame.
+  ToolPoint tool_point(const Vec5& p, const CallContext& ctx) const;
+  // The planning point whose tip is shifted by `shift_mm` (workpiece
+  // frame) with A and C unchanged.
+  Vec5 shifted(const Vec5& p, const CallContext& ctx, const Eigen::Vector3d& shift_mm) const;
+
+  // Points of the move from current() at fractions k/n, k = 1..n, and the
+  // point at a fraction in [0, 1].
+  struct Move {
+    bool arc = false;
+    Vec5 start{}, end{};
+    // arc: centre (in-plane), plane axes, radii, sweep
+    int first = 0, second = 1;
+    Vec5 centre{};
+    double r0 = 0, r1 = 0, sweep_rad = 0, start_angle = 0;
+  };
+  Move line_to(const Axes6& end, const CallContext& ctx) const;
+  Move arc_to(const ArcFeed& arc, const CallContext& ctx) const;
+  static Vec5 at(const Move& m, double fraction);
+  void finish(const Move& m) { cur_ = m.end; }
+
+ private:
+  rt::AcTrtParams kinematics(const CallContext& ctx) const;
+  void set_tcp(bool on, const CallContext& ctx);
+
+  rt::AcTrtParams base_;
+  bool tcp_ = false;
+  double tcp_tool_length_mm_ = 0;
+  Vec5 cur_{};
+};
+
+}  // namespace truecut::interp::rewrite

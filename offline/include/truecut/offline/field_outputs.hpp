@@ -1,0 +1,57 @@
+// The files `truecut field` writes into its output folder, and the audit
+// record (docs/offline.md, "Outputs" and "audit.json"):
+//   field.tcf               the correction field (rt/field_file.hpp)
+//   compensation_matrix.csv the mirror of the raw error vectors
+//   adapted.stl             the nominal mesh moved by the smoothed compensation (binary)
+//   audit.json              SHA-256 of every input and of the three files above,
+//                           parameters, registration, statistics, max-correction check
+// All four are written as NAME.new first and renamed to NAME only when every
+// one of them has been written; on failure the .new files are removed and
+// nothing in the folder has changed.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "truecut/offline/field_pipeline.hpp"
+
+namespace truecut::offline {
+
+// Lower-case hex SHA-256 of a file's bytes (OpenSSL EVP). Throws
+// std::runtime_error naming the file when it cannot be read.
+std::string sha256_file(const std::filesystem::path& file);
+std::string sha256_bytes(std::string_view bytes);
+
+struct FileDigest {
+  std::string role;  // "nominal", "scan", "program", "tools", "part", "field", ...
+  std::filesystem::path path;
+  std::uintmax_t bytes = 0;
+  std::string sha256;
+};
+FileDigest digest_file(const std::string& role, const std::filesystem::path& file);
+
+struct AuditContext {
+  std::vector<FileDigest> inputs;
+  std::vector<std::string> command_line;  // argv as given
+  std::string created_utc;                // ISO 8601; empty: now
+  std::vector<ToolShape> tools;           // the tool shapes the placement used
+  double max_correction_limit_mm = 0.2;
+  bool forced = false;  // --force: written although max_correction_mm exceeds the limit
+};
+
+// The audit record as JSON text (schema: docs/offline.md, "audit.json").
+std::string audit_json(const FieldPipelineResult& result, const FieldPipelineOptions& options,
+                       const AuditContext& context, std::span<const FileDigest> outputs);
+
+// Writes the four files into `dir` (created if missing). Refuses (throws
+// std::runtime_error, nothing written) when a target exists and is not a
+// regular file. Returns the digests of the written files, audit.json last.
+std::vector<FileDigest> write_field_outputs(const std::filesystem::path& dir,
+                                            const FieldPipelineResult& result,
+                                            const FieldPipelineOptions& options,
+                                            const AuditContext& context);
+
+}  // namespace truecut::offline

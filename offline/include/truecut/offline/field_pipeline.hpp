@@ -1,0 +1,125 @@
+// The whole offline chain of `truecut field` (docs/offline.md, "truecut
+// field"): registration → compensation points → error vectors → (optional
+// rigid-body motion removal) → mirror → truss smoothing → adapted mesh →
+// tool path → tool-centre placement → field fit, with statistics and the
+// time of every stage. Files are read and written by the caller
+// (field_outputs.hpp writes the results).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "truecut/interp/canon.hpp"
+#include "truecut/offline/compensation_matrix.hpp"
+#include "truecut/offline/error_vectors.hpp"
+#include "truecut/offline/field_fit.hpp"
+#include "truecut/offline/mesh.hpp"
+#include "truecut/offline/registration.hpp"
+#include "truecut/offline/tool_centre_placement.hpp"
+#include "truecut/offline/tool_path.hpp"
+#include "truecut/offline/truss_smoothing.hpp"
+
+namespace truecut::offline {
+
+enum class ErrorMethod { ray, sphere };
+
+struct FieldPipelineOptions {
+  ErrorMethod method = ErrorMethod::ray;
+  // 0: the compensation points are the nominal vertices of the compensated
+  // surfaces; > 0: an even sampling of them at this spacing.
+  double spacing_mm = 0.0;
+  std::vector<std::int32_t> surfaces;        // compensated surfaces; empty: all
+  std::vector<std::int32_t> datum_surfaces;  // registration datum; empty: the whole nominal
+  bool register_scan = true;                 // false: the scan is already in the workpiece frame
+  bool remove_rigid_body_motion = false;  // after the error vectors (model-adaptation eqs. 3–6)
+  IcpOptions icp;
+  RayMethodOptions ray;
+  SphereMethodOptions sphere;
+  TrussOptions truss;
+  FieldFitOptions fit;  // fit.spacing_mm is the field resolution
+  ToolPathOptions path;
+  PlacementOptions placement;
+};
+
+struct FieldPipelineInputs {
+  const TriangleMesh* nominal = nullptr;
+  // One surface id per nominal triangle; empty: segment_surfaces(nominal).
+  std::vector<std::int32_t> triangle_surface_ids;
+  // The scan: a mesh for the ray method, its vertices are the cloud for the
+  // sphere method.
+  const TriangleMesh* scan = nullptr;
+  const interp::CanonProgram* program = nullptr;
+  std::vector<ToolShape> tools;
+  // A further iteration: the field in use when the scanned part was cut.
+  // The new field is that field plus the new compensation (each fit sample
+  // gets base(tool, tcp) added), so the residual error of a compensated part
+  // refines the correction instead of replacing it.
+  const rt::CorrectionField* base_field = nullptr;
+};
+
+// Statistics of a set of vectors (error or compensation), over the valid ones.
+struct VectorStatistics {
+  std::size_t points = 0;
+  std::size_t valid = 0;
+  double percent_invalid = 0.0;
+  Eigen::Vector3d mean_mm = Eigen::Vector3d::Zero();  // mean vector
+  double mean_length_mm = 0.0;
+  double rms_length_mm = 0.0;
+  double max_length_mm = 0.0;
+  double mean_normal_mm = 0.0;  // component along the nominal normal
+  double rms_normal_mm = 0.0;
+};
+VectorStatistics vector_statistics(std::span<const Eigen::Vector3d> vectors_mm,
+                                   std::span<const std::uint8_t> valid,
+                                   std::span<const Eigen::Vector3d> normals);
+
+struct StageTime {
+  std::string name;
+  double wall_s = 0.0;
+};
+
+struct FieldPipelineResult {
+  std::vector<std::int32_t> triangle_surface_ids;
+  std::optional<IcpResult> registration;
+  std::optional<RigidBodyMotion> rigid_body_motion;
+  CompensationPoints points;
+  ErrorVectors errors;
+  ErrorVectorSummary error_summary;
+  CompensationMatrix matrix;  // mirror of the raw error vectors
+  // Per nominal vertex: the truss-smoothed compensation (zero off the
+  // compensated surfaces) and the adapted mesh (nominal + that).
+  TrussResult truss;
+  std::vector<std::uint8_t> vertex_compensated;  // 1 where the adapted mesh moved the vertex
+  TriangleMesh adapted;
+  // The vectors the field is fitted to, one per compensation point: the
+  // truss-smoothed vertex vectors (vertex points) or the raw mirror (sampled
+  // points, smoothed by the fit's regularisation).
+  std::vector<Eigen::Vector3d> field_vectors_mm;
+  ToolPath path;
+  PlacementResult placement;
+  std::vector<ToolSamples> tool_samples;     // what the fit got, per tool
+  std::optional<FieldFitResult> fit;         // set when the pipeline returns
+  VectorStatistics error_statistics;         // raw error vectors
+  VectorStatistics compensation_statistics;  // field_vectors_mm over the valid points
+  // Largest correction the outputs apply: over the field samples and the
+  // adapted mesh's vertex moves.
+  double max_correction_mm = 0.0;
+  std::vector<StageTime> stages;
+  double total_wall_s = 0.0;
+};
+
+// Called after every stage with its name, its wall time and a short detail.
+using PipelineProgress =
+    std::function<void(const std::string& stage, double wall_s, const std::string& detail)>;
+
+// Throws std::invalid_argument for inconsistent inputs (missing pointers,
+// a scan without faces for the ray method, no valid compensation point cut
+// by any tool, ...) and whatever the stages throw.
+FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& inputs,
+                                       const FieldPipelineOptions& options,
+                                       const PipelineProgress& progress = {});
+
+}  // namespace truecut::offline

@@ -1,0 +1,251 @@
+#include "multilevel_bspline.hpp"
+
+#include <Eigen/Eigenvalues>
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+
+namespace truecut::offline::fit_detail {
+namespace {
+
+// Uniform cubic B-spline basis at t in [0, 1]: weights of control points
+// cell − 1 … cell + 2.
+std::array<double, 4> cubic_basis(double t) {
+  const double s = 1.0 - t;
+  return {s * s * s / 6.0, (3.0 * t * t * t - 6.0 * t * t + 4.0) / 6.0,
+          (-3.0 * t * t * t + 3.0 * t * t + 3.0 * t + 1.0) / 6.0, t * t * t / 6.0};
+}
+
+// One control lattice: spacing ratio × grid spacing, aligned with grid node
+// 0. Control point I (I = −1 … last_cell + 2) is stored at I + 1.
+struct Lattice {
+  int32_t ratio = 1;
+  std::array<int32_t, 3> last_cell{};  // last cell index holding grid nodes
+  std::array<int32_t, 3> n{};          // control points per axis
+  std::vector<Eigen::Vector3d> phi;
+
+  Lattice(const rt::FieldGrid& g, int32_t r) : ratio(r) {
+    for (int a = 0; a < 3; ++a) {
+      last_cell[a] = (g.dims[a] - 1) / r;
+      n[a] = last_cell[a] + 4;
+    }
+    phi.assign(static_cast<std::size_t>(n[0]) * n[1] * n[2], Eigen::Vector3d::Zero());
+  }
+  std::size_t at(int32_t i, int32_t j, int32_t k) const {  // i, j, k already offset
+    return static_cast<std::size_t>(i + int64_t{n[0]} * (j + int64_t{n[1]} * k));
+  }
+};
+
+struct Stencil {
+  std::array<int32_t, 3> first{};  // stored index of the first control point per axis
+  std::array<std::array<double, 4>, 3> b{};
+};
+
+Stencil stencil_of(const rt::FieldGrid& g, const Lattice& l, const Eigen::Vector3d& p_mm) {
+  Stencil s;
+  for (int a = 0; a < 3; ++a) {
+    const double u = (p_mm[a] - g.origin_mm[a]) / (g.spacing_mm[a] * l.ratio);
+    const int32_t cell = std::clamp(static_cast<int32_t>(std::floor(u)), 0, l.last_cell[a]);
+    s.first[a] = cell;  // control point cell − 1 is stored at cell
+    s.b[a] = cubic_basis(std::clamp(u - cell, 0.0, 1.0));
+  }
+  return s;
+}
+
+Eigen::Vector3d evaluate(const Lattice& l, const Stencil& s) {
+  Eigen::Vector3d v = Eigen::Vector3d::Zero();
+  for (int c = 0; c < 4; ++c)
+    for (int b = 0; b < 4; ++b) {
+      const double wbc = s.b[1][b] * s.b[2][c];
+      const std::size_t row = l.at(s.first[0], s.first[1] + b, s.first[2] + c);
+      for (int a = 0; a < 4; ++a)
+        v += (s.b[0][a] * wbc) * l.phi[row + a];
+    }
+  return v;
+}
+
+// Lee, Wolberg & Shin's closed form: each sample alone would be reproduced by
+// the control values w_c r / Σ w²; every control point takes the w²-weighted
+// mean of what its samples ask for.
+// damping ≥ 0 shrinks control values with little data behind them: the
+// denominator gets damping × its mean over the control points with data.
+void fit_level(const rt::FieldGrid& g, Lattice& l, std::span<const Eigen::Vector3d> positions,
+               std::span<const Eigen::Vector3d> residuals, double damping) {
+  std::vector<Eigen::Vector3d> num(l.phi.size(), Eigen::Vector3d::Zero());
+  std::vector<double> den(l.phi.size(), 0.0);
+  for (std::size_t p = 0; p < positions.size(); ++p) {
+    const Stencil s = stencil_of(g, l, positions[p]);
+    double sum2 = 1.0;
+    for (int a = 0; a < 3; ++a) {
+      double q = 0.0;
+      for (double w : s.b[a])
+        q += w * w;
+      sum2 *= q;
+    }
+    for (int c = 0; c < 4; ++c)
+      for (int b = 0; b < 4; ++b) {
+        const double wbc = s.b[1][b] * s.b[2][c];
+        const std::size_t row = l.at(s.first[0], s.first[1] + b, s.first[2] + c);
+        for (int a = 0; a < 4; ++a) {
+          const double w = s.b[0][a] * wbc;
+          const double w2 = w * w;
+          num[row + a] += (w2 * w / sum2) * residuals[p];
+          den[row + a] += w2;
+        }
+      }
+  }
+  double mean = 0.0;
+  std::size_t with_data = 0;
+  for (double d : den) {
+    mean += d;
+    with_data += d > 0.0 ? 1 : 0;
+  }
+  const double extra = with_data > 0 ? damping * mean / static_cast<double>(with_data) : 0.0;
+  for (std::size_t c = 0; c < l.phi.size(); ++c)
+    l.phi[c] = den[c] > 0.0 ? Eigen::Vector3d(num[c] / (den[c] + extra)) : Eigen::Vector3d::Zero();
+}
+
+// Adds the lattice's values at every grid node, one axis at a time (each
+// node coordinate is a fixed fraction of a lattice cell).
+void add_at_nodes(const rt::FieldGrid& g, const Lattice& l, std::vector<Eigen::Vector3d>& nodes) {
+  std::array<std::vector<Stencil>, 3> axis;  // per axis and node: first control point, basis
+  for (int a = 0; a < 3; ++a) {
+    axis[a].resize(static_cast<std::size_t>(g.dims[a]));
+    for (int32_t i = 0; i < g.dims[a]; ++i) {
+      const int32_t cell = std::min(i / l.ratio, l.last_cell[a]);
+      Stencil& s = axis[a][static_cast<std::size_t>(i)];
+      s.first[0] = cell;
+      s.b[0] = cubic_basis(static_cast<double>(i - cell * l.ratio) / l.ratio);
+    }
+  }
+  // x: (n0, n1, n2) → (d0, n1, n2); y: → (d0, d1, n2); z: → (d0, d1, d2).
+  const int64_t d0 = g.dims[0], d1 = g.dims[1], d2 = g.dims[2];
+  const int64_t n0 = l.n[0], n1 = l.n[1], n2 = l.n[2];
+  std::vector<Eigen::Vector3d> tx(static_cast<std::size_t>(d0 * n1 * n2));
+  tbb::parallel_for(int64_t{0}, n2, [&](int64_t k) {
+    for (int64_t j = 0; j < n1; ++j)
+      for (int64_t i = 0; i < d0; ++i) {
+        const Stencil& s = axis[0][static_cast<std::size_t>(i)];
+        Eigen::Vector3d v = Eigen::Vector3d::Zero();
+        for (int a = 0; a < 4; ++a)
+          v += s.b[0][a] * l.phi[static_cast<std::size_t>(s.first[0] + a + n0 * (j + n1 * k))];
+        tx[static_cast<std::size_t>(i + d0 * (j + n1 * k))] = v;
+      }
+  });
+  std::vector<Eigen::Vector3d> ty(static_cast<std::size_t>(d0 * d1 * n2));
+  tbb::parallel_for(int64_t{0}, n2, [&](int64_t k) {
+    for (int64_t j = 0; j < d1; ++j) {
+      const Stencil& s = axis[1][static_cast<std::size_t>(j)];
+      for (int64_t i = 0; i < d0; ++i) {
+        Eigen::Vector3d v = Eigen::Vector3d::Zero();
+        for (int a = 0; a < 4; ++a)
+          v += s.b[0][a] * tx[static_cast<std::size_t>(i + d0 * (s.first[0] + a + n1 * k))];
+        ty[static_cast<std::size_t>(i + d0 * (j + d1 * k))] = v;
+      }
+    }
+  });
+  tbb::parallel_for(int64_t{0}, d2, [&](int64_t k) {
+    const Stencil& s = axis[2][static_cast<std::size_t>(k)];
+    for (int64_t j = 0; j < d1; ++j)
+      for (int64_t i = 0; i < d0; ++i) {
+        Eigen::Vector3d v = Eigen::Vector3d::Zero();
+        for (int a = 0; a < 4; ++a)
+          v += s.b[0][a] * ty[static_cast<std::size_t>(i + d0 * (j + d1 * (s.first[0] + a)))];
+        nodes[static_cast<std::size_t>(i + d0 * (j + d1 * k))] += v;
+      }
+  });
+}
+
+// v ≈ value + gradient (p − centre), least squares. Only along directions in
+// which the samples spread by at least min_spread_mm (standard deviation);
+// along the others (e.g. the normal of a plane of samples) the part is
+// constant. A B-spline reproduces an affine function exactly, so the levels
+// only have to fit what is left: this gives the fit linear precision up to
+// the rim of the data, where the local averages of the levels are one-sided.
+struct Affine {
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  Eigen::Vector3d value = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d gradient = Eigen::Matrix3d::Zero();  // (component, axis)
+  Eigen::Vector3d operator()(const Eigen::Vector3d& p) const {
+    return value + gradient * (p - centre);
+  }
+};
+
+Affine fit_affine(std::span<const Eigen::Vector3d> positions,
+                  std::span<const Eigen::Vector3d> values, double min_spread_mm) {
+  Affine f;
+  if (positions.empty()) return f;
+  const double n = static_cast<double>(positions.size());
+  for (std::size_t p = 0; p < positions.size(); ++p) {
+    f.centre += positions[p];
+    f.value += values[p];
+  }
+  f.centre /= n;
+  f.value /= n;
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero(), cross = Eigen::Matrix3d::Zero();
+  for (std::size_t p = 0; p < positions.size(); ++p) {
+    const Eigen::Vector3d d = positions[p] - f.centre;
+    cov += d * d.transpose();
+    cross += (values[p] - f.value) * d.transpose();
+  }
+  cov /= n;
+  cross /= n;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  Eigen::Matrix3d pinv = Eigen::Matrix3d::Zero();
+  for (int a = 0; a < 3; ++a) {
+    const double lambda = eig.eigenvalues()[a];
+    if (lambda < min_spread_mm * min_spread_mm) continue;
+    pinv += eig.eigenvectors().col(a) * eig.eigenvectors().col(a).transpose() / lambda;
+  }
+  f.gradient = cross * pinv;
+  return f;
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector3d> multilevel_bspline_nodes(const rt::FieldGrid& grid,
+                                                      std::span<const FitSample> samples,
+                                                      const FieldFitOptions& o) {
+  std::vector<Eigen::Vector3d> positions, residuals;
+  for (const FitSample& s : samples) {
+    if (!s.valid) continue;
+    positions.push_back(s.position_mm);
+    residuals.push_back(s.vector_mm);
+  }
+  const Affine affine = fit_affine(positions, residuals, grid.spacing_mm.x());
+  for (std::size_t p = 0; p < positions.size(); ++p)
+    residuals[p] -= affine(positions[p]);
+  std::vector<Eigen::Vector3d> nodes(static_cast<std::size_t>(grid.node_count()));
+  for (int32_t k = 0; k < grid.dims[2]; ++k)
+    for (int32_t j = 0; j < grid.dims[1]; ++j)
+      for (int32_t i = 0; i < grid.dims[0]; ++i)
+        nodes[static_cast<std::size_t>(grid.index(i, j, k))] =
+            affine(grid.node_position_mm(i, j, k));
+  // Coarsest lattice: at most ~4 cells along the grid's longest axis.
+  const int32_t longest = std::max({grid.dims[0], grid.dims[1], grid.dims[2]}) - 1;
+  int32_t ratio = 1;
+  while (longest / ratio > 4)
+    ratio *= 2;
+  // Levels coarse to fine, then `refinement_iterations` more passes on the
+  // finest lattice (spacing_mm) to take up what is left.
+  std::vector<int32_t> ratios;
+  for (int32_t r = ratio; r >= 1; r /= 2)
+    ratios.push_back(r);
+  for (int it = 0; it < o.refinement_iterations; ++it)
+    ratios.push_back(1);
+  for (int32_t r : ratios) {
+    Lattice l(grid, r);
+    fit_level(grid, l, positions, residuals, r == 1 ? o.smoothness : 0.0);
+    tbb::parallel_for(std::size_t{0}, positions.size(), [&](std::size_t p) {
+      residuals[p] -= evaluate(l, stencil_of(grid, l, positions[p]));
+    });
+    add_at_nodes(grid, l, nodes);
+  }
+  return nodes;
+}
+
+}  // namespace truecut::offline::fit_detail

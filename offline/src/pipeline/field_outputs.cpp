@@ -1,0 +1,271 @@
+#include "truecut/offline/field_outputs.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <ctime>
+#include <stdexcept>
+
+#include "mesh_io/atomic_file.hpp"
+#include "truecut/offline/compensation_matrix.hpp"
+#include "truecut/offline/stl_io.hpp"
+#include "truecut/rt/field_file.hpp"
+
+namespace truecut::offline {
+
+namespace {
+
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+json vec(const Eigen::Vector3d& v) {
+  return json::array({v.x(), v.y(), v.z()});
+}
+
+std::string now_utc() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+json stats_json(const VectorStatistics& s) {
+  return {{"points", s.points},
+          {"valid", s.valid},
+          {"percent_invalid", s.percent_invalid},
+          {"mean_vector_mm", vec(s.mean_mm)},
+          {"mean_length_mm", s.mean_length_mm},
+          {"rms_length_mm", s.rms_length_mm},
+          {"max_length_mm", s.max_length_mm},
+          {"mean_normal_mm", s.mean_normal_mm},
+          {"rms_normal_mm", s.rms_normal_mm}};
+}
+
+json digest_json(const FileDigest& d) {
+  return {{"role", d.role}, {"path", d.path.string()}, {"bytes", d.bytes}, {"sha256", d.sha256}};
+}
+
+json transform_json(const RigidTransformReport& t) {
+  json m = json::array();
+  for (int i = 0; i < 4; ++i)
+    m.push_back({t.matrix(i, 0), t.matrix(i, 1), t.matrix(i, 2), t.matrix(i, 3)});
+  return {{"matrix", m},
+          {"translation_mm", vec(t.translation_mm)},
+          {"rotation_xyz_deg", vec(t.rotation_xyz_deg)},
+          {"rotation_angle_deg", t.rotation_angle_deg},
+          {"rotation_axis", vec(t.rotation_axis)}};
+}
+
+json parameters_json(const FieldPipelineOptions& o, const AuditContext& c) {
+  json tools = json::array();
+  for (const ToolShape& t : c.tools)
+    tools.push_back({{"tool", t.tool},
+                     {"radius_mm", t.radius_mm},
+                     {"corner_radius_mm", t.corner_radius_mm},
+                     {"cutting_length_mm", t.cutting_length_mm}});
+  const char* kernel[] = {"none", "huber", "tukey"};
+  return {{"method", o.method == ErrorMethod::ray ? "ray" : "sphere"},
+          {"compensation_points", o.spacing_mm > 0 ? "sampled" : "vertices"},
+          {"spacing_mm", o.spacing_mm},
+          {"surfaces", o.surfaces},
+          {"datum_surfaces", o.datum_surfaces},
+          {"register_scan", o.register_scan},
+          {"remove_rigid_body_motion", o.remove_rigid_body_motion},
+          {"icp",
+           {{"max_iterations", o.icp.max_iterations},
+            {"samples", o.icp.samples},
+            {"edge_margin_mm", o.icp.edge_margin_mm},
+            {"sharp_edge_deg", o.icp.sharp_edge_deg},
+            {"max_correspondence_mm", o.icp.max_correspondence_mm},
+            {"kernel", kernel[static_cast<int>(o.icp.kernel)]},
+            {"min_robust_scale_mm", o.icp.min_robust_scale_mm}}},
+          {"ray",
+           {{"max_distance_mm", o.ray.max_distance_mm},
+            {"grazing_angle_deg", o.ray.grazing_angle_deg},
+            {"sharp_edge_deg", o.ray.sharp_edge_deg},
+            {"edge_exclusion_mm", o.ray.edge_exclusion_mm},
+            {"reject_back_faces", o.ray.reject_back_faces}}},
+          {"sphere",
+           {{"radius_mm", o.sphere.radius_mm},
+            {"min_points", o.sphere.min_points},
+            {"plane_angle_deg", o.sphere.plane_angle_deg},
+            {"max_displacement_ratio", o.sphere.max_displacement_ratio}}},
+          {"truss",
+           {{"kb_over_kc", o.truss.kb_over_kc},
+            {"edge_weight",
+             o.truss.edge_weight == TrussEdgeWeight::uniform ? "uniform" : "inverse_length"}}},
+          {"field",
+           {{"resolution_mm", o.fit.spacing_mm},
+            {"smoothness", o.fit.smoothness},
+            {"membrane_weight", o.fit.membrane_weight},
+            {"support_radius_nodes", o.fit.support_radius_nodes},
+            {"fade_nodes", o.fit.fade_nodes},
+            {"refinement_iterations", o.fit.refinement_iterations}}},
+          {"tool_path",
+           {{"step_mm", o.path.step_mm},
+            {"max_axis_step_deg", o.path.max_axis_step_deg},
+            {"spline_tolerance_mm", o.path.spline_tolerance_mm}}},
+          {"placement",
+           {{"contact_tolerance_mm", o.placement.contact_tolerance_mm},
+            {"max_normal_angle_deg", o.placement.max_normal_angle_deg},
+            {"tie_mm", o.placement.tie_mm}}},
+          {"tools", tools},
+          {"max_correction_mm", c.max_correction_limit_mm},
+          {"force", c.forced}};
+}
+
+void refuse_special(const fs::path& target) {
+  std::error_code ec;
+  const fs::file_status st = fs::symlink_status(target, ec);
+  if (ec || !fs::exists(st)) return;
+  if (!fs::is_regular_file(st))
+    throw std::runtime_error(target.string() +
+                             " exists and is not a regular file; refusing to replace it");
+}
+
+}  // namespace
+
+std::string audit_json(const FieldPipelineResult& r, const FieldPipelineOptions& o,
+                       const AuditContext& c, std::span<const FileDigest> outputs) {
+  json j;
+  j["truecut_audit"] = 1;
+  j["created_utc"] = c.created_utc.empty() ? now_utc() : c.created_utc;
+  j["command_line"] = c.command_line;
+  j["frame"] = "workpiece";
+  j["units"] = "mm";
+  json in = json::array(), out = json::array();
+  for (const FileDigest& d : c.inputs)
+    in.push_back(digest_json(d));
+  for (const FileDigest& d : outputs)
+    out.push_back(digest_json(d));
+  j["inputs"] = in;
+  j["outputs"] = out;
+  j["parameters"] = parameters_json(o, c);
+  if (r.registration) {
+    const IcpResult& g = *r.registration;
+    json reg = transform_json(g.transform);
+    reg["iterations"] = g.iterations;
+    reg["converged"] = g.converged;
+    reg["samples"] = g.samples;
+    reg["correspondences"] = g.correspondences;
+    reg["rms_before_mm"] = g.rms_before_mm;
+    reg["rms_residual_mm"] = g.rms_after_mm;
+    reg["robust_scale_mm"] = g.robust_scale_mm;
+    reg["determined_directions"] = g.determined_directions;
+    j["registration"] = reg;
+  } else {
+    j["registration"] = nullptr;
+  }
+  if (r.rigid_body_motion) {
+    const RigidBodyMotion& m = *r.rigid_body_motion;
+    json rbm = transform_json(m.transform);
+    rbm["barycentre_mm"] = vec(m.barycentre_mm);
+    rbm["points_used"] = m.points_used;
+    rbm["rms_before_mm"] = m.rms_before_mm;
+    rbm["rms_after_mm"] = m.rms_after_mm;
+    j["rigid_body_motion"] = rbm;
+  } else {
+    j["rigid_body_motion"] = nullptr;
+  }
+  json errors = stats_json(r.error_statistics);
+  json by_status = json::object();
+  for (int s = 0; s < 9; ++s)
+    if (r.error_summary.by_status[s] > 0)
+      by_status[std::string(to_string(static_cast<ErrorStatus>(s)))] = r.error_summary.by_status[s];
+  errors["by_status"] = by_status;
+  j["error_vectors"] = errors;
+  j["compensation_vectors"] = stats_json(r.compensation_statistics);
+  json layers = json::array();
+  for (std::size_t i = 0; i < r.fit->layers.size(); ++i) {
+    const FieldFitLayerStats& l = r.fit->layers[i];
+    std::size_t placed = 0;
+    for (const ToolPlacement& tp : r.placement.tools)
+      if (tp.tool == l.tool) placed = tp.points.size();
+    layers.push_back({{"tool", l.tool},
+                      {"points_cut", placed},
+                      {"valid_samples", l.valid_samples},
+                      {"unknown_nodes", l.unknown_nodes},
+                      {"residual_rms_mm", l.residual_rms_mm},
+                      {"residual_max_mm", l.residual_max_mm}});
+  }
+  const rt::FieldGrid& g = r.fit->field.grid();
+  j["tool_path"] = {{"samples", r.path.samples.size()},
+                    {"feed_moves", r.path.feed_moves},
+                    {"rapid_moves", r.path.rapid_moves},
+                    {"skipped_rotated_moves", r.path.skipped_rotated_moves}};
+  j["placement"] = {{"points", r.points.size()}, {"uncut_points", r.placement.uncut_points}};
+  j["field"] = {{"origin_mm", vec(g.origin_mm)},
+                {"spacing_mm", vec(g.spacing_mm)},
+                {"dims", {g.dims[0], g.dims[1], g.dims[2]}},
+                {"layers", layers}};
+  std::size_t moved = 0;
+  double max_move = 0.0;
+  for (std::size_t v = 0; v < r.vertex_compensated.size(); ++v) {
+    if (!r.vertex_compensated[v]) continue;
+    ++moved;
+    max_move = std::max(max_move, r.truss.displacement_mm[v].norm());
+  }
+  j["adapted_mesh"] = {{"vertices", r.adapted.vertices_mm.size()},
+                       {"vertices_moved", moved},
+                       {"max_move_mm", max_move},
+                       {"unsupported_vertices", r.truss.unsupported_count}};
+  const bool exceeded = r.max_correction_mm > c.max_correction_limit_mm;
+  j["max_correction"] = {{"limit_mm", c.max_correction_limit_mm},
+                         {"max_mm", r.max_correction_mm},
+                         {"exceeded", exceeded},
+                         {"forced", exceeded && c.forced}};
+  json stages = json::array();
+  for (const StageTime& s : r.stages)
+    stages.push_back({{"name", s.name}, {"wall_s", s.wall_s}});
+  j["stages"] = stages;
+  j["total_wall_s"] = r.total_wall_s;
+  return j.dump(2) + "\n";
+}
+
+std::vector<FileDigest> write_field_outputs(const fs::path& dir, const FieldPipelineResult& r,
+                                            const FieldPipelineOptions& o, const AuditContext& c) {
+  const char* names[] = {"field.tcf", "compensation_matrix.csv", "adapted.stl", "audit.json"};
+  for (const char* n : names)
+    refuse_special(dir / n);
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw std::runtime_error(dir.string() + ": cannot create the folder: " + ec.message());
+
+  auto staged = [&](const char* n) { return dir / (std::string(n) + ".new"); };
+  std::vector<FileDigest> out;
+  try {
+    rt::FieldFileInfo info;
+    info.source = "truecut field";
+    rt::write_field_file(staged(names[0]), r.fit->field, info);
+    write_compensation_matrix(staged(names[1]), r.matrix,
+                              "mirror method: compensation = -(measured - nominal)");
+    write_stl(staged(names[2]), r.adapted, StlEncoding::binary, "truecut adapted model");
+    const char* roles[] = {"field", "compensation_matrix", "adapted_model"};
+    for (int i = 0; i < 3; ++i) {
+      FileDigest d = digest_file(roles[i], staged(names[i]));
+      d.path = dir / names[i];
+      out.push_back(d);
+    }
+    const std::string audit = audit_json(r, o, c, out);
+    {
+      mesh_io::AtomicFile f(staged(names[3]));
+      f.write(audit);
+      f.commit();
+    }
+    for (const char* n : names) {
+      fs::rename(staged(n), dir / n, ec);
+      if (ec)
+        throw std::runtime_error((dir / n).string() +
+                                 ": cannot rename into place: " + ec.message());
+    }
+    out.push_back({"audit", dir / names[3], audit.size(), sha256_bytes(audit)});
+  } catch (...) {
+    for (const char* n : names)
+      fs::remove(staged(n), ec);
+    throw;
+  }
+  return out;
+}
+
+}  // namespace truecut::offline

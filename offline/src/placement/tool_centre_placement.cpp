@@ -1,0 +1,217 @@
+#include "truecut/offline/tool_centre_placement.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+
+#include "spatial/kd_tree.hpp"
+
+namespace truecut::offline {
+
+namespace {
+
+void check_shape(const ToolShape& s) {
+  const std::string t = "tool " + std::to_string(s.tool) + ": ";
+  if (!(s.radius_mm > 0.0) || !std::isfinite(s.radius_mm))
+    throw std::invalid_argument(t + "radius must be positive");
+  if (!(s.corner_radius_mm >= 0.0) || s.corner_radius_mm > s.radius_mm)
+    throw std::invalid_argument(t + "corner radius must be in [0, radius]");
+  if (!(s.cutting_length_mm >= s.corner_radius_mm) || !std::isfinite(s.cutting_length_mm) ||
+      !(s.cutting_length_mm > 0.0))
+    throw std::invalid_argument(t +
+                                "cutting length must be positive and at least the corner radius");
+}
+
+// Probe points along the core axis of the first sample of every chunk of
+// consecutive samples of one tool. A chunk holds samples whose probes lie
+// within `spread` of the first one's (tip shift + cutting length × axis
+// change); a point within R + tol of a member's core axis segment is then
+// within query_radius of a probe of its chunk. Path samples are dense along
+// the path (the tool path step), so chunks keep the tree small; probes every
+// R/2 along the axis keep the query radius close to R + tol, so few samples
+// that cannot reach the point are tested.
+struct ToolIndex {
+  std::vector<Eigen::Vector3d> probes;
+  std::vector<std::uint32_t> probe_chunk;
+  std::vector<std::uint32_t> chunk_begin;  // into the tool's samples; one past the last at the end
+  spatial::KdTree tree;
+  double query_radius = 0.0;
+};
+
+ToolIndex build_index(const ToolShape& shape, const ToolPath& path,
+                      std::span<const std::uint32_t> samples, double tol) {
+  const double r = shape.corner_radius_mm, len = shape.cutting_length_mm - r;
+  const int k = std::max(1, static_cast<int>(std::ceil(2.0 * len / shape.radius_mm)));
+  const double step = len / k;
+  const double max_spread = 0.1 * shape.radius_mm;
+  constexpr std::size_t kMaxChunk = 32;
+  ToolIndex ix;
+  double spread = 0.0;
+  for (std::size_t c = 0; c < samples.size();) {
+    const ToolPathSample& lead = path.samples[samples[c]];
+    std::size_t e = c + 1;
+    for (; e < samples.size() && e - c < kMaxChunk; ++e) {
+      const ToolPathSample& m = path.samples[samples[e]];
+      const double d =
+          (m.tip_mm - lead.tip_mm).norm() + shape.cutting_length_mm * (m.axis - lead.axis).norm();
+      if (d > max_spread) break;
+      spread = std::max(spread, d);
+    }
+    const auto chunk = static_cast<std::uint32_t>(ix.chunk_begin.size());
+    ix.chunk_begin.push_back(static_cast<std::uint32_t>(c));
+    for (int i = 0; i <= k; ++i) {
+      ix.probes.push_back(lead.tip_mm + (r + i * step) * lead.axis);
+      ix.probe_chunk.push_back(chunk);
+    }
+    c = e;
+  }
+  ix.chunk_begin.push_back(static_cast<std::uint32_t>(samples.size()));
+  ix.tree = spatial::KdTree(ix.probes);
+  ix.query_radius = std::hypot(shape.radius_mm + tol, 0.5 * step) + spread;
+  return ix;
+}
+
+}  // namespace
+
+CutterDistance cutter_distance(const ToolShape& shape, const Eigen::Vector3d& tip_mm,
+                               const Eigen::Vector3d& axis, const Eigen::Vector3d& p_mm) {
+  const double r = shape.corner_radius_mm;
+  const Eigen::Vector3d d = p_mm - tip_mm;
+  const double h = d.dot(axis);
+  const Eigen::Vector3d w = d - h * axis;
+  const double rho = w.norm();
+  // The core in the (ρ, h) half-plane: |ρ| ≤ R − r, r ≤ h ≤ L.
+  const double hc = 0.5 * (r + shape.cutting_length_mm);
+  const double hh = 0.5 * (shape.cutting_length_mm - r);
+  const double qx = rho - (shape.radius_mm - r);
+  const double qy = std::abs(h - hc) - hh;
+  const double side = h >= hc ? 1.0 : -1.0;
+  double nx = 0.0, ny = 0.0, dist = 0.0;
+  if (qx > 0.0 || qy > 0.0) {
+    const double ox = std::max(qx, 0.0), oy = std::max(qy, 0.0);
+    const double len = std::hypot(ox, oy);
+    nx = ox / len;
+    ny = side * oy / len;
+    dist = len - r;
+  } else {
+    if (qx > qy) {
+      nx = 1.0;
+    } else {
+      ny = side;
+    }
+    dist = std::max(qx, qy) - r;
+  }
+  Eigen::Vector3d radial;
+  if (rho > 1e-12) {
+    radial = w / rho;
+  } else {
+    radial = axis.unitOrthogonal();
+  }
+  return {dist, (nx * radial + ny * axis).normalized()};
+}
+
+PlacementResult place_at_tool_centre(std::span<const Eigen::Vector3d> positions_mm,
+                                     std::span<const Eigen::Vector3d> normals, const ToolPath& path,
+                                     std::span<const ToolShape> shapes,
+                                     const PlacementOptions& options) {
+  if (positions_mm.size() != normals.size())
+    throw std::invalid_argument("placement: one normal per point is needed");
+  if (!(options.contact_tolerance_mm > 0.0) || !(options.tie_mm >= 0.0) ||
+      !(options.max_normal_angle_deg > 0.0 && options.max_normal_angle_deg <= 90.0))
+    throw std::invalid_argument("placement: bad options");
+  std::map<std::int32_t, const ToolShape*> shape_of;
+  for (const ToolShape& s : shapes) {
+    check_shape(s);
+    shape_of[s.tool] = &s;
+  }
+  std::map<std::int32_t, std::vector<std::uint32_t>> samples_of;
+  for (std::size_t i = 0; i < path.samples.size(); ++i) {
+    const ToolPathSample& s = path.samples[i];
+    if (!shape_of.count(s.tool))
+      throw std::invalid_argument("tool " + std::to_string(s.tool) + " cuts at program line " +
+                                  std::to_string(s.line) + " but has no tool shape");
+    samples_of[s.tool].push_back(static_cast<std::uint32_t>(i));
+  }
+
+  const std::size_t n = positions_mm.size();
+  const double tol = options.contact_tolerance_mm;
+  const double min_cos = std::cos(options.max_normal_angle_deg * std::numbers::pi / 180.0);
+  PlacementResult out;
+  out.cut.assign(n, 0);
+  for (const auto& [tool, samples] : samples_of) {
+    const ToolShape& shape = *shape_of.at(tool);
+    const ToolIndex ix = build_index(shape, path, samples, tol);
+    constexpr std::uint32_t kNone = 0xffffffffu;
+    std::vector<std::uint32_t> chosen(n, kNone);
+    std::vector<double> chosen_d(n, 0.0);
+    const double reach2 = (shape.radius_mm + tol) * (shape.radius_mm + tol);
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, n, 256),
+        [&](const tbb::blocked_range<std::size_t>& range) {
+          std::vector<std::uint32_t> near, cand;
+          std::vector<double> dist;
+          for (std::size_t p = range.begin(); p != range.end(); ++p) {
+            near.clear();
+            ix.tree.within(positions_mm[p], ix.query_radius, near);
+            cand.clear();
+            dist.clear();
+            double best = std::numeric_limits<double>::infinity();
+            const Eigen::Vector3d inside = positions_mm[p] - 0.5 * tol * normals[p];
+            // A chunk comes up once per probe near P: test it once.
+            for (std::uint32_t& q : near)
+              q = ix.probe_chunk[q];
+            std::sort(near.begin(), near.end());
+            near.erase(std::unique(near.begin(), near.end()), near.end());
+            for (std::uint32_t chunk : near) {
+              for (std::uint32_t m = ix.chunk_begin[chunk]; m < ix.chunk_begin[chunk + 1]; ++m) {
+                const std::uint32_t sample = samples[m];
+                const ToolPathSample& s = path.samples[sample];
+                // Necessary for |distance| <= tol: P within R + tol of the
+                // core's axis segment. Cheaper than the exact distance.
+                const Eigen::Vector3d d = positions_mm[p] - s.tip_mm;
+                const double h =
+                    std::clamp(d.dot(s.axis), shape.corner_radius_mm, shape.cutting_length_mm);
+                if ((d - h * s.axis).squaredNorm() > reach2) continue;
+                const CutterDistance cd = cutter_distance(shape, s.tip_mm, s.axis, positions_mm[p]);
+                if (std::abs(cd.distance_mm) > tol) continue;
+                // The cutter normal just inside the material: unambiguous where P lies
+                // on the rim of a flat end mill, where its bottom meets its flank.
+                const CutterDistance ci = cutter_distance(shape, s.tip_mm, s.axis, inside);
+                if (-ci.normal.dot(normals[p]) < min_cos) continue;
+                cand.push_back(sample);
+                dist.push_back(cd.distance_mm);
+                best = std::min(best, std::abs(cd.distance_mm));
+              }
+            }
+            for (std::size_t c = 0; c < cand.size(); ++c) {
+              if (std::abs(dist[c]) <= best + options.tie_mm && cand[c] < chosen[p]) {
+                chosen[p] = cand[c];
+                chosen_d[p] = dist[c];
+              }
+            }
+          }
+        });
+    ToolPlacement tp;
+    tp.tool = tool;
+    for (std::size_t p = 0; p < n; ++p) {
+      if (chosen[p] == kNone) continue;
+      const ToolPathSample& s = path.samples[chosen[p]];
+      tp.points.push_back(
+          {static_cast<std::uint32_t>(p), chosen[p], s.tip_mm, s.axis, chosen_d[p]});
+      out.cut[p] = 1;
+    }
+    out.tools.push_back(std::move(tp));
+  }
+  out.uncut_points = std::count(out.cut.begin(), out.cut.end(), std::uint8_t{0});
+  return out;
+}
+
+}  // namespace truecut::offline

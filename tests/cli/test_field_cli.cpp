@@ -1,0 +1,209 @@
+// `truecut field` as a user runs it: outputs, audit hashes, the
+// max-correction refusal, and malformed inputs.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "run_process.hpp"
+#include "test_paths.hpp"
+
+using namespace truecut::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+ProcessResult truecut(std::vector<std::string> args) {
+  args.insert(args.begin(), cli_path().string());
+  return run_process(args);
+}
+
+void write_text(const fs::path& f, const std::string& text) {
+  std::ofstream(f, std::ios::binary) << text;
+}
+
+std::set<std::string> listing(const fs::path& dir) {
+  std::set<std::string> names;
+  if (!fs::exists(dir)) return names;
+  for (const auto& e : fs::directory_iterator(dir))
+    names.insert(e.path().filename().string());
+  return names;
+}
+
+// The implant benchmark part (coarse) and a scan of it: the nominal binary
+// STL with the shaft (z > 0) made oversize_mm thicker on every side.
+struct Part {
+  fs::path dir, nominal, program, tools, part, scan;
+};
+
+Part make_part_and_scan(const fs::path& root, double oversize_mm) {
+  Part p;
+  p.dir = root / "part";
+  const ProcessResult r = truecut({"part", "implant", "--out", p.dir.string(), "--mesh-edge", "0.5",
+                                   "--stepover", "0.8", "--step-down", "2"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  p.nominal = p.dir / "nominal.stl";
+  p.program = p.dir / "program.ngc";
+  p.tools = p.dir / "tools.tbl";
+  p.part = p.dir / "part.json";
+  p.scan = root / "scan.stl";
+  std::string stl = read_file(p.nominal);
+  std::uint32_t n = 0;
+  std::memcpy(&n, stl.data() + 80, 4);
+  EXPECT_EQ(stl.size(), 84u + 50u * n);
+  const float k = static_cast<float>((0.8 + oversize_mm) / 0.8);
+  for (std::uint32_t f = 0; f < n; ++f) {
+    for (int c = 0; c < 3; ++c) {
+      float xyz[3];
+      char* at = stl.data() + 84 + 50 * f + 12 + 12 * c;
+      std::memcpy(xyz, at, 12);
+      if (xyz[2] > 1e-4f) {
+        xyz[0] *= k;
+        xyz[1] *= k;
+      }
+      std::memcpy(at, xyz, 12);
+    }
+  }
+  write_text(p.scan, stl);
+  return p;
+}
+
+std::vector<std::string> field_args(const Part& p, const fs::path& out) {
+  return {"field",     p.nominal.string(), p.scan.string(), "--program",     p.program.string(),
+          "--tools",   p.tools.string(),   "--part",        p.part.string(), "--out",
+          out.string()};
+}
+
+std::string sha256sum(const fs::path& f) {
+  const ProcessResult r = run_process({"/usr/bin/sha256sum", f.string()});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  return r.out.substr(0, 64);
+}
+
+TEST(FieldCli, WritesOutputsWithAuditHashes) {
+  const fs::path root = scratch_dir();
+  const Part p = make_part_and_scan(root, 0.05);
+  const fs::path out = root / "out";
+  const ProcessResult r = truecut(field_args(p, out));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("field: registration"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("field: field fit"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("layer T1"), std::string::npos) << r.out;
+  EXPECT_EQ(listing(out), (std::set<std::string>{"adapted.stl", "audit.json",
+                                                 "compensation_matrix.csv", "field.tcf"}));
+  const nlohmann::json audit = nlohmann::json::parse(read_file(out / "audit.json"));
+  EXPECT_EQ(audit["truecut_audit"], 1);
+  ASSERT_EQ(audit["outputs"].size(), 3u);
+  for (const auto& o : audit["outputs"])
+    EXPECT_EQ(o["sha256"].get<std::string>(), sha256sum(o["path"].get<std::string>())) << o;
+  std::set<std::string> roles;
+  for (const auto& i : audit["inputs"]) {
+    roles.insert(i["role"].get<std::string>());
+    EXPECT_EQ(i["sha256"].get<std::string>(), sha256sum(i["path"].get<std::string>())) << i;
+  }
+  EXPECT_EQ(roles, (std::set<std::string>{"nominal", "scan", "program", "tools", "part"}));
+  EXPECT_FALSE(audit["max_correction"]["exceeded"].get<bool>());
+  EXPECT_FALSE(audit["max_correction"]["forced"].get<bool>());
+  EXPECT_LT(audit["registration"]["rms_residual_mm"].get<double>(), 0.05);
+  EXPECT_EQ(audit["parameters"]["method"], "ray");
+  // The shaft is 0.05 mm oversize: the valid error vectors say so, and the
+  // compensation points back by the same amount.
+  EXPECT_NEAR(audit["error_vectors"]["mean_normal_mm"].get<double>(), 0.05, 0.005);
+  EXPECT_NEAR(audit["compensation_vectors"]["mean_normal_mm"].get<double>(), -0.05, 0.005);
+  // Binary STL of the nominal's size.
+  EXPECT_EQ(fs::file_size(out / "adapted.stl"), fs::file_size(p.nominal));
+  EXPECT_EQ(read_file(out / "field.tcf").rfind("TRUECUT-FIELD 1\n", 0), 0u);
+}
+
+TEST(FieldCli, RefusesAboveMaxCorrectionUnlessForced) {
+  const fs::path root = scratch_dir();
+  const Part p = make_part_and_scan(root, 0.05);
+  const fs::path out = root / "out";
+  fs::create_directories(out);
+  write_text(out / "keep.txt", "mine");
+  std::vector<std::string> args = field_args(p, out);
+  args.insert(args.end(), {"--max-correction", "0.02"});
+  ProcessResult r = truecut(args);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("above --max-correction"), std::string::npos) << r.err;
+  EXPECT_EQ(listing(out), std::set<std::string>{"keep.txt"});
+  args.push_back("--force");
+  r = truecut(args);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(listing(out).size(), 5u);
+  const nlohmann::json audit = nlohmann::json::parse(read_file(out / "audit.json"));
+  EXPECT_TRUE(audit["max_correction"]["exceeded"].get<bool>());
+  EXPECT_TRUE(audit["max_correction"]["forced"].get<bool>());
+  EXPECT_GT(audit["max_correction"]["max_mm"].get<double>(), 0.02);
+}
+
+TEST(FieldCli, MalformedInputsExit2AndWriteNothing) {
+  const fs::path root = scratch_dir();
+  const Part p = make_part_and_scan(root, 0.05);
+  const fs::path out = root / "out";
+  fs::create_directories(out);
+  write_text(out / "keep.txt", "mine");
+
+  const fs::path truncated = root / "truncated.stl";
+  write_text(truncated, read_file(p.nominal).substr(0, 84 + 50 * 10 + 17));
+  const fs::path nan_scan = root / "nan.ply";
+  write_text(nan_scan,
+             "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+             "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+             "end_header\n0 0 0\nnan 0 0\n1 1 1\n3 0 1 2\n");
+  const fs::path bad_program = root / "bad.ngc";
+  write_text(bad_program, "G21 G90\nT1 M6\nG1 X1 Y2 F100\nG1 X[1+]\nM30\n");
+  const fs::path bad_tools = root / "bad.tbl";
+  write_text(bad_tools, "T1 P1 D2.000 Zabc\n");
+  const fs::path bad_json = root / "bad.json";
+  write_text(bad_json, "{ \"triangle_surface_ids\": [1, 2,");
+  const fs::path short_json = root / "short.json";
+  write_text(short_json, R"({"triangle_surface_ids": [1, 2], "surfaces": [], "tools": []})");
+  const fs::path cloud = root / "cloud.xyz";
+  write_text(cloud, "0 0 0\n1 0 0\n0 1 0\n");
+
+  struct Case {
+    const char* name;
+    std::vector<std::string> args;
+    fs::path named;
+  };
+  auto with = [&](int index, const fs::path& f) {
+    std::vector<std::string> a = field_args(p, out);
+    a[index] = f.string();
+    return a;
+  };
+  std::vector<std::string> ray_on_cloud = with(2, cloud);
+  ray_on_cloud.insert(ray_on_cloud.end(), {"--method", "ray"});
+  const std::vector<Case> cases{
+      {"truncated nominal", with(1, truncated), truncated},
+      {"NaN in the scan", with(2, nan_scan), nan_scan},
+      {"missing scan", with(2, root / "missing.ply"), root / "missing.ply"},
+      {"program error", with(4, bad_program), bad_program},
+      {"tool table error", with(6, bad_tools), bad_tools},
+      {"part.json not JSON", with(8, bad_json), bad_json},
+      {"part.json for another mesh", with(8, short_json), short_json},
+      {"ray method on a point cloud", ray_on_cloud, cloud},
+  };
+  for (const Case& c : cases) {
+    const ProcessResult r = truecut(c.args);
+    EXPECT_EQ(r.exit_code, 2) << c.name << "\n" << r.err;
+    EXPECT_NE(r.err.find(c.named.filename().string()), std::string::npos) << c.name << "\n"
+                                                                          << r.err;
+    EXPECT_EQ(listing(out), std::set<std::string>{"keep.txt"}) << c.name;
+  }
+  // Usage errors.
+  EXPECT_EQ(truecut({"field", p.nominal.string()}).exit_code, 2);
+  std::vector<std::string> no_out = field_args(p, out);
+  no_out.resize(no_out.size() - 2);
+  EXPECT_EQ(truecut(no_out).exit_code, 2);
+  EXPECT_EQ(listing(out), std::set<std::string>{"keep.txt"});
+  EXPECT_FALSE(fs::exists(root / "never"));
+}
+
+}  // namespace

@@ -1,0 +1,176 @@
+// `truecut rewrite` as a user runs it: summary, output and audit record,
+// and every kind of bad input (exit 2, a clear message, no output file).
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <fstream>
+#include <regex>
+
+#include "run_process.hpp"
+#include "test_paths.hpp"
+
+using namespace truecut::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+void write(const fs::path& p, const std::string& text) {
+  std::ofstream(p, std::ios::binary) << text;
+}
+
+const char* kProgram =
+    "%\n(OPERATION: FACE)\nG21 G17 G90 G94\nT2 M6\nG43 H2\nG0 X-8 Y-2 Z5\nG1 Z0 F200\n"
+    "G1 X8 F600\nY2\nX-8\nG0 Z5\nM30\n%\n";
+
+// Points on z = 0 over [-4, 4]^2 every 0.5 mm, compensation (0, 0, 0.05).
+std::string face_matrix() {
+  std::string csv =
+      "# truecut compensation matrix v1\n# frame: workpiece\n# units: mm\n"
+      "x,y,z,dx,dy,dz,valid,surface_id\n";
+  for (int i = -8; i <= 8; ++i)
+    for (int j = -8; j <= 8; ++j)
+      csv += std::to_string(0.5 * i) + "," + std::to_string(0.5 * j) + ",0,0,0,0.05,1,5\n";
+  return csv;
+}
+
+struct Case {
+  fs::path dir;
+  ProcessResult run(std::vector<std::string> args) const {
+    args.insert(args.begin(), {cli_path().string(), "rewrite"});
+    return run_process(args, dir);
+  }
+};
+
+Case setup() {
+  Case c{scratch_dir()};
+  write(c.dir / "p.ngc", kProgram);
+  write(c.dir / "tools.tbl", "T2 P2 D4 Z40\n");
+  write(c.dir / "m.csv", face_matrix());
+  return c;
+}
+
+const std::vector<std::string> kArgs = {
+    "p.ngc", "--matrix", "m.csv",     "--operation", "FACE", "--type", "face",   "--tool-radius",
+    "2",     "--tools",  "tools.tbl", "--reach",     "0.6",  "--out",  "out.ngc"};
+
+std::vector<std::string> with(std::vector<std::string> args, const std::string& key,
+                              const std::string& value) {
+  for (size_t i = 0; i + 1 < args.size(); ++i)
+    if (args[i] == key) {
+      args[i + 1] = value;
+      return args;
+    }
+  args.push_back(key);
+  args.push_back(value);
+  return args;
+}
+
+void expect_refused(const Case& c, const ProcessResult& r, const std::string& message) {
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find(message), std::string::npos) << r.err;
+  EXPECT_EQ(r.out, "");
+  EXPECT_FALSE(fs::exists(c.dir / "out.ngc"));
+  EXPECT_FALSE(fs::exists(c.dir / "out.ngc.tmp"));
+  EXPECT_FALSE(fs::exists(c.dir / "out.ngc.audit.json"));
+}
+
+}  // namespace
+
+TEST(CliRewrite, WritesProgramSummaryAndAudit) {
+  const Case c = setup();
+  const auto r = c.run(kArgs);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("  moves read            6\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("  moves rewritten       2\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("  max compensation      0.0500 mm\n"), std::string::npos) << r.out;
+  const std::string out = read_file(c.dir / "out.ngc");
+  EXPECT_EQ(out.substr(0, out.find("X-7.5000")),
+            "%\n(OPERATION: FACE)\nG21 G17 G90 G94\nT2 M6\nG43 H2\nG0 X-8 Y-2 Z5\nG1 Z0 F200\n");
+  EXPECT_NE(out.find("X-6.5000 Y-2.0000 Z0.0500"), std::string::npos);
+  EXPECT_FALSE(fs::exists(c.dir / "out.ngc.tmp"));
+  // The audit record's digests are those of the files.
+  const std::string audit = read_file(c.dir / "out.ngc.audit.json");
+  auto sum = run_process({"/usr/bin/sha256sum", "out.ngc", "p.ngc", "m.csv", "tools.tbl"}, c.dir);
+  ASSERT_EQ(sum.exit_code, 0);
+  std::istringstream lines(sum.out);
+  std::string digest, name;
+  int n = 0;
+  while (lines >> digest >> name) {
+    EXPECT_NE(audit.find("\"sha256\": \"" + digest + "\""), std::string::npos) << name << audit;
+    ++n;
+  }
+  EXPECT_EQ(n, 4);
+  EXPECT_NE(audit.find("\"operation\": \"FACE\", \"type\": \"face\""), std::string::npos) << audit;
+  EXPECT_NE(audit.find("\"moves_rewritten\": 2"), std::string::npos) << audit;
+  // The rewritten program runs through truecut's interpreter.
+  auto canon =
+      run_process({cli_path().string(), "canon", "--tool-table", "tools.tbl", "out.ngc"}, c.dir);
+  EXPECT_EQ(canon.exit_code, 0) << canon.err;
+}
+
+TEST(CliRewrite, UnknownOperation) {
+  const Case c = setup();
+  expect_refused(c, c.run(with(kArgs, "--operation", "ROUGH")),
+                 "p.ngc: operation 'ROUGH' is not in the program (operations: FACE)");
+}
+
+TEST(CliRewrite, MatrixWithNaNOrWrongColumns) {
+  const Case c = setup();
+  write(c.dir / "nan.csv", "x,y,z,dx,dy,dz\n0,0,0,0,0,0.01\n0.5,0,0,NaN,0,0.01\n");
+  expect_refused(c, c.run(with(kArgs, "--matrix", "nan.csv")), "nan.csv:3: dx is not finite (NaN)");
+  write(c.dir / "cols.csv", "# c\nx,y,z,u,v,w\n0,0,0,0,0,0.01\n");
+  expect_refused(c, c.run(with(kArgs, "--matrix", "cols.csv")),
+                 "cols.csv:2: header has no column 'dx'");
+  write(c.dir / "short.csv", "x,y,z,dx,dy,dz\n0,0,0,0,0\n");
+  expect_refused(c, c.run(with(kArgs, "--matrix", "short.csv")),
+                 "short.csv:2: 5 fields, the header has 6");
+  expect_refused(c, c.run(with(kArgs, "--matrix", "missing.csv")),
+                 "cannot open compensation matrix missing.csv");
+}
+
+TEST(CliRewrite, StepMustBePositive) {
+  const Case c = setup();
+  expect_refused(c, c.run(with(kArgs, "--step", "0")), "--step must be > 0 mm (got 0)");
+  expect_refused(c, c.run(with(kArgs, "--step", "-0.5")), "--step must be > 0 mm (got -0.5)");
+  expect_refused(c, c.run(with(kArgs, "--step", "abc")), "--step 'abc' is not a number");
+}
+
+TEST(CliRewrite, UnsupportedWordNamesTheLine) {
+  const Case c = setup();
+  std::string prog = kProgram;
+  prog.replace(prog.find("G1 X8 F600"), 10, "G1 X8 F600 M0");
+  write(c.dir / "p.ngc", prog);
+  expect_refused(c, c.run(kArgs), "p.ngc:8:12: M0 beside a move: this move cannot be rewritten");
+  prog = kProgram;
+  prog.replace(prog.find("G1 X8 F600"), 10, "G1 X[4*2] F600");
+  write(c.dir / "p.ngc", prog);
+  expect_refused(c, c.run(kArgs), "p.ngc:8:4: word X with a parameter or expression");
+}
+
+TEST(CliRewrite, UsageErrors) {
+  const Case c = setup();
+  expect_refused(c, c.run(with(kArgs, "--field", "f.tcf")),
+                 "give exactly one of --matrix and --field");
+  expect_refused(c, c.run(with(kArgs, "--type", "drill")), "expected peripheral, face or ball");
+  std::vector<std::string> no_out(kArgs.begin(), kArgs.end() - 2);
+  expect_refused(c, c.run(no_out), "--out OUT.ngc is required");
+  std::vector<std::string> field = with(kArgs, "--matrix", "x");
+  field.erase(field.begin() + 1, field.begin() + 3);
+  write(c.dir / "f.tcf", "not a field\n");
+  expect_refused(c, c.run(with(field, "--field", "f.tcf")), "f.tcf");
+  // An output that is not a regular file is not replaced.
+  fs::create_directory(c.dir / "dir.ngc");
+  const auto r = c.run(with(kArgs, "--out", "dir.ngc"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("dir.ngc exists and is not a regular file"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::is_directory(c.dir / "dir.ngc"));
+  EXPECT_FALSE(fs::exists(c.dir / "dir.ngc.tmp"));
+}
+
+TEST(CliRewrite, Help) {
+  auto r = run_process({cli_path().string(), "rewrite", "--help"});
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.out.find("usage: truecut rewrite IN.ngc"), std::string::npos);
+  auto list = run_process({cli_path().string(), "--help"});
+  EXPECT_NE(list.out.find("rewrite"), std::string::npos);
+}

@@ -1,0 +1,73 @@
+// The compensation matrix written by offline's writer is read by the
+// rewriter's own reader (interp may not use offline/) to the same doubles,
+// and `truecut rewrite` accepts the file.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "run_process.hpp"
+#include "test_paths.hpp"
+#include "truecut/interp/rewrite_matrix.hpp"
+#include "truecut/offline/compensation_matrix.hpp"
+
+using namespace truecut;
+using Eigen::Vector3d;
+
+TEST(CliRewriteMatrix, OfflineWriterAndRewriteReaderAgreeBitForBit) {
+  offline::CompensationMatrix m;
+  // Awkward doubles: thirds, tiny and huge magnitudes, negative zero, values
+  // that need 17 significant digits.
+  const double values[] = {1.0 / 3.0,           -2.0 / 7.0, 0.1,  1e-300,
+                           -123456.78901234567, 5e-324,     -0.0, 1e300,
+                           0.30000000000000004, 17.0};
+  for (int i = 0; i < 200; ++i) {
+    const double a = values[i % 10], b = values[(i / 10) % 10], c = values[(i * 7) % 10];
+    m.positions_mm.emplace_back(a * (i + 1), b - i, c);
+    m.vectors_mm.emplace_back(i % 3 ? 0.0 : c * 1e-3, a * 1e-2, -b * 1e-4);
+    m.valid.push_back(i % 5 == 4 ? 0 : 1);
+    m.surface_ids.push_back(i % 4);
+    if (!m.valid.back()) m.vectors_mm.back() = Vector3d::Zero();
+  }
+  const auto file = test::scratch_dir() / "comp.csv";
+  offline::write_compensation_matrix(file, m, "from the test\nsecond comment line");
+  const interp::CompensationMatrixData r = interp::read_compensation_matrix(file);
+  ASSERT_EQ(r.size(), m.size());
+  for (size_t i = 0; i < m.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      // -0 is written as 0: equal as numbers; everything else bit for bit.
+      EXPECT_EQ(r.positions_mm[i][k], m.positions_mm[i][k]) << i;
+      EXPECT_EQ(r.vectors_mm[i][k], m.vectors_mm[i][k]) << i;
+      if (m.positions_mm[i][k] != 0) {
+        EXPECT_EQ(std::signbit(r.positions_mm[i][k]), std::signbit(m.positions_mm[i][k]));
+      }
+    }
+    EXPECT_EQ(r.valid[i], m.valid[i]);
+    EXPECT_EQ(r.surface_ids[i], m.surface_ids[i]);
+  }
+}
+
+TEST(CliRewriteMatrix, RewriteAcceptsTheOfflineMatrix) {
+  offline::CompensationMatrix m;
+  for (int i = -10; i <= 10; ++i)
+    for (int j = -4; j <= 4; ++j) {
+      m.positions_mm.emplace_back(0.5 * i, 0.5 * j, 0.0);
+      m.vectors_mm.emplace_back(0.0, 0.0, 0.01);
+      m.valid.push_back(1);
+      m.surface_ids.push_back(1);
+    }
+  const auto dir = test::scratch_dir();
+  offline::write_compensation_matrix(dir / "comp.csv", m, "flat face");
+  std::ofstream(dir / "p.ngc") << "G21 G90 G94\n(OPERATION: FACE)\nT1 M6\nG43 H1\nG0 X-4 Y0 Z1\n"
+                                  "G1 Z0 F100\nG1 X4 F500\nG0 Z5\nM30\n";
+  std::ofstream(dir / "t.tbl") << "T1 P1 D2 Z30\n";
+  const auto r = test::run_process(
+      {test::cli_path().string(), "rewrite", "p.ngc", "--matrix", "comp.csv", "--operation", "FACE",
+       "--type", "face", "--tool-radius", "1", "--tools", "t.tbl", "--out", "o.ngc"},
+      dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("  max compensation      0.0100 mm"), std::string::npos) << r.out;
+  EXPECT_NE(test::read_file(dir / "o.ngc").find("X4.0000 Y0.0000 Z0.0100\nG0 X4 Y0 Z5\n"),
+            std::string::npos)
+      << test::read_file(dir / "o.ngc");
+}

@@ -1,0 +1,354 @@
+// truecut::interp::rewrite_program: lines outside the operation byte for
+// byte, constant and zero compensation, arcs, TRAORI and joint-space moves,
+// G93 feeds, field vs matrix, and the bad-input cases.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "truecut/interp/error.hpp"
+#include "truecut/interp/operations.hpp"
+#include "truecut/interp/rewrite.hpp"
+
+namespace truecut::interp {
+namespace {
+
+using V = Eigen::Vector3d;
+
+const char* kTools = "T1 P1 D2 Z35\nT2 P2 D4 Z40\n";
+
+RewriteOptions options(const std::string& op, CutType type, double radius) {
+  RewriteOptions o;
+  o.operation = op;
+  o.type = type;
+  o.tool_radius_mm = radius;
+  o.interpreter.tools = ToolTable::parse(kTools, "tools.tbl");
+  return o;
+}
+
+// Compensation points on a grid in the plane z = z0 over [x0,x1] x [y0,y1].
+CompensationMatrixData plane_matrix(double x0, double x1, double y0, double y1, double z0,
+                                    double spacing, const V& vector) {
+  CompensationMatrixData m;
+  for (double x = x0; x <= x1 + 1e-9; x += spacing)
+    for (double y = y0; y <= y1 + 1e-9; y += spacing) {
+      m.positions_mm.emplace_back(x, y, z0);
+      m.vectors_mm.push_back(vector);
+      m.valid.push_back(1);
+      m.surface_ids.push_back(1);
+    }
+  return m;
+}
+
+// Straight feeds of operation `op` in the program's coordinates.
+std::vector<Axes6> feeds_of(const std::string& text, const std::string& op) {
+  InterpreterOptions io;
+  io.tools = ToolTable::parse(kTools, "tools.tbl");
+  const auto prog = Interpreter(io).run_text(text, "o.ngc");
+  std::vector<Axes6> out;
+  for (const auto& c : prog.calls)
+    if (c.context.operation == op)
+      if (const auto* f = std::get_if<StraightFeed>(&c.op)) out.push_back(f->end);
+  return out;
+}
+
+double distance_to_segment(const V& p, const V& a, const V& b) {
+  const V d = b - a;
+  const double t = std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+  return (a + t * d - p).norm();
+}
+
+// A face-milling operation between two others.
+const char* kThreeOps =
+    "%\n"
+    "(OPERATION: FIRST)\n"
+    "G21 G17 G90 G94 G54\n"
+    "T1 M6\n"
+    "G43 H1\n"
+    "G0 X-5 Y0 Z5\n"
+    "G1 Z0 F100\n"
+    "G1 X5 F300\n"
+    "G0 Z5\n"
+    "(OPERATION: FACE)\r\n"
+    "T2 M6\r\n"
+    "G43 H2\r\n"
+    "S12000 M3\r\n"
+    "G0 X-8 Y-2 Z5\r\n"
+    "G1 Z0 F200\r\n"
+    "N40 G1 X8 F600 (pass 1)\r\n"
+    "Y2\r\n"
+    "X-8\r\n"
+    "G0 Z5\r\n"
+    "(OPERATION: LAST)\n"
+    "G1 X0 Y0 Z1 F100\n"
+    "X1\n"
+    "G0 Z20\n"
+    "M30\n"
+    "%\n";
+
+TEST(Rewrite, LinesOutsideTheRewrittenMovesStayByteForByte) {
+  // Points on the face z = 0 over x, y in [-4, 4], shifting by (0, 0, 0.05).
+  const auto m = plane_matrix(-4, 4, -4, 4, 0, 0.5, V(0, 0, 0.05));
+  RewriteOptions o = options("FACE", CutType::kFace, 2.0);
+  o.reach_mm = 0.6;
+  const RewriteResult r = rewrite_program(kThreeOps, "p.ngc", m, o);
+  const std::string in = kThreeOps;
+  // Everything up to the first rewritten line, and from the retract on.
+  const size_t first = in.find("N40");
+  EXPECT_EQ(r.text.substr(0, first), in.substr(0, first));
+  const size_t tail = in.find("G0 Z5\r\n(OPERATION: LAST)");
+  ASSERT_NE(tail, std::string::npos);
+  EXPECT_EQ(r.text.substr(r.text.size() - (in.size() - tail)), in.substr(tail));
+  // The rewritten line keeps its N number and comment, ends in CRLF.
+  EXPECT_NE(r.text.find("N40 (pass 1)\r\nX-7.5000 Y-2.0000 Z0.0000 F600\r\n"), std::string::npos)
+      << r.text;
+  EXPECT_EQ(r.summary.moves_read, 6);
+  // The two passes over the face; the rapids, the plunge and the step-over
+  // Y2 at x = 8 (2 mm beyond the disc's reach) get no compensation.
+  EXPECT_EQ(r.summary.moves_rewritten, 2);
+  EXPECT_EQ(r.summary.moves_kept, 4);
+  EXPECT_EQ(r.summary.rapids_rewritten, 0);
+  EXPECT_NEAR(r.summary.max_compensation_mm, 0.05, 1e-15);
+  EXPECT_NEAR(r.summary.mean_compensation_mm, 0.05, 1e-15);
+}
+
+TEST(Rewrite, ConstantOffsetShiftsEveryDensifiedPointByExactlyThatOffset) {
+  const V offset(0.01, -0.02, 0.03);
+  const auto m = plane_matrix(-10, 10, -4, 4, 0, 0.5, offset);
+  RewriteOptions o = options("FACE", CutType::kFace, 2.0);
+  o.reach_mm = 100;  // every point compensated
+  o.decimals = 6;
+  const RewriteResult r = rewrite_program(kThreeOps, "p.ngc", m, o);
+  const auto pts = feeds_of(r.text, "FACE");
+  // Original polyline of the operation's feeds: (-8,-2,5) -> (-8,-2,0) ->
+  // (8,-2,0) -> (8,2,0) -> (-8,2,0); the plunge is 5 mm, the passes 16 and 4.
+  const std::vector<V> path = {V(-8, -2, 5), V(-8, -2, 0), V(8, -2, 0), V(8, 2, 0), V(-8, 2, 0)};
+  ASSERT_EQ(pts.size(), 10u + 32u + 8u + 32u);
+  EXPECT_EQ(r.summary.points_written, 82);
+  EXPECT_EQ(r.summary.points_compensated, 82);
+  for (const Axes6& p : pts) {
+    const V back = V(p.x, p.y, p.z) - offset;
+    double best = 1e9;
+    for (size_t k = 1; k < path.size(); ++k)
+      best = std::min(best, distance_to_segment(back, path[k - 1], path[k]));
+    EXPECT_LE(best, 0.5e-6 * std::sqrt(3.0) + 1e-12) << p.x << " " << p.y << " " << p.z;
+  }
+  // Spacing: each piece is at most the step.
+  EXPECT_NEAR(pts[1].z - pts[0].z, -0.5, 1e-6);
+}
+
+TEST(Rewrite, ZeroMatrixLeavesTheProgramIdenticalOrOnItsPath) {
+  const auto m = plane_matrix(-10, 10, -4, 4, 0, 0.5, V::Zero());
+  RewriteOptions o = options("FACE", CutType::kFace, 2.0);
+  o.reach_mm = 100;
+  const RewriteResult same = rewrite_program(kThreeOps, "p.ngc", m, o);
+  EXPECT_EQ(same.text, kThreeOps);
+  EXPECT_EQ(same.summary.moves_rewritten, 0);
+  EXPECT_EQ(same.summary.points_written, 0);
+
+  o.keep_unchanged_moves = false;
+  o.decimals = 6;
+  const RewriteResult all = rewrite_program(kThreeOps, "p.ngc", m, o);
+  EXPECT_EQ(all.summary.moves_rewritten, 4);
+  for (const Axes6& p : feeds_of(all.text, "FACE")) {
+    const V q(p.x, p.y, p.z);
+    const double d = std::min({distance_to_segment(q, V(-8, -2, 5), V(-8, -2, 0)),
+                               distance_to_segment(q, V(-8, -2, 0), V(8, -2, 0)),
+                               distance_to_segment(q, V(8, -2, 0), V(8, 2, 0)),
+                               distance_to_segment(q, V(8, 2, 0), V(-8, 2, 0))});
+    EXPECT_LE(d, 1e-6);
+  }
+}
+
+TEST(Rewrite, ArcsAreDensifiedOnTheirCircle) {
+  const char* prog =
+      "G21 G17 G90 G94\n(OPERATION: RING)\nT1 M6\nG43 H1\nG0 X10 Y0 Z0\n"
+      "G1 X10 Y0 Z-1 F100\nG3 X0 Y10 I-10 J0 F500\nG2 X10 Y0 Z-2 I0 J-10\nG0 Z10\nM30\n";
+  CompensationMatrixData m;
+  m.positions_mm = {V(0, 0, -1)};
+  m.vectors_mm = {V::Zero()};
+  m.valid = {1};
+  m.surface_ids = {0};
+  RewriteOptions o = options("RING", CutType::kPeripheral, 1.0);
+  o.keep_unchanged_moves = false;
+  o.reach_mm = 0.1;
+  o.decimals = 7;
+  o.step_mm = 0.25;
+  const RewriteResult r = rewrite_program(prog, "ring.ngc", m, o);
+  const auto pts = feeds_of(r.text, "RING");
+  // Plunge 1 mm (4 pieces), quarter arc 15.708 mm (63), then the helix
+  // (quarter circle the other way, 1 mm down; 15.74 mm: 63 pieces).
+  ASSERT_EQ(pts.size(), 4u + 63u + 63u);
+  for (size_t k = 4; k < pts.size(); ++k) {
+    EXPECT_NEAR(std::hypot(pts[k].x, pts[k].y), 10.0, 1e-6);
+    EXPECT_GE(pts[k].y, -1e-6);
+  }
+  // Helix: Z linear in the angle (clockwise from 90 deg to 0 deg).
+  const Axes6& mid = pts[4 + 63 + 31];
+  const double angle = std::atan2(mid.y, mid.x);
+  EXPECT_NEAR(mid.z, -1.0 - (M_PI / 2 - angle) / (M_PI / 2), 1e-6);
+}
+
+// TRAORI: X Y Z are the tip in the workpiece frame, A C the tool axis.
+const char* kTraori =
+    "G21 G17 G90 G94\nG54\n(OPERATION: FIVE)\nT1 M6\nG43 H1\nTRAORI\n"
+    "G0 X0 Y0 Z20 A20 C0\nG1 X0 Y0 Z0 F400\nG1 X6 Y0 Z0 A30 C10 F1500\n"
+    "G1 X6 Y0 Z0 A30 C-10\nG0 Z20\nTRAFOOF\nM30\n";
+
+TEST(Rewrite, TraoriMovesShiftTheTipAndInterpolateTheAxis) {
+  const V offset(0.02, 0.01, -0.04);
+  CompensationMatrixData m;
+  m.positions_mm = {V(0, 0, 0), V(6, 0, 0)};
+  m.vectors_mm = {offset, offset};
+  m.valid = {1, 1};
+  m.surface_ids = {1, 1};
+  RewriteOptions o = options("FIVE", CutType::kBall, 1.0);
+  o.reach_mm = 100;
+  o.decimals = 7;
+  const RewriteResult r = rewrite_program(kTraori, "five.ngc", m, o);
+  const auto pts = feeds_of(r.text, "FIVE");
+  // Each point minus the offset is on the programmed tip path, A and C
+  // linear along the move.
+  ASSERT_GT(pts.size(), 40u);
+  int on_rotation = 0;
+  for (const Axes6& p : pts) {
+    const V tip = V(p.x, p.y, p.z) - offset;
+    EXPECT_LE(std::min(distance_to_segment(tip, V(0, 0, 20), V(0, 0, 0)),
+                       distance_to_segment(tip, V(0, 0, 0), V(6, 0, 0))),
+              1e-6);
+    if (std::fabs(tip.x() - 6) < 1e-6 && p.a == 30) ++on_rotation;
+    if (tip.x() > 1e-6 && tip.x() < 6 - 1e-6) {
+      EXPECT_NEAR(p.a, 20 + 10 * tip.x() / 6, 2e-6);
+      EXPECT_NEAR(p.c, 10 * tip.x() / 6, 2e-6);
+    }
+  }
+  // The pure rotation C10 -> C-10 at A30 moves the cutting edge by
+  // R * 20 deg... densified too (not one point).
+  EXPECT_GE(on_rotation, 2);
+  EXPECT_NE(r.text.find("TRAORI\nG0 X0 Y0 Z20 A20 C0\n"), std::string::npos);
+}
+
+TEST(Rewrite, JointSpaceMovesAreShiftedInTheWorkpieceFrame) {
+  // Without TRAORI the program holds joints: at A = 90 the table has turned
+  // the workpiece, so a workpiece offset along +Z is a joint move along -Y
+  // for these (zero) pivots (tcp_z = -sinA*u_y + cosA*u_z).
+  const char* prog =
+      "G21 G17 G90 G94\n(OPERATION: SIDE)\nT1 M6\nG43 H1\nG0 X0 Y0 Z5 A90\n"
+      "G1 X0 Y0 Z0 F100\nG1 X4 F500\nM30\n";
+  CompensationMatrixData m;
+  for (int i = -50; i <= 50; ++i) {
+    m.positions_mm.emplace_back(0.1 * i, 0, 0);
+    m.vectors_mm.emplace_back(0, 0, 0.05);
+    m.valid.push_back(1);
+    m.surface_ids.push_back(0);
+  }
+  // The tip at joints (x, 0, 0 + 35 - 35) with A = 90: workpiece tip
+  // (x, 0, 0); the compensation points lie there.
+  RewriteOptions o = options("SIDE", CutType::kFace, 1.0);
+  o.reach_mm = 0.2;
+  o.decimals = 7;
+  const RewriteResult r = rewrite_program(prog, "side.ngc", m, o);
+  const auto pts = feeds_of(r.text, "SIDE");
+  // The plunge (machine Z, workpiece Y at A = 90: 10 pieces) reaches the
+  // points only at its end; the 4 mm along X runs over them (8 pieces).
+  ASSERT_EQ(pts.size(), 18u);
+  for (size_t i = 10; i < pts.size(); ++i) {
+    const Axes6& p = pts[i];
+    rt::AcJoints j{p.x, p.y, p.z + 35, p.a, p.c};
+    rt::AcTrtParams k;
+    k.tool_length_mm = 35;
+    const V tip = rt::forward_ac(k, j).tcp_mm;
+    EXPECT_NEAR(tip.z(), 0.05, 1e-7);
+    EXPECT_NEAR(tip.y(), 0.0, 1e-7);
+    EXPECT_NEAR(p.y, -0.05, 1e-7);
+  }
+}
+
+TEST(Rewrite, InverseTimeFeedIsRecomputedPerPiece) {
+  const char* prog =
+      "G21 G17 G90\n(OPERATION: G93OP)\nT1 M6\nG43 H1\nG0 X0 Y0 Z0\n"
+      "G93 G1 X2 F10\nG94 G0 Z5\nM30\n";
+  const auto m = plane_matrix(-1, 3, -1, 1, 0, 0.5, V(0, 0, 0.01));
+  RewriteOptions o = options("G93OP", CutType::kFace, 1.0);
+  o.reach_mm = 0.5;
+  const RewriteResult r = rewrite_program(prog, "g93.ngc", m, o);
+  // 2 mm in 4 pieces of 0.5 mm: each F = 4 x 10, total time 4 / 40 = 1/10 min.
+  EXPECT_NE(r.text.find("G93\nG1 X0.5000 Y0.0000 Z0.0100 F40\nX1.0000 Y0.0000 Z0.0100 F40\n"),
+            std::string::npos)
+      << r.text;
+  // The retract names only Z: it is written with X Y Z so that X and Y come
+  // back from the compensated point; G94 stays on its own line.
+  EXPECT_NE(r.text.find("X2.0000 Y0.0000 Z0.0100 F40\nG94\nG0 X2 Y0 Z5\nM30\n"), std::string::npos)
+      << r.text;
+  EXPECT_EQ(r.summary.rapids_rewritten, 1);
+}
+
+TEST(Rewrite, FieldAndMatrixAgreeOnAConstantOffset) {
+  const V offset(0.015, -0.025, 0.035);
+  rt::FieldGrid g;
+  g.origin_mm = V(-20, -10, -10);
+  g.spacing_mm = V(1, 1, 1);
+  g.dims = {41, 21, 21};
+  std::vector<rt::FieldLayer> layers(2);
+  for (int t = 0; t < 2; ++t) {
+    layers[t].tool = t + 1;
+    layers[t].nodes.assign(g.node_count(), rt::FieldNode{offset.x(), offset.y(), offset.z(), 1.0});
+  }
+  const rt::CorrectionField field(g, layers);
+  const auto m = plane_matrix(-10, 10, -4, 4, 0, 0.5, offset);
+  RewriteOptions o = options("FACE", CutType::kFace, 2.0);
+  o.reach_mm = 100;
+  o.decimals = 6;
+  const auto a = feeds_of(rewrite_program(kThreeOps, "p.ngc", m, o).text, "FACE");
+  const auto b = feeds_of(rewrite_program(kThreeOps, "p.ngc", field, o).text, "FACE");
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t k = 0; k < a.size(); ++k)
+    for (int ax = 0; ax < 6; ++ax)
+      EXPECT_NEAR(a[k][ax], b[k][ax], 1.0000001e-6);
+  // Outside the grid the field gives nothing: the program stays as it was.
+  g.origin_mm = V(100, 100, 100);
+  const rt::CorrectionField away(g, layers);
+  EXPECT_EQ(rewrite_program(kThreeOps, "p.ngc", away, o).text, kThreeOps);
+}
+
+template <typename E>
+std::string error_of(const std::string& program, const RewriteOptions& o) {
+  const auto m = plane_matrix(-10, 10, -4, 4, 0, 0.5, V(0, 0, 0.01));
+  try {
+    rewrite_program(program, "bad.ngc", m, o);
+  } catch (const E& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(Rewrite, BadInputIsRefusedWithAClearMessage) {
+  RewriteOptions o = options("FACE", CutType::kFace, 2.0);
+  o.reach_mm = 100;
+  EXPECT_EQ(error_of<RewriteError>(kThreeOps, options("ROUGH", CutType::kFace, 2)),
+            "bad.ngc: operation 'ROUGH' is not in the program (operations: FIRST, FACE, LAST)");
+  RewriteOptions s = o;
+  s.step_mm = 0;
+  EXPECT_EQ(error_of<std::invalid_argument>(kThreeOps, s), "step must be > 0 mm (got 0.000000)");
+  s.step_mm = -1;
+  EXPECT_NE(error_of<std::invalid_argument>(kThreeOps, s), "no error");
+  const std::string head = "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X0 Y0 Z1\n";
+  EXPECT_EQ(error_of<GcodeError>(head + "G1 Z0 F100 M0\nM30\n", o),
+            "bad.ngc:6:12: M0 beside a move: this move cannot be rewritten");
+  EXPECT_EQ(error_of<GcodeError>(head + "G1 X[1+1] F100\nM30\n", o),
+            "bad.ngc:6:4: word X with a parameter or expression: this move cannot be rewritten");
+  EXPECT_EQ(error_of<GcodeError>(head + "G91 G1 X1 F100\nM30\n", o),
+            "bad.ngc:6:1: G91 (incremental distance): this move cannot be rewritten");
+  EXPECT_EQ(error_of<GcodeError>(head + "F100\nBSPLINE X1\nX2 Y1\nG1 X3\nM30\n", o),
+            "bad.ngc:7: BSPLINE/CSPLINE point: spline moves cannot be rewritten as G1 moves");
+  EXPECT_EQ(
+      error_of<GcodeError>(head + "F100\no1 repeat [2]\nG1 X1\nG1 X0\no1 endrepeat\nM30\n", o),
+      "bad.ngc:8: line makes several moves (loop, subroutine or G28/G30): it cannot be "
+      "rewritten");
+  // G91 set before the operation: caught when the new program is checked.
+  const std::string g91 = error_of<GcodeError>(
+      "G21 G91 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 Z40\nG1 X1 F100\nM30\n", o);
+  EXPECT_NE(g91.find("G91"), std::string::npos) << g91;
+}
+
+}  // namespace
+}  // namespace truecut::interp
