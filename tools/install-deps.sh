@@ -3,7 +3,7 @@
 set -euo pipefail
 packages=(cmake g++ make pkg-config libeigen3-dev libembree-dev libboost-dev libtbb-dev
           libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev libssl-dev
-          libpng-dev)
+          libpng-dev chromium)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

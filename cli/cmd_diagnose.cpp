@@ -1,0 +1,286 @@
+// truecut diagnose --recording REC.csv --out DIR: what the machine does that
+// the believed model does not (trace mode), and --surface / --cmm with the
+// program that machined the part (surface mode); docs/diagnosis.md.
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "run_support.hpp"
+#include "truecut/offline/stl_io.hpp"
+#include "truecut/sim/diagnosis/diagnosis.hpp"
+#include "truecut/sim/diagnosis/surface.hpp"
+#include "truecut/sim/machine_description.hpp"
+#include "truecut/sim/measure/part_surfaces.hpp"
+#include "truecut/sim/recording.hpp"
+
+namespace truecut::cli {
+namespace {
+
+namespace fs = std::filesystem;
+namespace dg = sim::diagnosis;
+
+const char* kDiagnoseHelp =
+    "usage: truecut diagnose --recording REC.csv --out DIR [options]\n"
+    "       truecut diagnose (--surface SCAN.{stl,ply,xyz} | --cmm CMM.csv) --program P.ngc\n"
+    "                        --machine BELIEVED.json --out DIR [options]\n"
+    "\n"
+    "Re-simulates the recorded commands through the believed machine model, removes\n"
+    "a logging delay, locates where the recording differs (above the noise floor),\n"
+    "names the missing effects of the machine description (servo_lag, backlash,\n"
+    "reversal_spike, pitch_error, thermal_drift, squareness, straightness), fits their\n"
+    "parameters"
+    "with 95 % intervals and shows the fit on held-out data. Target per joint:\n"
+    "<j>_meas when present, else <j>_act. Writes DIR/diagnosis.json,\n"
+    "DIR/fitted_machine.json and DIR/diagnosis.html, each atomically; on bad input\n"
+    "(exit 2) nothing is written.\n"
+    "\n"
+    "options:\n"
+    "  --recording FILE        the recording CSV (required)\n"
+    "  --out DIR               output folder (created; required)\n"
+    "  --map NAME=SOURCE,...   column map for foreign files (repeatable; also used for\n"
+    "                          --holdout), e.g. t=@index*0.1,x_cmd=X1_CommandPosition\n"
+    "  --machine FILE          believed machine description (default: the ideal\n"
+    "                          machine, actual = commanded)\n"
+    "  --holdout FILE          a second recording to prove the fit on\n"
+    "  --split F               hold out the last fraction F of the recording (default\n"
+    "                          0.3 without --holdout; 0: none)\n"
+    "  --servo-period S        longest simulated servo period (default 0.001): each\n"
+    "                          recorded interval is split into equal sub-steps\n"
+    "  --max-delay S           largest logging delay searched (default: 10 samples or\n"
+    "                          50 ms, whichever is longer)\n"
+    "  --bic-threshold D       BIC gain needed to select an effect (default 10)\n"
+    "\n"
+    "surface mode: re-machines PROGRAM on the believed machine, profiles out the\n"
+    "registration, and explains the residual by tool_radius_error, tool_length_error,\n"
+    "rotary_location (when the program turns A or C), tool_deflection,\n"
+    "workpiece_deflection and squareness (one re-machining per parameter).\n"
+    "  --surface FILE          a scan (STL/PLY mesh, PLY/XYZ points), registered by ICP\n"
+    "  --cmm FILE              CMM CSV with deviations (as `truecut measure` writes it)\n"
+    "  --program FILE          the program that machined the part (required)\n"
+    "  --nominal/--part/--tools  default: beside the program\n"
+    "  --split F               held-out region: the last fraction F along the part's\n"
+    "                          longest extent (default 0.3)\n"
+    "  --candidates LIST       comma-separated effects to test (default: all)\n"
+    "  --spacing MM            scan: nominal point spacing (default 0.5)\n"
+    "  --work DIR              where re-machinings are kept and reused (default DIR/runs)\n"
+    "  --component-path DIR    also search DIR for components\n"
+    "  --help                  this text\n";
+
+void write_all(const std::vector<std::pair<fs::path, std::string>>& files) {
+  std::vector<fs::path> temps;
+  auto cleanup = [&] {
+    std::error_code ec;
+    for (const auto& t : temps)
+      fs::remove(t, ec);
+  };
+  for (const auto& [path, text] : files) {
+    if (fs::exists(path) && !fs::is_regular_file(path)) {
+      cleanup();
+      throw std::runtime_error(path.string() + " exists and is not a regular file");
+    }
+    fs::path tmp = path;
+    tmp += ".tmp";
+    temps.push_back(tmp);
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out.write(text.data(), std::streamsize(text.size()));
+    out.close();
+    if (!out) {
+      cleanup();
+      throw std::runtime_error("cannot write " + tmp.string());
+    }
+  }
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    std::error_code ec;
+    fs::rename(temps[i], files[i].first, ec);
+    if (ec) {
+      cleanup();
+      throw std::runtime_error("cannot rename " + temps[i].string() + ": " + ec.message());
+    }
+  }
+}
+
+}  // namespace
+
+namespace {
+
+fs::path existing(const std::optional<std::string>& given, const fs::path& beside, const char* name,
+                  const char* option) {
+  const fs::path p = given ? fs::path(*given) : beside / name;
+  if (!fs::is_regular_file(p))
+    throw UsageError(p.string() + " not found" +
+                     (given ? std::string() : std::string(" (give ") + option + ")"));
+  return p;
+}
+
+int surface_mode(const ParsedArgs& a, const std::string& out_dir) {
+  const auto program = a.value("program");
+  if (!program) throw UsageError("surface mode needs --program FILE.ngc");
+  if (!a.value("machine")) throw UsageError("surface mode needs --machine BELIEVED.json");
+  if (a.value("holdout")) throw UsageError("surface mode: use --split (a held-out region)");
+  dg::SurfaceJob job;
+  job.program = *program;
+  if (!fs::is_regular_file(job.program)) throw UsageError(*program + " not found");
+  const fs::path beside = job.program.has_parent_path() ? job.program.parent_path() : ".";
+  job.nominal = existing(a.value("nominal"), beside, "nominal.stl", "--nominal");
+  job.part = existing(a.value("part"), beside, "part.json", "--part");
+  job.tools = existing(a.value("tools"), beside, "tools.tbl", "--tools");
+  job.component_path = component_path(a);
+  job.work_dir = a.value("work") ? fs::path(*a.value("work")) : fs::path(out_dir);
+  dg::SurfaceOptions options;
+  options.holdout_fraction = a.number("split", 0.3, 0.0, 0.9);
+  options.bic_threshold = a.number("bic-threshold", 10.0, 0.0, 1e6);
+  if (const auto c = a.value("candidates")) {
+    std::string cur;
+    for (char ch : *c + ",") {
+      if (ch != ',') {
+        cur += ch;
+      } else if (!cur.empty()) {
+        options.candidates.push_back(cur);
+        cur.clear();
+      }
+    }
+  }
+  options.progress = [](const std::string& line) {
+    std::fprintf(stderr, "diagnose: %s\n", line.c_str());
+  };
+  dg::SurfaceDiagnosisResult result;
+  try {
+    const auto believed = sim::read_machine_description(*a.value("machine"));
+    dg::SurfaceMeasurement m;
+    if (const auto cmm = a.value("cmm")) {
+      m = dg::read_cmm_measurement(*cmm);
+    } else {
+      const auto nominal = offline::read_stl(job.nominal);
+      const auto labels = sim::measure::read_part_surfaces(job.part);
+      m = dg::read_scan_measurement(*a.value("surface"), nominal, labels.triangle_surface_ids,
+                                    a.number("spacing", 0.5, 0.01, 100.0));
+    }
+    result = dg::diagnose_surface(m, job, believed, options);
+    result.believed_file = *a.value("machine");
+  } catch (const sim::MachineDescriptionError& e) {
+    std::fprintf(stderr, "truecut diagnose: %s\n", e.what());
+    return kExitUsage;
+  } catch (const dg::DiagnosisError& e) {
+    std::fprintf(stderr, "truecut diagnose: %s\n", e.what());
+    return kExitUsage;
+  } catch (const sim::measure::PartFileError& e) {
+    std::fprintf(stderr, "truecut diagnose: %s\n", e.what());
+    return kExitUsage;
+  }
+  const fs::path dir(out_dir);
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw std::runtime_error("cannot create " + dir.string() + ": " + ec.message());
+  write_all({{dir / "diagnosis.json", dg::surface_diagnosis_json(result)},
+             {dir / "fitted_machine.json", sim::format_machine_description(result.fitted)},
+             {dir / "diagnosis.html", dg::surface_diagnosis_html(result)}});
+  std::fputs(dg::surface_diagnosis_summary(result).c_str(), stdout);
+  std::printf("wrote %s, %s and %s\n", (dir / "diagnosis.json").c_str(),
+              (dir / "fitted_machine.json").c_str(), (dir / "diagnosis.html").c_str());
+  return kExitOk;
+}
+
+}  // namespace
+
+int cmd_diagnose(const std::vector<std::string>& argv) {
+  ParsedArgs a(argv, {{"recording", true},
+                      {"surface", true},
+                      {"cmm", true},
+                      {"program", true},
+                      {"nominal", true},
+                      {"part", true},
+                      {"tools", true},
+                      {"candidates", true},
+                      {"spacing", true},
+                      {"work", true},
+                      {"component-path", true, true},
+                      {"out", true},
+                      {"map", true, true},
+                      {"machine", true},
+                      {"holdout", true},
+                      {"split", true},
+                      {"servo-period", true},
+                      {"max-delay", true},
+                      {"bic-threshold", true},
+                      {"help", false}});
+  if (a.flag("help")) {
+    std::fputs(kDiagnoseHelp, stdout);
+    return kExitOk;
+  }
+  if (!a.positionals().empty())
+    throw UsageError("unexpected argument '" + a.positionals()[0] + "'");
+  const auto recording = a.value("recording");
+  const int modes =
+      int(bool(recording)) + int(bool(a.value("surface"))) + int(bool(a.value("cmm")));
+  if (modes > 1) throw UsageError("--recording, --surface and --cmm exclude each other");
+  if (modes == 0) throw UsageError("--recording FILE (or --surface / --cmm) is required");
+  const auto out_dir = a.value("out");
+  if (!out_dir) throw UsageError("--out DIR is required");
+  if (!recording) return surface_mode(a, *out_dir);
+  const auto holdout = a.value("holdout");
+  if (holdout && a.value("split")) throw UsageError("--holdout and --split exclude each other");
+
+  dg::DiagnosisOptions options;
+  options.holdout_fraction = a.number("split", 0.3, 0.0, 0.9);
+  options.max_servo_period_s = a.number("servo-period", 1e-3, 1e-6, 1.0);
+  options.max_delay_s = a.number("max-delay", 0.0, 0.0, 1e3);
+  options.bic_threshold = a.number("bic-threshold", 10.0, 0.0, 1e6);
+  options.progress = [](const std::string& line) {
+    std::fprintf(stderr, "diagnose: %s\n", line.c_str());
+  };
+
+  std::string map_text;
+  for (const auto& m : a.values("map"))
+    map_text += (map_text.empty() ? "" : ",") + m;
+
+  dg::DiagnosisResult result;
+  try {
+    sim::RecordingOptions ro;
+    ro.map = sim::parse_column_map(map_text);
+    std::fprintf(stderr, "diagnose: reading %s\n", recording->c_str());
+    const auto rec = sim::read_recording(*recording, ro);
+    std::optional<sim::Recording> held;
+    if (holdout) {
+      std::fprintf(stderr, "diagnose: reading %s\n", holdout->c_str());
+      held = sim::read_recording(*holdout, ro);
+    }
+    const auto believed = a.value("machine") ? sim::read_machine_description(*a.value("machine"))
+                                             : dg::ideal_machine_for(rec);
+    result = dg::diagnose(rec, held ? &*held : nullptr, believed, options);
+    result.map = map_text;
+  } catch (const sim::RecordingError& e) {
+    std::fprintf(stderr, "truecut diagnose: %s\n", e.what());
+    return kExitUsage;
+  } catch (const sim::MachineDescriptionError& e) {
+    std::fprintf(stderr, "truecut diagnose: %s\n", e.what());
+    return kExitUsage;
+  } catch (const dg::DiagnosisError& e) {
+    std::fprintf(stderr, "truecut diagnose: %s\n", e.what());
+    return kExitUsage;
+  }
+
+  const fs::path dir(*out_dir);
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw std::runtime_error("cannot create " + dir.string() + ": " + ec.message());
+  write_all({{dir / "diagnosis.json", dg::diagnosis_json(result)},
+             {dir / "fitted_machine.json", sim::format_machine_description(result.fitted)},
+             {dir / "diagnosis.html", dg::diagnosis_html(result)}});
+  std::fputs(dg::diagnosis_summary(result).c_str(), stdout);
+  std::printf("wrote %s, %s and %s\n", (dir / "diagnosis.json").c_str(),
+              (dir / "fitted_machine.json").c_str(), (dir / "diagnosis.html").c_str());
+  return kExitOk;
+}
+
+namespace {
+const CommandRegistration kRegistration{
+    "diagnose",
+    "find, name and fit what the machine does that the model does not (recordings, parts)",
+    cmd_diagnose, 70};
+}  // namespace
+
+}  // namespace truecut::cli

@@ -1,0 +1,525 @@
+// The trace-mode pipeline: simulate, align, locate, explain, fit, prove.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "effect_params.hpp"
+#include "locate.hpp"
+#include "model_fit.hpp"
+#include "trace.hpp"
+#include "truecut/sim/diagnosis/diagnosis.hpp"
+
+namespace truecut::sim::diagnosis {
+
+namespace {
+
+std::string fmt(const char* f, double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, f, v);
+  return b;
+}
+
+struct Masks {
+  std::vector<char> train, heldout, valid;  // valid: inside the delay margins, no glitch
+  std::size_t excluded = 0;                 // glitch samples
+};
+
+Masks make_masks(const Trace& tr, double margin_s, double holdout_fraction) {
+  Masks m;
+  const std::size_t n = tr.rows();
+  const double t0 = tr.t_s.front(), t1 = tr.t_s.back();
+  const double split = t1 - holdout_fraction * (t1 - t0);
+  m.train.assign(n, 0);
+  m.heldout.assign(n, 0);
+  m.valid.assign(n, 0);
+  // Recorder glitches: a command jump far beyond the path's own speeds
+  // (20 × the median speed while moving) is not motion; the two
+  // samples around it are left out of every fit and statistic.
+  std::vector<char> glitch(n, 0);
+  for (int j = 0; j < kJointCount; ++j) {
+    if (tr.cmd[j].empty()) continue;
+    std::vector<double> speeds;
+    for (std::size_t k = 1; k < n; ++k) {
+      const double v = std::abs(tr.cmd[j][k] - tr.cmd[j][k - 1]) / (tr.t_s[k] - tr.t_s[k - 1]);
+      if (v > 0) speeds.push_back(v);
+    }
+    if (speeds.size() < 10) continue;
+    std::nth_element(speeds.begin(), speeds.begin() + speeds.size() / 2, speeds.end());
+    const double limit = 20 * speeds[speeds.size() / 2];
+    for (std::size_t k = 1; k < n; ++k)
+      if (std::abs(tr.cmd[j][k] - tr.cmd[j][k - 1]) / (tr.t_s[k] - tr.t_s[k - 1]) > limit)
+        glitch[k] = glitch[k - 1] = 1;
+  }
+  for (std::size_t k = 0; k < n; ++k) {
+    const double t = tr.t_s[k];
+    m.valid[k] = t >= t0 + margin_s && t <= t1 - margin_s && !glitch[k];
+    m.excluded += glitch[k];
+    if (!m.valid[k]) continue;
+    if (holdout_fraction > 0 && t >= split)
+      m.heldout[k] = 1;
+    else
+      m.train[k] = 1;
+  }
+  return m;
+}
+
+FitContext context(const Trace& tr, const std::vector<char>& use, const std::vector<double>& w,
+                   double delay_s, const DiagnosisOptions& o) {
+  FitContext c;
+  c.trace = &tr;
+  c.max_period_s = o.max_servo_period_s;
+  c.bic_threshold = o.bic_threshold;
+  c.progress = o.progress;
+  c.delay_s = delay_s;
+  c.layout.axes = tr.axes;
+  for (std::size_t a = 0; a < tr.axes.size(); ++a) {
+    c.aligned[tr.axes[a]] = tr.target[tr.axes[a]];
+    std::vector<std::size_t> ix;
+    for (std::size_t k = 0; k < tr.rows(); ++k)
+      if (use[k]) ix.push_back(k);
+    c.layout.index.push_back(ix);
+    c.layout.weight.push_back(w[a]);
+  }
+  return c;
+}
+
+// Weighted, centred RSS of the recording read at t + d against a fixed simulation.
+double delay_rss(const Trace& tr, const Simulated& sim, const std::vector<char>& use,
+                 const std::vector<double>& w, double d) {
+  double total = 0;
+  for (std::size_t a = 0; a < tr.axes.size(); ++a) {
+    const int j = tr.axes[a];
+    const auto& y = tr.target[j];
+    const auto sd = delayed(tr.t_s, sim.target[j], d);
+    double s = 0, ss = 0;
+    std::size_t n = 0;
+    for (std::size_t k = 0; k < y.size(); ++k)
+      if (use[k]) {
+        const double r = (y[k] - sd[k]) * w[a];
+        s += r, ss += r * r, ++n;
+      }
+    total += n ? ss - s * s / double(n) : 0;
+  }
+  return total;
+}
+
+// The delay minimising delay_rss in [lo, hi]: a grid, then golden section.
+double best_delay(const Trace& tr, const Simulated& sim, const std::vector<char>& use,
+                  const std::vector<double>& w, double lo, double hi, double step) {
+  double best = 0, best_rss = delay_rss(tr, sim, use, w, 0.0);
+  const int steps = std::min(800, int(std::ceil((hi - lo) / step)));
+  for (int i = 0; i <= steps; ++i) {
+    const double d = lo + (hi - lo) * i / std::max(1, steps);
+    const double r = delay_rss(tr, sim, use, w, d);
+    if (r < best_rss) best_rss = r, best = d;
+  }
+  const double g = (std::sqrt(5.0) - 1) / 2;
+  double a = best - (hi - lo) / std::max(1, steps), b = best + (hi - lo) / std::max(1, steps);
+  for (int it = 0; it < 30; ++it) {
+    const double c = b - g * (b - a), d = a + g * (b - a);
+    if (delay_rss(tr, sim, use, w, c) < delay_rss(tr, sim, use, w, d))
+      b = d;
+    else
+      a = c;
+  }
+  const double m = (a + b) / 2;
+  return delay_rss(tr, sim, use, w, m) < best_rss ? m : best;
+}
+
+struct Hypothesis {
+  double delay_s = 0;
+  ModelFit fit;
+};
+
+struct Residuals {
+  std::array<std::vector<double>, kJointCount> r;  // aligned − simulated − train offset
+  std::array<double, kJointCount> offset{};
+};
+
+Residuals residuals(const Trace& tr, const Simulated& sim, double delay_s,
+                    const std::vector<char>& offset_use,
+                    const std::array<double, kJointCount>* offsets) {
+  Residuals out;
+  for (int j : tr.axes) {
+    const auto& y = tr.target[j];
+    const auto sd = delayed(tr.t_s, sim.target[j], delay_s);
+    auto& r = out.r[j];
+    r.resize(y.size());
+    for (std::size_t k = 0; k < y.size(); ++k)
+      r[k] = y[k] - sd[k];
+    double off = 0;
+    if (offsets) {
+      off = (*offsets)[j];
+    } else {
+      std::size_t n = 0;
+      for (std::size_t k = 0; k < r.size(); ++k)
+        if (offset_use[k]) off += r[k], ++n;
+      off = n ? off / double(n) : 0;
+    }
+    out.offset[j] = off;
+    for (double& v : r)
+      v -= off;
+  }
+  return out;
+}
+
+void figures(const Trace& tr, const Residuals& raw, const Residuals& before, const Residuals& after,
+             const std::vector<char>& use, FitFigures& f) {
+  double sr = 0;
+  for (int j : tr.axes)
+    for (std::size_t k = 0; k < tr.rows(); ++k)
+      if (use[k]) sr += raw.r[j][k] * raw.r[j][k];
+  double sb = 0, sa = 0;
+  std::size_t n = 0;
+  for (int j : tr.axes) {
+    double jb = 0, ja = 0;
+    std::size_t jn = 0;
+    for (std::size_t k = 0; k < tr.rows(); ++k) {
+      if (!use[k]) continue;
+      const double b = before.r[j][k], a = after.r[j][k];
+      jb += b * b, ja += a * a, ++jn;
+      f.max_before_mm = std::max(f.max_before_mm, std::abs(b));
+      f.max_after_mm = std::max(f.max_after_mm, std::abs(a));
+    }
+    if (jn)
+      f.per_axis_rms_mm[std::string(kJointNames[j])] = {std::sqrt(jb / jn), std::sqrt(ja / jn)};
+    sb += jb, sa += ja, n += jn;
+  }
+  f.samples = n;
+  f.rms_before_mm = n ? std::sqrt(sb / n) : 0;
+  f.rms_after_mm = n ? std::sqrt(sa / n) : 0;
+  f.rms_unaligned_mm = n ? std::sqrt(sr / n) : 0;
+}
+
+}  // namespace
+
+MachineDescription ideal_machine_for(const Recording& rec) {
+  MachineDescription d;
+  d.name = "ideal machine (actual = commanded)";
+  for (int j = 0; j < kJointCount; ++j) {
+    const std::string name(kJointNames[j]);
+    auto& jp = d.machine.joints[j];
+    jp.drive = default_drive(j);
+    double lo = -1000, hi = 1000;
+    if (rec.has(name + "_cmd")) {
+      const auto& c = rec.channel(name + "_cmd");
+      const auto [a, b] = std::minmax_element(c.begin(), c.end());
+      const double pad = std::max(1.0, 0.1 * (*b - *a));
+      lo = std::min(lo, *a - pad), hi = std::max(hi, *b + pad);
+    } else if (j >= 3) {
+      continue;
+    }
+    jp.present = true;
+    jp.min = lo;
+    jp.max = hi;
+  }
+  return d;
+}
+
+DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_rec,
+                         const MachineDescription& believed, const DiagnosisOptions& o) {
+  auto say = [&](const std::string& s) {
+    if (o.progress) o.progress(s);
+  };
+  const Trace tr = make_trace(train_rec);
+  if (tr.axes.empty())
+    throw DiagnosisError(train_rec.file +
+                         ": no joint has both a <j>_cmd and a <j>_act or <j>_meas channel "
+                         "(map them with --map)");
+  if (tr.rows() < 20)
+    throw DiagnosisError(train_rec.file + ": " + std::to_string(tr.rows()) +
+                         " samples; at least 20 are needed");
+  DiagnosisResult res;
+  res.recording = train_rec.file;
+  res.rows = tr.rows();
+  res.believed = believed;
+  const double dt = median_period(tr.t_s);
+  res.sample_period_s = dt;
+  res.substeps = substeps_for(dt, o.max_servo_period_s);
+  const double span = tr.t_s.back() - tr.t_s.front();
+  const double dmax =
+      std::min(o.max_delay_s > 0 ? o.max_delay_s : std::max(10 * dt, 0.05), 0.1 * span);
+  const double holdout_fraction = holdout_rec ? 0.0 : o.holdout_fraction;
+  const Masks masks = make_masks(tr, dmax, holdout_fraction);
+  res.excluded_samples = masks.excluded;
+  if (masks.excluded)
+    say(std::to_string(masks.excluded) +
+        " samples around command jumps left out (recorder glitches)");
+  const MachineParams& base = believed.machine;
+
+  say("re-simulating " + std::to_string(tr.rows()) + " samples (" + std::to_string(res.substeps) +
+      " servo periods per interval) with the believed model");
+  const Simulated sim0 = resimulate(base, tr, o.max_servo_period_s);
+
+  // Noise floors from the unaligned residual (the high-pass hardly sees a delay).
+  std::vector<double> w;
+  for (int j : tr.axes) {
+    std::vector<double> r(tr.rows());
+    for (std::size_t k = 0; k < r.size(); ++k)
+      r[k] = tr.target[j][k] - sim0.target[j][k];
+    const double floor = noise_floor(r, masks.train);
+    AxisStats st;
+    st.axis = std::string(kJointNames[j]);
+    st.target = st.axis + (tr.meas[j] ? "_meas" : "_act");
+    st.noise_floor_mm = floor;
+    res.axes.push_back(st);
+    w.push_back(1.0 / std::max(floor, 1e-7));
+  }
+
+  // Align: a logging delay and the effects are fitted as competing
+  // hypotheses, so that neither masquerades as the other.
+  const double step = std::max(dt / 4, dmax / 400);
+  say("searching a logging delay within ±" + fmt("%.4g", dmax) + " s");
+  const double d_a = best_delay(tr, sim0, masks.train, w, -dmax, dmax, step);
+  std::vector<Hypothesis> hyps;
+  auto fit_at = [&](double d) {
+    say("fitting with delay " + fmt("%.5g", d) + " s");
+    Hypothesis h;
+    h.delay_s = d;
+    h.fit = fit_model(context(tr, masks.train, w, d, o), base);
+    hyps.push_back(h);
+    return hyps.back();
+  };
+  const double small = 0.05 * dt;
+  const Hypothesis h0 = fit_at(0.0);
+  if (std::abs(d_a) > small) {
+    Hypothesis h1 = fit_at(d_a);
+    const Simulated s1 = resimulate(h1.fit.params, tr, o.max_servo_period_s);
+    const double d_a2 =
+        best_delay(tr, s1, masks.train, w, d_a - 2 * step, d_a + 2 * step, step / 8);
+    if (std::abs(d_a2 - d_a) > 0.02 * dt) fit_at(d_a2);
+  }
+  {
+    const Simulated s0f = resimulate(h0.fit.params, tr, o.max_servo_period_s);
+    const double d0 = best_delay(tr, s0f, masks.train, w, -dmax, dmax, step);
+    bool known = false;
+    for (const auto& h : hyps)
+      known = known || std::abs(h.delay_s - d0) <= 0.05 * dt;
+    if (std::abs(d0) > small && !known) fit_at(d0);
+  }
+  // Compare on one scale: the effective sample count of the best fit.
+  std::size_t best_i = 0;
+  for (std::size_t i = 1; i < hyps.size(); ++i)
+    if (hyps[i].fit.rss < hyps[best_i].fit.rss) best_i = i;
+  const double n_eff = hyps[best_i].fit.n_eff;
+  auto bic = [&](const Hypothesis& h) {
+    const double n = double(h.fit.n);
+    return n_eff * std::log(std::max(h.fit.rss, 1e-300) / n) +
+           (h.fit.k + (h.delay_s != 0.0 ? 1 : 0)) * std::log(n_eff);
+  };
+  for (const auto& h : hyps)
+    say("hypothesis delay " + fmt("%.5g", h.delay_s) +
+        " s: " + std::to_string(h.fit.selected.size()) + " effects, weighted RSS " +
+        fmt("%.6g", h.fit.rss) + ", BIC " + fmt("%.6g", bic(h)));
+  std::size_t chosen = 0;
+  for (std::size_t i = 1; i < hyps.size(); ++i)
+    if (bic(hyps[i]) < bic(hyps[chosen])) chosen = i;
+  const Hypothesis& H = hyps[chosen];
+  res.delay_s = H.delay_s;
+  for (std::size_t i = 0; i < hyps.size(); ++i) {
+    if (i == chosen) continue;
+    const double d = bic(hyps[i]) - bic(H);
+    // Equal fit quality (whatever the parameter count): the data cannot tell.
+    const double dlik =
+        n_eff * std::abs(std::log(std::max(hyps[i].fit.rss, 1e-300) / std::max(H.fit.rss, 1e-300)));
+    const bool delay_differs = std::abs(hyps[i].delay_s - H.delay_s) > 0.01 * dt;
+    if ((d >= o.bic_threshold && dlik >= o.bic_threshold) || !delay_differs) continue;
+    // Which servo effects trade places with the delay.
+    std::string other;
+    for (const ModelFit* f : {&H.fit, static_cast<const ModelFit*>(&hyps[i].fit)})
+      for (const auto& s : f->selected)
+        if (s.effect == "servo_lag" && other.find(s.group) == std::string::npos)
+          other += (other.empty() ? "" : ",") + s.group;
+    NotIdentifiable ni;
+    ni.first = "logging_delay";
+    ni.second = other.empty() ? "servo_lag" : other;
+    ni.separate_by = separation_hint("logging_delay", "servo_lag");
+    ni.correlation = 1.0;
+    res.not_identifiable.push_back(ni);
+    std::string alt;
+    for (std::size_t e = 0; e < hyps[i].fit.selected.size(); ++e) {
+      alt += (alt.empty() ? "" : "; ") + hyps[i].fit.selected[e].group;
+      for (const auto& p : hyps[i].fit.per_effect[e])
+        alt += " " + p.name + "=" + fmt("%.4g", p.value);
+    }
+    res.delay_note = "a delay of " + fmt("%.5g", hyps[i].delay_s) + " s" +
+                     (alt.empty() ? std::string() : " with " + alt) +
+                     " explains the data almost as well (ΔBIC " + fmt("%.3g", d) + ", RSS ratio " +
+                     fmt("%.4g", hyps[i].fit.rss / H.fit.rss) + ")";
+    break;
+  }
+  const ModelFit& fit = H.fit;
+  res.not_identifiable.insert(res.not_identifiable.end(), fit.not_identifiable.begin(),
+                              fit.not_identifiable.end());
+  res.candidates_tested = fit.tested;
+  res.candidates_tested.insert(res.candidates_tested.begin(), "logging_delay");
+  res.fitted = believed;
+  res.fitted.machine = fit.params;
+  res.fitted.name = (believed.name.empty() ? std::string("machine") : believed.name) +
+                    " + diagnosis of " + train_rec.file;
+
+  // Delay confidence interval from the profile of the RSS.
+  const Simulated simf = resimulate(fit.params, tr, o.max_servo_period_s);
+  {
+    const double rmin = delay_rss(tr, simf, masks.train, w, H.delay_s);
+    auto inside = [&](double d) {
+      return fit.n_eff * std::log(delay_rss(tr, simf, masks.train, w, d) / rmin) <= 3.84;
+    };
+    // Each side: step out until outside, then bisect the crossing.
+    auto edge = [&](double dir) {
+      double in = H.delay_s, out = H.delay_s + dir * dt * 1e-4;
+      while (inside(out) && std::abs(out - H.delay_s) < dmax) {
+        in = out;
+        out = H.delay_s + 2 * (out - H.delay_s);
+      }
+      for (int i = 0; i < 40; ++i) {
+        const double mid = (in + out) / 2;
+        (inside(mid) ? in : out) = mid;
+      }
+      return in;
+    };
+    res.delay_ci95_s = std::pair{edge(-1), edge(+1)};
+  }
+
+  // Residuals before and after, offsets from the fitted block.
+  const Residuals before = residuals(tr, sim0, H.delay_s, masks.train, nullptr);
+  const Residuals after = residuals(tr, simf, H.delay_s, masks.train, nullptr);
+  const Residuals raw = residuals(tr, sim0, 0.0, masks.train, nullptr);
+  const std::vector<char>& all_valid = masks.valid;
+  double floor_ss = 0;
+  for (std::size_t a = 0; a < tr.axes.size(); ++a) {
+    const int j = tr.axes[a];
+    AxisStats& st = res.axes[a];
+    st.offset_mm = before.offset[j];
+    const auto& r = before.r[j];
+    double ss = 0, s = 0;
+    std::size_t n = 0;
+    for (std::size_t k = 0; k < r.size(); ++k)
+      if (all_valid[k])
+        ss += r[k] * r[k], s += r[k], ++n, st.max_mm = std::max(st.max_mm, std::abs(r[k]));
+    st.samples = n;
+    st.rms_mm = n ? std::sqrt(ss / n) : 0;
+    st.mean_mm = n ? s / n : 0;
+    const auto v = derivative(tr.t_s, tr.cmd[j]);
+    double vmax = 0;
+    for (double x : v)
+      vmax = std::max(vmax, std::abs(x));
+    st.standstill_noise_mm = standstill_noise(r, v, all_valid, std::max(1e-3 * vmax, 1e-9),
+                                              std::max<std::size_t>(5, std::size_t(0.05 / dt)));
+    floor_ss += st.noise_floor_mm * st.noise_floor_mm;
+    locate_axis(tr, j, r, all_valid, st.noise_floor_mm, res.mismatch);
+
+    AxisSeries se;
+    se.axis = st.axis;
+    for (std::size_t k = 0; k < r.size(); ++k) {
+      if (!all_valid[k]) continue;
+      se.t_s.push_back(tr.t_s[k]);
+      se.cmd.push_back(tr.cmd[j][k]);
+      se.velocity.push_back(v[k]);
+      se.before_mm.push_back(r[k]);
+      se.after_mm.push_back(after.r[j][k]);
+      se.heldout.push_back(masks.heldout[k]);
+    }
+    res.series.push_back(std::move(se));
+  }
+  res.noise_floor_mm = std::sqrt(floor_ss / double(tr.axes.size()));
+  std::stable_sort(
+      res.mismatch.begin(), res.mismatch.end(),
+      [](const Mismatch& a, const Mismatch& b) { return a.ratio_to_floor > b.ratio_to_floor; });
+  if (res.mismatch.size() > 40) res.mismatch.resize(40);
+
+  std::vector<char> train_use(tr.rows()), held_use(tr.rows());
+  for (std::size_t k = 0; k < tr.rows(); ++k) {
+    train_use[k] = masks.train[k] && all_valid[k];
+    held_use[k] = masks.heldout[k] && all_valid[k];
+  }
+  figures(tr, raw, before, after, train_use, res.train);
+
+  // Whiteness of what remains (fitted block).
+  {
+    std::vector<std::vector<double>> series;
+    for (int j : tr.axes) {
+      std::vector<double> s;
+      for (std::size_t k = 0; k < tr.rows(); ++k)
+        if (train_use[k]) s.push_back(after.r[j][k]);
+      series.push_back(std::move(s));
+    }
+    res.whiteness = whiteness(series);
+  }
+
+  // Held out: the last time block, or a second recording.
+  if (holdout_rec) {
+    const Trace ht = make_trace(*holdout_rec);
+    if (ht.axes != tr.axes)
+      throw DiagnosisError(holdout_rec->file +
+                           ": the hold-out recording must carry the same "
+                           "joints as " +
+                           train_rec.file);
+    say("re-simulating the hold-out recording " + holdout_rec->file);
+    const Masks hm = make_masks(ht, std::abs(H.delay_s), 0.0);
+    const Simulated hs0 = resimulate(base, ht, o.max_servo_period_s);
+    const Residuals hb = residuals(ht, hs0, H.delay_s, hm.train, &before.offset);
+    const Residuals hr = residuals(ht, hs0, 0.0, hm.train, &raw.offset);
+    const Residuals ha = residuals(ht, resimulate(fit.params, ht, o.max_servo_period_s), H.delay_s,
+                                   hm.train, &after.offset);
+    figures(ht, hr, hb, ha, hm.valid, res.heldout);
+    res.has_heldout = true;
+    res.heldout_kind = "file";
+    res.holdout_recording = holdout_rec->file;
+  } else if (holdout_fraction > 0) {
+    figures(tr, raw, before, after, held_use, res.heldout);
+    res.has_heldout = res.heldout.samples > 0;
+    res.heldout_kind = "split";
+  }
+
+  // Explanations with their contribution.
+  for (std::size_t i = 0; i < fit.selected.size(); ++i) {
+    const auto& s = fit.selected[i];
+    Explanation e;
+    e.effect = s.effect;
+    e.axis = s.axis;
+    e.parameters = fit.per_effect[i];
+    e.delta_bic = s.delta_bic;
+    if (!s.variant.empty()) {
+      // The scanned variant (a period, a start time constant) is part of the answer.
+      const auto eq = s.variant.find('=');
+      const std::string key = s.variant.substr(0, eq);
+      MachineParams p = fit.params;
+      if (const double* v = param_ptr(p, s.effect, s.joint, key);
+          v && std::find(s.keys.begin(), s.keys.end(), key) == s.keys.end()) {
+        Parameter fixed;
+        fixed.name = key;
+        fixed.value = fixed.ci95_lo = fixed.ci95_hi = *v;
+        fixed.fixed = true;
+        e.parameters.push_back(fixed);
+        e.note = key + " chosen from a scan of candidate values";
+      }
+    }
+    const Simulated sw = resimulate(without_effect(fit.params, base, s), tr, o.max_servo_period_s);
+    double ss = 0;
+    std::size_t n = 0;
+    for (int j : tr.axes)
+      for (std::size_t k = 0; k < tr.rows(); ++k)
+        if (train_use[k]) {
+          const double d = simf.target[j][k] - sw.target[j][k];
+          ss += d * d, ++n;
+        }
+    e.rms_effect_mm = n ? std::sqrt(ss / n) : 0;
+    res.explanations.push_back(e);
+  }
+
+  const bool above = !res.mismatch.empty();
+  if (res.explanations.empty())
+    res.verdict = above ? "mismatch above the noise floor that no candidate effect explains"
+                        : "nothing missing: the residual is at the noise floor";
+  else {
+    res.verdict = "missing in the believed model:";
+    for (const auto& e : res.explanations)
+      res.verdict += " " + e.effect + (e.axis.empty() ? "" : "(" + e.axis + ")");
+  }
+  if (std::abs(res.delay_s) > 0)
+    res.verdict += "; logging delay " + fmt("%.4g", res.delay_s * 1e3) + " ms removed";
+  return res;
+}
+
+}  // namespace truecut::sim::diagnosis

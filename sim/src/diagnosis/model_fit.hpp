@@ -1,0 +1,91 @@
+// The explanation stage: candidate signatures of the named effects, sparse
+// selection by BIC, and the nonlinear fit of the selected effects'
+// parameters by re-simulation (Levenberg–Marquardt, numeric Jacobian).
+#pragma once
+
+#include <Eigen/Dense>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "trace.hpp"
+#include "truecut/sim/diagnosis/diagnosis.hpp"
+
+namespace truecut::sim::diagnosis {
+
+// Which samples of which axes enter the fit, and their weights (1 / the
+// axis' noise floor): residuals are stacked axis after axis.
+struct Layout {
+  std::vector<int> axes;
+  std::vector<std::vector<std::size_t>> index;  // per axis, the samples used
+  std::vector<double> weight;                   // per axis
+  std::size_t size() const;
+  Eigen::VectorXd stack(const std::array<std::vector<double>, kJointCount>& per_joint) const;
+  // Subtracts each axis' mean (the constant offset is a nuisance, profiled out).
+  void center(Eigen::Ref<Eigen::VectorXd> v) const;
+  // Lag-1 autocorrelation within the axes.
+  double lag1(const Eigen::VectorXd& v) const;
+};
+
+struct Candidate {
+  std::string effect;
+  int joint = -1;                 // -1: global (squareness)
+  std::string axis;               // "x", or the plane "xy"
+  std::string group;              // effect:axis[:part]; variants of a group exclude each other
+  std::string variant;            // e.g. "tau_s=120" (empty when none)
+  std::vector<std::string> keys;  // parameters the nonlinear fit moves
+  Eigen::MatrixXd X;              // weighted, centred signature columns
+  // Puts the effect into `params` from the linear coefficients of X; false
+  // when they have no physical meaning (e.g. a negative lag).
+  std::function<bool(MachineParams&, const Eigen::VectorXd&)> apply;
+  std::string label() const { return group + (variant.empty() ? "" : " (" + variant + ")"); }
+};
+
+struct FitContext {
+  const Trace* trace = nullptr;
+  std::array<std::vector<double>, kJointCount> aligned;  // recorded targets
+  double delay_s = 0.0;  // the simulation is delayed by this to meet the recording
+  Layout layout;
+  double max_period_s = 1e-3;
+  double bic_threshold = 10.0;
+  std::function<void(const std::string&)> progress;
+};
+
+// Re-simulation delayed by ctx.delay_s.
+Simulated simulate_aligned(const FitContext& ctx, const MachineParams& params);
+Eigen::VectorXd weighted_residual(const FitContext& ctx, const MachineParams& params);
+
+std::vector<Candidate> build_candidates(const FitContext& ctx, const MachineParams& base);
+
+struct SelectedEffect {
+  std::string effect;
+  int joint = -1;
+  std::string axis, group, variant;
+  std::vector<std::string> keys;
+  double delta_bic = 0.0;
+};
+
+struct ModelFit {
+  MachineParams params;
+  std::vector<SelectedEffect> selected;
+  std::vector<Parameter> parameters;  // parallel to the concatenated keys of `selected`
+  std::vector<std::vector<Parameter>> per_effect;
+  std::vector<NotIdentifiable> not_identifiable;
+  std::vector<std::string> tested;
+  double rss = 0.0;  // weighted, centred
+  std::size_t n = 0;
+  double n_eff = 0.0;
+  int k = 0;  // free parameters
+  double bic() const;
+};
+
+// `params` with one effect's keys back to their values in `reference` (or
+// the effect off when `reference` does not have it).
+MachineParams without_effect(const MachineParams& params, const MachineParams& reference,
+                             const SelectedEffect& effect);
+
+// Rounds of (signatures → forward selection → nonlinear fit) from `base`
+// until nothing more is selected.
+ModelFit fit_model(const FitContext& ctx, const MachineParams& base);
+
+}  // namespace truecut::sim::diagnosis

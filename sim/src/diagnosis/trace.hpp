@@ -1,0 +1,53 @@
+// A recording prepared for re-simulation: commands of every joint, the
+// recorded target of the joints that have one, and the re-simulation of
+// the commands through a machine model at the recording's own time steps.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "truecut/sim/machine_description.hpp"
+#include "truecut/sim/recording.hpp"
+
+namespace truecut::sim::diagnosis {
+
+struct Trace {
+  std::string file;
+  std::vector<double> t_s;
+  std::array<std::vector<double>, kJointCount> cmd;     // empty: joint not commanded (held at 0)
+  std::array<std::vector<double>, kJointCount> target;  // recorded _meas or _act, empty: none
+  std::array<bool, kJointCount> meas{};                 // target is <j>_meas
+  std::vector<double> spindle_power_kw;                 // empty: none
+  std::vector<double> line;                             // empty: none
+  std::vector<int> axes;                                // joints with cmd and target
+  std::size_t rows() const { return t_s.size(); }
+};
+
+Trace make_trace(const Recording& rec);
+
+// What the model says the recorder would have seen, per joint.
+struct Simulated {
+  std::array<std::vector<double>, kJointCount> target;  // same meaning as Trace::target
+  std::array<std::vector<double>, kJointCount> motor;   // encoder (motor-side) position
+};
+
+// Each recorded interval dt is simulated in ceil(dt / max_period_s) equal
+// servo periods, the command interpolated linearly; the output of the first
+// period of an interval is the sample at its start.
+Simulated resimulate(const MachineParams& params, const Trace& trace, double max_period_s);
+int substeps_for(double dt_s, double max_period_s);
+
+// A simulated series read at t − delay (linear interpolation, held at the
+// ends): the simulation shifted to match a recorder that logs late by delay.
+std::vector<double> delayed(const std::vector<double>& t, const std::vector<double>& y,
+                            double delay_s);
+// Every target and motor series of `sim` delayed.
+void delay_simulated(const std::vector<double>& t, Simulated& sim, double delay_s);
+
+// Central-difference derivatives of a sampled signal.
+std::vector<double> derivative(const std::vector<double>& t, const std::vector<double>& y);
+
+double median_period(const std::vector<double>& t);
+
+}  // namespace truecut::sim::diagnosis
