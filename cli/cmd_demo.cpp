@@ -22,7 +22,8 @@ const char* kHelp =
     "The closed loop, per part: machine part 1 on a machine with hidden physics\n"
     "(tool and workpiece deflection, a tool radius error, servo lag, rotary location\n"
     "errors on the 5-axis part), scan it, build the correction field, machine part 2\n"
-    "with the real-time compensation and part 3 with the rewritten G-code, measure\n"
+    "with the real-time compensation and part 3 with the G-code rewritten from the\n"
+    "same field (truecut rewrite --field), measure\n"
     "every part with the virtual CMM, then scan part 2 and machine a 2nd iteration.\n"
     "Every step is a truecut command; DIR/<part>/commands.sh lists them, demo.log\n"
     "holds their output. Writes DIR/report.html and DIR/results.json.\n"
@@ -38,6 +39,7 @@ const char* kHelp =
     "  --stepover MM      tool path stepover (default 0.5)\n"
     "  --cmm-spacing MM   CMM point spacing (default 1)\n"
     "  --resolution MM    correction field grid (default 1)\n"
+    "  --dexel-spacing MM cutting model sampling (default 0.1 implant, 0.3 others)\n"
     "  --seed N           noise seed (default 1)\n"
     "  --help             this text\n";
 
@@ -76,6 +78,7 @@ int cmd_demo(const std::vector<std::string>& argv) {
                       {"stepover", true},
                       {"cmm-spacing", true},
                       {"resolution", true},
+                      {"dexel-spacing", true},
                       {"seed", true},
                       {"help", false}});
   if (a.flag("help")) {
@@ -93,6 +96,7 @@ int cmd_demo(const std::vector<std::string>& argv) {
   o.stepover_mm = a.number("stepover", 0.5, 0.05, 10.0);
   o.cmm_spacing_mm = a.number("cmm-spacing", 1.0, 0.05, 20.0);
   o.field_resolution_mm = a.number("resolution", 1.0, 0.1, 20.0);
+  o.dexel_spacing_mm = a.number("dexel-spacing", 0.0, 0.0, 5.0);
   o.seed = static_cast<std::uint64_t>(a.integer("seed", 1, 0, 1'000'000'000));
   const double tolerance_um = a.number("tolerance-um", 20.0, 0.1, 10000.0);
   const std::string which = a.value("part").value_or("implant");

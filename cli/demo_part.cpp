@@ -117,7 +117,11 @@ DemoPartResult run_demo_part(const std::string& part, const DemoOptions& o) {
 
   auto machine = [&](const std::string& key, const std::string& title, const std::string& program,
                      const std::string& field) {
-    std::vector<std::string> args{"run", "part/machine.json", program, "--out", key};
+    const double dexel = o.dexel_spacing_mm > 0 ? o.dexel_spacing_mm
+                         : part == "implant"    ? 0.1
+                                                : 0.3;
+    std::vector<std::string> args{"run", "part/machine.json", program,   "--out",
+                                  key,   "--dexel-spacing",   num(dexel)};
     args.insert(args.end(), part_files.begin(), part_files.end());
     if (!field.empty()) args.insert(args.end(), {"--field", field});
     s.run("machine (" + title + ")", args);
@@ -172,9 +176,9 @@ DemoPartResult run_demo_part(const std::string& part, const DemoOptions& o) {
       const auto& tool = info.tools.at(op.tool);
       const std::string out = "rewrite/program_" + std::to_string(++n) + ".ngc";
       s.run("rewrite operation " + op.name,
-            {"rewrite", program, "--matrix", "field_1/compensation_matrix.csv", "--operation",
-             op.name, "--tool-radius", num(tool.radius_mm), "--type", rewrite_type(op, tool),
-             "--tools", "part/tools.tbl", "--out", out});
+            {"rewrite", program, "--field", "field_1/field.tcf", "--operation", op.name,
+             "--tool-radius", num(tool.radius_mm), "--type", rewrite_type(op, tool), "--tools",
+             "part/tools.tbl", "--out", out});
       program = out;
     }
     machine("rewrite", "G-code rewrite", program, "");

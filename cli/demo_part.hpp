@@ -19,6 +19,7 @@ struct DemoOptions {
   double mesh_edge_mm = 0.5;  // part generation
   double stepover_mm = 0.5;
   double field_resolution_mm = 1.0;
+  double dexel_spacing_mm = 0;  // 0: 0.1 for the implant, 0.3 for the larger parts
   int iterations = 2;  // real-time iterations (1 or 2)
   bool rewrite = true;
   std::uint64_t seed = 1;

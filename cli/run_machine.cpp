@@ -43,6 +43,7 @@ const char* kHelp =
     "  --max-rate MM_PER_S    truecut_comp rate limit (default 5)\n"
     "  --fade-time S          truecut_comp fade in/out (default 0.2)\n"
     "  --period-us US         servo period (default 1000)\n"
+    "  --dexel-spacing MM     cutting model's surface sampling (default 0.1)\n"
     "  --record-every N       record every N-th cycle (default 1)\n"
     "  --component-path DIR   also search DIR for components (repeatable)\n"
     "  --realtime             run against the wall clock instead of simulated time\n"
@@ -73,6 +74,7 @@ int run_machine(const std::vector<std::string>& argv) {
                       {"max-rate", true},
                       {"fade-time", true},
                       {"period-us", true},
+                      {"dexel-spacing", true},
                       {"record-every", true},
                       {"component-path", true, true},
                       {"realtime", false},
@@ -101,6 +103,7 @@ int run_machine(const std::vector<std::string>& argv) {
   }
   job.out_dir = *out;
   job.period_us = a.number("period-us", 1000.0, 50.0, 100000.0);
+  job.dexel_spacing_mm = a.number("dexel-spacing", 0.1, 0.01, 5.0);
   job.record_every = a.integer("record-every", 1, 1, 1000000);
   job.max_correction_mm = a.number("max-correction", 0.5, 0.0, 10.0);
   job.max_rate_mm_per_s = a.number("max-rate", 5.0, 0.0, 1000.0);

@@ -296,6 +296,24 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
   for (std::size_t i = 0; i < nd; ++i)
     m.height_[i] = stock_height(m.line_origin_[i], m.normal_[i], stock, options.max_stock_mm);
   m.initial_height_ = m.height_;
+  // Partners: the dexels at one position with different normals (the
+  // sides of a sharp edge or corner), linked in a cycle.
+  m.partner_.resize(nd);
+  {
+    std::unordered_map<WeldKey, std::uint32_t, WeldHash> first;
+    std::vector<std::uint32_t> last(nd);
+    for (std::size_t i = 0; i < nd; ++i) {
+      m.partner_[i] = last[i] = static_cast<std::uint32_t>(i);
+      const auto [it, inserted] =
+          first.try_emplace(weld_key(0, m.position_[i]), static_cast<std::uint32_t>(i));
+      if (inserted) continue;
+      // Append i to the cycle that starts at it->second.
+      const std::uint32_t head = it->second;
+      m.partner_[last[head]] = static_cast<std::uint32_t>(i);
+      m.partner_[i] = head;
+      last[head] = static_cast<std::uint32_t>(i);
+    }
+  }
   m.stamp_.assign(nd, 0);
   m.visit_.assign(nd, 0);
   if (nd == 0) return m;

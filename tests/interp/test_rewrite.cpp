@@ -188,6 +188,45 @@ TEST(Rewrite, ArcsAreDensifiedOnTheirCircle) {
   EXPECT_NEAR(mid.z, -1.0 - (M_PI / 2 - angle) / (M_PI / 2), 1e-6);
 }
 
+// A small arc (a shaft corner: tool-centre radius 1 mm) at the default
+// 0.5 mm step would be 4 chords with a 19 um sagitta, all of it inside the
+// corner; the chord tolerance adds pieces until no chord leaves the arc by
+// more than 1 um.
+TEST(Rewrite, ArcChordsStayWithinTheChordToleranceOfTheArc) {
+  const char* prog =
+      "G21 G17 G90 G94\n(OPERATION: CORNER)\nT1 M6\nG43 H1\nG0 X0 Y1 Z0\n"
+      "G1 X0 Y1 Z-1 F100\nG2 X1 Y0 I0 J-1 F500\nG0 Z10\nM30\n";
+  CompensationMatrixData m;
+  m.positions_mm = {V(0, 0, -1)};
+  m.vectors_mm = {V::Zero()};
+  m.valid = {1};
+  m.surface_ids = {0};
+  RewriteOptions o = options("CORNER", CutType::kPeripheral, 1.0);
+  o.keep_unchanged_moves = false;
+  o.reach_mm = 0.1;
+  o.decimals = 7;
+  ASSERT_DOUBLE_EQ(o.step_mm, 0.5);
+  ASSERT_DOUBLE_EQ(o.chord_tolerance_mm, 0.001);
+  const RewriteResult r = rewrite_program(prog, "corner.ngc", m, o);
+  const auto pts = feeds_of(r.text, "CORNER");
+  // Plunge 1 mm (2 pieces), then the quarter arc: 1.571 mm would be 4
+  // pieces by the step; the 1 um sagitta needs 18 (0.0895 rad each).
+  ASSERT_EQ(pts.size(), 2u + 18u);
+  double worst_sagitta_mm = 0;
+  for (size_t k = 2; k < pts.size(); ++k) {
+    const Axes6& a = pts[k - 1];
+    const Axes6& b = pts[k];
+    EXPECT_NEAR(std::hypot(b.x, b.y), 1.0, 1e-6);
+    const double mid_radius = std::hypot(0.5 * (a.x + b.x), 0.5 * (a.y + b.y));
+    worst_sagitta_mm = std::max(worst_sagitta_mm, 1.0 - mid_radius);
+  }
+  EXPECT_LE(worst_sagitta_mm, 0.001 + 1e-7);
+  EXPECT_GT(worst_sagitta_mm, 0.0005);  // the pieces are not needlessly fine
+
+  o.chord_tolerance_mm = 0;
+  EXPECT_THROW(rewrite_program(prog, "corner.ngc", m, o), std::invalid_argument);
+}
+
 // TRAORI: X Y Z are the tip in the workpiece frame, A C the tool axis.
 const char* kTraori =
     "G21 G17 G90 G94\nG54\n(OPERATION: FIVE)\nT1 M6\nG43 H1\nTRAORI\n"

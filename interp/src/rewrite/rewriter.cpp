@@ -92,6 +92,8 @@ void check_options(const RewriteOptions& o) {
     throw std::invalid_argument("tool radius must be >= 0 mm");
   if (o.type == CutType::kBall && !(o.tool_radius_mm > 0))
     throw std::invalid_argument("a ball end mill needs a tool radius > 0");
+  if (!(o.chord_tolerance_mm > 0) || !std::isfinite(o.chord_tolerance_mm))
+    throw std::invalid_argument("chord tolerance must be > 0 mm");
   if (!(o.reach_mm >= 0) || !std::isfinite(o.reach_mm))
     throw std::invalid_argument("reach must be >= 0 mm (0: automatic)");
   if (o.decimals < 3 || o.decimals > 9) throw std::invalid_argument("decimals must be 3..9");
@@ -116,6 +118,19 @@ double move_length_mm(const ToolPath& path, const ToolPath::Move& m, const CallC
     prev = t;
   }
   return len;
+}
+
+int pieces_for_step(double length_mm, double step_mm) {
+  return std::max(1, static_cast<int>(std::ceil(length_mm / step_mm - 1e-9)));
+}
+
+// Pieces of an arc so that no chord's sagitta r (1 - cos(sweep / 2n))
+// exceeds the tolerance (r: the larger of the start and end radii).
+int pieces_for_chord(const ToolPath::Move& m, const RewriteOptions& o) {
+  const double r = std::max(m.r0, m.r1);
+  if (!m.arc || !(r > o.chord_tolerance_mm)) return 1;
+  const double max_piece_rad = 2.0 * std::acos(1.0 - o.chord_tolerance_mm / r);
+  return std::max(1, static_cast<int>(std::ceil(std::fabs(m.sweep_rad) / max_piece_rad - 1e-9)));
 }
 
 struct PlannedLine {               // what replaces one program line
@@ -241,7 +256,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
 
     // Densify and compensate.
     const double len = move_length_mm(path, move, ctx, o);
-    const int n = std::max(1, static_cast<int>(std::ceil(len / o.step_mm - 1e-9)));
+    const int n = std::max(pieces_for_step(len, o.step_mm), pieces_for_chord(move, o));
     std::vector<Vec5> points(n);
     std::vector<Correction> corrections(n);
     bool all_zero = true;

@@ -54,6 +54,7 @@ std::string soft_cnc_ini_text(const SoftCncJob& job, const MachineDescription& m
   ini.set("RUN", "PART", absolute_text(job.part));
   ini.set("RUN", "NOMINAL", absolute_text(job.nominal));
   ini.set("RUN", "OUT_DIR", absolute_text(job.out_dir));
+  ini.set("RUN", "DEXEL_SPACING", number_text(job.dexel_spacing_mm));
   ini.set("RUN", "SERVO_PERIOD_NS",
           std::to_string(static_cast<long long>(job.period_us * 1000 + 0.5)));
   ini.set("RUN", "RECORD_EVERY", std::to_string(job.record_every));

@@ -41,6 +41,10 @@ struct RewriteOptions {
   CutType type = CutType::kPeripheral;
   double tool_radius_mm = 0;  // >= 0 (> 0 for ball)
   double step_mm = 0.5;       // densification distance, > 0
+  // Arcs: the most a written chord may leave the programmed arc (its sagitta),
+  // > 0. Pieces of `step_mm` alone leave R (1 - cos(step / 2R)) inside the
+  // arc: 19 um on a 1 mm tool-centre radius, the size of the compensation.
+  double chord_tolerance_mm = 0.001;
   // Compensation points farther than this from the cutting part of the tool
   // are not used (infeed, retract and moves off the part stay unchanged).
   // 0: twice the median distance between neighbouring compensation points.

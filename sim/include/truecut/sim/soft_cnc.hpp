@@ -35,6 +35,7 @@ struct SoftCncJob {
   std::optional<std::filesystem::path> field;  // correction field for truecut_comp
   std::filesystem::path out_dir;
   double period_us = 1000.0;
+  double dexel_spacing_mm = 0.1;  // the cutting model's surface sampling (docs/cutting.md)
   long record_every = 1;
   double max_correction_mm = 0.5;
   double max_rate_mm_per_s = 5.0;

@@ -69,7 +69,10 @@ class DexelModel {
                  bool include_start = true) noexcept;
 
   // Nominal topology subdivided at the dexels, vertices at p + h·n; triangles
-  // of surfaces that are not modelled are copied unchanged.
+  // of surfaces that are not modelled are copied unchanged. A dexel on a
+  // sharp edge whose line holds no surface point (cut through to its floor,
+  // or material up to the stock cap) takes the vertex of a partner on the
+  // other face that has one: the corner where the machined faces meet.
   offline::TriangleMesh machined_mesh() const;
   // machined.stl (binary) and machined.ply (binary) into `dir`, each atomic.
   void write_machined(const std::filesystem::path& dir, const std::string& comment = {}) const;
@@ -98,6 +101,9 @@ class DexelModel {
   std::vector<double> floor_;  // −max_depth_mm
   std::vector<double> area_;
   std::vector<int> surface_;
+  // Next dexel at the same position with another normal (a cycle through the
+  // dexels of a sharp edge or corner); its own index when there is none.
+  std::vector<std::uint32_t> partner_;
   std::vector<std::uint32_t> stamp_;  // last cut() that lowered the dexel
   std::uint32_t epoch_ = 0;
   std::vector<std::uint32_t> visit_;  // last tool instance that tested the dexel
