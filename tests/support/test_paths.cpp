@@ -4,6 +4,9 @@
 
 #include <fstream>
 #include <sstream>
+#include <string>
+
+#include <unistd.h>
 
 namespace truecut::test {
 
@@ -27,8 +30,14 @@ std::filesystem::path shared_data_dir() {
 }
 
 std::filesystem::path scratch_dir() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  std::string name = info ? std::string(info->test_suite_name()) + "." + info->name() : "scratch";
+  const auto* unit = ::testing::UnitTest::GetInstance();
+  const auto* info = unit->current_test_info();
+  const auto* suite = unit->current_test_suite();
+  // Outside a test (SetUpTestSuite) the folder is the process's own: ctest
+  // runs every case of a suite as a separate process, several at a time.
+  std::string name = info    ? std::string(info->test_suite_name()) + "." + info->name()
+                     : suite ? std::string(suite->name()) + ".suite-" + std::to_string(::getpid())
+                             : "scratch-" + std::to_string(::getpid());
   for (char& c : name)
     if (c == '/') c = '_';
   auto dir = binary_dir() / "test-scratch" / name;
