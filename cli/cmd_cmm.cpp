@@ -4,11 +4,11 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
-#include <system_error>
 #include <vector>
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "measure_options.hpp"
 #include "truecut/offline/mesh_io.hpp"
 #include "truecut/sim/measure/cmm.hpp"
 #include "truecut/sim/measure/part_surfaces.hpp"
@@ -41,54 +41,19 @@ const char* kCmmHelp =
     "  --seed N            noise seed (default 1)\n"
     "  --help              this text\n";
 
-std::vector<std::int32_t> parse_surface_list(const std::string& text) {
-  std::vector<std::int32_t> ids;
-  std::size_t start = 0;
-  while (start <= text.size()) {
-    const std::size_t comma = std::min(text.find(',', start), text.size());
-    const std::string item = text.substr(start, comma - start);
-    char* end = nullptr;
-    const long v = std::strtol(item.c_str(), &end, 10);
-    if (item.empty() || *end != '\0' || v < -2147483647L || v > 2147483647L)
-      throw UsageError("--surfaces '" + text + "': '" + item + "' is not a surface id");
-    ids.push_back(static_cast<std::int32_t>(v));
-    start = comma + 1;
-  }
-  return ids;
-}
-
-void print_row(const sim::measure::SurfaceDeviationStats& s) {
-  const std::string name = s.surface < 0 ? "all" : std::to_string(s.surface);
-  std::printf("%-8s %7zu %7zu %9.2f %9.2f %9.2f %9.2f %9.2f\n", name.c_str(), s.points, s.valid,
-              s.mean_um, s.std_um, s.rms_um, s.max_abs_um, s.p95_abs_um);
-}
-
 int input_error(const std::string& message) {
   std::fprintf(stderr, "truecut cmm: %s\n", message.c_str());
   return kExitUsage;
 }
 
-// Outputs are written to NAME.tmp and renamed: never over a device, FIFO or folder.
-void require_replaceable(const std::string& file) {
-  std::error_code ec;
-  const auto status = std::filesystem::status(file, ec);
-  if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status))
-    throw UsageError(file + " exists and is not a regular file");
-}
-
 }  // namespace
 
 int cmd_cmm(const std::vector<std::string>& argv) {
-  ParsedArgs a(argv, {{"out", true},
-                      {"nominal", true},
-                      {"part", true},
-                      {"surfaces", true},
-                      {"spacing", true},
-                      {"points", true},
-                      {"sigma-um", true},
-                      {"search-mm", true},
-                      {"seed", true},
-                      {"help", false}});
+  std::vector<OptionSpec> specs = cmm_option_specs("");
+  specs.insert(
+      specs.end(),
+      {{"out", true}, {"nominal", true}, {"part", true}, {"points", true}, {"help", false}});
+  ParsedArgs a(argv, specs);
   if (a.flag("help")) {
     std::fputs(kCmmHelp, stdout);
     return kExitOk;
@@ -105,13 +70,8 @@ int cmd_cmm(const std::vector<std::string>& argv) {
   if (!points_file && !(nominal_file && part_file))
     throw UsageError("give --nominal and --part, or --points");
   require_replaceable(*out);
-  sim::measure::CmmOptions opt;
-  opt.sigma_mm = a.number("sigma-um", 2.0, 0.0, 20.0) / 1000.0;
-  opt.search_distance_mm = a.number("search-mm", opt.search_distance_mm, 1e-3, 100.0);
-  opt.seed = static_cast<std::uint64_t>(a.integer("seed", 1, 0, 0x7fffffffffffffffL));
-  const double spacing_mm = a.number("spacing", 1.0, 0.01, 1000.0);
-  std::vector<std::int32_t> surfaces;
-  if (const auto list = a.value("surfaces")) surfaces = parse_surface_list(*list);
+  const CmmSettings settings = cmm_settings(a, "");
+  const sim::measure::CmmOptions& opt = settings.options;
 
   offline::TriangleMesh machined;
   std::vector<sim::measure::CmmPoint> points;
@@ -121,21 +81,7 @@ int cmd_cmm(const std::vector<std::string>& argv) {
     if (points_file) {
       points = sim::measure::read_cmm_points(*points_file);
     } else {
-      const offline::TriangleMesh nominal = offline::read_mesh(*nominal_file);
-      const sim::measure::PartSurfaces labels = sim::measure::read_part_surfaces(*part_file);
-      if (labels.triangle_surface_ids.size() != nominal.triangles.size())
-        return input_error(*part_file + ": key 'triangle_surface_ids' has " +
-                           std::to_string(labels.triangle_surface_ids.size()) + " entries but " +
-                           *nominal_file + " has " + std::to_string(nominal.triangles.size()) +
-                           " triangles");
-      for (std::int32_t id : surfaces)
-        if (!labels.has(id))
-          return input_error(*part_file + ": key 'surfaces' has no surface " + std::to_string(id));
-      if (surfaces.empty()) surfaces = labels.compensated_ids();
-      points = sim::measure::cmm_points_on_surfaces(nominal, labels.triangle_surface_ids,
-                                                    spacing_mm, surfaces);
-      if (points.empty())
-        return input_error(*nominal_file + ": no points on the selected surfaces");
+      points = cmm_points_on_part(*nominal_file, *part_file, settings);
     }
   } catch (const offline::MeshIoError& e) {
     return input_error(e.what());
@@ -143,18 +89,16 @@ int cmd_cmm(const std::vector<std::string>& argv) {
     return input_error(e.what());
   } catch (const sim::measure::PartFileError& e) {
     return input_error(e.what());
+  } catch (const MeasureInputError& e) {
+    return input_error(e.what());
   }
 
   std::fprintf(stderr, "cmm: probing %zu points on %s\n", points.size(), mesh_file.c_str());
   const auto measurements = sim::measure::probe(machined, points, opt);
   sim::measure::write_cmm_csv(*out, measurements);
 
+  print_cmm_table(measurements);
   const auto overall = sim::measure::overall_statistics(measurements);
-  std::printf("%-8s %7s %7s %9s %9s %9s %9s %9s\n", "surface", "points", "valid", "mean_um",
-              "std_um", "rms_um", "max_um", "p95_um");
-  for (const auto& s : sim::measure::surface_statistics(measurements))
-    print_row(s);
-  print_row(overall);
   if (overall.valid < overall.points)
     std::fprintf(
         stderr, "cmm: %zu of %zu points found no surface within %.3f mm (valid = 0 in %s)\n",

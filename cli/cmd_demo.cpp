@@ -9,6 +9,8 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "demo_part.hpp"
+#include "truecut/rt/atomic_write.hpp"
+#include "truecut/sim/part_file.hpp"
 #include "truecut/sim/report/closed_loop_report.hpp"
 
 namespace truecut::cli {
@@ -39,19 +41,12 @@ const char* kHelp =
     "  --stepover MM      tool path stepover (default 0.5)\n"
     "  --cmm-spacing MM   CMM point spacing (default 1)\n"
     "  --resolution MM    correction field grid (default 1)\n"
+    "  --point-spacing MM compensation points every MM on the surface (default\n"
+    "                     0.1 implant; 0 = nominal vertices, default for others)\n"
+    "  --edge-exclusion MM no error vector this close to a sharp edge (default 0.2)\n"
     "  --dexel-spacing MM cutting model sampling (default 0.1 implant, 0.3 others)\n"
     "  --seed N           noise seed (default 1)\n"
     "  --help             this text\n";
-
-void write_atomic(const fs::path& path, const std::string& text) {
-  const fs::path tmp = path.string() + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    out << text;
-    if (!out.flush()) throw std::runtime_error(tmp.string() + ": cannot write");
-  }
-  fs::rename(tmp, path);
-}
 
 std::string read_text(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -78,6 +73,8 @@ int cmd_demo(const std::vector<std::string>& argv) {
                       {"stepover", true},
                       {"cmm-spacing", true},
                       {"resolution", true},
+                      {"point-spacing", true},
+                      {"edge-exclusion", true},
                       {"dexel-spacing", true},
                       {"seed", true},
                       {"help", false}});
@@ -97,6 +94,8 @@ int cmd_demo(const std::vector<std::string>& argv) {
   o.cmm_spacing_mm = a.number("cmm-spacing", 1.0, 0.05, 20.0);
   o.field_resolution_mm = a.number("resolution", 1.0, 0.1, 20.0);
   o.dexel_spacing_mm = a.number("dexel-spacing", 0.0, 0.0, 5.0);
+  o.point_spacing_mm = a.number("point-spacing", 0.0, 0.0, 10.0);
+  o.edge_exclusion_mm = a.number("edge-exclusion", o.edge_exclusion_mm, 0.0, 10.0);
   o.seed = static_cast<std::uint64_t>(a.integer("seed", 1, 0, 1'000'000'000));
   const double tolerance_um = a.number("tolerance-um", 20.0, 0.1, 10000.0);
   const std::string which = a.value("part").value_or("implant");
@@ -124,11 +123,9 @@ int cmd_demo(const std::vector<std::string>& argv) {
     sim::report::ReportPart rp;
     rp.name = r.part;
     rp.nominal_stl = r.dir / "part" / "nominal.stl";
-    {
-      std::ifstream in(r.dir / "part" / "part.json");
-      rp.triangle_surface_ids =
-          nlohmann::json::parse(in).at("triangle_surface_ids").get<std::vector<int>>();
-    }
+    rp.triangle_surface_ids =
+        sim::read_part_file(r.dir / "part" / "part.json", sim::kPartTriangleSurfaceIds)
+            .triangle_surface_ids;
     for (const auto& s : r.surfaces)
       rp.surfaces.push_back({s.id, s.name, s.compensate});
     rp.field_tcf = r.first_field_dir / "field.tcf";
@@ -170,8 +167,9 @@ int cmd_demo(const std::vector<std::string>& argv) {
   ro.tolerance_um = tolerance_um;
   ro.scanner_sigma_um = o.sigma_um;
   std::fprintf(stderr, "demo: writing the report\n");
-  write_atomic(o.out_dir / "report.html", sim::report::closed_loop_html(report_parts, ro));
-  write_atomic(o.out_dir / "results.json", json.dump(2) + "\n");
+  rt::write_file_atomically(o.out_dir / "report.html",
+                            sim::report::closed_loop_html(report_parts, ro));
+  rt::write_file_atomically(o.out_dir / "results.json", json.dump(2) + "\n");
   std::printf("report: %s\nresults: %s\n", (o.out_dir / "report.html").string().c_str(),
               (o.out_dir / "results.json").string().c_str());
   return kExitOk;

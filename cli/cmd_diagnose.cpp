@@ -10,6 +10,8 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "run_support.hpp"
+#include "truecut/interp/error.hpp"
+#include "truecut/interp/tool_table.hpp"
 #include "truecut/offline/stl_io.hpp"
 #include "truecut/sim/diagnosis/diagnosis.hpp"
 #include "truecut/sim/diagnosis/surface.hpp"
@@ -31,7 +33,8 @@ const char* kDiagnoseHelp =
     "Re-simulates the recorded commands through the believed machine model, removes\n"
     "a logging delay, locates where the recording differs (above the noise floor),\n"
     "names the missing effects of the machine description (servo_lag, backlash,\n"
-    "reversal_spike, pitch_error, thermal_drift, squareness, straightness), fits their\n"
+    "reversal_spike, pitch_error, thermal_drift, squareness, straightness; with a\n"
+    "measured TCP rotary_location and tool_length_error), fits their\n"
     "parameters"
     "with 95 % intervals and shows the fit on held-out data. Target per joint:\n"
     "<j>_meas when present, else <j>_act. Writes DIR/diagnosis.json,\n"
@@ -53,6 +56,13 @@ const char* kDiagnoseHelp =
     "  --max-delay S           largest logging delay searched (default: 10 samples or\n"
     "                          50 ms, whichever is longer)\n"
     "  --bic-threshold D       BIC gain needed to select an effect (default 10)\n"
+    "  --tcp-datum free|known  with tcp_true_x/y/z (a measured tool-centre point): free\n"
+    "                          (default) profiles out its constant offset, known takes\n"
+    "                          it as absolute in the workpiece frame (rotary_location,\n"
+    "                          tool_length_error become candidates)\n"
+    "  --tools FILE            tool table (LinuxCNC format): the nominal tool length per\n"
+    "                          the recording's `tool` channel, for the TCP comparison\n"
+    "                          (default: the description's kinematics.tool)\n"
     "\n"
     "surface mode: re-machines PROGRAM on the believed machine, profiles out the\n"
     "registration, and explains the residual by tool_radius_error, tool_length_error,\n"
@@ -103,9 +113,27 @@ void write_all(const std::vector<std::pair<fs::path, std::string>>& files) {
   }
 }
 
-}  // namespace
+// Input that cannot be diagnosed: the message, exit 2.
+int bad_input(const std::exception& e) {
+  std::fprintf(stderr, "truecut diagnose: %s\n", e.what());
+  return kExitUsage;
+}
 
-namespace {
+// The three outputs, atomically, then the summary on stdout.
+void write_outputs(const std::string& out_dir, const std::string& json,
+                   const sim::MachineDescription& fitted, const std::string& html,
+                   const std::string& summary) {
+  const fs::path dir(out_dir);
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw std::runtime_error("cannot create " + dir.string() + ": " + ec.message());
+  write_all({{dir / "diagnosis.json", json},
+             {dir / "fitted_machine.json", sim::format_machine_description(fitted)},
+             {dir / "diagnosis.html", html}});
+  std::fputs(summary.c_str(), stdout);
+  std::printf("wrote %s, %s and %s\n", (dir / "diagnosis.json").c_str(),
+              (dir / "fitted_machine.json").c_str(), (dir / "diagnosis.html").c_str());
+}
 
 fs::path existing(const std::optional<std::string>& given, const fs::path& beside, const char* name,
                   const char* option) {
@@ -162,25 +190,14 @@ int surface_mode(const ParsedArgs& a, const std::string& out_dir) {
     result = dg::diagnose_surface(m, job, believed, options);
     result.believed_file = *a.value("machine");
   } catch (const sim::MachineDescriptionError& e) {
-    std::fprintf(stderr, "truecut diagnose: %s\n", e.what());
-    return kExitUsage;
+    return bad_input(e);
   } catch (const dg::DiagnosisError& e) {
-    std::fprintf(stderr, "truecut diagnose: %s\n", e.what());
-    return kExitUsage;
+    return bad_input(e);
   } catch (const sim::measure::PartFileError& e) {
-    std::fprintf(stderr, "truecut diagnose: %s\n", e.what());
-    return kExitUsage;
+    return bad_input(e);
   }
-  const fs::path dir(out_dir);
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) throw std::runtime_error("cannot create " + dir.string() + ": " + ec.message());
-  write_all({{dir / "diagnosis.json", dg::surface_diagnosis_json(result)},
-             {dir / "fitted_machine.json", sim::format_machine_description(result.fitted)},
-             {dir / "diagnosis.html", dg::surface_diagnosis_html(result)}});
-  std::fputs(dg::surface_diagnosis_summary(result).c_str(), stdout);
-  std::printf("wrote %s, %s and %s\n", (dir / "diagnosis.json").c_str(),
-              (dir / "fitted_machine.json").c_str(), (dir / "diagnosis.html").c_str());
+  write_outputs(out_dir, dg::surface_diagnosis_json(result), result.fitted,
+                dg::surface_diagnosis_html(result), dg::surface_diagnosis_summary(result));
   return kExitOk;
 }
 
@@ -206,6 +223,7 @@ int cmd_diagnose(const std::vector<std::string>& argv) {
                       {"servo-period", true},
                       {"max-delay", true},
                       {"bic-threshold", true},
+                      {"tcp-datum", true},
                       {"help", false}});
   if (a.flag("help")) {
     std::fputs(kDiagnoseHelp, stdout);
@@ -229,6 +247,21 @@ int cmd_diagnose(const std::vector<std::string>& argv) {
   options.max_servo_period_s = a.number("servo-period", 1e-3, 1e-6, 1.0);
   options.max_delay_s = a.number("max-delay", 0.0, 0.0, 1e3);
   options.bic_threshold = a.number("bic-threshold", 10.0, 0.0, 1e6);
+  if (const auto d = a.value("tcp-datum")) {
+    if (*d != "free" && *d != "known")
+      throw UsageError("--tcp-datum " + *d + ": expected free or known");
+    options.tcp_datum_known = *d == "known";
+  }
+  if (const auto t = a.value("tools")) {
+    if (!fs::is_regular_file(*t)) throw UsageError(*t + " not found");
+    try {
+      const auto table = interp::ToolTable::load(*t);
+      for (const auto& e : table.entries())
+        options.tool_length_mm[e.number] = e.offset_mm.z;
+    } catch (const interp::GcodeError& e) {
+      throw UsageError(e.what());
+    }
+  }
   options.progress = [](const std::string& line) {
     std::fprintf(stderr, "diagnose: %s\n", line.c_str());
   };
@@ -253,26 +286,15 @@ int cmd_diagnose(const std::vector<std::string>& argv) {
     result = dg::diagnose(rec, held ? &*held : nullptr, believed, options);
     result.map = map_text;
   } catch (const sim::RecordingError& e) {
-    std::fprintf(stderr, "truecut diagnose: %s\n", e.what());
-    return kExitUsage;
+    return bad_input(e);
   } catch (const sim::MachineDescriptionError& e) {
-    std::fprintf(stderr, "truecut diagnose: %s\n", e.what());
-    return kExitUsage;
+    return bad_input(e);
   } catch (const dg::DiagnosisError& e) {
-    std::fprintf(stderr, "truecut diagnose: %s\n", e.what());
-    return kExitUsage;
+    return bad_input(e);
   }
 
-  const fs::path dir(*out_dir);
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) throw std::runtime_error("cannot create " + dir.string() + ": " + ec.message());
-  write_all({{dir / "diagnosis.json", dg::diagnosis_json(result)},
-             {dir / "fitted_machine.json", sim::format_machine_description(result.fitted)},
-             {dir / "diagnosis.html", dg::diagnosis_html(result)}});
-  std::fputs(dg::diagnosis_summary(result).c_str(), stdout);
-  std::printf("wrote %s, %s and %s\n", (dir / "diagnosis.json").c_str(),
-              (dir / "fitted_machine.json").c_str(), (dir / "diagnosis.html").c_str());
+  write_outputs(*out_dir, dg::diagnosis_json(result), result.fitted, dg::diagnosis_html(result),
+                dg::diagnosis_summary(result));
   return kExitOk;
 }
 

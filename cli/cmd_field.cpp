@@ -1,11 +1,9 @@
 // truecut field NOMINAL.stl SCAN --program PART.ngc --tools TOOLS.tbl --out DIR:
 // the offline chain from a scan to a correction field (docs/offline.md,
 // "truecut field").
-#include <nlohmann/json.hpp>
 
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <optional>
 #include <string>
@@ -19,6 +17,7 @@
 #include "truecut/offline/field_pipeline.hpp"
 #include "truecut/offline/mesh_io.hpp"
 #include "truecut/rt/field_file.hpp"
+#include "truecut/sim/part_file.hpp"
 
 namespace truecut::cli {
 namespace {
@@ -63,6 +62,11 @@ const char* kFieldHelp =
     "  --smoothness X        field fit regularisation lambda (default 0.1)\n"
     "  --path-step MM        tool path sampling step (default 0.1)\n"
     "  --contact-tolerance MM  a tool cuts a point within this of its surface (0.05)\n"
+    "  --placement every-pass|first  a point goes to every pass that cuts it as deep\n"
+    "                        as the closest (default: a lower level re-sweeps the wall\n"
+    "                        above it), or only to the first of them\n"
+    "  --edge-exclusion MM   ray method: no error vector this close to a sharp\n"
+    "                        nominal edge (default 0.5)\n"
     "  --corner-radius T=MM  corner radius of tool T (repeatable; default 0, or part.json)\n"
     "  --cutting-length T=MM cutting length of tool T (default: part.json's flute\n"
     "                        length, else the table's Z length, else 10 x radius)\n"
@@ -116,30 +120,24 @@ struct PartFile {
 };
 
 PartFile read_part_file(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError(file.string() + ": cannot open");
-  nlohmann::json j;
+  sim::PartFile part;
   try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(file.string() + ": not valid JSON: " + e.what());
+    part = sim::read_part_file(file,
+                               sim::kPartTriangleSurfaceIds | sim::kPartSurfaces | sim::kPartTools);
+  } catch (const sim::PartFileError& e) {
+    throw InputError(e.what());
   }
   PartFile p;
-  try {
-    for (const auto& id : j.at("triangle_surface_ids"))
-      p.triangle_surface_ids.push_back(id.get<std::int32_t>());
-    for (const auto& s : j.at("surfaces"))
-      if (s.value("compensate", false)) p.compensated.push_back(s.at("id").get<std::int32_t>());
-    for (const auto& t : j.at("tools")) {
-      ToolShape s;
-      s.tool = t.at("number").get<std::int32_t>();
-      s.radius_mm = t.at("radius_mm").get<double>();
-      s.corner_radius_mm = t.value("corner_radius_mm", 0.0);
-      s.cutting_length_mm = t.value("flute_length_mm", 0.0);
-      p.tools[s.tool] = s;
-    }
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(file.string() + ": " + e.what());
+  p.triangle_surface_ids.assign(part.triangle_surface_ids.begin(), part.triangle_surface_ids.end());
+  for (const int id : part.compensated_surface_ids())
+    p.compensated.push_back(id);
+  for (const sim::PartTool& t : part.metadata.tools) {
+    ToolShape s;
+    s.tool = t.number;
+    s.radius_mm = t.radius_mm;
+    s.corner_radius_mm = t.corner_radius_mm;
+    s.cutting_length_mm = t.flute_length_mm;
+    p.tools[s.tool] = s;
   }
   return p;
 }
@@ -253,6 +251,11 @@ offline::FieldPipelineOptions pipeline_options(const ParsedArgs& a, const Inputs
   o.path.step_mm = a.number("path-step", o.path.step_mm, 0.001, 10.0);
   o.placement.contact_tolerance_mm =
       a.number("contact-tolerance", o.placement.contact_tolerance_mm, 1e-6, 10.0);
+  const std::string placement = a.value("placement").value_or("every-pass");
+  if (placement != "first" && placement != "every-pass")
+    throw UsageError("--placement " + placement + ": expected first or every-pass");
+  o.placement.every_generating_pass = placement == "every-pass";
+  o.ray.edge_exclusion_mm = a.number("edge-exclusion", o.ray.edge_exclusion_mm, 0.0, 100.0);
   return o;
 }
 
@@ -364,6 +367,8 @@ int cmd_field(const std::vector<std::string>& argv) {
                       {"smoothness", true},
                       {"path-step", true},
                       {"contact-tolerance", true},
+                      {"placement", true},
+                      {"edge-exclusion", true},
                       {"corner-radius", true, true},
                       {"cutting-length", true, true},
                       {"max-correction", true},

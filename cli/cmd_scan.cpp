@@ -2,11 +2,11 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
-#include <system_error>
 #include <vector>
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "measure_options.hpp"
 #include "truecut/offline/mesh_io.hpp"
 #include "truecut/offline/rigid_transform.hpp"
 #include "truecut/sim/measure/scanner.hpp"
@@ -37,38 +37,12 @@ const char* kScanHelp =
     "  --mesh-out FILE              also a triangulated scan mesh (.ply or .stl)\n"
     "  --help                       this text\n";
 
-bool has_extension(const std::string& file, std::initializer_list<const char*> extensions) {
-  const auto format = offline::format_from_extension(file);
-  std::string ext = std::filesystem::path(file).extension().string();
-  for (auto& ch : ext)
-    ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-  for (const char* e : extensions)
-    if (ext == e) return format.has_value();
-  return false;
-}
-
-// Outputs are written to NAME.tmp and renamed: never over a device, FIFO or folder.
-void require_replaceable(const std::string& file) {
-  std::error_code ec;
-  const auto status = std::filesystem::status(file, ec);
-  if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status))
-    throw UsageError(file + " exists and is not a regular file");
-}
-
 }  // namespace
 
 int cmd_scan(const std::vector<std::string>& argv) {
-  ParsedArgs a(argv, {{"out", true},
-                      {"sigma-um", true},
-                      {"density", true},
-                      {"mode", true},
-                      {"max-incidence-deg", true},
-                      {"registration-error-mm", true},
-                      {"registration-error-deg", true},
-                      {"seed", true},
-                      {"normals", true},
-                      {"mesh-out", true},
-                      {"help", false}});
+  std::vector<OptionSpec> specs = scan_option_specs("");
+  specs.insert(specs.end(), {{"out", true}, {"mesh-out", true}, {"help", false}});
+  ParsedArgs a(argv, specs);
   if (a.flag("help")) {
     std::fputs(kScanHelp, stdout);
     return kExitOk;
@@ -85,23 +59,9 @@ int cmd_scan(const std::vector<std::string>& argv) {
 
   require_replaceable(*out);
   if (mesh_out) require_replaceable(*mesh_out);
-  sim::measure::ScannerOptions opt;
-  opt.sigma0_mm = a.number("sigma-um", 20.0, 5.0, 50.0) / 1000.0;
-  opt.density_pt_per_mm2 = a.number("density", opt.density_pt_per_mm2, 1e-3, 1e4);
-  opt.max_incidence_deg = a.number("max-incidence-deg", opt.max_incidence_deg, 1.0, 89.0);
-  opt.seed = static_cast<std::uint64_t>(a.integer("seed", 1, 0, 0x7fffffffffffffffL));
-  const std::string mode = a.value("mode").value_or("fringe");
-  if (mode == "laser")
-    opt.mode = sim::measure::ScanMode::laser;
-  else if (mode != "fringe")
-    throw UsageError("--mode '" + mode + "': expected fringe or laser");
-  const std::string normals = a.value("normals").value_or("estimate");
-  if (normals != "estimate" && normals != "view")
-    throw UsageError("--normals '" + normals + "': expected estimate or view");
-  opt.estimate_normals = normals == "estimate";
-  opt.build_mesh = mesh_out.has_value();
-  const double reg_mm = a.number("registration-error-mm", 0.0, 0.0, 10.0);
-  const double reg_deg = a.number("registration-error-deg", 0.0, 0.0, 10.0);
+  ScanSettings settings = scan_settings(a, "");
+  const sim::measure::ScannerOptions& opt = settings.options;
+  settings.options.build_mesh = mesh_out.has_value();
 
   offline::TriangleMesh mesh;
   try {
@@ -115,22 +75,9 @@ int cmd_scan(const std::vector<std::string>& argv) {
                  mesh_file.c_str());
     return kExitUsage;
   }
-  if (reg_mm > 0 || reg_deg > 0) {
-    Eigen::Vector3d lo = mesh.vertices_mm.front(), hi = lo;
-    for (const Eigen::Vector3d& p : mesh.vertices_mm) {
-      lo = lo.cwiseMin(p);
-      hi = hi.cwiseMax(p);
-    }
-    opt.registration_error =
-        sim::measure::seeded_registration_error(reg_mm, reg_deg, 0.5 * (lo + hi), opt.seed);
-  }
-  opt.progress = [](std::size_t pose, std::size_t poses, std::size_t points) {
-    std::fprintf(stderr, "scan: pose %zu/%zu, %zu points\n", pose + 1, poses, points);
-  };
-
   sim::measure::ScanResult result;
   try {
-    result = sim::measure::scan(mesh, opt);
+    result = scan_mesh(mesh, settings);
   } catch (const std::invalid_argument& e) {
     std::fprintf(stderr, "truecut scan: %s: %s\n", mesh_file.c_str(), e.what());
     return kExitUsage;
@@ -141,9 +88,7 @@ int cmd_scan(const std::vector<std::string>& argv) {
     return kExitFailure;
   }
   offline::MeshWriteOptions write;
-  write.comment = "truecut scan " + mode + " sigma0_um=" + a.value("sigma-um").value_or("20") +
-                  " density_pt_per_mm2=" + std::to_string(opt.density_pt_per_mm2) +
-                  " seed=" + std::to_string(opt.seed) + ", workpiece frame, mm";
+  write.comment = scan_comment(settings);
   offline::write_point_cloud(*out, result.cloud, write);
   if (mesh_out) offline::write_mesh(*mesh_out, result.mesh, write);
 

@@ -6,9 +6,8 @@
 #include <map>
 #include <stdexcept>
 
-#include <nlohmann/json.hpp>
-
 #include "subprocess.hpp"
+#include "truecut/sim/part_file.hpp"
 
 namespace truecut::cli {
 namespace {
@@ -31,18 +30,14 @@ struct PartInfo {
 };
 
 PartInfo read_part_info(const fs::path& file) {
-  std::ifstream in(file);
-  const nlohmann::json j = nlohmann::json::parse(in);
+  const sim::PartFile part = sim::read_part_file(file);
   PartInfo p;
-  for (const auto& s : j.at("surfaces"))
-    p.surfaces.push_back(
-        {s.at("id").get<int>(), s.at("name").get<std::string>(), s.at("compensate").get<bool>()});
-  for (const auto& o : j.at("operations"))
-    p.operations.push_back({o.at("name").get<std::string>(), o.at("strategy").get<std::string>(),
-                            o.at("tool").get<int>(), o.at("surface_ids").get<std::vector<int>>()});
-  for (const auto& t : j.at("tools"))
-    p.tools[t.at("number").get<int>()] = {t.at("kind").get<std::string>(),
-                                          t.at("radius_mm").get<double>()};
+  for (const sim::PartSurface& s : part.metadata.surfaces)
+    p.surfaces.push_back({s.id, s.name, s.compensate});
+  for (const sim::PartOperation& o : part.metadata.operations)
+    p.operations.push_back({o.name, o.strategy, o.tool, o.surface_ids});
+  for (const sim::PartTool& t : part.metadata.tools)
+    p.tools[t.number] = {t.kind, t.radius_mm};
   return p;
 }
 
@@ -154,6 +149,11 @@ DemoPartResult run_demo_part(const std::string& part, const DemoOptions& o) {
                                   num(o.field_resolution_mm),
                                   "--out",
                                   field_dir};
+    const double spacing = o.point_spacing_mm > 0 ? o.point_spacing_mm
+                           : part == "implant"    ? 0.1
+                                                  : 0.0;
+    if (spacing > 0) args.insert(args.end(), {"--spacing", num(spacing)});
+    args.insert(args.end(), {"--edge-exclusion", num(o.edge_exclusion_mm)});
     if (!base.empty()) args.insert(args.end(), {"--base", base});
     s.run("correction field from the scan of " + key, args);
   };

@@ -19,8 +19,14 @@ struct DemoOptions {
   double mesh_edge_mm = 0.5;  // part generation
   double stepover_mm = 0.5;
   double field_resolution_mm = 1.0;
+  // Compensation points for the field: even sampling at this spacing
+  // (0: 0.1 for the implant, the nominal vertices for the larger parts).
+  double point_spacing_mm = 0;
+  // Error vectors are not taken this close to a sharp nominal edge: about one
+  // scan point spacing (25 pt/mm²), where the scanned mesh rounds the edge.
+  double edge_exclusion_mm = 0.2;
   double dexel_spacing_mm = 0;  // 0: 0.1 for the implant, 0.3 for the larger parts
-  int iterations = 2;  // real-time iterations (1 or 2)
+  int iterations = 2;           // real-time iterations (1 or 2)
   bool rewrite = true;
   std::uint64_t seed = 1;
 };

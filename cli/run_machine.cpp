@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 
+#include "run_measure.hpp"
 #include "run_support.hpp"
 #include "truecut/rt/hal_file.hpp"
 #include "truecut/sim/machine_description.hpp"
@@ -50,7 +51,15 @@ const char* kHelp =
     "                         (same outputs; prints cycle timing and overruns)\n"
     "  --cpu N                with --realtime: pin the servo thread to CPU N\n"
     "  --fifo PRIO            with --realtime: SCHED_FIFO priority 1..99 when permitted\n"
-    "  --help                 this text\n";
+    "  --help                 this text\n"
+    "measuring the machined part after the run (FILE relative to DIR):\n"
+    "  --scan FILE            virtual optical scan (as truecut scan): .ply, .xyz, .txt, .csv\n"
+    "  --scan-sigma-um S      and its options --scan-seed, --scan-density, --scan-mode,\n"
+    "                         --scan-max-incidence-deg, --scan-normals,\n"
+    "                         --scan-registration-error-mm, --scan-registration-error-deg\n"
+    "  --cmm FILE             virtual CMM on the part's compensated surfaces (as truecut cmm\n"
+    "                         --nominal --part): CSV\n"
+    "  --cmm-sigma-um S       and --cmm-seed, --cmm-spacing, --cmm-surfaces, --cmm-search-mm\n";
 
 fs::path existing(const std::optional<std::string>& given, const fs::path& beside,
                   const char* default_name, const char* option) {
@@ -65,22 +74,24 @@ fs::path existing(const std::optional<std::string>& given, const fs::path& besid
 }  // namespace
 
 int run_machine(const std::vector<std::string>& argv) {
-  ParsedArgs a(argv, {{"out", true},
-                      {"nominal", true},
-                      {"part", true},
-                      {"tools", true},
-                      {"field", true},
-                      {"max-correction", true},
-                      {"max-rate", true},
-                      {"fade-time", true},
-                      {"period-us", true},
-                      {"dexel-spacing", true},
-                      {"record-every", true},
-                      {"component-path", true, true},
-                      {"realtime", false},
-                      {"cpu", true},
-                      {"fifo", true},
-                      {"help", false}});
+  std::vector<OptionSpec> specs = run_measure_option_specs();
+  specs.insert(specs.end(), {{"out", true},
+                             {"nominal", true},
+                             {"part", true},
+                             {"tools", true},
+                             {"field", true},
+                             {"max-correction", true},
+                             {"max-rate", true},
+                             {"fade-time", true},
+                             {"period-us", true},
+                             {"dexel-spacing", true},
+                             {"record-every", true},
+                             {"component-path", true, true},
+                             {"realtime", false},
+                             {"cpu", true},
+                             {"fifo", true},
+                             {"help", false}});
+  ParsedArgs a(argv, specs);
   if (a.flag("help")) {
     std::fputs(kHelp, stdout);
     return kExitOk;
@@ -114,6 +125,7 @@ int run_machine(const std::vector<std::string>& argv) {
     throw UsageError("--cpu and --fifo need --realtime");
   job.wall_clock_options.cpu = static_cast<int>(a.integer("cpu", -1, 0, 1023));
   job.wall_clock_options.fifo_priority = static_cast<int>(a.integer("fifo", 0, 1, 99));
+  RunMeasurement measure = prepare_run_measurement(a, job.out_dir, job.nominal, job.part);
 
   Progress progress;
   progress.tty = isatty(STDERR_FILENO) != 0;
@@ -159,6 +171,7 @@ int run_machine(const std::vector<std::string>& argv) {
   }
   std::printf("  output      %s/{machined.stl,machined.ply,trace.csv,soft_cnc.hal,run.ini}\n",
               job.out_dir.string().c_str());
+  if (!measure_machined_part(measure, job.out_dir / "machined.stl")) return kExitFailure;
   return kExitOk;
 }
 

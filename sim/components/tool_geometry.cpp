@@ -1,5 +1,6 @@
 // tool_geometry: the nominal geometry of the tool in the spindle, looked up
-// by tool number in a benchmark part's part.json (the tool list CAM used).
+// by tool number in a benchmark part's part.json (the tool list CAM used;
+// read with truecut/sim/part_file.hpp).
 //
 //   loadrt tool_geometry part=PART.json [count=N | names=a,b]
 //
@@ -12,12 +13,10 @@
 //   out  <i>.known             (bit) the tool is in the list; otherwise all zero
 // Function <i>.update: a bounded search of at most kMaxTools rows.
 #include <array>
-#include <fstream>
 #include <string>
 
-#include <nlohmann/json.hpp>
-
 #include "truecut/rt/component_support.hpp"
+#include "truecut/sim/part_file.hpp"
 
 namespace {
 
@@ -55,46 +54,19 @@ void update(void* arg, long) {
 
 using truecut::hal::component::InitError;
 
-double number_at(const nlohmann::json& t, const std::string& where, const char* key) {
-  if (!t.contains(key) || !t[key].is_number())
-    throw InitError(where + "." + key + ": expected a number");
-  const double v = t[key].get<double>();
-  if (!(v >= 0)) throw InitError(where + "." + key + ": must be >= 0");
-  return v;
-}
-
 int read_tools(const std::string& file, std::array<ToolRow, kMaxTools>& rows) {
-  std::ifstream in(file);
-  if (!in) throw InitError(file + ": cannot open");
-  nlohmann::json doc;
+  truecut::sim::PartFile part;
   try {
-    doc = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw InitError(file + ": " + e.what());
+    part = truecut::sim::read_part_file(file, truecut::sim::kPartTools);
+  } catch (const truecut::sim::PartFileError& e) {
+    throw InitError(e.what());
   }
-  if (!doc.is_object() || !doc.contains("tools") || !doc["tools"].is_array())
-    throw InitError(file + ": tools: expected an array (a part.json written by truecut part)");
-  const auto& tools = doc["tools"];
+  const auto& tools = part.metadata.tools;
   if (tools.size() > kMaxTools)
-    throw InitError(file + ": tools: more than " + std::to_string(kMaxTools) + " tools");
+    throw InitError(file + ": key 'tools': more than " + std::to_string(kMaxTools) + " tools");
   int n = 0;
-  for (const auto& t : tools) {
-    const std::string where = file + ": tools[" + std::to_string(n) + "]";
-    if (!t.is_object() || !t.contains("number") || !t["number"].is_number_integer())
-      throw InitError(where + ".number: expected an integer");
-    ToolRow r;
-    r.number = t["number"].get<int32_t>();
-    for (int i = 0; i < n; ++i)
-      if (rows[i].number == r.number)
-        throw InitError(where + ".number: tool " + std::to_string(r.number) + " listed twice");
-    r.radius_mm = number_at(t, where, "radius_mm");
-    r.corner_radius_mm = number_at(t, where, "corner_radius_mm");
-    r.length_mm = number_at(t, where, "length_mm");
-    r.flute_length_mm = number_at(t, where, "flute_length_mm");
-    if (r.corner_radius_mm > r.radius_mm)
-      throw InitError(where + ".corner_radius_mm: larger than radius_mm");
-    rows[n++] = r;
-  }
+  for (const truecut::sim::PartTool& t : tools)
+    rows[n++] = {t.number, t.radius_mm, t.corner_radius_mm, t.length_mm, t.flute_length_mm};
   return n;
 }
 

@@ -5,39 +5,18 @@
 #include <cstdio>
 #include <numbers>
 
+#include "diagnosis/report_text.hpp"
 #include "truecut/sim/iso230_report.hpp"
 
 namespace truecut::sim {
 namespace {
 
 std::string esc(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    switch (c) {
-      case '&':
-        o += "&amp;";
-        break;
-      case '<':
-        o += "&lt;";
-        break;
-      case '>':
-        o += "&gt;";
-        break;
-      case '"':
-        o += "&quot;";
-        break;
-      default:
-        o += c;
-    }
-  }
-  return o;
+  return report_text::html_escape(s);
 }
 
 std::string f(double v, const char* fmt = "%.2f") {
-  if (!std::isfinite(v)) return "–";
-  char b[48];
-  std::snprintf(b, sizeof b, fmt, v);
-  return b;
+  return report_text::number(v, fmt);
 }
 
 std::string f(const std::optional<double>& v, double scale, const char* fmt = "%.2f") {

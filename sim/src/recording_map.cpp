@@ -65,7 +65,8 @@ std::vector<std::string> canonical_channels() {
   for (const char* j : kRecordingJoints)
     for (const char* kind : {"_cmd", "_act", "_meas"})
       names.push_back(std::string(j) + kind);
-  for (const char* extra : {"feed", "spindle_power", "line", "tool"})
+  for (const char* extra :
+       {"feed", "spindle_power", "line", "tool", "tcp_true_x", "tcp_true_y", "tcp_true_z"})
     names.emplace_back(extra);
   return names;
 }

@@ -47,17 +47,25 @@ void check_reduction() {
   const double before = rms(part, "uncompensated");
   // The hidden physics leaves the shaft oversize by tens of µm.
   EXPECT_GT(before, 15.0);
-  // Measured (docs/results.md): −50 % after one real-time iteration, −66 %
-  // after two. The issue's targets (−90 %, −95 %) are not reached yet; these
-  // bounds guard what is achieved.
-  EXPECT_LT(rms(part, "realtime"), 0.7 * before);
-  EXPECT_LT(rms(part, "realtime_2"), rms(part, "realtime"));
-  EXPECT_LT(rms(part, "rewrite"), before);
-  // Noise from the 20 µm scan is not passed on wholesale: the spread after
-  // two iterations is at most the uncompensated one plus the CMM noise.
+  // Measured on this reduced demo: −78 % after one real-time iteration
+  // (docs/results.md has the full-size figures). The issue's −90 % is not
+  // reachable with a tip-position field on this part: the lowest level's
+  // flank sets the whole shaft wall above it, leaving the bottom-to-top
+  // trend of the uncompensated wall (docs/offline.md, "Tool-centre
+  // placement"). These bounds guard what is achieved.
+  EXPECT_LT(rms(part, "realtime"), 0.3 * before);
+  // The second iteration does not undo the first.
+  EXPECT_LT(rms(part, "realtime_2"), 0.3 * before);
+  // The rewritten program achieves the real-time reduction within 10 %.
+  const auto reduction = [&](const std::string& s) { return 1.0 - rms(part, s) / before; };
+  EXPECT_GE(reduction("rewrite"), 0.9 * reduction("realtime"));
+  // Noise from the 20 µm scan is not passed on: the compensated spread is
+  // below the uncompensated one, and after two iterations at most it plus
+  // the CMM noise.
   const auto std_um = [&](const std::string& s) {
     return part.at("stages").at(s).at("all_judged").at("std_um").get<double>();
   };
+  EXPECT_LT(std_um("realtime"), std_um("uncompensated"));
   EXPECT_LT(std_um("realtime_2"), std_um("uncompensated") + 2.0);
 }
 

@@ -90,6 +90,68 @@ TEST(DiagnosisCli, FindsPlantedBacklashAndWritesThreeFiles) {
   EXPECT_EQ(html.find("http://"), html.find("http://www.w3.org/2000/svg"));
 }
 
+// A tracker's columns (TrackerX/Y/Z) mapped to the TCP channels; the tool
+// length (80 mm, T7) from a tool table by the `tool` channel.
+TEST(DiagnosisCli, MeasuredTcpThroughTheMapFindsTheToolLength) {
+  const auto dir = scratch_dir();
+  MachineDescription believed = trunnion_with_servo();
+  MachineDescription truth = believed;
+  truth.machine.effects.tool_length_error.enabled = true;
+  truth.machine.effects.tool_length_error.params.length_mm = 0.015;
+  // The believed description's own tool is wrong: the table's must be used.
+  believed.machine.kinematics.tool.length_mm = 50.0;
+  write_machine_description(dir / "believed.json", believed);
+  const Recording rec = five_axis_recording(truth.machine, 31);
+  {
+    std::ofstream out(dir / "rec.csv", std::ios::binary);
+    out << "t,x_cmd,y_cmd,z_cmd,a_cmd,c_cmd,x_act,y_act,z_act,a_act,c_act,tool,TrackerX,TrackerY,"
+           "TrackerZ\n";
+    char b[64];
+    for (std::size_t k = 0; k < rec.rows(); ++k) {
+      std::snprintf(b, sizeof b, "%.6f", rec.t_s[k]);
+      out << b;
+      for (const char* kind : {"_cmd", "_act"})
+        for (const char* j : {"x", "y", "z", "a", "c"}) {
+          std::snprintf(b, sizeof b, ",%.9f", rec.channels.at(std::string(j) + kind)[k]);
+          out << b;
+        }
+      out << ",7";
+      for (const char* c : {"x", "y", "z"}) {
+        std::snprintf(b, sizeof b, ",%.9f", rec.channels.at(std::string("tcp_true_") + c)[k]);
+        out << b;
+      }
+      out << "\n";
+    }
+  }
+  std::ofstream(dir / "tools.tbl") << "T7 P1 D10.000 Z80.000 ;probe\n";
+  const auto out = dir / "out";
+  auto r =
+      run_process({cli_path().string(), "diagnose", "--recording", (dir / "rec.csv").string(),
+                   "--map", "tcp_true_x=TrackerX,tcp_true_y=TrackerY,tcp_true_z=TrackerZ",
+                   "--machine", (dir / "believed.json").string(), "--tools",
+                   (dir / "tools.tbl").string(), "--tcp-datum", "known", "--out", out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(read_file(out / "diagnosis.json"));
+  ASSERT_TRUE(j["tcp"].is_object()) << j.dump(2);
+  EXPECT_EQ(j["tcp"]["datum"], "known");
+  EXPECT_LT(j["tcp"]["heldout"]["rms_after_mm"].get<double>(),
+            0.5 * j["tcp"]["heldout"]["rms_before_mm"].get<double>());
+  bool found = false;
+  for (const auto& e : j["explanations"])
+    if (e["effect"] == "tool_length_error") {
+      found = true;
+      EXPECT_LE(e["ci95"]["length_mm"][0].get<double>(), 0.015) << e.dump();
+      EXPECT_GE(e["ci95"]["length_mm"][1].get<double>(), 0.015) << e.dump();
+    }
+  EXPECT_TRUE(found) << r.out;
+  const auto fitted = read_machine_description(out / "fitted_machine.json");
+  EXPECT_TRUE(fitted.machine.effects.tool_length_error.enabled);
+  auto bad =
+      run_process({cli_path().string(), "diagnose", "--recording", (dir / "rec.csv").string(),
+                   "--tcp-datum", "maybe", "--out", (dir / "out2").string()});
+  EXPECT_EQ(bad.exit_code, 2) << bad.err;
+}
+
 TEST(DiagnosisCli, BadInputExitsTwoAndWritesNothing) {
   const auto dir = scratch_dir();
   std::ofstream(dir / "bad.csv") << "t,x_cmd\n0,1\n0.1,2\n";

@@ -3,7 +3,9 @@
 // standstill, run through a "true" machine, with noise on what is recorded.
 #pragma once
 
+#include <array>
 #include <cmath>
+#include <numbers>
 #include <random>
 #include <vector>
 
@@ -136,6 +138,61 @@ inline MachineDescription xy_machine() {
   d.machine.joints[kA].present = false;
   d.machine.joints[kC].present = false;
   return d;
+}
+
+inline constexpr double kTcpNoiseMm = 1e-3;  // σ of the measured TCP
+
+// A trunnion machine (trunnion_params) with a known servo lag on X and Y.
+inline MachineDescription trunnion_with_servo() {
+  MachineDescription d;
+  d.name = "trunnion";
+  d.machine = trunnion_params();
+  enable_servo_lag(d.machine, kX, 40.0, 0.9);
+  enable_servo_lag(d.machine, kY, 35.0, 0.8);
+  return d;
+}
+
+// X, Y, Z sweep, A tilts 0…90° and back every 5 s, C turns once every 8 s;
+// 20 s at 200 Hz (the model stepped at 1 kHz).
+inline Recording five_axis_recording(const MachineParams& truth, unsigned seed) {
+  MachineModel model(truth);
+  MachineState state;
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> noise(0.0, kTcpNoiseMm), encoder_noise(0.0, 0.2e-3);
+  Recording rec;
+  rec.file = "five_axis.csv";
+  const double dt = 1e-3;
+  // The 1 kHz command is linear between the 200 Hz samples (as the
+  // re-simulation interpolates them), so the joints' believed model is exact.
+  auto command = [](double t) {
+    std::array<double, kJointCount> q{};
+    q[kX] = 30 * std::sin(2 * std::numbers::pi * t / 7);
+    q[kY] = 20 * std::sin(2 * std::numbers::pi * t / 11 + 1);
+    q[kZ] = -10 + 10 * std::sin(2 * std::numbers::pi * t / 13);
+    q[kA] = 45 - 45 * std::cos(2 * std::numbers::pi * t / 5);
+    q[kC] = 45 * t;
+    return q;
+  };
+  for (int k = 0; k < 20000; ++k) {
+    const double t = k * dt;
+    const double t0 = (k / 5) * 5 * dt, w = (k % 5) / 5.0;
+    const auto q0 = command(t0), q1 = command(t0 + 5 * dt);
+    MachineInputs in;
+    for (int j = 0; j < kJointCount; ++j)
+      in.pos_cmd[j] = q0[j] + (q1[j] - q0[j]) * w;
+    MachineOutputs out;
+    model.step(state, in, dt, out);
+    if (k % 5 != 0) continue;
+    rec.t_s.push_back(t);
+    for (int j = 0; j < kJointCount; ++j) {
+      const std::string name(kJointNames[j]);
+      rec.channels[name + "_cmd"].push_back(in.pos_cmd[j]);
+      rec.channels[name + "_act"].push_back(out.pos_act[j] + encoder_noise(rng));
+    }
+    for (int c = 0; c < 3; ++c)
+      rec.channels[std::string("tcp_true_") + "xyz"[c]].push_back(out.tcp_true[c] + noise(rng));
+  }
+  return rec;
 }
 
 }  // namespace truecut::sim::test

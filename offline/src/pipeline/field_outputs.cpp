@@ -5,9 +5,9 @@
 #include <ctime>
 #include <stdexcept>
 
-#include "mesh_io/atomic_file.hpp"
 #include "truecut/offline/compensation_matrix.hpp"
 #include "truecut/offline/stl_io.hpp"
+#include "truecut/rt/atomic_write.hpp"
 #include "truecut/rt/field_file.hpp"
 
 namespace truecut::offline {
@@ -109,19 +109,11 @@ json parameters_json(const FieldPipelineOptions& o, const AuditContext& c) {
           {"placement",
            {{"contact_tolerance_mm", o.placement.contact_tolerance_mm},
             {"max_normal_angle_deg", o.placement.max_normal_angle_deg},
-            {"tie_mm", o.placement.tie_mm}}},
+            {"tie_mm", o.placement.tie_mm},
+            {"every_generating_pass", o.placement.every_generating_pass}}},
           {"tools", tools},
           {"max_correction_mm", c.max_correction_limit_mm},
           {"force", c.forced}};
-}
-
-void refuse_special(const fs::path& target) {
-  std::error_code ec;
-  const fs::file_status st = fs::symlink_status(target, ec);
-  if (ec || !fs::exists(st)) return;
-  if (!fs::is_regular_file(st))
-    throw std::runtime_error(target.string() +
-                             " exists and is not a regular file; refusing to replace it");
 }
 
 }  // namespace
@@ -179,11 +171,17 @@ std::string audit_json(const FieldPipelineResult& r, const FieldPipelineOptions&
   json layers = json::array();
   for (std::size_t i = 0; i < r.fit->layers.size(); ++i) {
     const FieldFitLayerStats& l = r.fit->layers[i];
-    std::size_t placed = 0;
-    for (const ToolPlacement& tp : r.placement.tools)
-      if (tp.tool == l.tool) placed = tp.points.size();
+    std::size_t placed = 0, points = 0;
+    for (const ToolPlacement& tp : r.placement.tools) {
+      if (tp.tool != l.tool) continue;
+      placed = tp.points.size();
+      // Ascending point index: a point placed in several passes counts once.
+      for (std::size_t k = 0; k < tp.points.size(); ++k)
+        if (k == 0 || tp.points[k].point != tp.points[k - 1].point) ++points;
+    }
     layers.push_back({{"tool", l.tool},
-                      {"points_cut", placed},
+                      {"points_cut", points},
+                      {"placements", placed},
                       {"valid_samples", l.valid_samples},
                       {"unknown_nodes", l.unknown_nodes},
                       {"residual_rms_mm", l.residual_rms_mm},
@@ -226,45 +224,28 @@ std::string audit_json(const FieldPipelineResult& r, const FieldPipelineOptions&
 std::vector<FileDigest> write_field_outputs(const fs::path& dir, const FieldPipelineResult& r,
                                             const FieldPipelineOptions& o, const AuditContext& c) {
   const char* names[] = {"field.tcf", "compensation_matrix.csv", "adapted.stl", "audit.json"};
-  for (const char* n : names)
-    refuse_special(dir / n);
+  rt::StagedFiles files({dir / names[0], dir / names[1], dir / names[2], dir / names[3]}, ".new");
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) throw std::runtime_error(dir.string() + ": cannot create the folder: " + ec.message());
 
-  auto staged = [&](const char* n) { return dir / (std::string(n) + ".new"); };
   std::vector<FileDigest> out;
-  try {
-    rt::FieldFileInfo info;
-    info.source = "truecut field";
-    rt::write_field_file(staged(names[0]), r.fit->field, info);
-    write_compensation_matrix(staged(names[1]), r.matrix,
-                              "mirror method: compensation = -(measured - nominal)");
-    write_stl(staged(names[2]), r.adapted, StlEncoding::binary, "truecut adapted model");
-    const char* roles[] = {"field", "compensation_matrix", "adapted_model"};
-    for (int i = 0; i < 3; ++i) {
-      FileDigest d = digest_file(roles[i], staged(names[i]));
-      d.path = dir / names[i];
-      out.push_back(d);
-    }
-    const std::string audit = audit_json(r, o, c, out);
-    {
-      mesh_io::AtomicFile f(staged(names[3]));
-      f.write(audit);
-      f.commit();
-    }
-    for (const char* n : names) {
-      fs::rename(staged(n), dir / n, ec);
-      if (ec)
-        throw std::runtime_error((dir / n).string() +
-                                 ": cannot rename into place: " + ec.message());
-    }
-    out.push_back({"audit", dir / names[3], audit.size(), sha256_bytes(audit)});
-  } catch (...) {
-    for (const char* n : names)
-      fs::remove(staged(n), ec);
-    throw;
+  rt::FieldFileInfo info;
+  info.source = "truecut field";
+  rt::write_field_file(files.staged(0), r.fit->field, info);
+  write_compensation_matrix(files.staged(1), r.matrix,
+                            "mirror method: compensation = -(measured - nominal)");
+  write_stl(files.staged(2), r.adapted, StlEncoding::binary, "truecut adapted model");
+  const char* roles[] = {"field", "compensation_matrix", "adapted_model"};
+  for (int i = 0; i < 3; ++i) {
+    FileDigest d = digest_file(roles[i], files.staged(i));
+    d.path = files.target(i);
+    out.push_back(d);
   }
+  const std::string audit = audit_json(r, o, c, out);
+  files.write(3, audit);
+  files.commit();
+  out.push_back({"audit", files.target(3), audit.size(), sha256_bytes(audit)});
   return out;
 }
 

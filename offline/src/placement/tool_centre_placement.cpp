@@ -9,6 +9,7 @@
 #include <limits>
 #include <map>
 #include <numbers>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 
@@ -118,6 +119,41 @@ CutterDistance cutter_distance(const ToolShape& shape, const Eigen::Vector3d& ti
   return {dist, (nx * radial + ny * axis).normalized()};
 }
 
+namespace {
+
+// Of the candidate samples those within tie of the
+// closest: the earliest (default), or per pass (run of consecutive samples)
+// the one whose tip is nearest to p.
+void choose_samples(const std::vector<std::uint32_t>& cand, const std::vector<double>& dist,
+                    double best, const Eigen::Vector3d& p, const ToolPath& path,
+                    const PlacementOptions& options,
+                    std::vector<std::pair<std::uint32_t, double>>& chosen) {
+  std::vector<std::size_t> order(cand.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t a, std::size_t b) { return cand[a] < cand[b]; });
+  std::uint32_t previous = 0;
+  double nearest = 0.0;
+  for (std::size_t c : order) {
+    if (std::abs(dist[c]) > best + options.tie_mm) continue;
+    if (!options.every_generating_pass) {
+      chosen.push_back({cand[c], dist[c]});
+      return;
+    }
+    const double tip_distance = (path.samples[cand[c]].tip_mm - p).squaredNorm();
+    if (chosen.empty() || cand[c] != previous + 1) {
+      chosen.push_back({cand[c], dist[c]});
+      nearest = tip_distance;
+    } else if (tip_distance < nearest) {
+      chosen.back() = {cand[c], dist[c]};
+      nearest = tip_distance;
+    }
+    previous = cand[c];
+  }
+}
+
+}  // namespace
+
 PlacementResult place_at_tool_centre(std::span<const Eigen::Vector3d> positions_mm,
                                      std::span<const Eigen::Vector3d> normals, const ToolPath& path,
                                      std::span<const ToolShape> shapes,
@@ -149,9 +185,8 @@ PlacementResult place_at_tool_centre(std::span<const Eigen::Vector3d> positions_
   for (const auto& [tool, samples] : samples_of) {
     const ToolShape& shape = *shape_of.at(tool);
     const ToolIndex ix = build_index(shape, path, samples, tol);
-    constexpr std::uint32_t kNone = 0xffffffffu;
-    std::vector<std::uint32_t> chosen(n, kNone);
-    std::vector<double> chosen_d(n, 0.0);
+    // Per point, the chosen samples (one, or one per generating pass).
+    std::vector<std::vector<std::pair<std::uint32_t, double>>> chosen(n);
     const double reach2 = (shape.radius_mm + tol) * (shape.radius_mm + tol);
     tbb::parallel_for(
         tbb::blocked_range<std::size_t>(0, n, 256),
@@ -191,22 +226,17 @@ PlacementResult place_at_tool_centre(std::span<const Eigen::Vector3d> positions_
                 best = std::min(best, std::abs(cd.distance_mm));
               }
             }
-            for (std::size_t c = 0; c < cand.size(); ++c) {
-              if (std::abs(dist[c]) <= best + options.tie_mm && cand[c] < chosen[p]) {
-                chosen[p] = cand[c];
-                chosen_d[p] = dist[c];
-              }
-            }
+            choose_samples(cand, dist, best, positions_mm[p], path, options, chosen[p]);
           }
         });
     ToolPlacement tp;
     tp.tool = tool;
     for (std::size_t p = 0; p < n; ++p) {
-      if (chosen[p] == kNone) continue;
-      const ToolPathSample& s = path.samples[chosen[p]];
-      tp.points.push_back(
-          {static_cast<std::uint32_t>(p), chosen[p], s.tip_mm, s.axis, chosen_d[p]});
-      out.cut[p] = 1;
+      for (const auto& [sample, distance] : chosen[p]) {
+        const ToolPathSample& s = path.samples[sample];
+        tp.points.push_back({static_cast<std::uint32_t>(p), sample, s.tip_mm, s.axis, distance});
+        out.cut[p] = 1;
+      }
     }
     out.tools.push_back(std::move(tp));
   }

@@ -2,10 +2,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 
 #include "effect_params.hpp"
 #include "locate.hpp"
 #include "model_fit.hpp"
+#include "tcp_stage.hpp"
 #include "trace.hpp"
 #include "truecut/sim/diagnosis/diagnosis.hpp"
 
@@ -506,6 +508,24 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
         }
     e.rms_effect_mm = n ? std::sqrt(ss / n) : 0;
     res.explanations.push_back(e);
+  }
+
+  // The tool-centre point, when measured: the kinematics' effects.
+  if (tr.has_tcp()) {
+    std::optional<Trace> ht;
+    if (holdout_rec) ht = make_trace(*holdout_rec);
+    const TcpStage ts = fit_tcp(tr, train_use, held_use, ht ? &*ht : nullptr, base, o);
+    res.tcp = ts.comparison;
+    res.mismatch.insert(res.mismatch.end(), ts.mismatch.begin(), ts.mismatch.end());
+    std::stable_sort(
+        res.mismatch.begin(), res.mismatch.end(),
+        [](const Mismatch& a, const Mismatch& b) { return a.ratio_to_floor > b.ratio_to_floor; });
+    res.explanations.insert(res.explanations.end(), ts.explanations.begin(), ts.explanations.end());
+    res.not_identifiable.insert(res.not_identifiable.end(), ts.not_identifiable.begin(),
+                                ts.not_identifiable.end());
+    res.candidates_tested.insert(res.candidates_tested.end(), ts.tested.begin(), ts.tested.end());
+    res.fitted.machine.effects.rotary_location = ts.fitted.effects.rotary_location;
+    res.fitted.machine.effects.tool_length_error = ts.fitted.effects.tool_length_error;
   }
 
   const bool above = !res.mismatch.empty();

@@ -94,6 +94,22 @@ void normalise_periodic(MachineParams& p) {
   }
 }
 
+// Forward-difference Jacobian of the weighted residual in `keys` at theta
+// (r0: the residual there), one re-simulation per parameter.
+MatrixXd jacobian(const FitContext& ctx, const MachineParams& params, const std::vector<Key>& keys,
+                  const VectorXd& theta, const VectorXd& r0) {
+  MatrixXd j(r0.size(), theta.size());
+  for (Eigen::Index i = 0; i < theta.size(); ++i) {
+    MachineParams p = params;
+    VectorXd t2 = theta;
+    const double h = param_step(keys[std::size_t(i)].key, theta[i]);
+    t2[i] += h;
+    set_theta(p, keys, t2);
+    j.col(i) = (weighted_residual(ctx, p) - r0) / h;
+  }
+  return j;
+}
+
 }  // namespace
 
 std::size_t Layout::size() const {
@@ -154,6 +170,30 @@ VectorXd weighted_residual(const FitContext& ctx, const MachineParams& params) {
   ctx.layout.center(r);
   return r;
 }
+
+namespace {
+
+// A candidate of one parameter that must stay positive (a play, a friction):
+// applied by adding its linear coefficient to the believed value.
+Candidate single_positive(const std::string& effect, int joint, const std::string& axis,
+                          const std::string& key) {
+  Candidate c;
+  c.effect = effect;
+  c.joint = joint;
+  c.axis = axis;
+  c.group = effect + ":" + axis;
+  c.keys = {key};
+  c.apply = [effect, joint, key](MachineParams& p, const VectorXd& coef) {
+    enable_effect(p, effect, joint);
+    double* v = param_ptr(p, effect, joint, key);
+    if (!v || !(*v + coef[0] > 0)) return false;
+    *v += coef[0];
+    return true;
+  };
+  return c;
+}
+
+}  // namespace
 
 std::vector<Candidate> build_candidates(const FitContext& ctx, const MachineParams& base) {
   const Trace& tr = *ctx.trace;
@@ -231,43 +271,18 @@ std::vector<Candidate> build_candidates(const FitContext& ctx, const MachinePara
     }
     // reversal_spike: friction acts through the servo, so only on a dynamic joint.
     if (dynamic) {
-      Candidate c;
-      c.effect = "reversal_spike";
-      c.joint = j;
-      c.axis = ax;
-      c.group = "reversal_spike:" + ax;
-      c.keys = {coulomb_key(j)};
+      Candidate c = single_positive("reversal_spike", j, ax, coulomb_key(j));
       const double inertia = base.joints[j].drive.inertia;
       const double h = joint_kind(j) == JointKind::Linear ? 0.05 * inertia
                                                           : 50.0 * inertia * std::numbers::pi / 180;
       c.X = fd_column(base, "reversal_spike", j, coulomb_key(j), std::max(h, 0.5));
-      const std::string key = coulomb_key(j);
-      c.apply = [j, key](MachineParams& p, const VectorXd& coef) {
-        enable_effect(p, "reversal_spike", j);
-        double& f = p.effects.reversal_spike.axes[j]->coulomb;
-        if (!(f + coef[0] > 0)) return false;
-        f += coef[0];
-        return true;
-      };
       out.push_back(std::move(c));
     }
     if (!tr.meas[j]) continue;  // the encoder sees only the servo effects
 
     {
-      Candidate c;
-      c.effect = "backlash";
-      c.joint = j;
-      c.axis = ax;
-      c.group = "backlash:" + ax;
-      c.keys = {play_key(j)};
+      Candidate c = single_positive("backlash", j, ax, play_key(j));
       c.X = fd_column(base, "backlash", j, play_key(j), 1e-3);
-      c.apply = [j](MachineParams& p, const VectorXd& coef) {
-        enable_effect(p, "backlash", j);
-        double& b = p.effects.backlash.axes[j]->play;
-        if (!(b + coef[0] > 0)) return false;
-        b += coef[0];
-        return true;
-      };
       out.push_back(std::move(c));
     }
     if (j >= 3) continue;
@@ -680,15 +695,7 @@ ModelFit fit_model(const FitContext& ctx, const MachineParams& base) {
     double rss0 = r0.squaredNorm(), lambda = 1e-3;
     const Eigen::Index m = th.size();
     for (int it = 0; it < 12; ++it) {
-      MatrixXd J(r0.size(), m);
-      for (Eigen::Index i = 0; i < m; ++i) {
-        MachineParams p = fit.params;
-        VectorXd t2 = th;
-        const double h = param_step(keys[std::size_t(i)].key, th[i]);
-        t2[i] += h;
-        set_theta(p, keys, t2);
-        J.col(i) = (weighted_residual(ctx, p) - r0) / h;
-      }
+      const MatrixXd J = jacobian(ctx, fit.params, keys, th, r0);
       const MatrixXd A = J.transpose() * J;
       const VectorXd g = J.transpose() * r0;
       bool improved = false;
@@ -772,15 +779,7 @@ ModelFit fit_model(const FitContext& ctx, const MachineParams& base) {
     const VectorXd rr = weighted_residual(ctx, fit.params);
     const double ne = n_eff_of(double(fit.n), ctx.layout.lag1(rr));
     const VectorXd t0 = get_theta(fit.params, ks);
-    MatrixXd J(rr.size(), mk);
-    for (Eigen::Index i = 0; i < mk; ++i) {
-      MachineParams p = fit.params;
-      VectorXd t2 = t0;
-      const double h = param_step(ks[std::size_t(i)].key, t0[i]);
-      t2[i] += h;
-      set_theta(p, ks, t2);
-      J.col(i) = (weighted_residual(ctx, p) - rr) / h;
-    }
+    const MatrixXd J = jacobian(ctx, fit.params, ks, t0, rr);
     const double s2 =
         rr.squaredNorm() / std::max(1.0, double(fit.n) - double(mk)) * (double(fit.n) / ne);
     const MatrixXd cv =
@@ -816,15 +815,7 @@ ModelFit fit_model(const FitContext& ctx, const MachineParams& base) {
   VectorXd th = get_theta(fit.params, keys);
   MatrixXd cov = MatrixXd::Zero(m, m);
   if (m > 0) {
-    MatrixXd J(r0.size(), m);
-    for (Eigen::Index i = 0; i < m; ++i) {
-      MachineParams p = fit.params;
-      VectorXd t2 = th;
-      const double h = param_step(keys[std::size_t(i)].key, th[i]);
-      t2[i] += h;
-      set_theta(p, keys, t2);
-      J.col(i) = (weighted_residual(ctx, p) - r0) / h;
-    }
+    const MatrixXd J = jacobian(ctx, fit.params, keys, th, r0);
     const double dof = std::max(1.0, double(fit.n) - double(m));
     const double s2 = fit.rss / dof * (double(fit.n) / fit.n_eff);
     cov = s2 * Eigen::CompleteOrthogonalDecomposition<MatrixXd>(J.transpose() * J).pseudoInverse();

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "report_text.hpp"
 #include "truecut/sim/diagnosis/diagnosis.hpp"
 
 namespace truecut::sim::diagnosis {
@@ -11,27 +12,11 @@ namespace truecut::sim::diagnosis {
 namespace {
 
 std::string esc(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    if (c == '&')
-      o += "&amp;";
-    else if (c == '<')
-      o += "&lt;";
-    else if (c == '>')
-      o += "&gt;";
-    else if (c == '"')
-      o += "&quot;";
-    else
-      o += c;
-  }
-  return o;
+  return report_text::html_escape(s);
 }
 
 std::string f(double v, const char* fmt = "%.1f") {
-  if (!std::isfinite(v)) return "–";
-  char b[48];
-  std::snprintf(b, sizeof b, fmt, v);
-  return b;
+  return report_text::number(v, fmt);
 }
 
 struct Series {

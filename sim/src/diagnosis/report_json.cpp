@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
+#include "report_text.hpp"
 #include "truecut/sim/diagnosis/diagnosis.hpp"
 
 namespace truecut::sim::diagnosis {
@@ -12,7 +13,7 @@ namespace {
 using nlohmann::json;
 
 json num(double v) {
-  return std::isfinite(v) ? json(v) : json(nullptr);
+  return report_text::json_number(v);
 }
 
 json fit_json(const FitFigures& f) {
@@ -105,6 +106,18 @@ std::string diagnosis_json(const DiagnosisResult& r) {
   j["fit"]["train"] = fit_json(r.train);
   j["fit"]["heldout"] = r.has_heldout ? fit_json(r.heldout) : json(nullptr);
   if (r.has_heldout) j["fit"]["heldout"]["kind"] = r.heldout_kind;
+  if (r.tcp.present) {
+    const auto& t = r.tcp;
+    j["tcp"] = {{"target", "tcp_true_x/y/z"},
+                {"datum", t.datum_known ? "known" : "free"},
+                {"offset_mm", {num(t.offset_mm[0]), num(t.offset_mm[1]), num(t.offset_mm[2])}},
+                {"noise_floor_mm",
+                 {num(t.noise_floor_mm[0]), num(t.noise_floor_mm[1]), num(t.noise_floor_mm[2])}},
+                {"train", fit_json(t.train)},
+                {"heldout", t.heldout.samples ? fit_json(t.heldout) : json(nullptr)}};
+  } else {
+    j["tcp"] = nullptr;
+  }
   json ac = json::array();
   for (double v : r.whiteness.autocorrelation)
     ac.push_back(num(v));
@@ -152,6 +165,14 @@ std::string diagnosis_summary(const DiagnosisResult& r) {
   if (r.has_heldout)
     s += ", " + g(r.heldout.rms_unaligned_mm * 1e3) + " → " + g(r.heldout.rms_before_mm * 1e3) +
          " → " + g(r.heldout.rms_after_mm * 1e3) + " µm (held out, " + r.heldout_kind + ")";
+  if (r.tcp.present) {
+    s += "\ntcp (" + std::string(r.tcp.datum_known ? "known datum" : "offset profiled out") +
+         "): rms " + g(r.tcp.train.rms_before_mm * 1e3) + " → " +
+         g(r.tcp.train.rms_after_mm * 1e3) + " µm (fitted data)";
+    if (r.tcp.heldout.samples)
+      s += ", " + g(r.tcp.heldout.rms_before_mm * 1e3) + " → " +
+           g(r.tcp.heldout.rms_after_mm * 1e3) + " µm (held out)";
+  }
   s += "\nwhiteness: Ljung–Box Q=" + g(r.whiteness.ljung_box_q, "%.1f") +
        " p=" + g(r.whiteness.p_value, "%.3g") + (r.whiteness.white ? " (white)" : " (not white)") +
        "\n";

@@ -473,13 +473,77 @@ SurfaceDiagnosisResult diagnose_surface(const SurfaceMeasurement& measurement,
     current = best_bic;
   }
 
-  // Fit, intervals, identifiability.
+  // Fit: Gauss–Newton on the re-machined residual. Step 0 is the linear fit
+  // around the believed model (the selection's signatures); each iteration
+  // re-machines the model at the estimate and its nudges, re-linearises
+  // there and steps, until every step is below a fifth of its standard
+  // error (the deflections change the engagement and so the force: one
+  // linearisation around the believed model is biased).
   std::vector<std::size_t> pidx;
-  const Eigen::MatrixXd xs = design(selected, &pidx);
-  const Ls fit = least_squares(xs, ytr);
-  const double dof = std::max(1.0, n - double(xs.cols()));
-  const double s2 = fit.rss / dof * n / n_eff;
-  const Eigen::MatrixXd cov = fit.cov_unscaled * s2;
+  Eigen::MatrixXd xs = design(selected, &pidx);
+  Ls fit = least_squares(xs, ytr);
+  const long np = long(pidx.size());
+  auto covariance = [&](const Ls& f, const Eigen::MatrixXd& x) {
+    const double dof = std::max(1.0, n - double(x.cols()));
+    return Eigen::MatrixXd(f.cov_unscaled * (f.rss / dof * n / n_eff));
+  };
+  Eigen::MatrixXd cov = covariance(fit, xs);
+  Eigen::VectorXd theta(np);
+  for (long c = 0; c < np; ++c)
+    theta[c] = params[pidx[std::size_t(c)]].base + fit.beta[6 + c];
+  auto model_at = [&](const Eigen::VectorXd& th) {
+    MachineDescription m = believed;
+    for (long c = 0; c < np; ++c)
+      set_surface_param(m.machine, params[pidx[std::size_t(c)]], th[c], geometry);
+    return m;
+  };
+  for (int it = 1; np > 0 && it <= options.gauss_newton_iterations; ++it) {
+    const std::string tag = "Gauss-Newton " + std::to_string(it);
+    const Run at = machinist.machine(model_at(theta), tag + ": estimate");
+    auto deviation = [&](const Run& run, std::size_t k) {
+      const double d = run.deviation_mm[use[k]];
+      return std::isfinite(d) ? d : base.deviation_mm[use[k]];
+    };
+    Eigen::VectorXd y(long(tr.size()));
+    for (std::size_t k = 0; k < tr.size(); ++k)
+      y[long(k)] = measurement.points[use[tr[k]]].deviation_mm - deviation(at, tr[k]);
+    Eigen::MatrixXd x(long(tr.size()), 6 + np);
+    x.leftCols(6) = rows(nuis, tr);
+    for (long c = 0; c < np; ++c) {
+      const SurfaceParam& p = params[pidx[std::size_t(c)]];
+      // Compliances are nudged in proportion (the deviation is far from
+      // linear in them near zero); the others by their fixed step.
+      const double step = p.compliance ? std::max(0.2 * std::abs(theta[c]), 0.05 * p.step) : p.step;
+      Eigen::VectorXd nudged = theta;
+      nudged[c] += step;
+      const Run run = machinist.machine(model_at(nudged), tag + ": " + p.key);
+      for (std::size_t k = 0; k < tr.size(); ++k)
+        x(long(k), 6 + c) = (deviation(run, tr[k]) - deviation(at, tr[k])) / step;
+    }
+    const Ls f = least_squares(x, y);
+    if (!f.ok) break;
+    xs = x;
+    fit = f;
+    cov = covariance(f, x);
+    res.gauss_newton_iterations = it;
+    res.gauss_newton_converged = true;
+    std::string line = tag + ":";
+    for (long c = 0; c < np; ++c) {
+      const SurfaceParam& p = params[pidx[std::size_t(c)]];
+      const double delta = f.beta[6 + c];
+      const double se = std::sqrt(std::max(0.0, cov(6 + c, 6 + c)));
+      if (!(std::abs(delta) <= 0.2 * se)) res.gauss_newton_converged = false;
+      // A compliance stays positive: at most halve it per step.
+      theta[c] =
+          p.compliance && theta[c] + delta < 0.5 * theta[c] ? 0.5 * theta[c] : theta[c] + delta;
+      line += " " + p.key + " " + std::to_string(theta[c]) + " (step " + std::to_string(delta) +
+              ", se " + std::to_string(se) + ")";
+    }
+    progress(line);
+    if (res.gauss_newton_converged) break;
+  }
+
+  // Intervals, identifiability.
   res.registration_translation_mm = fit.beta.head<3>();
   res.registration_rotation_urad = fit.beta.segment<3>(3) * 1e6;
   MachineDescription fitted = believed;
@@ -493,11 +557,10 @@ SurfaceDiagnosisResult diagnose_surface(const SurfaceMeasurement& measurement,
     for (std::size_t c = 0; c < pidx.size(); ++c) {
       const auto& p = params[pidx[c]];
       if (surface_group(p) != g) continue;
-      const double b = fit.beta[6 + long(c)];
+      const double v = theta[long(c)];
       const double se = std::sqrt(std::max(0.0, cov(6 + long(c), 6 + long(c))));
-      const double v = p.base + b;
       set_surface_param(fitted.machine, p, v, geometry);
-      contrib += b * xs.col(6 + long(c));
+      contrib += (v - p.base) * xs.col(6 + long(c));
       Parameter out;
       out.name = p.key;
       if (p.compliance) {

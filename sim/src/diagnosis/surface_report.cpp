@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "report_text.hpp"
 #include "truecut/sim/diagnosis/surface.hpp"
 
 namespace truecut::sim::diagnosis {
@@ -14,7 +15,7 @@ namespace {
 using nlohmann::json;
 
 json num(double v) {
-  return std::isfinite(v) ? json(v) : json(nullptr);
+  return report_text::json_number(v);
 }
 
 json fit_json(const SurfaceFit& f) {
@@ -34,18 +35,7 @@ std::string fmt(const char* f, double v) {
 }
 
 std::string esc(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    if (c == '<')
-      o += "&lt;";
-    else if (c == '>')
-      o += "&gt;";
-    else if (c == '&')
-      o += "&amp;";
-    else
-      o += c;
-  }
-  return o;
+  return report_text::html_escape(s);
 }
 
 }  // namespace
@@ -113,6 +103,8 @@ std::string surface_diagnosis_json(const SurfaceDiagnosisResult& r) {
   j["not_identifiable"] = ni;
   j["candidates_tested"] = r.candidates_tested;
   j["resimulations"] = r.resimulations;
+  j["gauss_newton"] = {{"iterations", r.gauss_newton_iterations},
+                       {"converged", r.gauss_newton_converged}};
   json heldout = nullptr;
   if (r.has_heldout) {
     heldout = fit_json(r.heldout);
@@ -152,6 +144,11 @@ std::string surface_diagnosis_summary(const SurfaceDiagnosisResult& r) {
     if (!e.note.empty()) o << "; " << e.note;
     o << "\n";
   }
+  if (r.gauss_newton_iterations > 0)
+    o << "parameters fitted by " << r.gauss_newton_iterations << " Gauss-Newton iteration"
+      << (r.gauss_newton_iterations > 1 ? "s" : "")
+      << (r.gauss_newton_converged ? " (converged)" : " (not converged: last step above se/5)")
+      << "\n";
   for (const auto& n : r.not_identifiable)
     o << "not identifiable: " << n.first << " vs " << n.second << " (correlation "
       << fmt("%.3f", n.correlation) << ") — " << n.separate_by << "\n";

@@ -21,9 +21,14 @@ Trace make_trace(const Recording& rec) {
       tr.target[j] = rec.channel(name + "_act");
     }
     if (!tr.cmd[j].empty() && !tr.target[j].empty()) tr.axes.push_back(j);
+    tr.joint_pos[j] = !tr.target[j].empty() ? tr.target[j] : tr.cmd[j];
   }
+  if (rec.has("tcp_true_x") && rec.has("tcp_true_y") && rec.has("tcp_true_z"))
+    for (int i = 0; i < 3; ++i)
+      tr.tcp[i] = rec.channel(std::string("tcp_true_") + "xyz"[i]);
   if (rec.has("spindle_power")) tr.spindle_power_kw = rec.channel("spindle_power");
   if (rec.has("line")) tr.line = rec.channel("line");
+  if (rec.has("tool")) tr.tool = rec.channel("tool");
   return tr;
 }
 

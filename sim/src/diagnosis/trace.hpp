@@ -20,7 +20,15 @@ struct Trace {
   std::array<bool, kJointCount> meas{};                 // target is <j>_meas
   std::vector<double> spindle_power_kw;                 // empty: none
   std::vector<double> line;                             // empty: none
+  std::vector<double> tool;                             // tool number; empty: none
   std::vector<int> axes;                                // joints with cmd and target
+  // An external measurement of the true tool-centre point (tcp_true_x/y/z,
+  // workpiece frame), all three or none, and the recorded joint positions
+  // the believed kinematics turn into a TCP: <j>_meas, else <j>_act, else
+  // <j>_cmd; empty: the joint is not in the recording (held at 0).
+  std::array<std::vector<double>, 3> tcp;
+  std::array<std::vector<double>, kJointCount> joint_pos;
+  bool has_tcp() const { return !tcp[0].empty(); }
   std::size_t rows() const { return t_s.size(); }
 };
 

@@ -10,6 +10,7 @@
 #include <system_error>
 #include <vector>
 
+#include "truecut/rt/atomic_write.hpp"
 #include "truecut/sim/measure/cmm.hpp"
 
 namespace truecut::sim::measure {
@@ -140,19 +141,7 @@ void write_cmm_csv(const std::filesystem::path& file,
       text += "nan";
     text += m.valid ? ",1\n" : ",0\n";
   }
-  std::filesystem::path tmp = file;
-  tmp += ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out << text;
-    out.flush();
-    if (!out) {
-      out.close();
-      std::filesystem::remove(tmp, ec);
-      throw std::runtime_error(tmp.string() + ": cannot write");
-    }
-  }
-  std::filesystem::rename(tmp, file);
+  rt::write_file_atomically(file, text);
 }
 
 }  // namespace truecut::sim::measure

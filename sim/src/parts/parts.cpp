@@ -1,5 +1,4 @@
 #include <cmath>
-#include <fstream>
 #include <stdexcept>
 
 #include <Eigen/Geometry>
@@ -8,6 +7,7 @@
 #include "parts/part_builders.hpp"
 #include "parts/program_writer.hpp"
 #include "truecut/offline/stl_io.hpp"
+#include "truecut/rt/atomic_write.hpp"
 
 namespace truecut::sim {
 
@@ -71,18 +71,6 @@ void check_options(const PartOptions& o) {
         "PartOptions: mesh_edge_mm (≤ 20), stepover_mm, point_spacing_mm (≤ 10) and "
         "step_down_mm (≤ 17) must be positive and at least 0.001 mm");
   }
-}
-
-void write_atomic(const std::filesystem::path& file, const std::string& text) {
-  std::filesystem::path tmp = file;
-  tmp += ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out << text;
-    out.flush();
-    if (!out) throw std::runtime_error("cannot write " + tmp.string());
-  }
-  std::filesystem::rename(tmp, file);
 }
 
 nlohmann::ordered_json vec(const Eigen::Vector3d& v) {
@@ -164,9 +152,9 @@ void write_part(const BenchmarkPart& part, const std::filesystem::path& dir) {
   std::filesystem::create_directories(dir);
   offline::write_stl(dir / "nominal.stl", part.mesh, offline::StlEncoding::binary,
                      "truecut nominal " + part.metadata.name + ", workpiece frame, mm");
-  write_atomic(dir / "program.ngc", part.program);
-  write_atomic(dir / "tools.tbl", tool_table_text(part.metadata));
-  write_atomic(dir / "part.json", part_json(part));
+  rt::write_file_atomically(dir / "program.ngc", part.program);
+  rt::write_file_atomically(dir / "tools.tbl", tool_table_text(part.metadata));
+  rt::write_file_atomically(dir / "part.json", part_json(part));
   write_machine_description(dir / "machine.json", part_machine(part));
   write_machine_description(dir / "machine_ideal.json", part_machine_ideal(part));
 }

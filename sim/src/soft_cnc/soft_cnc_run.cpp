@@ -1,7 +1,7 @@
 // Runs a soft-CNC job: writes the wiring and its INI, loads, runs, shuts down.
-#include <fstream>
 #include <stdexcept>
 
+#include "truecut/rt/atomic_write.hpp"
 #include "truecut/rt/executor.hpp"
 #include "truecut/rt/hal.hpp"
 #include "truecut/rt/hal_file.hpp"
@@ -12,22 +12,6 @@ namespace truecut::sim {
 namespace {
 
 namespace fs = std::filesystem;
-
-void write_text(const fs::path& path, const std::string& text) {
-  const fs::path tmp = path.string() + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    out << text;
-    if (!out.flush()) throw std::runtime_error(tmp.string() + ": cannot write");
-  }
-  fs::rename(tmp, path);
-}
-
-void copy_file_atomically(const fs::path& from, const fs::path& to) {
-  const fs::path tmp = to.string() + ".tmp";
-  fs::copy_file(from, tmp, fs::copy_options::overwrite_existing);
-  fs::rename(tmp, to);
-}
 
 // Runs at every service point on the non-real-time side: the progress
 // report and the field swaps (file replaced, then a reload pulse: raised at
@@ -49,7 +33,7 @@ void on_service(void* user, int64_t time_ns) {
     hook.hal->set_pin_or_param("comp.reload", "0");
     hook.reload_high = false;
   } else if (hook.next_swap < hook.swaps->size() && t_s >= (*hook.swaps)[hook.next_swap].time_s) {
-    copy_file_atomically((*hook.swaps)[hook.next_swap].field, hook.field_file);
+    rt::copy_file_atomically((*hook.swaps)[hook.next_swap].field, hook.field_file);
     hook.hal->set_pin_or_param("comp.reload", "1");
     hook.reload_high = true;
     ++hook.next_swap;
@@ -70,11 +54,11 @@ SoftCncResult run_soft_cnc(const SoftCncJob& given, const SoftCncProgress& progr
   SoftCncJob job = given;
   if (!job.field_swaps.empty()) {
     job.field = job.out_dir / "field.tcf";
-    copy_file_atomically(*given.field, *job.field);
+    rt::copy_file_atomically(*given.field, *job.field);
   }
   const fs::path hal_file = job.out_dir / "soft_cnc.hal", ini_file = job.out_dir / "run.ini";
-  write_text(hal_file, soft_cnc_hal_text());
-  write_text(ini_file, soft_cnc_ini_text(job, machine));
+  rt::write_file_atomically(hal_file, soft_cnc_hal_text());
+  rt::write_file_atomically(ini_file, soft_cnc_ini_text(job, machine));
 
   hal::HalOptions options;
   options.component_path = job.component_path;

@@ -17,8 +17,13 @@
 // tool touches the face from outside the material). Of all samples of a tool
 // that cut P, the one that comes closest (smallest |distance|) is taken — the
 // pass that generated the surface there; samples within tie_mm of the
-// closest count as equally close and the earliest in the program wins (a wall
-// touched by the flank of several levels belongs to the first).
+// closest count as equally close. By default (every_generating_pass) the
+// point goes to every pass (run of consecutive samples) that reaches it as
+// deep as the closest, taking in each pass the sample whose tip is nearest to
+// the point: a wall cut in several levels by a long flank is re-cut by every
+// level below its own, and the deepest of those levels' corrections sets it
+// (docs/offline.md). Without it, the earliest in the program wins (the level
+// whose tip lies just below the point).
 #pragma once
 
 #include <Eigen/Core>
@@ -42,6 +47,7 @@ struct PlacementOptions {
   double contact_tolerance_mm = 0.05;
   double max_normal_angle_deg = 45.0;
   double tie_mm = 1e-3;
+  bool every_generating_pass = true;
 };
 
 // Signed distance of p from the cutter surface at (tip, unit axis): negative
@@ -64,7 +70,9 @@ struct PointPlacement {
 
 struct ToolPlacement {
   std::int32_t tool = 0;
-  std::vector<PointPlacement> points;  // ascending point index
+  // Ascending point index; with every_generating_pass a point may appear
+  // once per pass, in program order.
+  std::vector<PointPlacement> points;
 };
 
 struct PlacementResult {

@@ -7,6 +7,7 @@
 // proven on held-out data.
 #pragma once
 
+#include <array>
 #include <functional>
 #include <map>
 #include <optional>
@@ -30,6 +31,17 @@ struct DiagnosisOptions {
   double max_delay_s = 0.0;
   // Minimum BIC improvement for an effect to be selected.
   double bic_threshold = 10.0;
+  // With a tool-centre-point measurement (tcp_true_x/y/z): true when it is
+  // taken against a datum fixed in the workpiece frame (absolute); false
+  // (default) when its constant offset is unknown (a tracker's or a test
+  // ball's registration) and profiled out — then a tool-length error and
+  // the A axis line's Z offset move the TCP alike and cannot be told apart.
+  bool tcp_datum_known = false;
+  // Nominal tool lengths by tool number (the tool table's Z), for the TCP
+  // comparison: a sample's `tool` channel picks its length (one tool and no
+  // channel: that tool). Empty, or a tool not listed: the description's
+  // kinematics.tool.
+  std::map<int, double> tool_length_mm;
   std::function<void(const std::string&)> progress;  // lines for stderr; may be empty
 };
 
@@ -95,6 +107,16 @@ struct Whiteness {
   bool white = true;  // p >= 0.01
 };
 
+// The measured tool-centre point against the believed kinematics applied
+// to the recorded joints (docs/diagnosis.md, "Tool-centre point").
+struct TcpComparison {
+  bool present = false;
+  bool datum_known = false;
+  std::array<double, 3> offset_mm{};       // constant removed (zero with a known datum)
+  std::array<double, 3> noise_floor_mm{};  // per component, as for the joints
+  FitFigures train, heldout;               // per_axis keys tcp_x, tcp_y, tcp_z
+};
+
 // Series kept for the report's plots (train recording, aligned).
 struct AxisSeries {
   std::string axis;
@@ -121,6 +143,7 @@ struct DiagnosisResult {
   bool has_heldout = false;
   std::string heldout_kind;  // "file" or "split"
   Whiteness whiteness;
+  TcpComparison tcp;
   std::string verdict;  // one line: "nothing missing" or the effects found
   std::vector<AxisSeries> series;
   MachineDescription believed, fitted;

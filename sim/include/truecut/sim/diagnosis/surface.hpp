@@ -39,6 +39,10 @@ struct SurfaceOptions {
   // 0: none.
   double holdout_fraction = 0.3;
   double bic_threshold = 10.0;
+  // Gauss–Newton iterations of the parameter fit after the linear step
+  // around the believed model; each re-machines the estimate and one nudge
+  // per fitted parameter. 0: the linear step only.
+  int gauss_newton_iterations = 4;
   // Candidate groups to test ("tool_radius_error", "tool_length_error",
   // "rotary_location", "tool_deflection", "workpiece_deflection",
   // "squareness"); empty: all that apply (rotary_location only when the
@@ -98,6 +102,10 @@ struct SurfaceDiagnosisResult {
   std::vector<NotIdentifiable> not_identifiable;
   std::vector<std::string> candidates_tested;
   int resimulations = 0;
+  // Gauss–Newton iterations made, and whether the last step was below a
+  // fifth of every parameter's standard error.
+  int gauss_newton_iterations = 0;
+  bool gauss_newton_converged = false;
   SurfaceFit train, heldout;
   bool has_heldout = false;
   std::string heldout_kind;  // "region: <axis> > <value> mm"

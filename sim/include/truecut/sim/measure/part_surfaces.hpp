@@ -1,13 +1,15 @@
 // The surface labels of a nominal model as part.json stores them
 // (docs/parts.md): the surfaces with their compensate flags and one id per
-// triangle of nominal.stl.
+// triangle of nominal.stl; read with the one part.json reader
+// (truecut/sim/part_file.hpp).
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
-#include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "truecut/sim/part_file.hpp"
 
 namespace truecut::sim::measure {
 
@@ -27,11 +29,8 @@ struct PartSurfaces {
 };
 
 // Thrown for unreadable JSON or a missing or wrong key; what() names the
-// file and the key (or the parse position).
-class PartFileError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
+// file and the key (or the parse position). The part.json reader's error.
+using PartFileError = sim::PartFileError;
 
 PartSurfaces read_part_surfaces(const std::filesystem::path& part_json);
 

@@ -1,0 +1,160 @@
+#include "measure_options.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cstdio>
+#include <filesystem>
+
+#include "truecut/offline/mesh_io.hpp"
+#include "truecut/rt/atomic_write.hpp"
+#include "truecut/sim/measure/part_surfaces.hpp"
+
+namespace truecut::cli {
+namespace {
+
+std::vector<std::int32_t> parse_surface_list(const std::string& option, const std::string& text) {
+  std::vector<std::int32_t> ids;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', start), text.size());
+    const std::string item = text.substr(start, comma - start);
+    char* end = nullptr;
+    const long v = std::strtol(item.c_str(), &end, 10);
+    if (item.empty() || *end != '\0' || v < -2147483647L || v > 2147483647L)
+      throw UsageError("--" + option + " '" + text + "': '" + item + "' is not a surface id");
+    ids.push_back(static_cast<std::int32_t>(v));
+    start = comma + 1;
+  }
+  return ids;
+}
+
+void print_row(const sim::measure::SurfaceDeviationStats& s, const char* indent) {
+  const std::string name = s.surface < 0 ? "all" : std::to_string(s.surface);
+  std::printf("%s%-8s %7zu %7zu %9.2f %9.2f %9.2f %9.2f %9.2f\n", indent, name.c_str(), s.points,
+              s.valid, s.mean_um, s.std_um, s.rms_um, s.max_abs_um, s.p95_abs_um);
+}
+
+}  // namespace
+
+void require_replaceable(const std::string& file) {
+  try {
+    rt::require_replaceable(file);
+  } catch (const rt::FileWriteError& e) {
+    throw UsageError(e.what());
+  }
+}
+
+bool has_extension(const std::string& file, std::initializer_list<const char*> extensions) {
+  const auto format = offline::format_from_extension(file);
+  std::string ext = std::filesystem::path(file).extension().string();
+  for (auto& ch : ext)
+    ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  for (const char* e : extensions)
+    if (ext == e) return format.has_value();
+  return false;
+}
+
+std::vector<OptionSpec> scan_option_specs(const std::string& prefix) {
+  std::vector<OptionSpec> specs;
+  for (const char* name : {"sigma-um", "density", "mode", "max-incidence-deg",
+                           "registration-error-mm", "registration-error-deg", "seed", "normals"})
+    specs.push_back({prefix + name, true});
+  return specs;
+}
+
+ScanSettings scan_settings(const ParsedArgs& a, const std::string& p) {
+  ScanSettings s;
+  sim::measure::ScannerOptions& opt = s.options;
+  opt.sigma0_mm = a.number(p + "sigma-um", 20.0, 5.0, 50.0) / 1000.0;
+  s.sigma_text = a.value(p + "sigma-um").value_or("20");
+  opt.density_pt_per_mm2 = a.number(p + "density", opt.density_pt_per_mm2, 1e-3, 1e4);
+  opt.max_incidence_deg = a.number(p + "max-incidence-deg", opt.max_incidence_deg, 1.0, 89.0);
+  opt.seed = static_cast<std::uint64_t>(a.integer(p + "seed", 1, 0, 0x7fffffffffffffffL));
+  s.mode = a.value(p + "mode").value_or("fringe");
+  if (s.mode == "laser")
+    opt.mode = sim::measure::ScanMode::laser;
+  else if (s.mode != "fringe")
+    throw UsageError("--" + p + "mode '" + s.mode + "': expected fringe or laser");
+  const std::string normals = a.value(p + "normals").value_or("estimate");
+  if (normals != "estimate" && normals != "view")
+    throw UsageError("--" + p + "normals '" + normals + "': expected estimate or view");
+  opt.estimate_normals = normals == "estimate";
+  s.registration_error_mm = a.number(p + "registration-error-mm", 0.0, 0.0, 10.0);
+  s.registration_error_deg = a.number(p + "registration-error-deg", 0.0, 0.0, 10.0);
+  return s;
+}
+
+sim::measure::ScanResult scan_mesh(const offline::TriangleMesh& mesh, ScanSettings& s) {
+  if (mesh.vertices_mm.empty()) throw std::invalid_argument("no vertices");
+  if (s.registration_error_mm > 0 || s.registration_error_deg > 0) {
+    Eigen::Vector3d lo = mesh.vertices_mm.front(), hi = lo;
+    for (const Eigen::Vector3d& p : mesh.vertices_mm) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    s.options.registration_error = sim::measure::seeded_registration_error(
+        s.registration_error_mm, s.registration_error_deg, 0.5 * (lo + hi), s.options.seed);
+  }
+  s.options.progress = [](std::size_t pose, std::size_t poses, std::size_t points) {
+    std::fprintf(stderr, "scan: pose %zu/%zu, %zu points\n", pose + 1, poses, points);
+  };
+  return sim::measure::scan(mesh, s.options);
+}
+
+std::string scan_comment(const ScanSettings& s) {
+  return "truecut scan " + s.mode + " sigma0_um=" + s.sigma_text +
+         " density_pt_per_mm2=" + std::to_string(s.options.density_pt_per_mm2) +
+         " seed=" + std::to_string(s.options.seed) + ", workpiece frame, mm";
+}
+
+std::vector<OptionSpec> cmm_option_specs(const std::string& prefix) {
+  std::vector<OptionSpec> specs;
+  for (const char* name : {"sigma-um", "search-mm", "seed", "spacing", "surfaces"})
+    specs.push_back({prefix + name, true});
+  return specs;
+}
+
+CmmSettings cmm_settings(const ParsedArgs& a, const std::string& p) {
+  CmmSettings s;
+  s.options.sigma_mm = a.number(p + "sigma-um", 2.0, 0.0, 20.0) / 1000.0;
+  s.options.search_distance_mm =
+      a.number(p + "search-mm", s.options.search_distance_mm, 1e-3, 100.0);
+  s.options.seed = static_cast<std::uint64_t>(a.integer(p + "seed", 1, 0, 0x7fffffffffffffffL));
+  s.spacing_mm = a.number(p + "spacing", 1.0, 0.01, 1000.0);
+  if (const auto list = a.value(p + "surfaces"))
+    s.surfaces = parse_surface_list(p + "surfaces", *list);
+  return s;
+}
+
+std::vector<sim::measure::CmmPoint> cmm_points_on_part(const std::string& nominal_file,
+                                                       const std::string& part_file,
+                                                       const CmmSettings& settings) {
+  const offline::TriangleMesh nominal = offline::read_mesh(nominal_file);
+  const sim::measure::PartSurfaces labels = sim::measure::read_part_surfaces(part_file);
+  if (labels.triangle_surface_ids.size() != nominal.triangles.size())
+    throw MeasureInputError(part_file + ": key 'triangle_surface_ids' has " +
+                            std::to_string(labels.triangle_surface_ids.size()) + " entries but " +
+                            nominal_file + " has " + std::to_string(nominal.triangles.size()) +
+                            " triangles");
+  for (std::int32_t id : settings.surfaces)
+    if (!labels.has(id))
+      throw MeasureInputError(part_file + ": key 'surfaces' has no surface " + std::to_string(id));
+  const std::vector<std::int32_t> surfaces =
+      settings.surfaces.empty() ? labels.compensated_ids() : settings.surfaces;
+  auto points = sim::measure::cmm_points_on_surfaces(nominal, labels.triangle_surface_ids,
+                                                     settings.spacing_mm, surfaces);
+  if (points.empty())
+    throw MeasureInputError(nominal_file + ": no points on the selected surfaces");
+  return points;
+}
+
+void print_cmm_table(const std::vector<sim::measure::CmmMeasurement>& measurements,
+                     const char* indent) {
+  std::printf("%s%-8s %7s %7s %9s %9s %9s %9s %9s\n", indent, "surface", "points", "valid",
+              "mean_um", "std_um", "rms_um", "max_um", "p95_um");
+  for (const auto& s : sim::measure::surface_statistics(measurements))
+    print_row(s, indent);
+  print_row(sim::measure::overall_statistics(measurements), indent);
+}
+
+}  // namespace truecut::cli
