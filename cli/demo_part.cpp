@@ -153,6 +153,13 @@ DemoPartResult run_demo_part(const std::string& part, const DemoOptions& o) {
                            : part == "implant"    ? 0.1
                                                   : 0.0;
     if (spacing > 0) args.insert(args.end(), {"--spacing", num(spacing)});
+    // Register on the surfaces the compensation does not touch, as a shop
+    // registers on datums: on all surfaces, ICP would take part of the real
+    // error (the shaft oversize, larger at its foot) for a tilt of the scan.
+    std::string datum;
+    for (const auto& sf : info.surfaces)
+      if (!sf.compensate) datum += (datum.empty() ? "" : ",") + std::to_string(sf.id);
+    if (!datum.empty()) args.insert(args.end(), {"--datum", datum});
     args.insert(args.end(), {"--edge-exclusion", num(o.edge_exclusion_mm)});
     if (!base.empty()) args.insert(args.end(), {"--base", base});
     s.run("correction field from the scan of " + key, args);
