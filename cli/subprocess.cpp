@@ -13,10 +13,6 @@ extern char** environ;
 
 namespace truecut::cli {
 
-std::filesystem::path self_executable() {
-  return std::filesystem::read_symlink("/proc/self/exe");
-}
-
 std::string shell_words(const std::vector<std::string>& argv) {
   std::string out;
   for (const auto& a : argv) {

@@ -8,9 +8,6 @@
 
 namespace truecut::cli {
 
-// The running truecut executable.
-std::filesystem::path self_executable();
-
 // Runs argv[0] with argv, stdout and stderr appended to `log`; returns the
 // exit code (-1 when killed by a signal). Throws std::runtime_error when the
 // program cannot be started.

@@ -2,8 +2,7 @@
 // payload, CRC-64/XZ over both. Format: docs/formats.md.
 #include "truecut/rt/field_file.hpp"
 
-#include <fcntl.h>
-#include <unistd.h>
+#include "truecut/rt/atomic_write.hpp"
 
 #include <algorithm>
 #include <bit>
@@ -355,17 +354,6 @@ void check_one_line(const std::string& what, const std::string& value) {
   throw FieldFileError(path.string() + ": " + what + ": " + std::strerror(err));
 }
 
-void write_all(int fd, std::string_view bytes, const std::filesystem::path& path) {
-  while (!bytes.empty()) {
-    const ssize_t n = ::write(fd, bytes.data(), bytes.size());
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      fail_io(path, "write failed", errno);
-    }
-    bytes.remove_prefix(static_cast<std::size_t>(n));
-  }
-}
-
 }  // namespace
 
 std::string encode_field_file(const CorrectionField& field, const FieldFileInfo& info) {
@@ -426,33 +414,10 @@ LoadedField read_field_file(const std::filesystem::path& path) {
 void write_field_file(const std::filesystem::path& path, const CorrectionField& field,
                       const FieldFileInfo& info) {
   const std::string bytes = encode_field_file(field, info);
-  const std::filesystem::path tmp = path.string() + ".tmp";
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) fail_io(tmp, "cannot create", errno);
   try {
-    write_all(fd, bytes, tmp);
-    if (::fsync(fd) != 0) fail_io(tmp, "fsync failed", errno);
-  } catch (...) {
-    ::close(fd);
-    ::unlink(tmp.c_str());
-    throw;
-  }
-  if (::close(fd) != 0) {
-    const int err = errno;
-    ::unlink(tmp.c_str());
-    fail_io(tmp, "close failed", err);
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int err = errno;
-    ::unlink(tmp.c_str());
-    fail_io(path, "cannot rename " + tmp.string() + " over it", err);
-  }
-  // Make the rename itself durable; failing here loses nothing already written.
-  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
-  const int dir_fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (dir_fd >= 0) {
-    ::fsync(dir_fd);
-    ::close(dir_fd);
+    write_file_atomically(path, bytes);
+  } catch (const FileWriteError& e) {
+    throw FieldFileError(e.what());
   }
 }
 
