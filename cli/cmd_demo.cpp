@@ -37,9 +37,9 @@ const char* kHelp =
     "  --tolerance-um T   tolerance drawn in the report (default 20)\n"
     "  --iterations N     real-time iterations, 1 or 2 (default 2)\n"
     "  --no-rewrite       skip the G-code rewrite stage\n"
-    "  --mesh-edge MM     nominal mesh edge (default 0.5)\n"
-    "  --stepover MM      tool path stepover (default 0.5)\n"
-    "  --cmm-spacing MM   CMM point spacing (default 1)\n"
+    "  --mesh-edge MM     nominal mesh edge (default 0.5 implant, 1 others)\n"
+    "  --stepover MM      tool path stepover (default 0.5 implant, 1 others)\n"
+    "  --cmm-spacing MM   CMM point spacing (default 1 implant, 2 others)\n"
     "  --resolution MM    correction field grid (default 1)\n"
     "  --point-spacing MM compensation points every MM on the surface (default\n"
     "                     0.1 implant; 0 = nominal vertices, default for others)\n"
@@ -89,9 +89,9 @@ int cmd_demo(const std::vector<std::string>& argv) {
   o.sigma_um = a.number("sigma-um", 20.0, 5.0, 50.0);
   o.iterations = static_cast<int>(a.integer("iterations", 2, 1, 2));
   o.rewrite = !a.flag("no-rewrite");
-  o.mesh_edge_mm = a.number("mesh-edge", 0.5, 0.05, 10.0);
-  o.stepover_mm = a.number("stepover", 0.5, 0.05, 10.0);
-  o.cmm_spacing_mm = a.number("cmm-spacing", 1.0, 0.05, 20.0);
+  o.mesh_edge_mm = a.number("mesh-edge", 0.0, 0.0, 10.0);
+  o.stepover_mm = a.number("stepover", 0.0, 0.0, 10.0);
+  o.cmm_spacing_mm = a.number("cmm-spacing", 0.0, 0.0, 20.0);
   o.field_resolution_mm = a.number("resolution", 1.0, 0.1, 20.0);
   o.dexel_spacing_mm = a.number("dexel-spacing", 0.0, 0.0, 5.0);
   o.point_spacing_mm = a.number("point-spacing", 0.0, 0.0, 10.0);

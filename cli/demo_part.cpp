@@ -41,6 +41,12 @@ PartInfo read_part_info(const fs::path& file) {
   return p;
 }
 
+// The option's value, or when it is 0 the default for the implant or for
+// the larger parts.
+double per_part(double value, const std::string& part, double implant, double larger) {
+  return value > 0 ? value : part == "implant" ? implant : larger;
+}
+
 std::string num(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%g", v);
@@ -101,12 +107,13 @@ DemoPartResult run_demo_part(const std::string& part, const DemoOptions& o) {
   r.dir = fs::absolute(o.out_dir / part);
   Steps s(r.dir, part);
   const std::string sigma = num(o.sigma_um), cmm_sigma = num(o.cmm_sigma_um),
-                    spacing = num(o.cmm_spacing_mm);
+                    spacing = num(per_part(o.cmm_spacing_mm, part, 1.0, 2.0));
   uint64_t seed = o.seed * 100;
   auto next_seed = [&] { return std::to_string(++seed); };
 
-  s.run("generate the part", {"part", part, "--out", "part", "--mesh-edge", num(o.mesh_edge_mm),
-                              "--stepover", num(o.stepover_mm)});
+  s.run("generate the part", {"part", part, "--out", "part", "--mesh-edge",
+                              num(per_part(o.mesh_edge_mm, part, 0.5, 1.0)), "--stepover",
+                              num(per_part(o.stepover_mm, part, 0.5, 1.0))});
   const PartInfo info = read_part_info(r.dir / "part" / "part.json");
   r.surfaces = info.surfaces;
   const std::vector<std::string> part_files{"--nominal",      "part/nominal.stl", "--part",

@@ -15,9 +15,11 @@ struct DemoOptions {
   std::filesystem::path out_dir = "out/demo";
   double sigma_um = 20.0;  // scanner noise
   double cmm_sigma_um = 2.0;
-  double cmm_spacing_mm = 1.0;
-  double mesh_edge_mm = 0.5;  // part generation
-  double stepover_mm = 0.5;
+  // 0: per part — the implant 1 / 0.5 / 0.5 mm; benchmark004 and freeform,
+  // ten times larger, 2 / 1 / 1 mm (docs/results.md).
+  double cmm_spacing_mm = 0;
+  double mesh_edge_mm = 0;  // part generation
+  double stepover_mm = 0;
   double field_resolution_mm = 1.0;
   // Compensation points for the field: even sampling at this spacing
   // (0: 0.1 for the implant, the nominal vertices for the larger parts).

@@ -11,4 +11,8 @@ tools/install-deps.sh
 cmake -S . -B build -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTRUECUT_SANITIZE=OFF >/dev/null
 cmake --build build -j"$(nproc)" --target truecut interp_planner truecut_comp tool_geometry \
       machine_joints cutting
-build/truecut demo --out out/demo "$@"
+# All three parts unless the caller names one (`tools/demo.sh --part implant`).
+case " $* " in
+  *" --part "*) build/truecut demo --out out/demo "$@" ;;
+  *) build/truecut demo --part all --out out/demo "$@" ;;
+esac
