@@ -120,12 +120,13 @@ DemoPartResult run_demo_part(const std::string& part, const DemoOptions& o) {
                                             "part/part.json", "--tools",          "part/tools.tbl"};
 
   auto machine = [&](const std::string& key, const std::string& title, const std::string& program,
-                     const std::string& field) {
+                     const std::string& field,
+                     const std::string& machine_file = "part/machine.json") {
     const double dexel = o.dexel_spacing_mm > 0 ? o.dexel_spacing_mm
                          : part == "implant"    ? 0.1
                                                 : 0.3;
-    std::vector<std::string> args{"run", "part/machine.json", program,   "--out",
-                                  key,   "--dexel-spacing",   num(dexel)};
+    std::vector<std::string> args{"run", machine_file,      program,   "--out",
+                                  key,   "--dexel-spacing", num(dexel)};
     args.insert(args.end(), part_files.begin(), part_files.end());
     if (!field.empty()) args.insert(args.end(), {"--field", field});
     s.run("machine (" + title + ")", args);
@@ -211,6 +212,9 @@ DemoPartResult run_demo_part(const std::string& part, const DemoOptions& o) {
     scan_and_field("realtime", "field_2", "field_1/field.tcf");
     machine("realtime_2", "real-time, 2nd iteration", "part/program.ngc", "field_2/field.tcf");
   }
+  if (o.ideal_reference)
+    machine("ideal", "error-free machine (reference)", "part/program.ngc", "",
+            "part/machine_ideal.json");
   r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;
 }

@@ -30,11 +30,15 @@ struct DemoOptions {
   double dexel_spacing_mm = 0;  // 0: 0.1 for the implant, 0.3 for the larger parts
   int iterations = 2;           // real-time iterations (1 or 2)
   bool rewrite = true;
+  // Also machine the program on the error-free machine (machine_ideal.json),
+  // uncompensated: the deviation the program itself leaves (scallops, the
+  // cutting model), which no compensation of the machine can remove.
+  bool ideal_reference = true;
   std::uint64_t seed = 1;
 };
 
 struct DemoStage {
-  std::string key;    // uncompensated, realtime, rewrite, realtime_2
+  std::string key;    // uncompensated, realtime, rewrite, realtime_2, ideal
   std::string title;  // for people
   std::filesystem::path dir;
   std::vector<sim::measure::CmmMeasurement> cmm;

@@ -110,6 +110,51 @@ std::string field_picture(const std::filesystem::path& tcf) {
   return html;
 }
 
+// Mean CMM deviation per height band of the judged points whose nominal
+// normal is within ~17° of horizontal (walls), one line per stage: how the
+// error and what is left of it vary from the foot of a wall to its top.
+std::string wall_profile(const ReportPart& part, double tolerance_um) {
+  std::map<int, bool> judged;
+  for (const auto& s : part.surfaces)
+    judged[s.id] = s.compensate;
+  auto is_wall_point = [&](const measure::CmmMeasurement& m) {
+    return m.valid && judged.count(m.nominal.surface) && judged[m.nominal.surface] &&
+           std::abs(m.nominal.normal.z()) < 0.3;
+  };
+  double low = std::numeric_limits<double>::infinity(), high = -low;
+  for (const auto& st : part.stages)
+    for (const auto& m : st.cmm)
+      if (is_wall_point(m)) {
+        low = std::min(low, m.nominal.position_mm.z());
+        high = std::max(high, m.nominal.position_mm.z());
+      }
+  if (!(high > low)) return "";
+  const int bands = 17;
+  const double width = (high - low) / bands;
+  std::vector<ProfileSeries> series;
+  double range = 5.0;
+  for (std::size_t k = 0; k < part.stages.size(); ++k) {
+    std::vector<double> sum(bands, 0.0);
+    std::vector<int> n(bands, 0);
+    for (const auto& m : part.stages[k].cmm) {
+      if (!is_wall_point(m)) continue;
+      const int b =
+          std::clamp(static_cast<int>((m.nominal.position_mm.z() - low) / width), 0, bands - 1);
+      sum[b] += m.deviation_mm * 1000.0;
+      ++n[b];
+    }
+    ProfileSeries ps{part.stages[k].title, kStageColours[k % 5], {}};
+    for (int b = 0; b < bands; ++b)
+      if (n[b] > 0) {
+        ps.points.emplace_back(low + (b + 0.5) * width, sum[b] / n[b]);
+        range = std::max(range, 1.15 * std::abs(sum[b] / n[b]));
+      }
+    series.push_back(std::move(ps));
+  }
+  return profile_svg(series, low, high, 5.0 * std::ceil(range / 5.0), tolerance_um, "µm",
+                     "height z (mm)");
+}
+
 }  // namespace
 
 std::vector<measure::SurfaceDeviationStats> judged_statistics(
@@ -155,8 +200,9 @@ std::string closed_loop_html(const std::vector<ReportPart>& parts, const ReportO
       const double ref = stats[0].back().rms_um;
       h += "<tr><td class='name'>" + html_escape(part.stages[k].title) + "</td>" +
            stats_cell(all, o.tolerance_um) + "<td>" +
-           (k == 0 || ref <= 0 ? std::string("—")
-                               : fmt("%.0f %%", 100.0 * (1.0 - all.rms_um / ref))) +
+           (part.stages[k].key == "ideal" ? std::string("floor")
+            : k == 0 || ref <= 0          ? std::string("—")
+                                          : fmt("%.0f %%", 100.0 * (1.0 - all.rms_um / ref))) +
            "</td></tr>";
     }
     h += "</table>";
@@ -165,6 +211,7 @@ std::string closed_loop_html(const std::vector<ReportPart>& parts, const ReportO
     double limit_um = 2.0 * o.tolerance_um;
     for (const auto& m : part.stages.front().cmm)
       if (m.valid) limit_um = std::max(limit_um, std::abs(m.deviation_mm) * 1000.0);
+    limit_um = 5.0 * std::ceil(limit_um / 5.0);  // axis labels people can read
     h += "<h3>Deviation maps (judged surfaces; grey: not judged)</h3><div>";
     for (const auto& st : part.stages) {
       const offline::TriangleMesh machined = offline::read_mesh(st.machined_stl);
@@ -192,6 +239,11 @@ std::string closed_loop_html(const std::vector<ReportPart>& parts, const ReportO
     }
     h += "<h3>Relative frequency of the CMM deviations (judged surfaces)</h3>" +
          histogram_svg(series, limit_um, 40, o.tolerance_um, "µm");
+
+    const std::string profile = wall_profile(part, o.tolerance_um);
+    if (!profile.empty())
+      h += "<h3>Deviation along the height of the judged walls (mean per height band)</h3>" +
+           profile;
 
     // Per-surface tables.
     h += "<h3>Per surface (RMS / max / P95 / std, µm; max within tolerance in green)</h3><table>"

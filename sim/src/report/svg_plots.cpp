@@ -103,6 +103,62 @@ std::string histogram_svg(const std::vector<HistogramSeries>& series, double ran
   return s + "</svg>";
 }
 
+std::string profile_svg(const std::vector<ProfileSeries>& series, double low, double high,
+                        double range, double tolerance, const std::string& value_unit,
+                        const std::string& height_label) {
+  const double W = 760, H = 320, left = 50, right = 210, top = 12, bottom = 40;
+  const double pw = W - left - right, ph = H - top - bottom;
+  if (!(high > low)) high = low + 1.0;
+  auto X = [&](double v) {
+    return left + (std::clamp(v, -range, range) + range) / (2 * range) * pw;
+  };
+  auto Y = [&](double z) { return top + ph - (z - low) / (high - low) * ph; };
+  std::string s = "<svg xmlns='http://www.w3.org/2000/svg' width='" + fmt("%.0f", W) +
+                  "' height='" + fmt("%.0f", H) + "' font-family='sans-serif' font-size='11'>";
+  s += "<rect x='" + fmt("%.1f", left) + "' y='" + fmt("%.1f", top) + "' width='" +
+       fmt("%.1f", pw) + "' height='" + fmt("%.1f", ph) + "' fill='none' stroke='#888'/>";
+  for (int i = -2; i <= 2; ++i) {
+    const double v = range * i / 2.0;
+    s += "<text x='" + fmt("%.1f", X(v)) + "' y='" + fmt("%.1f", top + ph + 14) +
+         "' text-anchor='middle'>" + fmt("%g", v) + "</text>";
+  }
+  s += "<line x1='" + fmt("%.1f", X(0)) + "' x2='" + fmt("%.1f", X(0)) + "' y1='" +
+       fmt("%.1f", top) + "' y2='" + fmt("%.1f", top + ph) + "' stroke='#bbb'/>";
+  for (int i = 0; i <= 4; ++i) {
+    const double z = low + (high - low) * i / 4.0;
+    s += "<text x='" + fmt("%.1f", left - 4) + "' y='" + fmt("%.1f", Y(z) + 4) +
+         "' text-anchor='end'>" + fmt("%.3g", z) + "</text>";
+  }
+  s += "<text x='" + fmt("%.1f", left + pw / 2) + "' y='" + fmt("%.1f", H - 6) +
+       "' text-anchor='middle'>deviation (" + html_escape(value_unit) + ")</text>";
+  s += "<text x='12' y='" + fmt("%.1f", top + ph / 2) + "' transform='rotate(-90 12 " +
+       fmt("%.1f", top + ph / 2) + ")' text-anchor='middle'>" + html_escape(height_label) +
+       "</text>";
+  if (tolerance > 0 && tolerance < range)
+    for (double t : {-tolerance, tolerance})
+      s += "<line x1='" + fmt("%.1f", X(t)) + "' x2='" + fmt("%.1f", X(t)) + "' y1='" +
+           fmt("%.1f", top) + "' y2='" + fmt("%.1f", top + ph) +
+           "' stroke='#444' stroke-dasharray='4 3'/>";
+  for (size_t k = 0; k < series.size(); ++k) {
+    const std::string colour = html_escape(series[k].colour);
+    std::string path;
+    for (size_t i = 0; i < series[k].points.size(); ++i) {
+      const auto& [z, v] = series[k].points[i];
+      path += (i == 0 ? "M" : "L") + fmt("%.1f", X(v)) + "," + fmt("%.1f", Y(z));
+      s += "<circle cx='" + fmt("%.1f", X(v)) + "' cy='" + fmt("%.1f", Y(z)) + "' r='2.2' fill='" +
+           colour + "'/>";
+    }
+    if (!path.empty())
+      s += "<path d='" + path + "' fill='none' stroke='" + colour + "' stroke-width='1.6'/>";
+    // Legend to the right of the plot, clear of the lines.
+    s += "<rect x='" + fmt("%.1f", left + pw + 12) + "' y='" + fmt("%.1f", top + 6 + 14.0 * k) +
+         "' width='12' height='3' fill='" + colour + "'/>";
+    s += "<text x='" + fmt("%.1f", left + pw + 28) + "' y='" + fmt("%.1f", top + 10 + 14.0 * k) +
+         "'>" + html_escape(series[k].label) + "</text>";
+  }
+  return s + "</svg>";
+}
+
 std::string colour_bar_svg(double limit, double tolerance, const std::string& unit) {
   const double W = 360, H = 46, left = 20, pw = 320;
   std::string s = "<svg xmlns='http://www.w3.org/2000/svg' width='" + fmt("%.0f", W) +
