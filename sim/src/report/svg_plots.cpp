@@ -15,6 +15,22 @@ std::string fmt(const char* f, double v) {
   return buf;
 }
 
+// The <svg> element, the plot's frame and the labels of its horizontal
+// axis, which runs symmetric from -range to +range.
+std::string plot_frame(double W, double H, double left, double top, double pw, double ph,
+                       double range) {
+  std::string s = "<svg xmlns='http://www.w3.org/2000/svg' width='" + fmt("%.0f", W) +
+                  "' height='" + fmt("%.0f", H) + "' font-family='sans-serif' font-size='11'>";
+  s += "<rect x='" + fmt("%.1f", left) + "' y='" + fmt("%.1f", top) + "' width='" +
+       fmt("%.1f", pw) + "' height='" + fmt("%.1f", ph) + "' fill='none' stroke='#888'/>";
+  for (int i = -2; i <= 2; ++i) {
+    const double v = range * i / 2.0;
+    s += "<text x='" + fmt("%.1f", left + (v + range) / (2 * range) * pw) + "' y='" +
+         fmt("%.1f", top + ph + 14) + "' text-anchor='middle'>" + fmt("%g", v) + "</text>";
+  }
+  return s;
+}
+
 }  // namespace
 
 std::string html_escape(const std::string& text) {
@@ -62,15 +78,7 @@ std::string histogram_svg(const std::vector<HistogramSeries>& series, double ran
   ymax *= 1.1;
   auto X = [&](double v) { return left + (v + range) / (2 * range) * pw; };
   auto Y = [&](double p) { return top + ph - p / ymax * ph; };
-  std::string s = "<svg xmlns='http://www.w3.org/2000/svg' width='" + fmt("%.0f", W) +
-                  "' height='" + fmt("%.0f", H) + "' font-family='sans-serif' font-size='11'>";
-  s += "<rect x='" + fmt("%.1f", left) + "' y='" + fmt("%.1f", top) + "' width='" +
-       fmt("%.1f", pw) + "' height='" + fmt("%.1f", ph) + "' fill='none' stroke='#888'/>";
-  for (int i = -2; i <= 2; ++i) {
-    const double v = range * i / 2.0;
-    s += "<text x='" + fmt("%.1f", X(v)) + "' y='" + fmt("%.1f", top + ph + 14) +
-         "' text-anchor='middle'>" + fmt("%g", v) + "</text>";
-  }
+  std::string s = plot_frame(W, H, left, top, pw, ph, range);
   for (int i = 0; i <= 4; ++i) {
     const double p = ymax * i / 4.0;
     s += "<text x='" + fmt("%.1f", left - 4) + "' y='" + fmt("%.1f", Y(p) + 4) +
@@ -113,15 +121,7 @@ std::string profile_svg(const std::vector<ProfileSeries>& series, double low, do
     return left + (std::clamp(v, -range, range) + range) / (2 * range) * pw;
   };
   auto Y = [&](double z) { return top + ph - (z - low) / (high - low) * ph; };
-  std::string s = "<svg xmlns='http://www.w3.org/2000/svg' width='" + fmt("%.0f", W) +
-                  "' height='" + fmt("%.0f", H) + "' font-family='sans-serif' font-size='11'>";
-  s += "<rect x='" + fmt("%.1f", left) + "' y='" + fmt("%.1f", top) + "' width='" +
-       fmt("%.1f", pw) + "' height='" + fmt("%.1f", ph) + "' fill='none' stroke='#888'/>";
-  for (int i = -2; i <= 2; ++i) {
-    const double v = range * i / 2.0;
-    s += "<text x='" + fmt("%.1f", X(v)) + "' y='" + fmt("%.1f", top + ph + 14) +
-         "' text-anchor='middle'>" + fmt("%g", v) + "</text>";
-  }
+  std::string s = plot_frame(W, H, left, top, pw, ph, range);
   s += "<line x1='" + fmt("%.1f", X(0)) + "' x2='" + fmt("%.1f", X(0)) + "' y1='" +
        fmt("%.1f", top) + "' y2='" + fmt("%.1f", top + ph) + "' stroke='#bbb'/>";
   for (int i = 0; i <= 4; ++i) {
