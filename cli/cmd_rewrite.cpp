@@ -47,6 +47,15 @@ const char* kRewriteHelp =
     "  --step MM            densification distance (default 0.5)\n"
     "  --reach MM           farthest compensation point from the cutting edge that\n"
     "                       is used (default: 2 x median point spacing)\n"
+    "  --placement P        matrix mode: every-pass (default) averages the blend over\n"
+    "                       the cutting part (flank up to the cutting length, or the\n"
+    "                       bottom disc), so every pass that sweeps a point takes\n"
+    "                       its compensation; tip: the source's 3 points at the tip\n"
+    "  --cutting-length MM  every-pass, peripheral: flank length from the tip\n"
+    "                       (default: the tool length of G43)\n"
+    "  --smooth MM          matrix mode: replace each vector by the Gaussian-weighted\n"
+    "                       mean of its surface's vectors within MM (default 0: as\n"
+    "                       read); a matrix of raw scan points carries the noise\n"
     "  --surfaces ID,ID     use only compensation points of these surface ids\n"
     "  --tools FILE         tool table (LinuxCNC format, mm)\n"
     "  --machine FILE       machine description JSON: kinematics pivots for moves\n"
@@ -159,6 +168,9 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
                       {"step", true},
                       {"reach", true},
                       {"surfaces", true},
+                      {"placement", true},
+                      {"smooth", true},
+                      {"cutting-length", true},
                       {"tools", true},
                       {"machine", true},
                       {"decimals", true},
@@ -193,6 +205,16 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
     o.step_mm = a.number("step", 0.5, 1e-4, 1000);
   }
   o.reach_mm = a.number("reach", 0, 1e-6, 1000);
+  o.cutting_length_mm = a.number("cutting-length", 0, 1e-6, 10000);
+  o.smoothing_radius_mm = a.number("smooth", 0, 0, 1000);
+  if (auto p = a.value("placement")) {
+    if (*p == "every-pass")
+      o.placement = interp::MatrixPlacement::kEveryPass;
+    else if (*p == "tip")
+      o.placement = interp::MatrixPlacement::kTip;
+    else
+      throw UsageError("--placement '" + *p + "': expected every-pass or tip");
+  }
   if (auto s = a.value("surfaces")) o.surfaces = surface_list(*s);
   o.decimals = static_cast<int>(a.integer("decimals", 4, 3, 9));
   o.keep_unchanged_moves = !a.flag("rewrite-all");
@@ -261,7 +283,10 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
   j += "  ],\n  \"options\": {\"operation\": " + json_string(o.operation) +
        ", \"type\": " + json_string(interp::to_string(o.type)) +
        ", \"tool_radius_mm\": " + number(o.tool_radius_mm) + ", \"step_mm\": " + number(o.step_mm) +
-       ", \"reach_mm\": " + number(s.reach_mm) + ", \"surfaces\": [";
+       ", \"reach_mm\": " + number(s.reach_mm) +
+       ", \"placement\": " + json_string(interp::to_string(o.placement)) +
+       ", \"cutting_length_mm\": " + number(o.cutting_length_mm) +
+       ", \"smoothing_radius_mm\": " + number(o.smoothing_radius_mm) + ", \"surfaces\": [";
   for (size_t i = 0; i < o.surfaces.size(); ++i)
     j += (i ? ", " : "") + std::to_string(o.surfaces[i]);
   j += "], \"decimals\": " + std::to_string(o.decimals) +
@@ -285,17 +310,23 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
   write_atomic(*out_path, result.text);
   write_atomic(audit_path, j);
 
-  std::printf("operation %s (%s, R %g mm, step %g mm, reach %.4g mm, %s %s)\n", o.operation.c_str(),
-              interp::to_string(o.type), o.tool_radius_mm, o.step_mm, s.reach_mm,
-              matrix_path ? "matrix" : "field", (matrix_path ? *matrix_path : *field_path).c_str());
+  if (matrix_path)
+    std::printf(
+        "operation %s (%s, R %g mm, step %g mm, matrix %s, reach %.4g mm, placement %s, "
+        "smooth %g mm)\n",
+        o.operation.c_str(), interp::to_string(o.type), o.tool_radius_mm, o.step_mm,
+        matrix_path->c_str(), s.reach_mm, interp::to_string(o.placement), o.smoothing_radius_mm);
+  else
+    std::printf("operation %s (%s, R %g mm, step %g mm, field %s)\n", o.operation.c_str(),
+                interp::to_string(o.type), o.tool_radius_mm, o.step_mm, field_path->c_str());
   std::printf("  moves read            %d\n", s.moves_read);
   std::printf("  moves rewritten       %d\n", s.moves_rewritten);
   std::printf("  moves kept            %d\n", s.moves_kept);
   std::printf("  points written        %ld\n", s.points_written);
   std::printf("  points compensated    %ld\n", s.points_compensated);
   if (matrix_path)
-    std::printf("  blend 3/2/1/0 points  %ld / %ld / %ld / %ld\n", s.blend_points[3],
-                s.blend_points[2], s.blend_points[1], s.blend_points[0]);
+    std::printf("  blends of 3/2/1 pts   %ld / %ld / %ld, %ld points reached none\n",
+                s.blend_points[3], s.blend_points[2], s.blend_points[1], s.blend_points[0]);
   std::printf("  max compensation      %.4f mm\n", s.max_compensation_mm);
   std::printf("  mean compensation     %.4f mm\n", s.mean_compensation_mm);
   std::printf("  lines                 %d -> %d\n", s.lines_in, s.lines_out);
