@@ -1,13 +1,10 @@
 // truecut rewrite IN.ngc --matrix COMP.csv | --field FIELD.tcf --operation NAME ...:
 // the G-code rewriting fallback (docs/rewrite.md).
-#include <sys/stat.h>
-
-#include <cerrno>
 #include <cstdio>
-#include <cstring>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -16,6 +13,7 @@
 #include "commands.hpp"
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/rewrite.hpp"
+#include "truecut/rt/atomic_write.hpp"
 #include "truecut/rt/field_file.hpp"
 #include "truecut/sim/machine_description.hpp"
 
@@ -60,7 +58,8 @@ const char* kRewriteHelp =
     "  --tools FILE         tool table (LinuxCNC format, mm)\n"
     "  --machine FILE       machine description JSON: kinematics pivots for moves\n"
     "                       outside TRAORI (default: all pivots 0)\n"
-    "  --decimals N         digits after the point in X Y Z A C (default 4)\n"
+    "  --decimals N         digits after the point in X Y Z A C (default 4 in mm,\n"
+    "                       5 in inch blocks)\n"
     "  --rewrite-all        densify every feed move of the operation, also those\n"
     "                       that get no compensation\n"
     "  --out FILE           the rewritten program\n"
@@ -121,28 +120,6 @@ std::string number(double v) {
   return b;
 }
 
-// Atomic write: PATH.tmp, fsync'ed by close, renamed over PATH. Refuses to
-// replace anything but a regular file.
-void write_atomic(const std::string& path, const std::string& bytes) {
-  struct stat st {};
-  if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
-    throw UsageError(path + " exists and is not a regular file: not replaced");
-  const std::string tmp = path + ".tmp";
-  std::FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (!f) throw std::runtime_error("cannot write " + tmp + ": " + std::strerror(errno));
-  const bool ok = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size() &&
-                  std::fflush(f) == 0 && ::fsync(fileno(f)) == 0;
-  if (std::fclose(f) != 0 || !ok) {
-    std::remove(tmp.c_str());
-    throw std::runtime_error("cannot write " + tmp + ": " + std::strerror(errno));
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int e = errno;
-    std::remove(tmp.c_str());
-    throw std::runtime_error("cannot rename " + tmp + " to " + path + ": " + std::strerror(e));
-  }
-}
-
 std::string utc_now() {
   const std::time_t t = std::time(nullptr);
   std::tm tm{};
@@ -193,6 +170,16 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
   const auto out_path = a.value("out");
   if (!out_path) throw UsageError("--out OUT.ngc is required");
 
+  // OUT and its audit record are written together or not at all; a target
+  // that is not a regular file is refused before anything is read.
+  const std::string audit_path = *out_path + ".audit.json";
+  std::optional<rt::StagedFiles> files;
+  try {
+    files.emplace(std::vector<fs::path>{*out_path, audit_path}, ".tmp");
+  } catch (const rt::FileWriteError& e) {
+    throw UsageError(e.what());
+  }
+
   interp::RewriteOptions o;
   o.operation = *operation;
   o.type = cut_type(*type);
@@ -216,7 +203,7 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
       throw UsageError("--placement '" + *p + "': expected every-pass or tip");
   }
   if (auto s = a.value("surfaces")) o.surfaces = surface_list(*s);
-  o.decimals = static_cast<int>(a.integer("decimals", 4, 3, 9));
+  o.decimals = static_cast<int>(a.integer("decimals", 0, 3, 9));
   o.keep_unchanged_moves = !a.flag("rewrite-all");
 
   std::vector<Input> inputs;
@@ -270,7 +257,6 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
   }
 
   const interp::RewriteSummary& s = result.summary;
-  const std::string audit_path = *out_path + ".audit.json";
   std::string j = "{\n  \"truecut_rewrite_audit\": 1,\n";
   j += "  \"created\": " + json_string(utc_now()) + ",\n";
   j += "  \"frame\": \"workpiece\",\n  \"units\": \"mm\",\n  \"inputs\": [\n";
@@ -307,8 +293,9 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
        ", \"lines_in\": " + std::to_string(s.lines_in) +
        ", \"lines_out\": " + std::to_string(s.lines_out) + "}\n}\n";
 
-  write_atomic(*out_path, result.text);
-  write_atomic(audit_path, j);
+  files->write(0, result.text);
+  files->write(1, j);
+  files->commit();
 
   if (matrix_path)
     std::printf(

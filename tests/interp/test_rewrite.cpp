@@ -482,6 +482,26 @@ TEST(Rewrite, SmoothingAveragesNeighboursOfTheSameSurfaceOnly) {
   EXPECT_LT(hi, 0.0205);
 }
 
+TEST(Rewrite, InchProgramsGetTheShiftInInchesWithFiveDecimals) {
+  // 0.0254 mm = 0.001 in towards +Z on the face z = 0 (the matrix is in mm).
+  const auto m = plane_matrix(-10, 10, -4, 4, 0, 0.5, V(0, 0, 0.0254));
+  const char* prog =
+      "G20 G17 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X-0.2 Y0 Z0.2\nG1 Z0 F10\n"
+      "G1 X0.2 F20\nG0 Z0.2\nM30\n";
+  RewriteOptions o = options("FACE", CutType::kFace, 2.0);
+  o.reach_mm = 100;
+  const RewriteResult r = rewrite_program(prog, "inch.ngc", m, o);
+  EXPECT_NE(r.text.find("\nX0.20000 Y0.00000 Z0.00100\n"), std::string::npos) << r.text;
+  int on_face = 0;
+  for (const Axes6& p : feeds_of(r.text, "FACE")) {  // program units: inches
+    if (p.z < 0.005) {
+      EXPECT_NEAR(p.z, 0.001, 1e-12);
+      ++on_face;
+    }
+  }
+  EXPECT_GE(on_face, 15);
+}
+
 template <typename E>
 std::string error_of(const std::string& program, const RewriteOptions& o) {
   const auto m = plane_matrix(-10, 10, -4, 4, 0, 0.5, V(0, 0, 0.01));

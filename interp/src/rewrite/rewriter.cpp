@@ -107,7 +107,8 @@ void check_options(const RewriteOptions& o) {
     throw std::invalid_argument("smoothing radius must be >= 0 mm");
   if (!(o.cutting_length_mm >= 0) || !std::isfinite(o.cutting_length_mm))
     throw std::invalid_argument("cutting length must be >= 0 mm (0: the tool length)");
-  if (o.decimals < 3 || o.decimals > 9) throw std::invalid_argument("decimals must be 3..9");
+  if (o.decimals != 0 && (o.decimals < 3 || o.decimals > 9))
+    throw std::invalid_argument("decimals must be 3..9 (0: automatic)");
 }
 
 // Pieces so that neither the point the compensation is looked up for (tip,
@@ -317,7 +318,8 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       Axes6 expect = original_end;
       auto word = [&](char letter, int axis, bool write) {
         if (!write) return;
-        const std::string v = fixed(q[axis], o.decimals);
+        const int decimals = o.decimals > 0 ? o.decimals : ctx.units == LengthUnits::kInch ? 5 : 4;
+        const std::string v = fixed(q[axis], decimals);
         if (!line.empty() && line.back() != ' ' && line.back() != '/') line += ' ';
         line += letter + v;
         expect[axis] = std::strtod(v.c_str(), nullptr);

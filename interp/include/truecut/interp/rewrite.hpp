@@ -75,7 +75,9 @@ struct RewriteOptions {
   // added to the G43 tool length offset, as the planner does).
   rt::AcTrtParams kinematics;
   InterpreterOptions interpreter;  // tool table, block delete, ...
-  int decimals = 4;                // digits after the point of X Y Z A C words
+  // Digits after the point of X Y Z A C words, 3..9; 0: 4 in a G21 (mm)
+  // block, 5 in a G20 (inch) block (0.1 um and 0.25 um).
+  int decimals = 0;
   // A move whose every point keeps a zero correction is copied unchanged
   // (false: every feed move of the operation is densified and rewritten).
   bool keep_unchanged_moves = true;
