@@ -1,13 +1,10 @@
 // truecut rewrite IN.ngc --matrix COMP.csv | --field FIELD.tcf --operation NAME ...:
 // the G-code rewriting fallback (docs/rewrite.md).
-#include <sys/stat.h>
-
-#include <cerrno>
 #include <cstdio>
-#include <cstring>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -16,6 +13,7 @@
 #include "commands.hpp"
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/rewrite.hpp"
+#include "truecut/rt/atomic_write.hpp"
 #include "truecut/rt/field_file.hpp"
 #include "truecut/sim/machine_description.hpp"
 
@@ -34,8 +32,9 @@ const char* kRewriteHelp =
     "of the matrix blended by eqs. 2-5 of the optical-compensation source, or the\n"
     "correction field's layer of the operation's tool) and written as G1 moves with\n"
     "the original feed (G93 F recomputed). Every other line is copied byte for byte.\n"
-    "OUT is written atomically; OUT.audit.json records inputs, options, SHA-256\n"
-    "digests and the summary. Method and file formats: docs/rewrite.md.\n"
+    "OUT and OUT.audit.json (inputs, options, SHA-256 digests, the summary) are\n"
+    "written together or not at all. Method, measured results and when to use it\n"
+    "rather than the real-time mode: docs/rewrite.md.\n"
     "\n"
     "options:\n"
     "  --matrix FILE        compensation matrix CSV (x,y,z,dx,dy,dz[,valid,surface_id])\n"
@@ -47,11 +46,21 @@ const char* kRewriteHelp =
     "  --step MM            densification distance (default 0.5)\n"
     "  --reach MM           farthest compensation point from the cutting edge that\n"
     "                       is used (default: 2 x median point spacing)\n"
+    "  --placement P        matrix mode: every-pass (default) averages the blend over\n"
+    "                       the cutting part (flank up to the cutting length, or the\n"
+    "                       bottom disc), so every pass that sweeps a point takes\n"
+    "                       its compensation; tip: the source's 3 points at the tip\n"
+    "  --cutting-length MM  every-pass, peripheral: flank length from the tip\n"
+    "                       (default: the tool length of G43)\n"
+    "  --smooth MM          matrix mode: replace each vector by the Gaussian-weighted\n"
+    "                       mean of its surface's vectors within MM (default 0: as\n"
+    "                       read); a matrix of raw scan points carries the noise\n"
     "  --surfaces ID,ID     use only compensation points of these surface ids\n"
     "  --tools FILE         tool table (LinuxCNC format, mm)\n"
     "  --machine FILE       machine description JSON: kinematics pivots for moves\n"
     "                       outside TRAORI (default: all pivots 0)\n"
-    "  --decimals N         digits after the point in X Y Z A C (default 4)\n"
+    "  --decimals N         digits after the point in X Y Z A C (default 4 in mm,\n"
+    "                       5 in inch blocks)\n"
     "  --rewrite-all        densify every feed move of the operation, also those\n"
     "                       that get no compensation\n"
     "  --out FILE           the rewritten program\n"
@@ -112,28 +121,6 @@ std::string number(double v) {
   return b;
 }
 
-// Atomic write: PATH.tmp, fsync'ed by close, renamed over PATH. Refuses to
-// replace anything but a regular file.
-void write_atomic(const std::string& path, const std::string& bytes) {
-  struct stat st {};
-  if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
-    throw UsageError(path + " exists and is not a regular file: not replaced");
-  const std::string tmp = path + ".tmp";
-  std::FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (!f) throw std::runtime_error("cannot write " + tmp + ": " + std::strerror(errno));
-  const bool ok = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size() &&
-                  std::fflush(f) == 0 && ::fsync(fileno(f)) == 0;
-  if (std::fclose(f) != 0 || !ok) {
-    std::remove(tmp.c_str());
-    throw std::runtime_error("cannot write " + tmp + ": " + std::strerror(errno));
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int e = errno;
-    std::remove(tmp.c_str());
-    throw std::runtime_error("cannot rename " + tmp + " to " + path + ": " + std::strerror(e));
-  }
-}
-
 std::string utc_now() {
   const std::time_t t = std::time(nullptr);
   std::tm tm{};
@@ -159,6 +146,9 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
                       {"step", true},
                       {"reach", true},
                       {"surfaces", true},
+                      {"placement", true},
+                      {"smooth", true},
+                      {"cutting-length", true},
                       {"tools", true},
                       {"machine", true},
                       {"decimals", true},
@@ -181,6 +171,16 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
   const auto out_path = a.value("out");
   if (!out_path) throw UsageError("--out OUT.ngc is required");
 
+  // OUT and its audit record are written together or not at all; a target
+  // that is not a regular file is refused before anything is read.
+  const std::string audit_path = *out_path + ".audit.json";
+  std::optional<rt::StagedFiles> files;
+  try {
+    files.emplace(std::vector<fs::path>{*out_path, audit_path}, ".tmp");
+  } catch (const rt::FileWriteError& e) {
+    throw UsageError(e.what());
+  }
+
   interp::RewriteOptions o;
   o.operation = *operation;
   o.type = cut_type(*type);
@@ -193,8 +193,18 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
     o.step_mm = a.number("step", 0.5, 1e-4, 1000);
   }
   o.reach_mm = a.number("reach", 0, 1e-6, 1000);
+  o.cutting_length_mm = a.number("cutting-length", 0, 1e-6, 10000);
+  o.smoothing_radius_mm = a.number("smooth", 0, 0, 1000);
+  if (auto p = a.value("placement")) {
+    if (*p == "every-pass")
+      o.placement = interp::MatrixPlacement::kEveryPass;
+    else if (*p == "tip")
+      o.placement = interp::MatrixPlacement::kTip;
+    else
+      throw UsageError("--placement '" + *p + "': expected every-pass or tip");
+  }
   if (auto s = a.value("surfaces")) o.surfaces = surface_list(*s);
-  o.decimals = static_cast<int>(a.integer("decimals", 4, 3, 9));
+  o.decimals = static_cast<int>(a.integer("decimals", 0, 3, 9));
   o.keep_unchanged_moves = !a.flag("rewrite-all");
 
   std::vector<Input> inputs;
@@ -248,7 +258,6 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
   }
 
   const interp::RewriteSummary& s = result.summary;
-  const std::string audit_path = *out_path + ".audit.json";
   std::string j = "{\n  \"truecut_rewrite_audit\": 1,\n";
   j += "  \"created\": " + json_string(utc_now()) + ",\n";
   j += "  \"frame\": \"workpiece\",\n  \"units\": \"mm\",\n  \"inputs\": [\n";
@@ -261,7 +270,10 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
   j += "  ],\n  \"options\": {\"operation\": " + json_string(o.operation) +
        ", \"type\": " + json_string(interp::to_string(o.type)) +
        ", \"tool_radius_mm\": " + number(o.tool_radius_mm) + ", \"step_mm\": " + number(o.step_mm) +
-       ", \"reach_mm\": " + number(s.reach_mm) + ", \"surfaces\": [";
+       ", \"reach_mm\": " + number(s.reach_mm) +
+       ", \"placement\": " + json_string(interp::to_string(o.placement)) +
+       ", \"cutting_length_mm\": " + number(o.cutting_length_mm) +
+       ", \"smoothing_radius_mm\": " + number(o.smoothing_radius_mm) + ", \"surfaces\": [";
   for (size_t i = 0; i < o.surfaces.size(); ++i)
     j += (i ? ", " : "") + std::to_string(o.surfaces[i]);
   j += "], \"decimals\": " + std::to_string(o.decimals) +
@@ -282,20 +294,27 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
        ", \"lines_in\": " + std::to_string(s.lines_in) +
        ", \"lines_out\": " + std::to_string(s.lines_out) + "}\n}\n";
 
-  write_atomic(*out_path, result.text);
-  write_atomic(audit_path, j);
+  files->write(0, result.text);
+  files->write(1, j);
+  files->commit();
 
-  std::printf("operation %s (%s, R %g mm, step %g mm, reach %.4g mm, %s %s)\n", o.operation.c_str(),
-              interp::to_string(o.type), o.tool_radius_mm, o.step_mm, s.reach_mm,
-              matrix_path ? "matrix" : "field", (matrix_path ? *matrix_path : *field_path).c_str());
+  if (matrix_path)
+    std::printf(
+        "operation %s (%s, R %g mm, step %g mm, matrix %s, reach %.4g mm, placement %s, "
+        "smooth %g mm)\n",
+        o.operation.c_str(), interp::to_string(o.type), o.tool_radius_mm, o.step_mm,
+        matrix_path->c_str(), s.reach_mm, interp::to_string(o.placement), o.smoothing_radius_mm);
+  else
+    std::printf("operation %s (%s, R %g mm, step %g mm, field %s)\n", o.operation.c_str(),
+                interp::to_string(o.type), o.tool_radius_mm, o.step_mm, field_path->c_str());
   std::printf("  moves read            %d\n", s.moves_read);
   std::printf("  moves rewritten       %d\n", s.moves_rewritten);
   std::printf("  moves kept            %d\n", s.moves_kept);
   std::printf("  points written        %ld\n", s.points_written);
   std::printf("  points compensated    %ld\n", s.points_compensated);
   if (matrix_path)
-    std::printf("  blend 3/2/1/0 points  %ld / %ld / %ld / %ld\n", s.blend_points[3],
-                s.blend_points[2], s.blend_points[1], s.blend_points[0]);
+    std::printf("  blends of 3/2/1 pts   %ld / %ld / %ld, %ld points reached none\n",
+                s.blend_points[3], s.blend_points[2], s.blend_points[1], s.blend_points[0]);
   std::printf("  max compensation      %.4f mm\n", s.max_compensation_mm);
   std::printf("  mean compensation     %.4f mm\n", s.mean_compensation_mm);
   std::printf("  lines                 %d -> %d\n", s.lines_in, s.lines_out);

@@ -101,6 +101,8 @@ TEST(CliRewrite, WritesProgramSummaryAndAudit) {
   }
   EXPECT_EQ(n, 4);
   EXPECT_NE(audit.find("\"operation\": \"FACE\", \"type\": \"face\""), std::string::npos) << audit;
+  EXPECT_NE(audit.find("\"placement\": \"every-pass\""), std::string::npos) << audit;
+  EXPECT_NE(audit.find("\"smoothing_radius_mm\": 0"), std::string::npos) << audit;
   EXPECT_NE(audit.find("\"moves_rewritten\": 2"), std::string::npos) << audit;
   // The rewritten program runs through truecut's interpreter.
   auto canon =
@@ -162,9 +164,22 @@ TEST(CliRewrite, UsageErrors) {
   fs::create_directory(c.dir / "dir.ngc");
   const auto r = c.run(with(kArgs, "--out", "dir.ngc"));
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("dir.ngc exists and is not a regular file"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("dir.ngc: exists and is not a regular file"), std::string::npos) << r.err;
   EXPECT_TRUE(fs::is_directory(c.dir / "dir.ngc"));
   EXPECT_FALSE(fs::exists(c.dir / "dir.ngc.tmp"));
+  // Nor is the audit record's, and then the program is not written either.
+  fs::create_directory(c.dir / "out.ngc.audit.json");
+  const auto audit = c.run(kArgs);
+  EXPECT_EQ(audit.exit_code, 2);
+  EXPECT_NE(audit.err.find("out.ngc.audit.json: exists and is not a regular file"),
+            std::string::npos)
+      << audit.err;
+  EXPECT_FALSE(fs::exists(c.dir / "out.ngc"));
+  EXPECT_FALSE(fs::exists(c.dir / "out.ngc.tmp"));
+  fs::remove(c.dir / "out.ngc.audit.json");
+  expect_refused(c, c.run(with(kArgs, "--placement", "nearest")), "expected every-pass or tip");
+  expect_refused(c, c.run(with(kArgs, "--smooth", "-1")), "--smooth -1 is outside");
+  expect_refused(c, c.run(with(kArgs, "--cutting-length", "0")), "--cutting-length 0 is outside");
 }
 
 TEST(CliRewrite, Help) {

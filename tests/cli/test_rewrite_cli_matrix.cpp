@@ -10,6 +10,7 @@
 #include "test_paths.hpp"
 #include "truecut/interp/rewrite_matrix.hpp"
 #include "truecut/offline/compensation_matrix.hpp"
+#include "truecut/rt/field_file.hpp"
 
 using namespace truecut;
 using Eigen::Vector3d;
@@ -70,4 +71,29 @@ TEST(CliRewriteMatrix, RewriteAcceptsTheOfflineMatrix) {
   EXPECT_NE(test::read_file(dir / "o.ngc").find("X4.0000 Y0.0000 Z0.0100\nG0 X4 Y0 Z5\n"),
             std::string::npos)
       << test::read_file(dir / "o.ngc");
+}
+
+TEST(CliRewriteMatrix, FieldWithoutALayerForTheOperationsToolIsRefused) {
+  const auto dir = test::scratch_dir();
+  rt::FieldGrid g;
+  g.origin_mm = Vector3d(-10, -10, -10);
+  g.spacing_mm = Vector3d(1, 1, 1);
+  g.dims = {21, 21, 21};
+  rt::FieldLayer layer;
+  layer.tool = 1;
+  layer.nodes.assign(static_cast<std::size_t>(g.node_count()), rt::FieldNode{0, 0, 0.01, 1});
+  rt::write_field_file(dir / "f.tcf", rt::CorrectionField(g, {layer}), {"", "test"});
+  std::ofstream(dir / "p.ngc") << "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X-4 Y0 Z1\n"
+                                  "G1 Z0 F100\nG1 X4 F500\nG0 Z5\nM30\n";
+  std::ofstream(dir / "t.tbl") << "T1 P1 D2 Z30\nT2 P2 D4 Z40\n";
+  const auto r = test::run_process(
+      {test::cli_path().string(), "rewrite", "p.ngc", "--field", "f.tcf", "--operation", "FACE",
+       "--type", "face", "--tool-radius", "2", "--tools", "t.tbl", "--out", "o.ngc"},
+      dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("the correction field has no layer for tool 2 (operation 'FACE')"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "o.ngc"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "o.ngc.audit.json"));
 }

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
+#include <numbers>
 
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/operations.hpp"
@@ -347,6 +349,157 @@ TEST(Rewrite, FieldAndMatrixAgreeOnAConstantOffset) {
   g.origin_mm = V(100, 100, 100);
   const rt::CorrectionField away(g, layers);
   EXPECT_EQ(rewrite_program(kThreeOps, "p.ngc", away, o).text, kThreeOps);
+}
+
+// A wall x = 0 (material at x < 0) cut by the flank of a flat end mill R 1
+// in five levels from the top down (tip z = 4, 3, 2, 1, 0), each level one
+// G1 along Y; compensation points on the wall every 0.1 mm up to z = 8 with
+// the vector (-c(z), 0, 0), c growing with z.
+const char* kStepped =
+    "G21 G17 G90 G94\n(OPERATION: WALL)\nT1 M6\nG43 H1\nG0 X1 Y-3 Z10\n"
+    "G1 Z4 F300\nG1 Y3\nG0 Z10\nG0 Y-3\nG1 Z3\nG1 Y3\nG0 Z10\nG0 Y-3\nG1 Z2\nG1 Y3\n"
+    "G0 Z10\nG0 Y-3\nG1 Z1\nG1 Y3\nG0 Z10\nG0 Y-3\nG1 Z0\nG1 Y3\nG0 Z10\nM30\n";
+
+double wall_need_mm(double z) {
+  return 0.01 + 0.004 * z;
+}
+
+CompensationMatrixData wall_matrix() {
+  CompensationMatrixData m;
+  for (int j = -50; j <= 50; ++j)
+    for (int k = 0; k <= 80; ++k) {
+      const double z = 0.1 * k;
+      m.positions_mm.emplace_back(0.0, 0.1 * j, z);
+      m.vectors_mm.emplace_back(-wall_need_mm(z), 0.0, 0.0);
+      m.valid.push_back(1);
+      m.surface_ids.push_back(1);
+    }
+  return m;
+}
+
+// The written X of each level's pass along Y (all its densified points).
+std::map<double, std::vector<double>> x_by_level(const std::string& text) {
+  std::map<double, std::vector<double>> out;
+  for (const Axes6& p : feeds_of(text, "WALL"))
+    if (std::fabs(p.y) < 2.9) out[std::round(p.z)].push_back(p.x);
+  return out;
+}
+
+TEST(Rewrite, EveryPassLevelTakesTheMeanOfTheWallItsFlankSweeps) {
+  RewriteOptions o = options("WALL", CutType::kPeripheral, 1.0);
+  o.reach_mm = 0.2;         // query bands every 0.1 mm, on the rows
+  o.cutting_length_mm = 2;  // the flank sweeps the wall from the tip up 2 mm
+  o.decimals = 7;
+  const auto every = x_by_level(rewrite_program(kStepped, "w.ngc", wall_matrix(), o).text);
+  o.placement = MatrixPlacement::kTip;
+  const auto tip = x_by_level(rewrite_program(kStepped, "w.ngc", wall_matrix(), o).text);
+  ASSERT_EQ(every.size(), 5u);
+  ASSERT_EQ(tip.size(), 5u);
+  for (const auto& [z, xs] : every) {
+    ASSERT_FALSE(xs.empty());
+    // c is linear in z: the mean over the 2 mm the flank sweeps is c at its middle.
+    for (double x : xs)
+      EXPECT_NEAR(x, 1.0 - wall_need_mm(z + 1.0), 1.5e-7) << "level z = " << z;
+    // The source's rule takes the row at the tip.
+    for (double x : tip.at(z))
+      EXPECT_NEAR(x, 1.0 - wall_need_mm(z), 1.5e-7) << "level z = " << z;
+  }
+  // Without a cutting length the flank reaches the G43 tool length (35 mm):
+  // the whole wall above the tip, up to its top at z = 8.
+  o.placement = MatrixPlacement::kEveryPass;
+  o.cutting_length_mm = 0;
+  for (const auto& [z, xs] : x_by_level(rewrite_program(kStepped, "w.ngc", wall_matrix(), o).text))
+    for (double x : xs)
+      EXPECT_NEAR(x, 1.0 - wall_need_mm((z + 8.0) / 2), 0.0003) << "level z = " << z;
+}
+
+TEST(Rewrite, EveryPassFaceMillingAveragesOverTheDisc) {
+  // The plane z = 0 with 0.01 mm to remove at x < 0 and 0.03 mm at x >= 0;
+  // a flat end mill R 2 passes along Y at x = -0.5.
+  CompensationMatrixData m;
+  for (int i = -60; i <= 60; ++i)
+    for (int j = -60; j <= 60; ++j) {
+      m.positions_mm.emplace_back(0.1 * i, 0.1 * j, 0.0);
+      m.vectors_mm.emplace_back(0.0, 0.0, i < 0 ? -0.01 : -0.03);
+      m.valid.push_back(1);
+      m.surface_ids.push_back(5);
+    }
+  const char* prog =
+      "G21 G17 G90 G94\n(OPERATION: TOP)\nT2 M6\nG43 H2\nG0 X-0.5 Y-2 Z5\nG1 Z0 F300\n"
+      "G1 Y2\nG0 Z5\nM30\n";
+  RewriteOptions o = options("TOP", CutType::kFace, 2.0);
+  o.reach_mm = 0.2;
+  o.decimals = 7;
+  std::vector<double> z_every, z_tip;
+  for (const Axes6& p : feeds_of(rewrite_program(prog, "t.ngc", m, o).text, "TOP"))
+    if (std::fabs(p.y) < 1.9 && p.z < 1) z_every.push_back(p.z);
+  o.placement = MatrixPlacement::kTip;
+  for (const Axes6& p : feeds_of(rewrite_program(prog, "t.ngc", m, o).text, "TOP"))
+    if (std::fabs(p.y) < 1.9 && p.z < 1) z_tip.push_back(p.z);
+  ASSERT_FALSE(z_every.empty());
+  ASSERT_EQ(z_every.size(), z_tip.size());
+  // The part of the disc beyond x = 0 (0.5 mm from its centre) is
+  // (R^2 acos(d/R) - d sqrt(R^2 - d^2)) / (pi R^2) = 0.3425 of its area.
+  const double beyond = (4 * std::acos(0.25) - 0.5 * std::sqrt(3.75)) / (4 * std::numbers::pi);
+  for (double z : z_every)
+    EXPECT_NEAR(z, -0.01 - 0.02 * beyond, 0.0005);
+  // The source's rule: the points nearest the tip only.
+  for (double z : z_tip)
+    EXPECT_NEAR(z, -0.01, 1e-7);
+}
+
+TEST(Rewrite, SmoothingAveragesNeighboursOfTheSameSurfaceOnly) {
+  // Surface 1: 0.02 mm along z with +-0.01 mm of checkerboard noise; surface
+  // 2 at the same places with 0.1 mm (not selected: it must not leak in).
+  CompensationMatrixData m;
+  for (int s = 1; s <= 2; ++s)
+    for (int i = -30; i <= 30; ++i)
+      for (int j = -30; j <= 30; ++j) {
+        m.positions_mm.emplace_back(0.3 * i, 0.3 * j, 0.0);
+        const double noise = (i + j) % 2 == 0 ? 0.01 : -0.01;
+        m.vectors_mm.emplace_back(0.0, 0.0, s == 1 ? 0.02 + noise : 0.1);
+        m.valid.push_back(1);
+        m.surface_ids.push_back(s);
+      }
+  RewriteOptions o = options("FACE", CutType::kFace, 2.0);
+  o.placement = MatrixPlacement::kTip;
+  o.reach_mm = 0.3;
+  o.surfaces = {1};
+  o.decimals = 7;
+  auto spread = [&](double radius, double& lo, double& hi) {
+    o.smoothing_radius_mm = radius;
+    lo = 1e9;
+    hi = -1e9;
+    for (const Axes6& p : feeds_of(rewrite_program(kThreeOps, "p.ngc", m, o).text, "FACE"))
+      if (std::fabs(p.z) < 0.5) lo = std::min(lo, p.z), hi = std::max(hi, p.z);
+  };
+  double lo = 0, hi = 0;
+  spread(0, lo, hi);
+  EXPECT_LT(lo, 0.018) << "the noise is passed on";
+  EXPECT_GT(hi, 0.022);
+  spread(1.0, lo, hi);
+  EXPECT_GT(lo, 0.0195) << "averaged away, and no trace of surface 2";
+  EXPECT_LT(hi, 0.0205);
+}
+
+TEST(Rewrite, InchProgramsGetTheShiftInInchesWithFiveDecimals) {
+  // 0.0254 mm = 0.001 in towards +Z on the face z = 0 (the matrix is in mm).
+  const auto m = plane_matrix(-10, 10, -4, 4, 0, 0.5, V(0, 0, 0.0254));
+  const char* prog =
+      "G20 G17 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X-0.2 Y0 Z0.2\nG1 Z0 F10\n"
+      "G1 X0.2 F20\nG0 Z0.2\nM30\n";
+  RewriteOptions o = options("FACE", CutType::kFace, 2.0);
+  o.reach_mm = 100;
+  const RewriteResult r = rewrite_program(prog, "inch.ngc", m, o);
+  EXPECT_NE(r.text.find("\nX0.20000 Y0.00000 Z0.00100\n"), std::string::npos) << r.text;
+  int on_face = 0;
+  for (const Axes6& p : feeds_of(r.text, "FACE")) {  // program units: inches
+    if (p.z < 0.005) {
+      EXPECT_NEAR(p.z, 0.001, 1e-12);
+      ++on_face;
+    }
+  }
+  EXPECT_GE(on_face, 15);
 }
 
 template <typename E>

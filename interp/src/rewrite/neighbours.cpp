@@ -44,6 +44,8 @@ NeighbourSearch::NeighbourSearch(const CompensationMatrixData& m,
     hi = hi.cwiseMax(p);
   }
   origin_mm_ = lo;
+  lower_mm_ = lo;
+  upper_mm_ = hi;
   // First grid: about one point per cell for points spread over surfaces.
   const double diag = (hi - lo).norm();
   cell_mm_ = std::max(diag / std::sqrt(static_cast<double>(positions_.size())), 1e-3);
@@ -82,6 +84,21 @@ double NeighbourSearch::median_spacing_mm() const {
   if (nn.empty()) return cell_mm_;
   std::nth_element(nn.begin(), nn.begin() + nn.size() / 2, nn.end());
   return nn[nn.size() / 2];
+}
+
+void NeighbourSearch::points_near_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+                                      std::vector<int>& out) const {
+  const Eigen::Vector3d a = lo.cwiseMax(lower_mm_), b = hi.cwiseMin(upper_mm_);
+  if ((a.array() > b.array()).any()) return;
+  const Eigen::Vector3d c0 = ((a - origin_mm_) / cell_mm_).array().floor();
+  const Eigen::Vector3d c1 = ((b - origin_mm_) / cell_mm_).array().floor();
+  for (auto i = static_cast<std::int64_t>(c0.x()); i <= static_cast<std::int64_t>(c1.x()); ++i)
+    for (auto j = static_cast<std::int64_t>(c0.y()); j <= static_cast<std::int64_t>(c1.y()); ++j)
+      for (auto k = static_cast<std::int64_t>(c0.z()); k <= static_cast<std::int64_t>(c1.z());
+           ++k) {
+        auto it = cells_.find(key(i, j, k));
+        if (it != cells_.end()) out.insert(out.end(), it->second.begin(), it->second.end());
+      }
 }
 
 Nearest NeighbourSearch::nearest(const ToolPoint& tool) const {

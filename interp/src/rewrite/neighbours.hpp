@@ -32,9 +32,19 @@ class NeighbourSearch {
                   CutType type, double radius_mm, double reach_mm);
 
   Nearest nearest(const ToolPoint& tool) const;
+  // Appends the points inside the axis-aligned box [lo, hi] (and possibly
+  // a few of the grid cells around it: callers test each point).
+  void points_near_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+                       std::vector<int>& out) const;
   const Eigen::Vector3d& position(int i) const { return positions_[i]; }
   const Eigen::Vector3d& vector(int i) const { return vectors_[i]; }
+  int size() const { return static_cast<int>(positions_.size()); }
   double reach_mm() const { return reach_mm_; }
+  double radius_mm() const { return radius_mm_; }
+  CutType type() const { return type_; }
+  // The bounding box of the points.
+  const Eigen::Vector3d& lower_mm() const { return lower_mm_; }
+  const Eigen::Vector3d& upper_mm() const { return upper_mm_; }
 
  private:
   std::int64_t key(const Eigen::Vector3d& p) const;
@@ -44,7 +54,7 @@ class NeighbourSearch {
   std::vector<Eigen::Vector3d> positions_, vectors_;
   CutType type_;
   double radius_mm_ = 0, reach_mm_ = 0, cell_mm_ = 1;
-  Eigen::Vector3d origin_mm_;
+  Eigen::Vector3d origin_mm_, lower_mm_, upper_mm_;
   std::unordered_map<std::int64_t, std::vector<int>> cells_;
 };
 

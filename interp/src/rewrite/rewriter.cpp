@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
+#include <limits>
 #include <map>
 #include <set>
 #include <stdexcept>
@@ -12,6 +13,8 @@
 #include "neighbours.hpp"
 #include "raw_lines.hpp"
 #include "self_check.hpp"
+#include "smoothing.hpp"
+#include "swept.hpp"
 #include "tool_path.hpp"
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/operations.hpp"
@@ -31,13 +34,17 @@ const char* to_string(CutType type) {
   return "?";
 }
 
+const char* to_string(MatrixPlacement placement) {
+  return placement == MatrixPlacement::kTip ? "tip" : "every-pass";
+}
+
 namespace rewrite {
 namespace {
 
 struct Correction {
   Eigen::Vector3d shift_mm = Eigen::Vector3d::Zero();
   bool compensated = false;
-  int points_used = -1;  // matrix mode: 0..3; field mode: -1
+  std::array<int, 4> blends{};  // matrix mode: blends by points used; [0] none at all
 };
 
 using CorrectionFn = std::function<Correction(const ToolPoint&, const CallContext&)>;
@@ -96,15 +103,21 @@ void check_options(const RewriteOptions& o) {
     throw std::invalid_argument("chord tolerance must be > 0 mm");
   if (!(o.reach_mm >= 0) || !std::isfinite(o.reach_mm))
     throw std::invalid_argument("reach must be >= 0 mm (0: automatic)");
-  if (o.decimals < 3 || o.decimals > 9) throw std::invalid_argument("decimals must be 3..9");
+  if (!(o.smoothing_radius_mm >= 0) || !std::isfinite(o.smoothing_radius_mm))
+    throw std::invalid_argument("smoothing radius must be >= 0 mm");
+  if (!(o.cutting_length_mm >= 0) || !std::isfinite(o.cutting_length_mm))
+    throw std::invalid_argument("cutting length must be >= 0 mm (0: the tool length)");
+  if (o.decimals != 0 && (o.decimals < 3 || o.decimals > 9))
+    throw std::invalid_argument("decimals must be 3..9 (0: automatic)");
 }
 
-// Path length of the point the compensation is looked up for, plus what
-// the cutting edge sweeps when the axis turns (R per radian).
-double move_length_mm(const ToolPath& path, const ToolPath::Move& m, const CallContext& ctx,
-                      const RewriteOptions& o) {
+// Pieces so that neither the point the compensation is looked up for (tip,
+// or ball centre) nor the cutting edge turning about it (R per radian of
+// the tool axis) moves more than one step per piece.
+int pieces_for_step(const ToolPath& path, const ToolPath::Move& m, const CallContext& ctx,
+                    const RewriteOptions& o) {
   constexpr int kSamples = 64;
-  double len = 0;
+  double length_mm = 0, turn_rad = 0;
   ToolPoint prev = path.tool_point(m.start, ctx);
   auto ref = [&](const ToolPoint& t) -> Eigen::Vector3d {
     return o.type == CutType::kBall ? Eigen::Vector3d(t.tip_mm + o.tool_radius_mm * t.axis)
@@ -112,16 +125,12 @@ double move_length_mm(const ToolPath& path, const ToolPath::Move& m, const CallC
   };
   for (int k = 1; k <= kSamples; ++k) {
     const ToolPoint t = path.tool_point(ToolPath::at(m, static_cast<double>(k) / kSamples), ctx);
-    len += (ref(t) - ref(prev)).norm();
-    const double c = std::clamp(t.axis.dot(prev.axis), -1.0, 1.0);
-    len += o.tool_radius_mm * std::acos(c);
+    length_mm += (ref(t) - ref(prev)).norm();
+    turn_rad += std::acos(std::clamp(t.axis.dot(prev.axis), -1.0, 1.0));
     prev = t;
   }
-  return len;
-}
-
-int pieces_for_step(double length_mm, double step_mm) {
-  return std::max(1, static_cast<int>(std::ceil(length_mm / step_mm - 1e-9)));
+  const double longest = std::max(length_mm, o.tool_radius_mm * turn_rad);
+  return std::max(1, static_cast<int>(std::ceil(longest / o.step_mm - 1e-9)));
 }
 
 // Pieces of an arc so that no chord's sagitta r (1 - cos(sweep / 2n))
@@ -255,8 +264,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
                        "rewritten");
 
     // Densify and compensate.
-    const double len = move_length_mm(path, move, ctx, o);
-    const int n = std::max(pieces_for_step(len, o.step_mm), pieces_for_chord(move, o));
+    const int n = std::max(pieces_for_step(path, move, ctx, o), pieces_for_chord(move, o));
     std::vector<Vec5> points(n);
     std::vector<Correction> corrections(n);
     bool all_zero = true;
@@ -284,7 +292,8 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     }
 
     for (const Correction& corr : corrections) {
-      if (corr.points_used >= 0) ++s.blend_points[corr.points_used];
+      for (int k = 0; k < 4; ++k)
+        s.blend_points[k] += corr.blends[k];
       if (!corr.compensated) continue;
       ++s.points_compensated;
       const double mag = corr.shift_mm.norm();
@@ -309,7 +318,8 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       Axes6 expect = original_end;
       auto word = [&](char letter, int axis, bool write) {
         if (!write) return;
-        const std::string v = fixed(q[axis], o.decimals);
+        const int decimals = o.decimals > 0 ? o.decimals : ctx.units == LengthUnits::kInch ? 5 : 4;
+        const std::string v = fixed(q[axis], decimals);
         if (!line.empty() && line.back() != ' ' && line.back() != '/') line += ' ';
         line += letter + v;
         expect[axis] = std::strtod(v.c_str(), nullptr);
@@ -374,8 +384,27 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
 RewriteResult rewrite_program(std::string_view text, const std::string& name,
                               const CompensationMatrixData& matrix, const RewriteOptions& o) {
   rewrite::check_options(o);
-  const rewrite::NeighbourSearch search(matrix, o.surfaces, o.type, o.tool_radius_mm, o.reach_mm);
-  auto fn = [&](const rewrite::ToolPoint& tp, const CallContext&) {
+  const rewrite::NeighbourSearch search(rewrite::smooth_matrix(matrix, o.smoothing_radius_mm),
+                                        o.surfaces, o.type, o.tool_radius_mm, o.reach_mm);
+  const bool swept = o.placement == MatrixPlacement::kEveryPass && o.type != CutType::kBall;
+  // Query points every half reach (with the default reach: the median point
+  // spacing); on a disc at most 20 across its radius.
+  const double band_mm = o.type == CutType::kFace
+                             ? std::max(search.reach_mm() / 2, o.tool_radius_mm / 20)
+                             : search.reach_mm() / 2;
+  auto fn = [&, swept, band_mm](const rewrite::ToolPoint& tp, const CallContext& ctx) {
+    rewrite::Correction c;
+    if (swept) {
+      const double length = o.cutting_length_mm > 0    ? o.cutting_length_mm
+                            : ctx.tool_offset_mm.z > 0 ? ctx.tool_offset_mm.z
+                                                       : std::numeric_limits<double>::infinity();
+      const rewrite::SweptCorrection sc = rewrite::swept_correction(search, tp, length, band_mm);
+      c.shift_mm = sc.correction_mm;
+      c.compensated = sc.blends > 0;
+      c.blends = sc.blends_by_points;
+      if (sc.blends == 0) c.blends[0] = 1;
+      return c;
+    }
     const rewrite::Nearest nn = search.nearest(tp);
     Eigen::Vector3d p[3], v[3];
     for (int i = 0; i < nn.count; ++i) {
@@ -384,7 +413,10 @@ RewriteResult rewrite_program(std::string_view text, const std::string& name,
     }
     const BlendResult b =
         blend_compensation(std::span(p, nn.count), std::span(v, nn.count), nn.query_mm);
-    return rewrite::Correction{b.correction_mm, b.points_used > 0, b.points_used};
+    c.shift_mm = b.correction_mm;
+    c.compensated = b.points_used > 0;
+    c.blends[b.points_used] = 1;
+    return c;
   };
   return rewrite::run(text, name, o, fn, search.reach_mm());
 }

@@ -36,6 +36,18 @@ enum class CutType { kPeripheral, kFace, kBall };
 
 const char* to_string(CutType type);
 
+// Matrix mode: which compensation points a tool point takes (docs/rewrite.md).
+// kEveryPass: the source's blend at query points over the whole cutting part
+//   (peripheral: the flank up to the cutting length; face: the bottom disc),
+//   averaged, so every pass that sweeps a point takes its compensation, as
+//   the field stage's tool-centre placement does. A ball cuts at its contact
+//   point only: the same as kTip.
+// kTip: the source's rule, the 3 nearest points to the cutting edge at the
+//   tip (peripheral: the bottom circle).
+enum class MatrixPlacement { kEveryPass, kTip };
+
+const char* to_string(MatrixPlacement placement);
+
 struct RewriteOptions {
   std::string operation;  // CAM operation name, as in (OPERATION: NAME)
   CutType type = CutType::kPeripheral;
@@ -49,13 +61,23 @@ struct RewriteOptions {
   // are not used (infeed, retract and moves off the part stay unchanged).
   // 0: twice the median distance between neighbouring compensation points.
   double reach_mm = 0;
+  MatrixPlacement placement = MatrixPlacement::kEveryPass;
+  // kEveryPass, peripheral: how far up the flank cuts, from the tip.
+  // 0: the tool length of the move (G43), or unlimited without one.
+  double cutting_length_mm = 0;
+  // Matrix mode: before the blend, every vector is replaced by the
+  // Gaussian-weighted mean of the vectors of its surface within this radius
+  // (sigma = radius / 2). 0: the matrix as it is.
+  double smoothing_radius_mm = 0;
   // Use only the compensation points of these surfaces (empty: all).
   std::vector<std::int32_t> surfaces;
   // Machine kinematics for moves outside TRAORI (pivots; tool_length_mm is
   // added to the G43 tool length offset, as the planner does).
   rt::AcTrtParams kinematics;
   InterpreterOptions interpreter;  // tool table, block delete, ...
-  int decimals = 4;                // digits after the point of X Y Z A C words
+  // Digits after the point of X Y Z A C words, 3..9; 0: 4 in a G21 (mm)
+  // block, 5 in a G20 (inch) block (0.1 um and 0.25 um).
+  int decimals = 0;
   // A move whose every point keeps a zero correction is copied unchanged
   // (false: every feed move of the operation is densified and rewritten).
   bool keep_unchanged_moves = true;
@@ -68,7 +90,10 @@ struct RewriteSummary {
   int rapids_rewritten = 0;     // G0 after a compensated point, written with all of X Y Z
   long points_written = 0;      // G1 points written
   long points_compensated = 0;  // points with a correction from >= 1 point / field weight > 0
-  std::array<long, 4> blend_points{};  // points by BlendResult::points_used (matrix mode)
+  // Matrix mode: [1..3] blends (eqs. 2-5) by the number of points they used,
+  // one per densified point with kTip, several per point with kEveryPass;
+  // [0] densified points that no compensation point reached.
+  std::array<long, 4> blend_points{};
   double max_compensation_mm = 0;
   double mean_compensation_mm = 0;  // over compensated points
   double reach_mm = 0;              // the reach used
