@@ -1,5 +1,6 @@
 #include "demo_part.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -27,6 +28,7 @@ struct PartInfo {
     double radius_mm = 0;
   };
   std::map<int, Tool> tools;
+  double point_spacing_mm = 0.5;  // of the program's curved passes
 };
 
 PartInfo read_part_info(const fs::path& file) {
@@ -38,6 +40,7 @@ PartInfo read_part_info(const fs::path& file) {
     p.operations.push_back({o.name, o.strategy, o.tool, o.surface_ids});
   for (const sim::PartTool& t : part.metadata.tools)
     p.tools[t.number] = {t.kind, t.radius_mm};
+  if (part.options) p.point_spacing_mm = part.options->point_spacing_mm;
   return p;
 }
 
@@ -200,10 +203,14 @@ DemoPartResult run_demo_part(const std::string& part, const DemoOptions& o) {
       if (!judged) continue;
       const auto& tool = info.tools.at(op.tool);
       const std::string out = "rewrite/program_" + std::to_string(++n) + ".ngc";
+      // Densify no finer than the program's own points: a move cut in two
+      // is cut slower (the planner's look-ahead), and the slower feed alone
+      // changes the part (docs/rewrite.md, "Measured", freeform).
+      const double step_mm = std::max(0.5, 1.2 * info.point_spacing_mm);
       s.run("rewrite operation " + op.name,
             {"rewrite", program, "--field", "field_1/field.tcf", "--operation", op.name,
-             "--tool-radius", num(tool.radius_mm), "--type", rewrite_type(op, tool), "--tools",
-             "part/tools.tbl", "--out", out});
+             "--tool-radius", num(tool.radius_mm), "--type", rewrite_type(op, tool), "--step",
+             num(step_mm), "--tools", "part/tools.tbl", "--out", out});
       program = out;
     }
     machine("rewrite", "G-code rewrite", program, "");
