@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 
 namespace truecut::offline::fit_detail {
 namespace {
@@ -73,12 +74,21 @@ Eigen::Vector3d evaluate(const Lattice& l, const Stencil& s) {
 // mean of what its samples ask for.
 // damping ≥ 0 shrinks control values with little data behind them: the
 // denominator gets damping × its mean over the control points with data.
-void fit_level(const rt::FieldGrid& g, Lattice& l, std::span<const Eigen::Vector3d> positions,
+//
+// In parallel and deterministic, the sums over the samples taken in an order
+// fixed by the data alone, whatever the number of threads:
+// - a lattice with at least 8 slabs of 4 control planes along its longest
+//   axis: a sample, filed under the slab of its first control plane, writes
+//   into that slab and the next; even slabs run in parallel, then odd ones,
+//   each over its samples in input order;
+// - a coarser (small) lattice: 8 fixed runs of consecutive samples sum into
+//   their own copies, which are then added in run order.
+void fit_level(Lattice& l, std::span<const Stencil> stencils,
                std::span<const Eigen::Vector3d> residuals, double damping) {
   std::vector<Eigen::Vector3d> num(l.phi.size(), Eigen::Vector3d::Zero());
   std::vector<double> den(l.phi.size(), 0.0);
-  for (std::size_t p = 0; p < positions.size(); ++p) {
-    const Stencil s = stencil_of(g, l, positions[p]);
+  auto accumulate = [&](std::uint32_t p, Eigen::Vector3d* to_num, double* to_den) {
+    const Stencil& s = stencils[p];
     double sum2 = 1.0;
     for (int a = 0; a < 3; ++a) {
       double q = 0.0;
@@ -93,10 +103,43 @@ void fit_level(const rt::FieldGrid& g, Lattice& l, std::span<const Eigen::Vector
         for (int a = 0; a < 4; ++a) {
           const double w = s.b[0][a] * wbc;
           const double w2 = w * w;
-          num[row + a] += (w2 * w / sum2) * residuals[p];
-          den[row + a] += w2;
+          to_num[row + a] += (w2 * w / sum2) * residuals[p];
+          to_den[row + a] += w2;
         }
       }
+  };
+  int axis = 0;
+  for (int a = 1; a < 3; ++a)
+    if (l.n[a] > l.n[axis]) axis = a;
+  constexpr int32_t kSlab = 4, kMinSlabs = 8, kRuns = 8;
+  const int32_t slabs = (l.n[axis] + kSlab - 1) / kSlab;
+  if (slabs >= kMinSlabs) {
+    std::vector<std::vector<std::uint32_t>> in_slab(static_cast<std::size_t>(slabs));
+    for (std::size_t p = 0; p < stencils.size(); ++p)
+      in_slab[static_cast<std::size_t>(stencils[p].first[axis] / kSlab)].push_back(
+          static_cast<std::uint32_t>(p));
+    for (int32_t parity = 0; parity < 2; ++parity) {
+      tbb::parallel_for(int32_t{0}, (slabs - parity + 1) / 2, [&](int32_t h) {
+        for (std::uint32_t p : in_slab[static_cast<std::size_t>(2 * h + parity)])
+          accumulate(p, num.data(), den.data());
+      });
+    }
+  } else {
+    std::vector<std::vector<Eigen::Vector3d>> run_num(kRuns);
+    std::vector<std::vector<double>> run_den(kRuns);
+    tbb::parallel_for(0, kRuns, [&](int run) {
+      run_num[run].assign(l.phi.size(), Eigen::Vector3d::Zero());
+      run_den[run].assign(l.phi.size(), 0.0);
+      const std::size_t n = stencils.size();
+      for (std::size_t p = n * run / kRuns; p < n * (run + 1) / kRuns; ++p)
+        accumulate(static_cast<std::uint32_t>(p), run_num[run].data(), run_den[run].data());
+    });
+    tbb::parallel_for(std::size_t{0}, l.phi.size(), [&](std::size_t c) {
+      for (int run = 0; run < kRuns; ++run) {
+        num[c] += run_num[run][c];
+        den[c] += run_den[run][c];
+      }
+    });
   }
   double mean = 0.0;
   std::size_t with_data = 0;
@@ -105,8 +148,9 @@ void fit_level(const rt::FieldGrid& g, Lattice& l, std::span<const Eigen::Vector
     with_data += d > 0.0 ? 1 : 0;
   }
   const double extra = with_data > 0 ? damping * mean / static_cast<double>(with_data) : 0.0;
-  for (std::size_t c = 0; c < l.phi.size(); ++c)
+  tbb::parallel_for(std::size_t{0}, l.phi.size(), [&](std::size_t c) {
     l.phi[c] = den[c] > 0.0 ? Eigen::Vector3d(num[c] / (den[c] + extra)) : Eigen::Vector3d::Zero();
+  });
 }
 
 // Adds the lattice's values at every grid node, one axis at a time (each
@@ -237,14 +281,31 @@ std::vector<Eigen::Vector3d> multilevel_bspline_nodes(const rt::FieldGrid& grid,
     ratios.push_back(r);
   for (int it = 0; it < o.refinement_iterations; ++it)
     ratios.push_back(1);
+  // The passes on the finest lattice are summed before they are evaluated
+  // at the nodes (the evaluation is linear), the coarser levels one by one.
+  std::optional<Lattice> finest;
+  std::vector<Stencil> stencils(positions.size());
+  int32_t stencil_ratio = 0;
   for (int32_t r : ratios) {
     Lattice l(grid, r);
-    fit_level(grid, l, positions, residuals, r == 1 ? o.smoothness : 0.0);
-    tbb::parallel_for(std::size_t{0}, positions.size(), [&](std::size_t p) {
-      residuals[p] -= evaluate(l, stencil_of(grid, l, positions[p]));
-    });
-    add_at_nodes(grid, l, nodes);
+    if (r != stencil_ratio) {
+      tbb::parallel_for(std::size_t{0}, positions.size(),
+                        [&](std::size_t p) { stencils[p] = stencil_of(grid, l, positions[p]); });
+      stencil_ratio = r;
+    }
+    fit_level(l, stencils, residuals, r == 1 ? o.smoothness : 0.0);
+    tbb::parallel_for(std::size_t{0}, positions.size(),
+                      [&](std::size_t p) { residuals[p] -= evaluate(l, stencils[p]); });
+    if (r != 1) {
+      add_at_nodes(grid, l, nodes);
+    } else if (!finest) {
+      finest = std::move(l);
+    } else {
+      for (std::size_t c = 0; c < l.phi.size(); ++c)
+        finest->phi[c] += l.phi[c];
+    }
   }
+  if (finest) add_at_nodes(grid, *finest, nodes);
   return nodes;
 }
 

@@ -42,6 +42,10 @@ struct FieldPipelineOptions {
   FieldFitOptions fit;  // fit.spacing_mm is the field resolution
   ToolPathOptions path;
   PlacementOptions placement;
+  // Run the scan chain (registration, error vectors, truss) and the program
+  // chain (tool path, placement) concurrently; false: one after the other
+  // (per-stage CPU times in the benchmark). The results are the same.
+  bool concurrent_stages = true;
 };
 
 struct FieldPipelineInputs {
@@ -107,6 +111,9 @@ struct FieldPipelineResult {
   // Largest correction the outputs apply: over the field samples and the
   // adapted mesh's vertex moves.
   double max_correction_mm = 0.0;
+  double max_vertex_move_mm = 0.0;  // of the adapted mesh
+  // Wall time of every stage from its own start (stages of the two chains
+  // overlap, see FieldPipelineOptions::concurrent_stages), in pipeline order.
   std::vector<StageTime> stages;
   double total_wall_s = 0.0;
 };
