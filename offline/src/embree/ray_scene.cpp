@@ -221,6 +221,9 @@ const Eigen::Vector3d& RayScene::local_origin_mm() const {
 std::size_t RayScene::triangle_count() const {
   return impl_->triangles.size();
 }
+const Triangle& RayScene::triangle(std::uint32_t t) const {
+  return impl_->triangles.at(t);
+}
 bool RayScene::ray_masks_supported() const {
   return impl_->masks_supported;
 }

@@ -78,15 +78,14 @@ std::vector<float> node_distances(const rt::FieldGrid& grid, std::span<const Fit
       }
     }
   });
-  for (float& v : d2)
-    v = std::sqrt(v);
+  tbb::parallel_for(std::size_t{0}, d2.size(), [&](std::size_t n) { d2[n] = std::sqrt(d2[n]); });
   return d2;
 }
 
 std::vector<double> node_weights(const rt::FieldGrid& grid, std::span<const float> distance_nodes,
                                  const FieldFitOptions& o) {
   std::vector<double> w(distance_nodes.size(), 0.0);
-  for (int32_t k = 0; k < grid.dims[2]; ++k) {
+  tbb::parallel_for(int32_t{0}, grid.dims[2], [&](int32_t k) {
     for (int32_t j = 0; j < grid.dims[1]; ++j) {
       for (int32_t i = 0; i < grid.dims[0]; ++i) {
         const std::array<int32_t, 3> ijk{i, j, k};
@@ -104,7 +103,7 @@ std::vector<double> node_weights(const rt::FieldGrid& grid, std::span<const floa
         }
       }
     }
-  }
+  });
   return w;
 }
 

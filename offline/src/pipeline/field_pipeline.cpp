@@ -12,6 +12,7 @@
 #include <tbb/task_group.h>
 
 #include "truecut/offline/compensation_points.hpp"
+#include "truecut/offline/compensation_significance.hpp"
 #include "truecut/offline/ray_scene.hpp"
 #include "truecut/offline/rigid_transform.hpp"
 #include "truecut/offline/surfaces.hpp"
@@ -194,7 +195,8 @@ void smooth_and_adapt(const TriangleMesh& nominal, const FieldPipelineOptions& o
   for (std::size_t i = 0; i < r.points.size(); ++i) {
     r.field_vectors_mm[i] =
         at_vertices ? r.truss.displacement_mm[vertex_of_point[i]] : r.matrix.vectors_mm[i];
-    if (!r.matrix.valid[i]) r.field_vectors_mm[i].setZero();
+    if (!r.matrix.valid[i] || !r.significance.compensated(r.points.surface_ids[i]))
+      r.field_vectors_mm[i].setZero();
   }
   timer.done(kTrussStage, started, "truss smoothing and adapted mesh",
              text("kb/kc %.3g, %lld bars", opt.truss.kb_over_kc,
@@ -336,6 +338,10 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
     }
     r.error_summary = summarize(r.errors, opt.sphere.radius_mm);
     r.matrix = mirror(r.points, r.errors);
+    r.significance = test_compensation_significance(
+        r.points, r.errors, *in.scan,
+        r.registration ? r.registration->scan_to_nominal : Eigen::Isometry3d::Identity(),
+        opt.significance);
     timer.done(kErrorStage, t0,
                opt.method == ErrorMethod::ray ? "error vectors (rays)" : "error vectors (spheres)",
                text("%zu of %zu valid", r.error_summary.valid, r.error_summary.points));
@@ -357,8 +363,16 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
           if (!ve.valid(i)) ve.vectors_mm[i].setZero();
       }
       vertex_matrix = mirror(vp, ve);
+      vertex_matrix.surface_ids = vp.surface_ids;
       timer.done(kVertexErrorStage, t1, "vertex error vectors", text("%zu vertices", vp.size()));
     }
+    // A surface whose measured error the scan's noise explains gets no
+    // compensation: its vectors become zero, and stay in the truss and the
+    // fit as measured points (so a neighbouring surface's correction does
+    // not spread onto it).
+    for (std::size_t i = 0; i < vertex_matrix.size(); ++i)
+      if (!r.significance.compensated(vertex_matrix.surface_ids[i]))
+        vertex_matrix.vectors_mm[i].setZero();
     smooth_and_adapt(nominal, opt, at_vertices, vertex_matrix, timer, r);
   };
   auto program_chain = [&] {
@@ -400,6 +414,10 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
         if (b.status == rt::FieldStatus::ok) s.vector_mm += b.correction_mm;
       }
       s.surface_id = r.points.surface_ids[pp.point];
+      // What the scan measured: along the normal (rays; spheres on one
+      // plane), or the whole vector (spheres at an edge or corner).
+      s.along_normal_only =
+          r.errors.sphere_case.empty() || r.errors.sphere_case[pp.point] == SphereCase::surface;
       max_field = std::max(max_field, s.vector_mm.norm());
       ts.samples.push_back(s);
     }

@@ -94,6 +94,8 @@ class RayScene {
 
   const Eigen::Vector3d& local_origin_mm() const;
   std::size_t triangle_count() const;
+  // The vertex indices of triangle t, as in the mesh the scene was built from.
+  const Triangle& triangle(std::uint32_t t) const;
   // Whether this Embree build honours ray masks (they are set either way).
   bool ray_masks_supported() const;
 
