@@ -63,7 +63,7 @@ const char* kFieldHelp =
     "                        surface)\n"
     "  --scan-noise MM       the scanner's noise along the normal (default: estimated\n"
     "                        from the scan)\n"
-    "  --kb-kc X             truss smoothing kb/kc (default 0.2)\n"
+    "  --kb-kc X             truss smoothing kb/kc (default 1)\n"
     "  --resolution MM       field grid spacing (default 1)\n"
     "  --smoothness X        field fit regularisation lambda (default 0.1)\n"
     "  --path-step MM        tool path sampling step (default 0.1)\n"

@@ -71,7 +71,11 @@ TEST(TrussSmoothing, LinearFieldWithinTolerance) {
   std::vector<Eigen::Vector3d> v;
   for (const auto& p : m.vertices_mm)
     v.push_back(gradient * p.x() + Eigen::Vector3d(0, 0, 0.003 * p.y()));
-  const TrussResult r = smooth_truss({}, m.triangles, v, all_valid(m));
+  // The source's kb/kc: the border effect grows with it (about kb/kc · |∇v| ·
+  // pitch; 10 µm at the default 1).
+  TrussOptions source;
+  source.kb_over_kc = 0.2;
+  const TrussResult r = smooth_truss({}, m.triangles, v, all_valid(m), source);
   double interior_max = 0.0, border_max = 0.0;
   for (int j = 0; j < n; ++j) {
     for (int i = 0; i < n; ++i) {
@@ -202,9 +206,9 @@ TEST(TrussSmoothing, ReducesNoiseTransferAtDefaults) {
     const double raw = rms_difference(c.measured, c.truth);
     const double smoothed = rms_difference(r.displacement_mm, c.truth);
     std::printf(
-        "truss kb/kc=0.2 sigma=%.0f um: raw-true RMS %.2f um, smoothed-true RMS %.2f um (x%.2f)\n",
+        "truss kb/kc=1 sigma=%.0f um: raw-true RMS %.2f um, smoothed-true RMS %.2f um (x%.2f)\n",
         sigma_mm * 1e3, raw * 1e3, smoothed * 1e3, smoothed / raw);
-    EXPECT_LT(smoothed, 0.6 * raw) << "sigma " << sigma_mm;
+    EXPECT_LT(smoothed, 0.4 * raw) << "sigma " << sigma_mm;
   }
 }
 

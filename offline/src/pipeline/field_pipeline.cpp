@@ -60,6 +60,7 @@ enum StageOrder : int {
   kPointsStage,
   kSceneStage,
   kErrorStage,
+  kSignificanceStage,
   kVertexErrorStage,
   kTrussStage,
   kPathStage,
@@ -261,6 +262,11 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
         r.triangle_surface_ids.end())
       throw std::invalid_argument(text("surface %d does not exist in the nominal model", id));
   }
+  for (std::int32_t id : opt.datum_surfaces) {
+    if (std::find(r.triangle_surface_ids.begin(), r.triangle_surface_ids.end(), id) ==
+        r.triangle_surface_ids.end())
+      throw std::invalid_argument(text("datum surface %d does not exist in the nominal model", id));
+  }
   IcpOptions icp = opt.icp;
   if (opt.register_scan && !opt.datum_surfaces.empty()) {
     icp.datum_triangles = triangles_of_surfaces(r.triangle_surface_ids, opt.datum_surfaces);
@@ -338,13 +344,20 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
     }
     r.error_summary = summarize(r.errors, opt.sphere.radius_mm);
     r.matrix = mirror(r.points, r.errors);
+    timer.done(kErrorStage, t0,
+               opt.method == ErrorMethod::ray ? "error vectors (rays)" : "error vectors (spheres)",
+               text("%zu of %zu valid", r.error_summary.valid, r.error_summary.points));
+    const auto t_test = timer.now();
     r.significance = test_compensation_significance(
         r.points, r.errors, *in.scan,
         r.registration ? r.registration->scan_to_nominal : Eigen::Isometry3d::Identity(),
         opt.significance);
-    timer.done(kErrorStage, t0,
-               opt.method == ErrorMethod::ray ? "error vectors (rays)" : "error vectors (spheres)",
-               text("%zu of %zu valid", r.error_summary.valid, r.error_summary.points));
+    std::size_t kept = 0;
+    for (const SurfaceSignificance& s : r.significance.surfaces)
+      kept += s.compensated ? 1 : 0;
+    timer.done(kSignificanceStage, t_test, "significance test",
+               text("noise %.4f mm; %zu of %zu surfaces compensated",
+                    r.significance.pooled_noise_mm, kept, r.significance.surfaces.size()));
 
     // Vertex compensation for the truss: the same points in vertex mode, a
     // second pass at the vertices of the compensated surfaces otherwise.
