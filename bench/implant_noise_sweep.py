@@ -28,7 +28,7 @@ CONFIGS = {
     "no significance test": ["--spacing", "0.1", "--significance", "0"],
     "default, remove RBM": ["--spacing", "0.1", "--remove-rbm"],
     "default, smoothness 1": ["--spacing", "0.1", "--smoothness", "1"],
-    "vertices, kb/kc 0.2": ["--spacing", "0"],
+    "vertices, kb/kc 0.2": ["--spacing", "0", "--kb-kc", "0.2"],
     "vertices, kb/kc 1": ["--spacing", "0", "--kb-kc", "1"],
     "vertices, kb/kc 5": ["--spacing", "0", "--kb-kc", "5"],
 }
