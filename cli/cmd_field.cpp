@@ -57,7 +57,13 @@ const char* kFieldHelp =
     "  --remove-rbm          remove the rigid-body motion left in the error vectors\n"
     "  --sphere-radius MM    sphere method radius Rs (default 1.5)\n"
     "  --max-distance MM     ray method search distance each way (default 1)\n"
-    "  --kb-kc X             truss smoothing kb/kc (default 0.2)\n"
+    "  --significance P      compensate a surface only when a surface cut exactly\n"
+    "                        right would show its measured error with probability\n"
+    "                        below P under the scan's noise (default 0.001; 0: every\n"
+    "                        surface)\n"
+    "  --scan-noise MM       the scanner's noise along the normal (default: estimated\n"
+    "                        from the scan)\n"
+    "  --kb-kc X             truss smoothing kb/kc (default 1)\n"
     "  --resolution MM       field grid spacing (default 1)\n"
     "  --smoothness X        field fit regularisation lambda (default 0.1)\n"
     "  --path-step MM        tool path sampling step (default 0.1)\n"
@@ -245,6 +251,9 @@ offline::FieldPipelineOptions pipeline_options(const ParsedArgs& a, const Inputs
   o.remove_rigid_body_motion = a.flag("remove-rbm");
   o.sphere.radius_mm = a.number("sphere-radius", o.sphere.radius_mm, 0.01, 100.0);
   o.ray.max_distance_mm = a.number("max-distance", o.ray.max_distance_mm, 0.001, 100.0);
+  o.significance.significance_level =
+      a.number("significance", o.significance.significance_level, 0.0, 0.5);
+  o.significance.noise_mm = a.number("scan-noise", 0.0, 0.0, 10.0);
   o.truss.kb_over_kc = a.number("kb-kc", o.truss.kb_over_kc, 0.0, 1e6);
   o.fit.spacing_mm = a.number("resolution", o.fit.spacing_mm, 0.05, 100.0);
   o.fit.smoothness = a.number("smoothness", o.fit.smoothness, 0.0, 1e6);
@@ -272,6 +281,15 @@ void print_summary(const offline::FieldPipelineResult& r,
   std::printf(
       "error vectors: %zu points, %.1f %% invalid, mean %.4f mm, RMS %.4f mm, max %.4f mm\n",
       e.points, e.percent_invalid, e.mean_length_mm, e.rms_length_mm, e.max_length_mm);
+  for (const auto& s : r.significance.surfaces)
+    std::printf(
+        "surface %d: %zu points from %zu scan points, mean error %+.4f mm +- %.4f mm (noise %.4f "
+        "mm%s), chi2 %.1f over %zu patches (limit %.1f): %s\n",
+        s.surface, s.valid_points, s.scan_points, s.mean_normal_mm, s.mean_uncertainty_mm,
+        s.noise_mm, s.pooled_noise ? ", pooled" : "", s.chi2, s.patches, s.threshold,
+        !r.significance.tested ? "compensated (not tested)"
+        : s.compensated        ? "compensated"
+                               : "within the scan noise, not compensated");
   const auto& c = r.compensation_statistics;
   std::printf("compensation (smoothed): RMS %.4f mm, max %.4f mm; max correction %.4f mm%s\n",
               c.rms_length_mm, c.max_length_mm, r.max_correction_mm, forced ? " (FORCED)" : "");
@@ -363,6 +381,8 @@ int cmd_field(const std::vector<std::string>& argv) {
                       {"sphere-radius", true},
                       {"max-distance", true},
                       {"kb-kc", true},
+                      {"significance", true},
+                      {"scan-noise", true},
                       {"resolution", true},
                       {"smoothness", true},
                       {"path-step", true},

@@ -116,6 +116,14 @@ TEST(FieldCli, WritesOutputsWithAuditHashes) {
   // compensation points back by the same amount.
   EXPECT_NEAR(audit["error_vectors"]["mean_normal_mm"].get<double>(), 0.05, 0.005);
   EXPECT_NEAR(audit["compensation_vectors"]["mean_normal_mm"].get<double>(), -0.05, 0.005);
+  // A noiseless scan: every shaft face's 0.05 mm is far beyond its noise.
+  EXPECT_TRUE(audit["significance"]["tested"].get<bool>());
+  ASSERT_FALSE(audit["significance"]["surfaces"].empty());
+  for (const auto& s : audit["significance"]["surfaces"])
+    if (s["surface"].get<int>() <= 4) {
+      EXPECT_TRUE(s["compensated"].get<bool>()) << s;
+    }
+  EXPECT_NE(r.out.find("surface 1: "), std::string::npos) << r.out;
   // Binary STL of the nominal's size.
   EXPECT_EQ(fs::file_size(out / "adapted.stl"), fs::file_size(p.nominal));
   EXPECT_EQ(read_file(out / "field.tcf").rfind("TRUECUT-FIELD 1\n", 0), 0u);
@@ -202,6 +210,13 @@ TEST(FieldCli, MalformedInputsExit2AndWriteNothing) {
   std::vector<std::string> no_out = field_args(p, out);
   no_out.resize(no_out.size() - 2);
   EXPECT_EQ(truecut(no_out).exit_code, 2);
+  for (const char* bad : {"--significance", "--scan-noise"}) {
+    std::vector<std::string> a = field_args(p, out);
+    a.insert(a.end(), {bad, "-1"});
+    const ProcessResult r = truecut(a);
+    EXPECT_EQ(r.exit_code, 2) << bad;
+    EXPECT_NE(r.err.find(std::string(bad).substr(2)), std::string::npos) << r.err;
+  }
   EXPECT_EQ(listing(out), std::set<std::string>{"keep.txt"});
   EXPECT_FALSE(fs::exists(root / "never"));
 }

@@ -339,6 +339,51 @@ TEST(FieldPipeline, SampledPointsAndSphereMethod) {
   EXPECT_LT(e.max_mm, 2e-3);
 }
 
+// truecut field runs the scan chain (registration, rays, truss) and the
+// program chain (tool path, placement) concurrently: the outputs are those
+// of the stages run one after the other, to the last bit.
+TEST(FieldPipeline, ConcurrentStagesGiveTheSameResult) {
+  PlateCase c = plate_case(kBending, 0.02);
+  Eigen::Isometry3d misplaced = Eigen::Isometry3d::Identity();
+  misplaced.linear() = Eigen::AngleAxisd(0.002, Eigen::Vector3d(1, 1, 0).normalized()).matrix();
+  misplaced.translation() = Eigen::Vector3d(0, 0, 0.1);
+  for (Eigen::Vector3d& v : c.scan.vertices_mm)
+    v = misplaced * v;
+  FieldPipelineInputs in;
+  in.nominal = &c.nominal;
+  in.scan = &c.scan;
+  in.program = &c.program;
+  in.tools = c.tools;
+  FieldPipelineOptions o;
+  o.concurrent_stages = false;
+  const FieldPipelineResult one_by_one = run_field_pipeline(in, o);
+  o.concurrent_stages = true;
+  const FieldPipelineResult concurrent = run_field_pipeline(in, o);
+  ASSERT_TRUE(one_by_one.registration && concurrent.registration);
+  EXPECT_EQ(one_by_one.registration->scan_to_nominal.matrix(),
+            concurrent.registration->scan_to_nominal.matrix());
+  EXPECT_EQ(one_by_one.errors.vectors_mm, concurrent.errors.vectors_mm);
+  EXPECT_EQ(one_by_one.field_vectors_mm, concurrent.field_vectors_mm);
+  const auto a = one_by_one.fit->field.nodes(1), b = concurrent.fit->field.nodes(1);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t n = 0; n < a.size(); ++n) {
+    ASSERT_EQ(a[n].dx_mm, b[n].dx_mm) << n;
+    ASSERT_EQ(a[n].dy_mm, b[n].dy_mm) << n;
+    ASSERT_EQ(a[n].dz_mm, b[n].dz_mm) << n;
+    ASSERT_EQ(a[n].weight, b[n].weight) << n;
+  }
+  // Stages are listed in pipeline order however they finished.
+  std::vector<std::string> names;
+  for (const StageTime& t : concurrent.stages)
+    names.push_back(t.name);
+  const std::vector<std::string> expected{"registration",      "compensation points",
+                                          "scan ray scene",    "error vectors (rays)",
+                                          "significance test", "truss smoothing and adapted mesh",
+                                          "tool path",         "tool-centre placement",
+                                          "field fit"};
+  EXPECT_EQ(names, expected);
+}
+
 TEST(FieldPipeline, NothingCutIsAnError) {
   PlateCase c = plate_case(kConstant, 0.0);
   c.program =

@@ -112,6 +112,59 @@ TEST(RayScene, TrianglesWithinMatchesBruteForce) {
   }
 }
 
+// A scan registered by placing its scene (set_world_from_mesh) answers as a
+// scene built from the moved vertices: same triangles, distances and
+// normals, to rounding.
+TEST(RayScene, PlacedSceneAnswersAsAMovedMesh) {
+  const TriangleMesh m = test_geo::plate(40, 30, 80, 60, [](double x, double y) {
+    return 0.5 * std::sin(0.2 * x) * std::cos(0.3 * y);
+  });
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  pose.translation() = Eigen::Vector3d(120.0, -35.0, 8.0);
+  TriangleMesh moved = m;
+  for (Eigen::Vector3d& v : moved.vertices_mm)
+    v = pose * v;
+  RayScene placed(m);
+  placed.set_world_from_mesh(pose);
+  const RayScene reference(moved);
+
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> xy(-2.0, 42.0), tilt(-0.3, 0.3);
+  std::vector<Ray> rays(500);
+  for (Ray& r : rays) {
+    r.origin_mm = pose * Eigen::Vector3d(xy(rng), 0.75 * xy(rng), 2.0);
+    r.direction = pose.linear() * Eigen::Vector3d(tilt(rng), tilt(rng), -1.0).normalized();
+    r.t_max_mm = 10.0;
+  }
+  std::vector<RayHit> a(rays.size()), b(rays.size());
+  placed.intersect(rays, a);
+  reference.intersect(rays, b);
+  std::size_t hits = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    ASSERT_EQ(a[i].triangle, b[i].triangle) << i;
+    if (!a[i].hit()) continue;
+    ++hits;
+    EXPECT_NEAR(a[i].distance_mm, b[i].distance_mm, 1e-9) << i;
+    EXPECT_NEAR((a[i].normal - b[i].normal).norm(), 0.0, 1e-12) << i;
+  }
+  EXPECT_GT(hits, 400u);
+
+  const Eigen::Vector3d p = pose * Eigen::Vector3d(20.0, 15.0, 0.3);
+  std::vector<std::uint32_t> near_a, near_b;
+  placed.triangles_within(p, 1.5, near_a);
+  reference.triangles_within(p, 1.5, near_b);
+  EXPECT_FALSE(near_a.empty());
+  EXPECT_EQ(near_a, near_b);
+
+  placed.set_world_from_mesh(Eigen::Isometry3d::Identity());  // back where it was built
+  RayHit h;
+  const Ray down{{20.0, 15.0, 3.0}, {0, 0, -1}, 0.0, 10.0};
+  placed.intersect({&down, 1}, {&h, 1});
+  ASSERT_TRUE(h.hit());
+  EXPECT_NEAR(h.distance_mm, 3.0 - 0.5 * std::sin(4.0) * std::cos(4.5), 2e-3);
+}
+
 TEST(RayScene, RejectsIndexOutOfRange) {
   TriangleMesh m;
   m.vertices_mm = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};

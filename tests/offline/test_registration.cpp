@@ -65,6 +65,25 @@ TEST(Registration, IsDeterministic) {
   EXPECT_EQ(a.iterations, b.iterations);
 }
 
+// Iterations after the first look the nearest scan point up among the
+// previous iteration's nearest few while the pose moves less than their
+// spacing: the same pairs as asking the k-d tree every time, so the same
+// transform to the last bit.
+TEST(Registration, ReusedNeighboursGiveTheTreesAnswer) {
+  const TriangleMesh nominal = nominal_block();
+  const std::vector<Eigen::Vector3d> scan =
+      scan_of(nominal, rigid({1, -1, 2}, 0.6, {0.3, 0.1, -0.2}), 5);
+  IcpOptions tree_every_time;
+  tree_every_time.reuse_neighbours = false;
+  const IcpResult reused = register_scan(nominal, scan);
+  const IcpResult asked = register_scan(nominal, scan, tree_every_time);
+  EXPECT_GT(reused.iterations, 3);
+  EXPECT_EQ(reused.iterations, asked.iterations);
+  EXPECT_EQ(reused.correspondences, asked.correspondences);
+  EXPECT_EQ(reused.scan_to_nominal.matrix(), asked.scan_to_nominal.matrix());
+  EXPECT_EQ(reused.rms_after_mm, asked.rms_after_mm);
+}
+
 TEST(Registration, TukeyIgnoresAFixtureThatBiasesPlainLeastSquares) {
   // The part stands on a fixture plate: its bottom face is hidden, and the
   // scanner sees the plate 0.5 mm below where the bottom face would be.

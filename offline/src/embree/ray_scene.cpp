@@ -8,6 +8,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <mutex>
@@ -74,6 +75,22 @@ struct RayScene::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
   bool masks_supported = false;
+  bool posed = false;  // world_from_mesh is not the identity
+  Eigen::Isometry3d world_from_mesh = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d mesh_from_world = Eigen::Isometry3d::Identity();
+
+  // A world ray in the mesh frame (distances along it are the same).
+  Ray to_mesh(const Ray& ray) const {
+    if (!posed) return ray;
+    Ray r = ray;
+    r.origin_mm = mesh_from_world * ray.origin_mm;
+    r.direction = mesh_from_world.linear() * ray.direction;
+    return r;
+  }
+  // A hit found with to_mesh(ray): its normal back in the world frame.
+  void to_world(RayHit& hit) const {
+    if (posed && hit.hit()) hit.normal = world_from_mesh.linear() * hit.normal;
+  }
 
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
@@ -204,6 +221,9 @@ const Eigen::Vector3d& RayScene::local_origin_mm() const {
 std::size_t RayScene::triangle_count() const {
   return impl_->triangles.size();
 }
+const Triangle& RayScene::triangle(std::uint32_t t) const {
+  return impl_->triangles.at(t);
+}
 bool RayScene::ray_masks_supported() const {
   return impl_->masks_supported;
 }
@@ -225,8 +245,9 @@ void RayScene::intersect(std::span<const Ray> rays, std::span<RayHit> hits,
                           RTCIntersectContext ctx;
                           rtcInitIntersectContext(&ctx);
                           for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                            const Ray local = m.to_mesh(rays[i]);
                             RTCRayHit rh;
-                            m.fill_ray(rh.ray, rays[i]);
+                            m.fill_ray(rh.ray, local);
                             rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
                             rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
                             rtcIntersect1(m.scene, &ctx, &rh);
@@ -234,8 +255,9 @@ void RayScene::intersect(std::span<const Ray> rays, std::span<RayHit> hits,
                               miss(hits[i]);
                               continue;
                             }
-                            m.finish(rays[i], rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v,
+                            m.finish(local, rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v,
                                      {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, refine, hits[i]);
+                            m.to_world(hits[i]);
                           }
                         });
       break;
@@ -246,6 +268,7 @@ void RayScene::intersect(std::span<const Ray> rays, std::span<RayHit> hits,
           [&](const tbb::blocked_range<std::size_t>& r) {
             RTCIntersectContext ctx;
             rtcInitIntersectContext(&ctx);
+            std::array<Ray, 16> local;
             for (std::size_t p = r.begin(); p != r.end(); ++p) {
               RTCRayHit16 rh;
               alignas(64) int valid[16];
@@ -253,8 +276,9 @@ void RayScene::intersect(std::span<const Ray> rays, std::span<RayHit> hits,
               for (std::size_t k = 0; k < 16; ++k) {
                 const std::size_t i = base + k;
                 valid[k] = i < rays.size() ? -1 : 0;
+                local[k] = m.to_mesh(rays[std::min(i, rays.size() - 1)]);
                 RTCRay one;
-                m.fill_ray(one, rays[std::min(i, rays.size() - 1)]);
+                m.fill_ray(one, local[k]);
                 rh.ray.org_x[k] = one.org_x;
                 rh.ray.org_y[k] = one.org_y;
                 rh.ray.org_z[k] = one.org_z;
@@ -277,8 +301,9 @@ void RayScene::intersect(std::span<const Ray> rays, std::span<RayHit> hits,
                   miss(hits[i]);
                   continue;
                 }
-                m.finish(rays[i], rh.hit.primID[k], rh.ray.tfar[k], rh.hit.u[k], rh.hit.v[k],
+                m.finish(local[k], rh.hit.primID[k], rh.ray.tfar[k], rh.hit.u[k], rh.hit.v[k],
                          {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]}, refine, hits[i]);
+                m.to_world(hits[i]);
               }
             }
           });
@@ -290,9 +315,11 @@ void RayScene::intersect(std::span<const Ray> rays, std::span<RayHit> hits,
                           RTCIntersectContext ctx;
                           rtcInitIntersectContext(&ctx);
                           std::vector<RTCRayHit> block(r.size());
+                          std::vector<Ray> local(r.size());
                           for (std::size_t i = r.begin(); i != r.end(); ++i) {
                             RTCRayHit& rh = block[i - r.begin()];
-                            m.fill_ray(rh.ray, rays[i]);
+                            local[i - r.begin()] = m.to_mesh(rays[i]);
+                            m.fill_ray(rh.ray, local[i - r.begin()]);
                             rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
                             rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
                           }
@@ -304,8 +331,10 @@ void RayScene::intersect(std::span<const Ray> rays, std::span<RayHit> hits,
                               miss(hits[i]);
                               continue;
                             }
-                            m.finish(rays[i], rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v,
-                                     {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, refine, hits[i]);
+                            m.finish(local[i - r.begin()], rh.hit.primID, rh.ray.tfar, rh.hit.u,
+                                     rh.hit.v, {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, refine,
+                                     hits[i]);
+                            m.to_world(hits[i]);
                           }
                         });
       break;
@@ -334,9 +363,19 @@ bool collect_triangle(RTCPointQueryFunctionArguments* args) {
 
 }  // namespace
 
-void RayScene::triangles_within(const Eigen::Vector3d& p, double radius_mm,
+void RayScene::set_world_from_mesh(const Eigen::Isometry3d& world_from_mesh) {
+  if (!world_from_mesh.matrix().allFinite())
+    throw RayEngineError("the scene's placement is not finite");
+  Impl& m = *impl_;
+  m.world_from_mesh = world_from_mesh;
+  m.mesh_from_world = world_from_mesh.inverse();
+  m.posed = world_from_mesh.matrix() != Eigen::Matrix4d::Identity();
+}
+
+void RayScene::triangles_within(const Eigen::Vector3d& p_world, double radius_mm,
                                 std::vector<std::uint32_t>& out) const {
   const Impl& m = *impl_;
+  const Eigen::Vector3d p = m.posed ? Eigen::Vector3d(m.mesh_from_world * p_world) : p_world;
   const std::size_t first = out.size();
   ProximityQuery q{&m.vertices_mm, &m.triangles, p, radius_mm * radius_mm, &out};
   const Eigen::Vector3d local = p - m.origin_mm;

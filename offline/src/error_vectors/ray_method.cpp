@@ -29,6 +29,7 @@ void check_points(const CompensationPoints& points) {
 
 ErrorVectors empty_result(std::size_t n) {
   ErrorVectors e;
+  e.support_begin.assign(n + 1, 0);
   e.vectors_mm.assign(n, Eigen::Vector3d::Zero());
   e.status.assign(n, ErrorStatus::valid);
   e.normal_mm.assign(n, 0.0);
@@ -73,6 +74,8 @@ ErrorVectors error_vectors_by_rays(const TriangleMesh& nominal, const Compensati
   scan.intersect(rays, hits, {options.batch, true});
 
   const double cos_grazing = std::cos(options.grazing_angle_deg * M_PI / 180.0);
+  std::vector<std::uint32_t> hit_triangle(n, RayHit::kMiss);
+  std::vector<Eigen::Vector3d> hit_weight(n);
   for (std::size_t k = 0; k < cast.size(); ++k) {
     const std::size_t i = cast[k];
     const RayHit& up = hits[2 * k];
@@ -95,8 +98,20 @@ ErrorVectors error_vectors_by_rays(const TriangleMesh& nominal, const Compensati
     } else {
       e.normal_mm[i] = s;
       e.vectors_mm[i] = s * nn;
+      hit_triangle[i] = h.triangle;
+      hit_weight[i] = {1.0 - h.u - h.v, h.u, h.v};
     }
   }
+  e.support_begin.assign(n + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    e.support_begin[i] = static_cast<std::uint32_t>(e.support_point.size());
+    if (hit_triangle[i] == RayHit::kMiss) continue;
+    for (int c = 0; c < 3; ++c) {
+      e.support_point.push_back(scan.triangle(hit_triangle[i])[c]);
+      e.support_weight.push_back(static_cast<float>(hit_weight[i][c]));
+    }
+  }
+  e.support_begin[n] = static_cast<std::uint32_t>(e.support_point.size());
   return e;
 }
 

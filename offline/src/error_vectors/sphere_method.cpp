@@ -40,6 +40,7 @@ struct Plane {
 
 struct Scratch {
   std::vector<std::uint32_t> triangles, cloud;
+  std::vector<std::pair<std::uint32_t, float>> support;
   std::vector<Plane> planes;
   std::vector<int> assigned;
   Eigen::Vector3d shift = Eigen::Vector3d::Zero();  // local translation estimate
@@ -162,8 +163,24 @@ Eigen::Vector3d local_translation(const Context& c, const Scratch& s) {
   return v;
 }
 
+// Each scan point's weight in n·v: the plane offsets b_k are means over the
+// plane's points (along its normal), and n·v = gᵀ b with g from the solve
+// below.
+void record_support(const Scratch& s, const std::vector<int>& plane_row, const Eigen::VectorXd& g,
+                    std::vector<std::pair<std::uint32_t, float>>& out) {
+  out.clear();
+  for (std::size_t k = 0; k < s.cloud.size(); ++k) {
+    const int row = plane_row[static_cast<std::size_t>(s.assigned[k])];
+    if (row < 0) continue;
+    const double count =
+        static_cast<double>(s.planes[static_cast<std::size_t>(s.assigned[k])].count);
+    out.push_back({s.cloud[k], static_cast<float>(g[row] / count)});
+  }
+}
+
 void one_point(const Context& c, const Eigen::Vector3d& P, const Eigen::Vector3d& normal,
                Scratch& s, ErrorVectors& e, std::size_t i) {
+  s.support.clear();
   const double Rs = c.options.radius_mm;
   s.cloud.clear();
   c.cloud_tree.within(P, Rs, s.cloud);
@@ -206,8 +223,11 @@ void one_point(const Context& c, const Eigen::Vector3d& P, const Eigen::Vector3d
   Eigen::Matrix<double, Eigen::Dynamic, 3> A(0, 3);
   Eigen::VectorXd b(0), w(0);
   int k = 0;
-  for (const Plane& p : s.planes) {
+  std::vector<int> plane_row(s.planes.size(), -1);
+  for (std::size_t j = 0; j < s.planes.size(); ++j) {
+    const Plane& p = s.planes[j];
     if (!p.through_point) continue;
+    plane_row[j] = k;
     if (!p.fitted || p.count < c.options.min_points) {
       e.status[i] = ErrorStatus::too_few_points;
       return;
@@ -238,6 +258,7 @@ void one_point(const Context& c, const Eigen::Vector3d& P, const Eigen::Vector3d
       return;
     }
     v = A.transpose() * AAt.ldlt().solve(b);
+    record_support(s, plane_row, AAt.ldlt().solve(A * normal), s.support);
   } else {
     const Eigen::Matrix3d N = A.transpose() * w.asDiagonal() * A;
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(N);
@@ -246,9 +267,11 @@ void one_point(const Context& c, const Eigen::Vector3d& P, const Eigen::Vector3d
       return;
     }
     v = N.ldlt().solve(A.transpose() * w.asDiagonal() * b);
+    record_support(s, plane_row, w.asDiagonal() * (A * N.ldlt().solve(normal)), s.support);
   }
   if (v.norm() > c.options.max_displacement_ratio * Rs) {
     e.status[i] = ErrorStatus::beyond_sphere_reach;
+    s.support.clear();
     return;
   }
   e.vectors_mm[i] = v;
@@ -282,12 +305,24 @@ ErrorVectors error_vectors_by_spheres(const TriangleMesh& nominal, const Compens
                   cloud_mm,
                   options,
                   std::cos(options.plane_angle_deg * M_PI / 180.0)};
+  std::vector<std::vector<std::pair<std::uint32_t, float>>> support(n);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 64),
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       Scratch s;
-                      for (std::size_t i = r.begin(); i != r.end(); ++i)
+                      for (std::size_t i = r.begin(); i != r.end(); ++i) {
                         one_point(c, points.positions_mm[i], points.normals[i], s, e, i);
+                        if (e.valid(i)) support[i] = s.support;
+                      }
                     });
+  e.support_begin.assign(n + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    e.support_begin[i] = static_cast<std::uint32_t>(e.support_point.size());
+    for (const auto& [point, weight] : support[i]) {
+      e.support_point.push_back(point);
+      e.support_weight.push_back(weight);
+    }
+  }
+  e.support_begin[n] = static_cast<std::uint32_t>(e.support_point.size());
   return e;
 }
 

@@ -3,6 +3,8 @@
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/Sparse>
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -268,14 +270,20 @@ FieldFitResult fit_correction_field(std::span<const ToolSamples> tools,
   rt::CorrectionField field(grid, std::move(layers));
   if (options.method == FieldFitMethod::multilevel_bspline) {
     for (std::size_t t = 0; t < tools.size(); ++t) {
+      // Per sample in parallel, summed in order: the same on any thread count.
+      const std::vector<FitSample>& samples = tools[t].samples;
+      std::vector<double> e2(samples.size(), 0.0);
+      tbb::parallel_for(std::size_t{0}, samples.size(), [&](std::size_t i) {
+        const FitSample& s = samples[i];
+        if (!s.valid) return;
+        const Eigen::Vector3d d =
+            s.vector_mm - field.evaluate_tricubic(tools[t].tool, s.position_mm).vector_mm;
+        e2[i] = s.along_normal_only ? std::pow(s.normal.normalized().dot(d), 2) : d.squaredNorm();
+      });
       double sum2 = 0.0, max2 = 0.0;
-      for (const FitSample& s : tools[t].samples) {
-        if (!s.valid) continue;
-        const double e2 =
-            (s.vector_mm - field.evaluate_tricubic(tools[t].tool, s.position_mm).vector_mm)
-                .squaredNorm();
-        sum2 += e2;
-        max2 = std::max(max2, e2);
+      for (double v : e2) {
+        sum2 += v;
+        max2 = std::max(max2, v);
       }
       if (stats[t].valid_samples > 0) {
         stats[t].residual_rms_mm = std::sqrt(sum2 / static_cast<double>(stats[t].valid_samples));

@@ -49,6 +49,11 @@ std::vector<float> node_distances(const rt::FieldGrid& grid, std::span<const Fit
   }
   const double reach2 = reach_nodes * reach_nodes;
   const auto reach_layers = static_cast<int32_t>(std::ceil(reach_nodes)) + 1;
+  // Every node gets min(its value, its exact squared distance to the
+  // sample), so updating a node outside a sample's ball is harmless: its
+  // value there is beyond the reach, as good as infinity to every user. That
+  // lets each row of a sample's ball run over the ball's full width in x
+  // with no square root per row.
   tbb::parallel_for(int32_t{0}, layers, [&](int32_t k) {
     const int32_t b0 = std::max(0, k - reach_layers), b1 = std::min(layers - 1, k + reach_layers);
     for (int32_t b = b0; b <= b1; ++b) {
@@ -56,18 +61,14 @@ std::vector<float> node_distances(const rt::FieldGrid& grid, std::span<const Fit
         const Eigen::Vector3d& q = u[p];
         const double dz2 = (k - q.z()) * (k - q.z());
         if (dz2 > reach2) continue;
-        // Only the nodes within the ball of radius reach_nodes: beyond it
-        // the distance is not needed.
         const double ry = std::sqrt(reach2 - dz2);
         const int32_t j0 = std::max(0, static_cast<int32_t>(std::ceil(q.y() - ry)));
         const int32_t j1 = std::min(grid.dims[1] - 1, static_cast<int32_t>(std::floor(q.y() + ry)));
+        const int32_t i0 = std::max(0, static_cast<int32_t>(std::ceil(q.x() - reach_nodes)));
+        const int32_t i1 =
+            std::min(grid.dims[0] - 1, static_cast<int32_t>(std::floor(q.x() + reach_nodes)));
         for (int32_t j = j0; j <= j1; ++j) {
           const double dyz2 = dz2 + (j - q.y()) * (j - q.y());
-          if (dyz2 > reach2) continue;
-          const double rx = std::sqrt(reach2 - dyz2);
-          const int32_t i0 = std::max(0, static_cast<int32_t>(std::ceil(q.x() - rx)));
-          const int32_t i1 =
-              std::min(grid.dims[0] - 1, static_cast<int32_t>(std::floor(q.x() + rx)));
           float* row = d2.data() + grid.index(0, j, k);
           for (int32_t i = i0; i <= i1; ++i) {
             const double dx = i - q.x();
@@ -77,15 +78,14 @@ std::vector<float> node_distances(const rt::FieldGrid& grid, std::span<const Fit
       }
     }
   });
-  for (float& v : d2)
-    v = std::sqrt(v);
+  tbb::parallel_for(std::size_t{0}, d2.size(), [&](std::size_t n) { d2[n] = std::sqrt(d2[n]); });
   return d2;
 }
 
 std::vector<double> node_weights(const rt::FieldGrid& grid, std::span<const float> distance_nodes,
                                  const FieldFitOptions& o) {
   std::vector<double> w(distance_nodes.size(), 0.0);
-  for (int32_t k = 0; k < grid.dims[2]; ++k) {
+  tbb::parallel_for(int32_t{0}, grid.dims[2], [&](int32_t k) {
     for (int32_t j = 0; j < grid.dims[1]; ++j) {
       for (int32_t i = 0; i < grid.dims[0]; ++i) {
         const std::array<int32_t, 3> ijk{i, j, k};
@@ -103,7 +103,7 @@ std::vector<double> node_weights(const rt::FieldGrid& grid, std::span<const floa
         }
       }
     }
-  }
+  });
   return w;
 }
 

@@ -13,8 +13,9 @@ namespace truecut::offline::fit_detail {
 
 void check_options(const FieldFitOptions& options);
 
-// Distance (in node spacings) from each node to the nearest valid sample;
-// +inf beyond reach_nodes.
+// Distance (in node spacings) from each node to the nearest valid sample,
+// exact up to reach_nodes; beyond it some value above reach_nodes (+inf far
+// from every sample).
 std::vector<float> node_distances(const rt::FieldGrid& grid, std::span<const FitSample> samples,
                                   double reach_nodes);
 

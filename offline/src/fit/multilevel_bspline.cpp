@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 
 namespace truecut::offline::fit_detail {
 namespace {
@@ -73,12 +74,55 @@ Eigen::Vector3d evaluate(const Lattice& l, const Stencil& s) {
 // mean of what its samples ask for.
 // damping ≥ 0 shrinks control values with little data behind them: the
 // denominator gets damping × its mean over the control points with data.
-void fit_level(const rt::FieldGrid& g, Lattice& l, std::span<const Eigen::Vector3d> positions,
-               std::span<const Eigen::Vector3d> residuals, double damping) {
-  std::vector<Eigen::Vector3d> num(l.phi.size(), Eigen::Vector3d::Zero());
-  std::vector<double> den(l.phi.size(), 0.0);
-  for (std::size_t p = 0; p < positions.size(); ++p) {
-    const Stencil s = stencil_of(g, l, positions[p]);
+//
+// In parallel and deterministic, the sums over the samples taken in an order
+// fixed by the data alone, whatever the number of threads:
+// - a lattice with at least 8 slabs of 4 control planes along its longest
+//   axis: a sample, filed under the slab of its first control plane, writes
+//   into that slab and the next; even slabs run in parallel, then odd ones,
+//   each over its samples in input order;
+// - a coarser (small) lattice: 8 fixed runs of consecutive samples sum into
+//   their own copies, which are then added in run order.
+//
+// A sample known only along its normal n (a ray-method error vector: the
+// scan says nothing about the tangential components) weighs its residual r
+// with P = β I + (1 − β) n nᵀ, β = kTangentialWeight: the normal component
+// fully, the tangential ones (taken as zero: a face pass should not be moved
+// sideways) at β. Each control point then solves M φ = Σ w² (w / Σw²) P r,
+// M = Σ w² P. Where only one normal is seen this is exactly the classic
+// closed form. Where a wall's samples (normal x) and a face's (normal z)
+// share a control point, the wall sets x and the face z, each hardly pulled
+// by the other's assumed zero (the classic form averages them: a wall's
+// correction lost a quarter at its foot). A face alone still keeps its
+// tangential components at zero (a face pass at a convex edge shifted
+// sideways by a wall's correction left a strip of stock on benchmark004),
+// and M's smallest eigenvalue is at least β·Σw², so nearly parallel noisy
+// normals (a curved surface) cannot blow a tangential component up.
+using Sym = std::array<double, 6>;  // xx, yy, zz, xy, xz, yz
+
+// See fit_level: the weight of a normal-only sample's tangential components
+// (taken as zero) against its normal component.
+constexpr double kTangentialWeight = 0.02;
+
+// Sums per control point, kept from level to level so the finest lattice's
+// memory is allocated once, not once per pass.
+struct LevelSums {
+  std::vector<Eigen::Vector3d> num;
+  std::vector<double> den;  // Σ w² of every sample
+  std::vector<Sym> sym;     // Σ w² n nᵀ of the normal-only samples
+};
+
+void fit_level(Lattice& l, std::span<const Stencil> stencils,
+               std::span<const Eigen::Vector3d> residuals, std::span<const Eigen::Vector3d> normal,
+               bool any_normal_only, double damping, LevelSums& sums) {
+  sums.num.assign(l.phi.size(), Eigen::Vector3d::Zero());
+  sums.den.assign(l.phi.size(), 0.0);
+  sums.sym.assign(any_normal_only ? l.phi.size() : 0, Sym{});
+  std::vector<Eigen::Vector3d>& num = sums.num;
+  std::vector<double>& den = sums.den;
+  std::vector<Sym>& sym = sums.sym;
+  auto accumulate = [&](std::uint32_t p, Eigen::Vector3d* to_num, double* to_den, Sym* to_sym) {
+    const Stencil& s = stencils[p];
     double sum2 = 1.0;
     for (int a = 0; a < 3; ++a) {
       double q = 0.0;
@@ -86,6 +130,14 @@ void fit_level(const rt::FieldGrid& g, Lattice& l, std::span<const Eigen::Vector
         q += w * w;
       sum2 *= q;
     }
+    const Eigen::Vector3d& n = normal[p];
+    const bool along_normal = to_sym && !n.isZero();
+    const Sym nn{n.x() * n.x(), n.y() * n.y(), n.z() * n.z(),
+                 n.x() * n.y(), n.x() * n.z(), n.y() * n.z()};
+    const Eigen::Vector3d r =
+        along_normal ? Eigen::Vector3d(kTangentialWeight * residuals[p] +
+                                       (1.0 - kTangentialWeight) * n * n.dot(residuals[p]))
+                     : residuals[p];
     for (int c = 0; c < 4; ++c)
       for (int b = 0; b < 4; ++b) {
         const double wbc = s.b[1][b] * s.b[2][c];
@@ -93,10 +145,53 @@ void fit_level(const rt::FieldGrid& g, Lattice& l, std::span<const Eigen::Vector
         for (int a = 0; a < 4; ++a) {
           const double w = s.b[0][a] * wbc;
           const double w2 = w * w;
-          num[row + a] += (w2 * w / sum2) * residuals[p];
-          den[row + a] += w2;
+          to_num[row + a] += (w2 * w / sum2) * r;
+          to_den[row + a] += w2;
+          if (along_normal)
+            for (int k = 0; k < 6; ++k)
+              to_sym[row + a][k] += w2 * nn[k];
         }
       }
+  };
+  int axis = 0;
+  for (int a = 1; a < 3; ++a)
+    if (l.n[a] > l.n[axis]) axis = a;
+  constexpr int32_t kSlab = 4, kMinSlabs = 8, kRuns = 8;
+  const int32_t slabs = (l.n[axis] + kSlab - 1) / kSlab;
+  Sym* const sym_data = any_normal_only ? sym.data() : nullptr;
+  if (slabs >= kMinSlabs) {
+    std::vector<std::vector<std::uint32_t>> in_slab(static_cast<std::size_t>(slabs));
+    for (std::size_t p = 0; p < stencils.size(); ++p)
+      in_slab[static_cast<std::size_t>(stencils[p].first[axis] / kSlab)].push_back(
+          static_cast<std::uint32_t>(p));
+    for (int32_t parity = 0; parity < 2; ++parity) {
+      tbb::parallel_for(int32_t{0}, (slabs - parity + 1) / 2, [&](int32_t h) {
+        for (std::uint32_t p : in_slab[static_cast<std::size_t>(2 * h + parity)])
+          accumulate(p, num.data(), den.data(), sym_data);
+      });
+    }
+  } else {
+    std::vector<std::vector<Eigen::Vector3d>> run_num(kRuns);
+    std::vector<std::vector<double>> run_den(kRuns);
+    std::vector<std::vector<Sym>> run_sym(kRuns);
+    tbb::parallel_for(0, kRuns, [&](int run) {
+      run_num[run].assign(l.phi.size(), Eigen::Vector3d::Zero());
+      run_den[run].assign(l.phi.size(), 0.0);
+      run_sym[run].assign(any_normal_only ? l.phi.size() : 0, Sym{});
+      const std::size_t n = stencils.size();
+      for (std::size_t p = n * run / kRuns; p < n * (run + 1) / kRuns; ++p)
+        accumulate(static_cast<std::uint32_t>(p), run_num[run].data(), run_den[run].data(),
+                   any_normal_only ? run_sym[run].data() : nullptr);
+    });
+    tbb::parallel_for(std::size_t{0}, l.phi.size(), [&](std::size_t c) {
+      for (int run = 0; run < kRuns; ++run) {
+        num[c] += run_num[run][c];
+        den[c] += run_den[run][c];
+        if (any_normal_only)
+          for (int k = 0; k < 6; ++k)
+            sym[c][k] += run_sym[run][c][k];
+      }
+    });
   }
   double mean = 0.0;
   std::size_t with_data = 0;
@@ -105,8 +200,29 @@ void fit_level(const rt::FieldGrid& g, Lattice& l, std::span<const Eigen::Vector
     with_data += d > 0.0 ? 1 : 0;
   }
   const double extra = with_data > 0 ? damping * mean / static_cast<double>(with_data) : 0.0;
-  for (std::size_t c = 0; c < l.phi.size(); ++c)
-    l.phi[c] = den[c] > 0.0 ? Eigen::Vector3d(num[c] / (den[c] + extra)) : Eigen::Vector3d::Zero();
+  tbb::parallel_for(std::size_t{0}, l.phi.size(), [&](std::size_t c) {
+    if (!(den[c] > 0.0)) {
+      l.phi[c].setZero();
+      return;
+    }
+    const bool has_normal_only =
+        any_normal_only && (sym[c][0] != 0.0 || sym[c][1] != 0.0 || sym[c][2] != 0.0);
+    if (!has_normal_only) {
+      l.phi[c] = num[c] / (den[c] + extra);
+      return;
+    }
+    // M = (Σ w² of full samples + β Σ w² of normal-only ones)·I
+    //     + (1 − β) Σ w² n nᵀ, plus the ridge; symmetric positive definite.
+    const Sym& m = sym[c];
+    const double normal_only = m[0] + m[1] + m[2];
+    const double iso =
+        std::max(den[c] - normal_only, 0.0) + kTangentialWeight * normal_only + extra;
+    const double k = 1.0 - kTangentialWeight;
+    Eigen::Matrix3d a;
+    a << k * m[0] + iso, k * m[3], k * m[4], k * m[3], k * m[1] + iso, k * m[5], k * m[4], k * m[5],
+        k * m[2] + iso;
+    l.phi[c] = a.ldlt().solve(num[c]);
+  });
 }
 
 // Adds the lattice's values at every grid node, one axis at a time (each
@@ -210,12 +326,21 @@ Affine fit_affine(std::span<const Eigen::Vector3d> positions,
 std::vector<Eigen::Vector3d> multilevel_bspline_nodes(const rt::FieldGrid& grid,
                                                       std::span<const FitSample> samples,
                                                       const FieldFitOptions& o) {
-  std::vector<Eigen::Vector3d> positions, residuals;
+  std::vector<Eigen::Vector3d> positions, residuals, normal;
+  bool any_normal_only = false;
   for (const FitSample& s : samples) {
     if (!s.valid) continue;
     positions.push_back(s.position_mm);
     residuals.push_back(s.vector_mm);
+    // Zero: the whole vector is known; else only its component along this.
+    normal.push_back(s.along_normal_only ? s.normal.normalized() : Eigen::Vector3d::Zero());
+    any_normal_only = any_normal_only || s.along_normal_only;
   }
+  // The affine part is fitted to the whole vectors, also where only their
+  // normal component is measured (taken as zero across the normal): a global
+  // 12-unknown fit to the normal components alone is as ill-conditioned as
+  // a single control point with nearly parallel normals, and the levels
+  // below correct the measured components locally anyway.
   const Affine affine = fit_affine(positions, residuals, grid.spacing_mm.x());
   for (std::size_t p = 0; p < positions.size(); ++p)
     residuals[p] -= affine(positions[p]);
@@ -237,14 +362,33 @@ std::vector<Eigen::Vector3d> multilevel_bspline_nodes(const rt::FieldGrid& grid,
     ratios.push_back(r);
   for (int it = 0; it < o.refinement_iterations; ++it)
     ratios.push_back(1);
+  // The passes on the finest lattice are summed before they are evaluated
+  // at the nodes (the evaluation is linear), the coarser levels one by one.
+  std::optional<Lattice> finest, pass;
+  std::vector<Stencil> stencils(positions.size());
+  int32_t stencil_ratio = 0;
+  LevelSums sums;
   for (int32_t r : ratios) {
-    Lattice l(grid, r);
-    fit_level(grid, l, positions, residuals, r == 1 ? o.smoothness : 0.0);
-    tbb::parallel_for(std::size_t{0}, positions.size(), [&](std::size_t p) {
-      residuals[p] -= evaluate(l, stencil_of(grid, l, positions[p]));
-    });
-    add_at_nodes(grid, l, nodes);
+    if (!pass || pass->ratio != r) pass.emplace(grid, r);
+    Lattice& l = *pass;
+    if (r != stencil_ratio) {
+      tbb::parallel_for(std::size_t{0}, positions.size(),
+                        [&](std::size_t p) { stencils[p] = stencil_of(grid, l, positions[p]); });
+      stencil_ratio = r;
+    }
+    fit_level(l, stencils, residuals, normal, any_normal_only, r == 1 ? o.smoothness : 0.0, sums);
+    tbb::parallel_for(std::size_t{0}, positions.size(),
+                      [&](std::size_t p) { residuals[p] -= evaluate(l, stencils[p]); });
+    if (r != 1) {
+      add_at_nodes(grid, l, nodes);
+    } else if (!finest) {
+      finest = l;
+    } else {
+      tbb::parallel_for(std::size_t{0}, l.phi.size(),
+                        [&](std::size_t c) { finest->phi[c] += l.phi[c]; });
+    }
   }
+  if (finest) add_at_nodes(grid, *finest, nodes);
   return nodes;
 }
 

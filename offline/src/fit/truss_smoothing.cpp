@@ -1,5 +1,6 @@
 #include "truecut/offline/truss_smoothing.hpp"
 
+#include <Eigen/IterativeLinearSolvers>
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
 
@@ -13,6 +14,11 @@ namespace truecut::offline {
 namespace {
 
 using Edge = std::array<std::uint32_t, 2>;
+
+// Relative residual |b − A d| / |b| at which conjugate gradients stop: far
+// below a micrometre on any compensation vector.
+constexpr double kTolerance = 1e-12;
+constexpr Eigen::Index kMaxCgIterations = 300;
 
 std::uint32_t find_root(std::vector<std::uint32_t>& parent, std::uint32_t i) {
   while (parent[i] != i) {
@@ -157,11 +163,32 @@ TrussResult smooth_truss(std::span<const Eigen::Vector3d> vertices_mm,
     if (a.coeff(ii, ii) == 0.0) a.coeffRef(ii, ii) = 1.0;
   }
 
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(a);
-  if (solver.info() != Eigen::Success) {
-    throw std::runtime_error("smooth_truss: factorisation failed");
+  // Conjugate gradients with a Jacobi preconditioner, from the measured
+  // vectors: the matrix is symmetric positive definite and, where most
+  // vertices are valid, well conditioned (c_i = 1 dominates kb/kc·K), so it
+  // converges in a few tens of iterations (28 at the source's scale, against
+  // 3× the time for a sparse factorisation). Large invalid regions (pure
+  // Laplace interpolation) or a very stiff truss converge slowly: then the
+  // sparse LDLᵀ factorisation solves it directly.
+  Eigen::MatrixX3d d(static_cast<Eigen::Index>(n), 3);
+  Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper,
+                           Eigen::DiagonalPreconditioner<double>>
+      cg;
+  cg.setTolerance(kTolerance);
+  cg.setMaxIterations(kMaxCgIterations);
+  cg.compute(a);
+  bool solved = cg.info() == Eigen::Success;
+  for (int c = 0; c < 3 && solved; ++c) {
+    d.col(c) = cg.solveWithGuess(rhs.col(c), rhs.col(c));
+    solved = cg.info() == Eigen::Success;
   }
-  const Eigen::MatrixX3d d = solver.solve(rhs);
+  if (!solved) {
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(a);
+    if (solver.info() != Eigen::Success) {
+      throw std::runtime_error("smooth_truss: factorisation failed");
+    }
+    d = solver.solve(rhs);
+  }
   for (std::size_t i = 0; i < n; ++i) {
     result.displacement_mm[i] = d.row(static_cast<Eigen::Index>(i)).transpose();
   }

@@ -91,6 +91,11 @@ json parameters_json(const FieldPipelineOptions& o, const AuditContext& c) {
             {"min_points", o.sphere.min_points},
             {"plane_angle_deg", o.sphere.plane_angle_deg},
             {"max_displacement_ratio", o.sphere.max_displacement_ratio}}},
+          {"significance",
+           {{"level", o.significance.significance_level},
+            {"patch_mm", o.significance.patch_mm},
+            {"noise_mm", o.significance.noise_mm},
+            {"min_noise_points", o.significance.min_noise_points}}},
           {"truss",
            {{"kb_over_kc", o.truss.kb_over_kc},
             {"edge_weight",
@@ -167,6 +172,23 @@ std::string audit_json(const FieldPipelineResult& r, const FieldPipelineOptions&
       by_status[std::string(to_string(static_cast<ErrorStatus>(s)))] = r.error_summary.by_status[s];
   errors["by_status"] = by_status;
   j["error_vectors"] = errors;
+  json surfaces = json::array();
+  for (const SurfaceSignificance& s : r.significance.surfaces)
+    surfaces.push_back({{"surface", s.surface},
+                        {"valid_points", s.valid_points},
+                        {"scan_points", s.scan_points},
+                        {"noise_mm", s.noise_mm},
+                        {"pooled_noise", s.pooled_noise},
+                        {"mean_normal_mm", s.mean_normal_mm},
+                        {"mean_uncertainty_mm", s.mean_uncertainty_mm},
+                        {"patches", s.patches},
+                        {"chi2", s.chi2},
+                        {"threshold", s.threshold},
+                        {"compensated", s.compensated}});
+  j["significance"] = {{"tested", r.significance.tested},
+                       {"pooled_noise_mm", r.significance.pooled_noise_mm},
+                       {"noise_points", r.significance.noise_points},
+                       {"surfaces", surfaces}};
   j["compensation_vectors"] = stats_json(r.compensation_statistics);
   json layers = json::array();
   for (std::size_t i = 0; i < r.fit->layers.size(); ++i) {

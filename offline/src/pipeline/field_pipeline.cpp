@@ -5,9 +5,14 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <mutex>
 #include <stdexcept>
 
+#include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
+
 #include "truecut/offline/compensation_points.hpp"
+#include "truecut/offline/compensation_significance.hpp"
 #include "truecut/offline/ray_scene.hpp"
 #include "truecut/offline/rigid_transform.hpp"
 #include "truecut/offline/surfaces.hpp"
@@ -18,23 +23,49 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// Stage times and progress. Stages of the two chains run concurrently (see
+// run_field_pipeline), so each stage is timed from its own start, reports
+// are serialised, and the stages are listed in the fixed order of the
+// pipeline whatever order they finish in.
 class StageTimer {
  public:
   StageTimer(FieldPipelineResult& r, const PipelineProgress& p) : result_(r), progress_(p) {}
-  void done(const std::string& name, const std::string& detail = {}) {
-    const auto now = Clock::now();
-    const double s = std::chrono::duration<double>(now - last_).count();
-    last_ = now;
-    result_.stages.push_back({name, s});
+  Clock::time_point now() const { return Clock::now(); }
+  void done(int order, Clock::time_point started, const std::string& name,
+            const std::string& detail = {}) {
+    const double s = std::chrono::duration<double>(Clock::now() - started).count();
+    std::lock_guard lock(mutex_);
+    timed_.push_back({order, {name, s}});
     if (progress_) progress_(name, s, detail);
   }
-  double total() const { return std::chrono::duration<double>(Clock::now() - start_).count(); }
+  void finish() {
+    std::stable_sort(timed_.begin(), timed_.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (auto& [order, stage] : timed_)
+      result_.stages.push_back(std::move(stage));
+    result_.total_wall_s = std::chrono::duration<double>(Clock::now() - start_).count();
+  }
 
  private:
   FieldPipelineResult& result_;
   const PipelineProgress& progress_;
+  std::mutex mutex_;
+  std::vector<std::pair<int, StageTime>> timed_;
   Clock::time_point start_ = Clock::now();
-  Clock::time_point last_ = start_;
+};
+
+// The order stages are listed in.
+enum StageOrder : int {
+  kRegistrationStage,
+  kPointsStage,
+  kSceneStage,
+  kErrorStage,
+  kSignificanceStage,
+  kVertexErrorStage,
+  kTrussStage,
+  kPathStage,
+  kPlacementStage,
+  kFitStage,
 };
 
 std::string text(const char* fmt, auto... args) {
@@ -47,40 +78,67 @@ bool selected(const std::vector<std::int32_t>& surfaces, std::int32_t id) {
   return surfaces.empty() || std::find(surfaces.begin(), surfaces.end(), id) != surfaces.end();
 }
 
-ErrorVectors error_vectors(const FieldPipelineInputs& in, const FieldPipelineOptions& opt,
-                           const CompensationPoints& points, const RayScene* scene,
-                           const std::vector<Eigen::Vector3d>& cloud) {
-  if (opt.method == ErrorMethod::ray)
-    return error_vectors_by_rays(*in.nominal, points, *scene, opt.ray);
-  return error_vectors_by_spheres(*in.nominal, points, cloud, opt.sphere);
-}
-
-// The truss separately on every compensated surface: bars across a sharp
-// edge would mix the normal components of two faces (on a square shaft they
-// pulled the valid vertices' compensation 18 % short). A vertex on an edge
-// gets the mean of its surfaces' results.
+// The truss separately on every compensated surface, on that surface's
+// vertices only: bars across a sharp edge would mix the normal components of
+// two faces (on a square shaft they pulled the valid vertices' compensation
+// 18 % short). A vertex on an edge gets the mean of its surfaces' results;
+// every other vertex its own surface's. Surfaces are solved in parallel and
+// merged in the order of their ids.
 TrussResult smooth_per_surface(const TriangleMesh& nominal, const std::vector<std::int32_t>& ids,
                                const std::vector<std::int32_t>& surfaces,
                                const std::vector<Eigen::Vector3d>& vectors,
                                const std::vector<std::uint8_t>& valid, const TrussOptions& o) {
-  std::map<std::int32_t, std::vector<Triangle>> by_surface;
+  std::map<std::int32_t, std::vector<std::uint32_t>> triangles_of;
   for (std::size_t t = 0; t < nominal.triangles.size(); ++t)
-    if (selected(surfaces, ids[t])) by_surface[ids[t]].push_back(nominal.triangles[t]);
+    if (selected(surfaces, ids[t])) triangles_of[ids[t]].push_back(static_cast<std::uint32_t>(t));
+  struct Surface {
+    std::vector<std::uint32_t> vertices;  // ascending; local index = position
+    TrussResult result;
+  };
+  std::vector<Surface> parts(triangles_of.size());
+  std::vector<const std::vector<std::uint32_t>*> tris;
+  for (const auto& [id, list] : triangles_of)
+    tris.push_back(&list);
   const std::size_t nv = nominal.vertices_mm.size();
+  tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t k) {
+    Surface& part = parts[k];
+    for (std::uint32_t t : *tris[k])
+      for (std::uint32_t v : nominal.triangles[t])
+        part.vertices.push_back(v);
+    std::sort(part.vertices.begin(), part.vertices.end());
+    part.vertices.erase(std::unique(part.vertices.begin(), part.vertices.end()),
+                        part.vertices.end());
+    std::vector<std::uint32_t> local(nv, 0);
+    const std::size_t n = part.vertices.size();
+    std::vector<Eigen::Vector3d> positions(n), v(n);
+    std::vector<std::uint8_t> ok(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint32_t g = part.vertices[i];
+      local[g] = static_cast<std::uint32_t>(i);
+      positions[i] = nominal.vertices_mm[g];
+      v[i] = vectors[g];
+      ok[i] = valid[g];
+    }
+    std::vector<Triangle> triangles;
+    triangles.reserve(tris[k]->size());
+    for (std::uint32_t t : *tris[k]) {
+      const Triangle& g = nominal.triangles[t];
+      triangles.push_back({local[g[0]], local[g[1]], local[g[2]]});
+    }
+    part.result = smooth_truss(positions, triangles, v, ok, o);
+  });
   TrussResult out;
   out.displacement_mm.assign(nv, Eigen::Vector3d::Zero());
   std::vector<int> count(nv, 0);
   std::vector<std::uint8_t> used(nv, 0);
-  for (const auto& [id, triangles] : by_surface) {
-    const TrussResult r = smooth_truss(nominal.vertices_mm, triangles, vectors, valid, o);
-    out.edge_count += r.edge_count;
-    for (const Triangle& t : triangles)
-      for (std::uint32_t v : t)
-        used[v] = 1;
-    for (std::size_t v = 0; v < nv; ++v) {
-      if (!r.supported[v]) continue;
-      out.displacement_mm[v] += r.displacement_mm[v];
-      ++count[v];
+  for (const Surface& part : parts) {
+    out.edge_count += part.result.edge_count;
+    for (std::size_t i = 0; i < part.vertices.size(); ++i) {
+      const std::uint32_t g = part.vertices[i];
+      used[g] = 1;
+      if (!part.result.supported[i]) continue;
+      out.displacement_mm[g] += part.result.displacement_mm[i];
+      ++count[g];
     }
   }
   out.supported.assign(nv, 0);
@@ -93,6 +151,57 @@ TrussResult smooth_per_surface(const TriangleMesh& nominal, const std::vector<st
     }
   }
   return out;
+}
+
+// Truss smoothing of the vertex compensation, the adapted mesh and the
+// vectors the field is fitted to.
+void smooth_and_adapt(const TriangleMesh& nominal, const FieldPipelineOptions& opt,
+                      bool at_vertices, const CompensationMatrix& vertex_matrix, StageTimer& timer,
+                      FieldPipelineResult& r) {
+  const auto started = timer.now();
+  // Vertex indices of vertex_matrix (compensation_points_at_vertices lists
+  // the vertices of the selected triangles in vertex order).
+  const std::size_t nv = nominal.vertices_mm.size();
+  std::vector<std::uint8_t> on_selected(nv, 0);
+  for (std::size_t t = 0; t < nominal.triangles.size(); ++t) {
+    if (!selected(opt.surfaces, r.triangle_surface_ids[t])) continue;
+    for (std::uint32_t v : nominal.triangles[t])
+      on_selected[v] = 1;
+  }
+  std::vector<Eigen::Vector3d> vertex_vectors(nv, Eigen::Vector3d::Zero());
+  std::vector<std::uint8_t> vertex_valid(nv, 0);
+  std::vector<std::uint32_t> vertex_of_point;
+  for (std::size_t v = 0, k = 0; v < nv; ++v) {
+    if (!on_selected[v]) continue;
+    vertex_vectors[v] = vertex_matrix.vectors_mm[k];
+    vertex_valid[v] = vertex_matrix.valid[k];
+    vertex_of_point.push_back(static_cast<std::uint32_t>(v));
+    ++k;
+  }
+  r.truss = smooth_per_surface(nominal, r.triangle_surface_ids, opt.surfaces, vertex_vectors,
+                               vertex_valid, opt.truss);
+  r.adapted = nominal;
+  r.adapted.normals.clear();
+  r.vertex_compensated.assign(nv, 0);
+  r.max_vertex_move_mm = 0.0;
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (!on_selected[v] || !r.truss.supported[v]) continue;
+    r.adapted.vertices_mm[v] += r.truss.displacement_mm[v];
+    r.vertex_compensated[v] = 1;
+    r.max_vertex_move_mm = std::max(r.max_vertex_move_mm, r.truss.displacement_mm[v].norm());
+  }
+  // Vectors for the field: at vertex points the truss-smoothed compensation,
+  // at sampled points the raw mirror (the fit's regularisation smooths them).
+  r.field_vectors_mm.resize(r.points.size());
+  for (std::size_t i = 0; i < r.points.size(); ++i) {
+    r.field_vectors_mm[i] =
+        at_vertices ? r.truss.displacement_mm[vertex_of_point[i]] : r.matrix.vectors_mm[i];
+    if (!r.matrix.valid[i] || !r.significance.compensated(r.points.surface_ids[i]))
+      r.field_vectors_mm[i].setZero();
+  }
+  timer.done(kTrussStage, started, "truss smoothing and adapted mesh",
+             text("kb/kc %.3g, %lld bars", opt.truss.kb_over_kc,
+                  static_cast<long long>(r.truss.edge_count)));
 }
 
 }  // namespace
@@ -153,126 +262,155 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
         r.triangle_surface_ids.end())
       throw std::invalid_argument(text("surface %d does not exist in the nominal model", id));
   }
-
-  // Registration: scan → workpiece frame.
-  TriangleMesh scan = *in.scan;
-  if (opt.register_scan) {
-    IcpOptions icp = opt.icp;
-    if (!opt.datum_surfaces.empty()) {
-      icp.datum_triangles = triangles_of_surfaces(r.triangle_surface_ids, opt.datum_surfaces);
-      if (icp.datum_triangles.empty())
-        throw std::invalid_argument("the datum surfaces have no triangles in the nominal model");
-    }
-    r.registration = register_scan(nominal, scan.vertices_mm, icp);
-    transform_points(r.registration->scan_to_nominal, scan.vertices_mm);
-    timer.done("registration",
-               text("%d iterations, RMS %.4f -> %.4f mm", r.registration->iterations,
-                    r.registration->rms_before_mm, r.registration->rms_after_mm));
+  for (std::int32_t id : opt.datum_surfaces) {
+    if (std::find(r.triangle_surface_ids.begin(), r.triangle_surface_ids.end(), id) ==
+        r.triangle_surface_ids.end())
+      throw std::invalid_argument(text("datum surface %d does not exist in the nominal model", id));
+  }
+  IcpOptions icp = opt.icp;
+  if (opt.register_scan && !opt.datum_surfaces.empty()) {
+    icp.datum_triangles = triangles_of_surfaces(r.triangle_surface_ids, opt.datum_surfaces);
+    if (icp.datum_triangles.empty())
+      throw std::invalid_argument("the datum surfaces have no triangles in the nominal model");
   }
 
   // Compensation points (and, for the truss, the vertices of the compensated surfaces).
+  auto started = timer.now();
   const bool at_vertices = opt.spacing_mm == 0.0;
   r.points = at_vertices
                  ? compensation_points_at_vertices(nominal, r.triangle_surface_ids, opt.surfaces)
                  : sample_compensation_points(nominal, r.triangle_surface_ids, opt.spacing_mm,
                                               opt.surfaces);
   if (r.points.size() == 0) throw std::invalid_argument("no compensation points");
-  timer.done("compensation points", text("%zu points", r.points.size()));
+  timer.done(kPointsStage, started, "compensation points", text("%zu points", r.points.size()));
 
+  // Two chains that share nothing until the field fit run concurrently (their
+  // parallel loops share the threads): the scan chain (registration and the
+  // scan's ray scene, error vectors, truss, adapted mesh) and the program
+  // chain (tool path, tool-centre placement). Each chain's result is the
+  // same as run alone.
   std::optional<RayScene> scene;
-  if (opt.method == ErrorMethod::ray) {
-    scene.emplace(scan);
-    timer.done("scan ray scene", text("%zu faces", scan.triangles.size()));
-  }
-  r.errors = error_vectors(in, opt, r.points, scene ? &*scene : nullptr, scan.vertices_mm);
-  const RigidBodyFit rbm_fit =
-      opt.method == ErrorMethod::ray ? RigidBodyFit::normal_components : RigidBodyFit::full_vectors;
-  if (opt.remove_rigid_body_motion) {
-    const std::vector<std::uint8_t> use = r.errors.valid_mask();
-    r.rigid_body_motion = fit_rigid_body_motion(r.points.positions_mm, r.errors.vectors_mm, rbm_fit,
-                                                use, r.points.normals);
-    remove_rigid_body_motion(*r.rigid_body_motion, rbm_fit, r.points.positions_mm,
-                             r.errors.vectors_mm, r.points.normals);
-    for (std::size_t i = 0; i < r.errors.size(); ++i) {
-      if (!r.errors.valid(i)) r.errors.vectors_mm[i].setZero();
-      r.errors.normal_mm[i] = r.errors.vectors_mm[i].dot(r.points.normals[i]);
+  std::vector<Eigen::Vector3d> cloud;  // sphere method: the registered scan points
+  auto registration = [&] {
+    if (!opt.register_scan) return;
+    const auto t0 = timer.now();
+    r.registration = register_scan(nominal, in.scan->vertices_mm, icp);
+    timer.done(kRegistrationStage, t0, "registration",
+               text("%d iterations, RMS %.4f -> %.4f mm", r.registration->iterations,
+                    r.registration->rms_before_mm, r.registration->rms_after_mm));
+  };
+  // The scene is built on the scan as it is and placed by the registration
+  // (RayScene::set_world_from_mesh): the scan is neither copied nor moved.
+  auto build_scene = [&] {
+    if (opt.method != ErrorMethod::ray) return;
+    const auto t0 = timer.now();
+    scene.emplace(*in.scan);
+    timer.done(kSceneStage, t0, "scan ray scene", text("%zu faces", in.scan->triangles.size()));
+  };
+  auto scan_chain = [&] {
+    if (opt.concurrent_stages) {
+      tbb::task_group g;
+      g.run(build_scene);
+      registration();
+      g.wait();
+    } else {
+      registration();
+      build_scene();
     }
-  }
-  r.error_summary = summarize(r.errors, opt.sphere.radius_mm);
-  r.matrix = mirror(r.points, r.errors);
-  timer.done(opt.method == ErrorMethod::ray ? "error vectors (rays)" : "error vectors (spheres)",
-             text("%zu of %zu valid", r.error_summary.valid, r.error_summary.points));
+    const auto t0 = timer.now();
+    if (scene && r.registration) scene->set_world_from_mesh(r.registration->scan_to_nominal);
+    if (opt.method == ErrorMethod::sphere) {
+      cloud = in.scan->vertices_mm;
+      if (r.registration) transform_points(r.registration->scan_to_nominal, cloud);
+    }
+    auto error_vectors = [&](const CompensationPoints& points) {
+      if (opt.method == ErrorMethod::ray)
+        return error_vectors_by_rays(nominal, points, *scene, opt.ray);
+      return error_vectors_by_spheres(nominal, points, cloud, opt.sphere);
+    };
+    r.errors = error_vectors(r.points);
+    const RigidBodyFit rbm_fit = opt.method == ErrorMethod::ray ? RigidBodyFit::normal_components
+                                                                : RigidBodyFit::full_vectors;
+    if (opt.remove_rigid_body_motion) {
+      const std::vector<std::uint8_t> use = r.errors.valid_mask();
+      r.rigid_body_motion = fit_rigid_body_motion(r.points.positions_mm, r.errors.vectors_mm,
+                                                  rbm_fit, use, r.points.normals);
+      remove_rigid_body_motion(*r.rigid_body_motion, rbm_fit, r.points.positions_mm,
+                               r.errors.vectors_mm, r.points.normals);
+      for (std::size_t i = 0; i < r.errors.size(); ++i) {
+        if (!r.errors.valid(i)) r.errors.vectors_mm[i].setZero();
+        r.errors.normal_mm[i] = r.errors.vectors_mm[i].dot(r.points.normals[i]);
+      }
+    }
+    r.error_summary = summarize(r.errors, opt.sphere.radius_mm);
+    r.matrix = mirror(r.points, r.errors);
+    timer.done(kErrorStage, t0,
+               opt.method == ErrorMethod::ray ? "error vectors (rays)" : "error vectors (spheres)",
+               text("%zu of %zu valid", r.error_summary.valid, r.error_summary.points));
+    const auto t_test = timer.now();
+    r.significance = test_compensation_significance(
+        r.points, r.errors, *in.scan,
+        r.registration ? r.registration->scan_to_nominal : Eigen::Isometry3d::Identity(),
+        opt.significance);
+    std::size_t kept = 0;
+    for (const SurfaceSignificance& s : r.significance.surfaces)
+      kept += s.compensated ? 1 : 0;
+    timer.done(kSignificanceStage, t_test, "significance test",
+               text("noise %.4f mm; %zu of %zu surfaces compensated",
+                    r.significance.pooled_noise_mm, kept, r.significance.surfaces.size()));
 
-  // Vertex compensation for the truss: the same points in vertex mode, a
-  // second pass at the vertices of the compensated surfaces otherwise.
-  CompensationMatrix vertex_matrix;
-  if (at_vertices) {
-    vertex_matrix = r.matrix;
+    // Vertex compensation for the truss: the same points in vertex mode, a
+    // second pass at the vertices of the compensated surfaces otherwise.
+    CompensationMatrix vertex_matrix;
+    if (at_vertices) {
+      vertex_matrix = r.matrix;
+    } else {
+      const auto t1 = timer.now();
+      const CompensationPoints vp =
+          compensation_points_at_vertices(nominal, r.triangle_surface_ids, opt.surfaces);
+      ErrorVectors ve = error_vectors(vp);
+      if (r.rigid_body_motion) {
+        remove_rigid_body_motion(*r.rigid_body_motion, rbm_fit, vp.positions_mm, ve.vectors_mm,
+                                 vp.normals);
+        for (std::size_t i = 0; i < ve.size(); ++i)
+          if (!ve.valid(i)) ve.vectors_mm[i].setZero();
+      }
+      vertex_matrix = mirror(vp, ve);
+      vertex_matrix.surface_ids = vp.surface_ids;
+      timer.done(kVertexErrorStage, t1, "vertex error vectors", text("%zu vertices", vp.size()));
+    }
+    // A surface whose measured error the scan's noise explains gets no
+    // compensation: its vectors become zero, and stay in the truss and the
+    // fit as measured points (so a neighbouring surface's correction does
+    // not spread onto it).
+    for (std::size_t i = 0; i < vertex_matrix.size(); ++i)
+      if (!r.significance.compensated(vertex_matrix.surface_ids[i]))
+        vertex_matrix.vectors_mm[i].setZero();
+    smooth_and_adapt(nominal, opt, at_vertices, vertex_matrix, timer, r);
+  };
+  auto program_chain = [&] {
+    auto t0 = timer.now();
+    r.path = sample_tool_path(*in.program, opt.path);
+    timer.done(kPathStage, t0, "tool path", text("%zu samples", r.path.samples.size()));
+    t0 = timer.now();
+    r.placement = place_at_tool_centre(r.points.positions_mm, r.points.normals, r.path, in.tools,
+                                       opt.placement);
+    timer.done(kPlacementStage, t0, "tool-centre placement",
+               text("%lld of %zu points cut by no tool",
+                    static_cast<long long>(r.placement.uncut_points), r.points.size()));
+  };
+  if (opt.concurrent_stages) {
+    tbb::task_group chains;
+    chains.run(program_chain);
+    scan_chain();
+    chains.wait();
   } else {
-    const CompensationPoints vp =
-        compensation_points_at_vertices(nominal, r.triangle_surface_ids, opt.surfaces);
-    ErrorVectors ve = error_vectors(in, opt, vp, scene ? &*scene : nullptr, scan.vertices_mm);
-    if (r.rigid_body_motion) {
-      remove_rigid_body_motion(*r.rigid_body_motion, rbm_fit, vp.positions_mm, ve.vectors_mm,
-                               vp.normals);
-      for (std::size_t i = 0; i < ve.size(); ++i)
-        if (!ve.valid(i)) ve.vectors_mm[i].setZero();
-    }
-    vertex_matrix = mirror(vp, ve);
-    timer.done("vertex error vectors", text("%zu vertices", vp.size()));
+    scan_chain();
+    program_chain();
   }
-  // Vertex indices of vertex_matrix (compensation_points_at_vertices lists
-  // the vertices of the selected triangles in vertex order).
-  const std::size_t nv = nominal.vertices_mm.size();
-  std::vector<std::uint8_t> on_selected(nv, 0);
-  for (std::size_t t = 0; t < nominal.triangles.size(); ++t) {
-    if (!selected(opt.surfaces, r.triangle_surface_ids[t])) continue;
-    for (std::uint32_t v : nominal.triangles[t])
-      on_selected[v] = 1;
-  }
-  std::vector<Eigen::Vector3d> vertex_vectors(nv, Eigen::Vector3d::Zero());
-  std::vector<std::uint8_t> vertex_valid(nv, 0);
-  std::vector<std::uint32_t> vertex_of_point;
-  for (std::size_t v = 0, k = 0; v < nv; ++v) {
-    if (!on_selected[v]) continue;
-    vertex_vectors[v] = vertex_matrix.vectors_mm[k];
-    vertex_valid[v] = vertex_matrix.valid[k];
-    vertex_of_point.push_back(static_cast<std::uint32_t>(v));
-    ++k;
-  }
-  r.truss = smooth_per_surface(nominal, r.triangle_surface_ids, opt.surfaces, vertex_vectors,
-                               vertex_valid, opt.truss);
-  r.adapted = nominal;
-  r.adapted.normals.clear();
-  r.vertex_compensated.assign(nv, 0);
-  double max_vertex_move = 0.0;
-  for (std::size_t v = 0; v < nv; ++v) {
-    if (!on_selected[v] || !r.truss.supported[v]) continue;
-    r.adapted.vertices_mm[v] += r.truss.displacement_mm[v];
-    r.vertex_compensated[v] = 1;
-    max_vertex_move = std::max(max_vertex_move, r.truss.displacement_mm[v].norm());
-  }
-  timer.done("truss smoothing and adapted mesh", text("kb/kc %.3g, %lld bars", opt.truss.kb_over_kc,
-                                                      static_cast<long long>(r.truss.edge_count)));
-
-  // Vectors for the field.
-  r.field_vectors_mm.resize(r.points.size());
-  for (std::size_t i = 0; i < r.points.size(); ++i) {
-    r.field_vectors_mm[i] =
-        at_vertices ? r.truss.displacement_mm[vertex_of_point[i]] : r.matrix.vectors_mm[i];
-    if (!r.matrix.valid[i]) r.field_vectors_mm[i].setZero();
-  }
-
-  // Tool path and tool-centre placement.
-  r.path = sample_tool_path(*in.program, opt.path);
-  timer.done("tool path", text("%zu samples", r.path.samples.size()));
-  r.placement = place_at_tool_centre(r.points.positions_mm, r.points.normals, r.path, in.tools,
-                                     opt.placement);
-  timer.done("tool-centre placement",
-             text("%lld of %zu points cut by no tool",
-                  static_cast<long long>(r.placement.uncut_points), r.points.size()));
 
   // Field fit.
+  started = timer.now();
   double max_field = 0.0;
   std::size_t fit_samples = 0;
   for (const ToolPlacement& tp : r.placement.tools) {
@@ -289,6 +427,10 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
         if (b.status == rt::FieldStatus::ok) s.vector_mm += b.correction_mm;
       }
       s.surface_id = r.points.surface_ids[pp.point];
+      // What the scan measured: along the normal (rays; spheres on one
+      // plane), or the whole vector (spheres at an edge or corner).
+      s.along_normal_only =
+          r.errors.sphere_case.empty() || r.errors.sphere_case[pp.point] == SphereCase::surface;
       max_field = std::max(max_field, s.vector_mm.norm());
       ts.samples.push_back(s);
     }
@@ -299,15 +441,16 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
     throw std::invalid_argument(
         "no valid compensation point is cut by any tool of the program: nothing to fit");
   r.fit = fit_correction_field(r.tool_samples, opt.fit);
-  timer.done("field fit", text("%zu samples, %zu layers, %d x %d x %d nodes", fit_samples,
-                               r.fit->layers.size(), r.fit->field.grid().dims[0],
-                               r.fit->field.grid().dims[1], r.fit->field.grid().dims[2]));
+  timer.done(
+      kFitStage, started, "field fit",
+      text("%zu samples, %zu layers, %d x %d x %d nodes", fit_samples, r.fit->layers.size(),
+           r.fit->field.grid().dims[0], r.fit->field.grid().dims[1], r.fit->field.grid().dims[2]));
 
   const std::vector<std::uint8_t> valid = r.errors.valid_mask();
   r.error_statistics = vector_statistics(r.errors.vectors_mm, valid, r.points.normals);
   r.compensation_statistics = vector_statistics(r.field_vectors_mm, valid, r.points.normals);
-  r.max_correction_mm = std::max(max_field, max_vertex_move);
-  r.total_wall_s = timer.total();
+  r.max_correction_mm = std::max(max_field, r.max_vertex_move_mm);
+  timer.finish();
   return r;
 }
 

@@ -70,15 +70,84 @@ struct Pair {
   double r = 0.0;     // (x − q)·n
 };
 
+// Nearest scan points of the samples from the previous iteration: the k
+// nearest around the sample's last query point `at`, and `reach`, a radius
+// within which every scan point is in the list. Once the pose moves by
+// less than the gap between the nearest and the k-th point, the nearest
+// scan point of the moved query is among the list; it is then found there
+// (with the tree's tie rule) instead of in the tree: the same point, at a
+// fraction of the cost.
+struct NeighbourCache {
+  static constexpr std::size_t k = 8;
+  std::vector<Eigen::Vector3d> at;
+  std::vector<double> reach;
+  std::vector<std::uint32_t> index;  // k per sample
+  std::vector<std::uint8_t> count;
+  std::vector<std::uint8_t> filled;  // 0: nothing cached yet
+};
+
+// The tree's nearest(q, max_distance) from the cached list when the list
+// provably holds it; false when the tree must be asked.
+bool nearest_from_cache(const NeighbourCache& c, std::size_t i, const Eigen::Vector3d& q,
+                        std::span<const Eigen::Vector3d> scan, double max_distance,
+                        spatial::KdTree::Nearest& out) {
+  if (!c.filled[i]) return false;
+  spatial::KdTree::Nearest best;
+  best.distance_sq = max_distance * max_distance;
+  const std::uint32_t* list = &c.index[i * NeighbourCache::k];
+  for (std::size_t m = 0; m < c.count[i]; ++m) {
+    const double d2 = (scan[list[m]] - q).squaredNorm();
+    if (d2 < best.distance_sq ||
+        (d2 == best.distance_sq && best.index != spatial::KdTree::kNone && list[m] < best.index)) {
+      best.distance_sq = d2;
+      best.index = list[m];
+    }
+  }
+  // Every point that could be the answer lies within sqrt(best) of q, so
+  // within sqrt(best) + |q − at| of `at` (with a margin for rounding).
+  const double need = (std::sqrt(best.distance_sq) + (q - c.at[i]).norm()) * (1.0 + 1e-9) + 1e-12;
+  if (!(need < c.reach[i])) return false;
+  out = best;
+  return true;
+}
+
 void find_pairs(const std::vector<Sample>& samples, const spatial::KdTree& tree,
                 std::span<const Eigen::Vector3d> scan, const Eigen::Isometry3d& T,
-                double max_distance, std::vector<Pair>& pairs) {
+                double max_distance, bool reuse, NeighbourCache& cache, std::vector<Pair>& pairs) {
   const Eigen::Isometry3d inverse = T.inverse();
   pairs.resize(samples.size());
+  if (reuse && cache.count.size() != samples.size()) {
+    cache.at.assign(samples.size(), Eigen::Vector3d::Zero());
+    cache.reach.assign(samples.size(), 0.0);
+    cache.index.assign(samples.size() * NeighbourCache::k, 0);
+    cache.count.assign(samples.size(), 0);
+    cache.filled.assign(samples.size(), 0);
+  }
+  // The list reaches a little beyond max_distance, so that a sample without
+  // a pair stays without one for small moves without asking the tree.
+  const double list_radius = 1.25 * max_distance;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples.size(), 512),
                     [&](const tbb::blocked_range<std::size_t>& range) {
+                      std::vector<spatial::KdTree::Nearest> knn;
                       for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                        const auto nn = tree.nearest(inverse * samples[i].q, max_distance);
+                        const Eigen::Vector3d q = inverse * samples[i].q;
+                        spatial::KdTree::Nearest nn;
+                        if (!reuse) {
+                          nn = tree.nearest(q, max_distance);
+                        } else if (!nearest_from_cache(cache, i, q, scan, max_distance, nn)) {
+                          tree.nearest_k(q, NeighbourCache::k, list_radius, knn);
+                          cache.at[i] = q;
+                          cache.filled[i] = 1;
+                          cache.count[i] = static_cast<std::uint8_t>(knn.size());
+                          cache.reach[i] = knn.size() == NeighbourCache::k
+                                               ? std::sqrt(knn.back().distance_sq)
+                                               : list_radius;
+                          for (std::size_t m = 0; m < knn.size(); ++m)
+                            cache.index[i * NeighbourCache::k + m] = knn[m].index;
+                          nn = {};
+                          if (!knn.empty() && knn.front().distance_sq < max_distance * max_distance)
+                            nn = knn.front();
+                        }
                         Pair& p = pairs[i];
                         p.found = nn.index != spatial::KdTree::kNone;
                         if (!p.found) continue;
@@ -161,7 +230,9 @@ IcpResult register_scan(const TriangleMesh& nominal, std::span<const Eigen::Vect
   result.samples = samples.size();
   Eigen::Isometry3d T = options.initial;
   std::vector<Pair> pairs;
-  find_pairs(samples, tree, scan, T, options.max_correspondence_mm, pairs);
+  NeighbourCache cache;
+  find_pairs(samples, tree, scan, T, options.max_correspondence_mm, options.reuse_neighbours, cache,
+             pairs);
   result.rms_before_mm = rms_of(pairs, nullptr);
 
   for (int it = 0; it < options.max_iterations; ++it) {
@@ -211,7 +282,8 @@ IcpResult register_scan(const TriangleMesh& nominal, std::span<const Eigen::Vect
     step.linear() = R;
     step.translation() = centroid + tau - R * centroid;
     T = step * T;
-    find_pairs(samples, tree, scan, T, options.max_correspondence_mm, pairs);
+    find_pairs(samples, tree, scan, T, options.max_correspondence_mm, options.reuse_neighbours,
+               cache, pairs);
     // Near the optimum, noisy scan points trade places as nearest neighbours
     // and the pose jitters by about its standard error, σ/√Σw (rotation:
     // divided by L); steps that small are noise, not progress.

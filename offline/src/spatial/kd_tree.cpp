@@ -96,6 +96,61 @@ void KdTree::nearest_in(std::uint32_t node, std::uint32_t begin, std::uint32_t e
   }
 }
 
+namespace {
+// Strict order on (distance, input index); as the heap's order, its top is
+// the worst point kept.
+bool closer(const KdTree::Nearest& a, const KdTree::Nearest& b) {
+  return a.distance_sq < b.distance_sq || (a.distance_sq == b.distance_sq && a.index < b.index);
+}
+}  // namespace
+
+void KdTree::nearest_k(const Eigen::Vector3d& q, std::size_t k, double max_distance,
+                       std::vector<Nearest>& out) const {
+  out.clear();
+  if (items_.empty() || k == 0) return;
+  double bound_sq = max_distance * max_distance;
+  nearest_k_in(0, 0, static_cast<std::uint32_t>(items_.size()), 0, q, k, bound_sq, out);
+  std::sort_heap(out.begin(), out.end(), closer);
+}
+
+// `heap` holds input indices in heap order by `closer`. bound_sq is
+// max_distance² until k points are held, then the k-th distance (a point
+// that far may still replace the top on a tie with a lower index, hence <=
+// when descending).
+void KdTree::nearest_k_in(std::uint32_t node, std::uint32_t begin, std::uint32_t end, int depth,
+                          const Eigen::Vector3d& q, std::size_t k, double& bound_sq,
+                          std::vector<Nearest>& heap) const {
+  if (depth == depth_) {
+    for (std::uint32_t i = begin; i < end; ++i) {
+      const Nearest candidate{items_[i].index, (items_[i].p - q).squaredNorm()};
+      if (heap.size() < k) {
+        if (!(candidate.distance_sq < bound_sq)) continue;
+        heap.push_back(candidate);
+        std::push_heap(heap.begin(), heap.end(), closer);
+        if (heap.size() == k) bound_sq = heap.front().distance_sq;
+      } else if (closer(candidate, heap.front())) {
+        std::pop_heap(heap.begin(), heap.end(), closer);
+        heap.back() = candidate;
+        std::push_heap(heap.begin(), heap.end(), closer);
+        bound_sq = heap.front().distance_sq;
+      }
+    }
+    return;
+  }
+  const Split s = splits_[node];
+  const std::uint32_t mid = begin + (end - begin) / 2;
+  const double delta = q[s.axis] - s.value;
+  if (delta < 0.0) {
+    nearest_k_in(2 * node + 1, begin, mid, depth + 1, q, k, bound_sq, heap);
+    if (delta * delta <= bound_sq)
+      nearest_k_in(2 * node + 2, mid, end, depth + 1, q, k, bound_sq, heap);
+  } else {
+    nearest_k_in(2 * node + 2, mid, end, depth + 1, q, k, bound_sq, heap);
+    if (delta * delta <= bound_sq)
+      nearest_k_in(2 * node + 1, begin, mid, depth + 1, q, k, bound_sq, heap);
+  }
+}
+
 void KdTree::within(const Eigen::Vector3d& q, double radius,
                     std::vector<std::uint32_t>& out) const {
   if (!items_.empty() && radius >= 0.0) {

@@ -31,6 +31,13 @@ class KdTree {
   Nearest nearest(const Eigen::Vector3d& q,
                   double max_distance = std::numeric_limits<double>::infinity()) const;
 
+  // The k nearest points strictly closer than max_distance, nearest first
+  // (ties: the lower index), written to `out` (cleared first). Every point
+  // strictly closer to q than the last one returned is among them; with
+  // fewer than k returned, every point strictly closer than max_distance.
+  void nearest_k(const Eigen::Vector3d& q, std::size_t k, double max_distance,
+                 std::vector<Nearest>& out) const;
+
   // Appends the indices of all points within `radius` (inclusive) to `out`,
   // in no particular order.
   void within(const Eigen::Vector3d& q, double radius, std::vector<std::uint32_t>& out) const;
@@ -48,6 +55,9 @@ class KdTree {
              Eigen::Vector3d lo, Eigen::Vector3d hi);
   void nearest_in(std::uint32_t node, std::uint32_t begin, std::uint32_t end, int depth,
                   const Eigen::Vector3d& q, Nearest& best) const;
+  void nearest_k_in(std::uint32_t node, std::uint32_t begin, std::uint32_t end, int depth,
+                    const Eigen::Vector3d& q, std::size_t k, double& bound_sq,
+                    std::vector<Nearest>& heap) const;
   void within_in(std::uint32_t node, std::uint32_t begin, std::uint32_t end, int depth,
                  const Eigen::Vector3d& q, double r2, std::vector<std::uint32_t>& out) const;
 

@@ -48,6 +48,17 @@ struct ErrorVectors {
   // the sphere (points per mm² ≈ count / (π Rs²) on a flat surface).
   std::vector<SphereCase> sphere_case;
   std::vector<std::uint32_t> points_in_sphere;
+  // The scan points each valid vector was measured from: normal_mm[i]
+  // changes by Σ support_weight[k] · δ_k when scan point support_point[k]
+  // moves by δ_k along the normal, k in [support_begin[i],
+  // support_begin[i + 1]). Ray method: the corners of the hit triangle with
+  // their barycentric weights; sphere method: the points of the planes
+  // fitted through the point. Nothing for an invalid point. It carries the
+  // scan's noise into the uncertainty of means of error vectors
+  // (compensation_significance.hpp).
+  std::vector<std::uint32_t> support_begin;  // size() + 1 entries
+  std::vector<std::uint32_t> support_point;  // scan vertex (ray) or cloud point (sphere)
+  std::vector<float> support_weight;
 
   std::size_t size() const { return vectors_mm.size(); }
   bool valid(std::size_t i) const { return status[i] == ErrorStatus::valid; }

@@ -65,8 +65,14 @@ namespace truecut::offline {
 // One compensation point, as plain data.
 struct FitSample {
   Eigen::Vector3d position_mm = Eigen::Vector3d::Zero();  // tool-centre point, see above
-  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();    // unit nominal normal (not used by the fit)
-  Eigen::Vector3d vector_mm = Eigen::Vector3d::Zero();  // compensation vector
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();      // unit nominal normal
+  Eigen::Vector3d vector_mm = Eigen::Vector3d::Zero();    // compensation vector
+  // true: only normal·vector_mm is measured (a ray-method error vector says
+  // nothing about the tangential components); the multilevel fit weighs its
+  // tangential components (taken as zero) at 2 %, so a sample that measures
+  // them (a wall meeting a face) sets them. false: the whole vector counts
+  // in full. The least-squares method always fits whole vectors.
+  bool along_normal_only = false;
   bool valid = true;
   std::int32_t surface_id = 0;
 };
@@ -95,7 +101,9 @@ struct FieldFitLayerStats {
   std::int32_t tool = 0;
   std::int64_t valid_samples = 0;
   std::int64_t unknown_nodes = 0;  // nodes within reach of the data (see the top)
-  double residual_rms_mm = 0.0;    // |field(p) − v_p| over valid samples, final evaluator
+  // |field(p) − v_p| over valid samples, final evaluator; for samples known
+  // along their normal only, the normal component of the difference.
+  double residual_rms_mm = 0.0;
   double residual_max_mm = 0.0;
 };
 

@@ -14,6 +14,7 @@
 
 #include "truecut/interp/canon.hpp"
 #include "truecut/offline/compensation_matrix.hpp"
+#include "truecut/offline/compensation_significance.hpp"
 #include "truecut/offline/error_vectors.hpp"
 #include "truecut/offline/field_fit.hpp"
 #include "truecut/offline/mesh.hpp"
@@ -38,10 +39,17 @@ struct FieldPipelineOptions {
   IcpOptions icp;
   RayMethodOptions ray;
   SphereMethodOptions sphere;
+  // Which surfaces the scan shows measurably wrong; the others get no
+  // compensation (compensation_significance.hpp).
+  SignificanceOptions significance;
   TrussOptions truss;
   FieldFitOptions fit;  // fit.spacing_mm is the field resolution
   ToolPathOptions path;
   PlacementOptions placement;
+  // Run the scan chain (registration, error vectors, truss) and the program
+  // chain (tool path, placement) concurrently; false: one after the other
+  // (per-stage CPU times in the benchmark). The results are the same.
+  bool concurrent_stages = true;
 };
 
 struct FieldPipelineInputs {
@@ -88,7 +96,8 @@ struct FieldPipelineResult {
   CompensationPoints points;
   ErrorVectors errors;
   ErrorVectorSummary error_summary;
-  CompensationMatrix matrix;  // mirror of the raw error vectors
+  CompensationMatrix matrix;        // mirror of the raw error vectors
+  SignificanceResult significance;  // per surface: compensated or within the noise
   // Per nominal vertex: the truss-smoothed compensation (zero off the
   // compensated surfaces) and the adapted mesh (nominal + that).
   TrussResult truss;
@@ -96,7 +105,8 @@ struct FieldPipelineResult {
   TriangleMesh adapted;
   // The vectors the field is fitted to, one per compensation point: the
   // truss-smoothed vertex vectors (vertex points) or the raw mirror (sampled
-  // points, smoothed by the fit's regularisation).
+  // points, smoothed by the fit's regularisation); zero on surfaces whose
+  // measured error is within the scan's noise.
   std::vector<Eigen::Vector3d> field_vectors_mm;
   ToolPath path;
   PlacementResult placement;
@@ -107,6 +117,9 @@ struct FieldPipelineResult {
   // Largest correction the outputs apply: over the field samples and the
   // adapted mesh's vertex moves.
   double max_correction_mm = 0.0;
+  double max_vertex_move_mm = 0.0;  // of the adapted mesh
+  // Wall time of every stage from its own start (stages of the two chains
+  // overlap, see FieldPipelineOptions::concurrent_stages), in pipeline order.
   std::vector<StageTime> stages;
   double total_wall_s = 0.0;
 };

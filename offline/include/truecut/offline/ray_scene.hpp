@@ -13,6 +13,8 @@
 
 #include "truecut/offline/mesh.hpp"
 
+#include <Eigen/Geometry>
+
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -76,6 +78,15 @@ class RayScene {
   void intersect(std::span<const Ray> rays, std::span<RayHit> hits,
                  const RayQueryOptions& options = {}) const;
 
+  // Places the mesh in the world frame of the queries: rays and query points
+  // are given, and hits returned, in the world frame, where the mesh's
+  // vertices v lie at world_from_mesh·v (default: identity). Lets a scan be
+  // registered without moving its vertices or rebuilding the scene; each
+  // query is moved into the mesh frame in double before it reaches Embree,
+  // so the precision is that of an unmoved scene. Not thread-safe against
+  // concurrent queries.
+  void set_world_from_mesh(const Eigen::Isometry3d& world_from_mesh);
+
   // Appends, in ascending order, the triangles whose closest point to p is
   // within radius_mm (distance computed in double). Thread-safe.
   void triangles_within(const Eigen::Vector3d& p, double radius_mm,
@@ -83,6 +94,8 @@ class RayScene {
 
   const Eigen::Vector3d& local_origin_mm() const;
   std::size_t triangle_count() const;
+  // The vertex indices of triangle t, as in the mesh the scene was built from.
+  const Triangle& triangle(std::uint32_t t) const;
   // Whether this Embree build honours ray masks (they are set either way).
   bool ray_masks_supported() const;
 

@@ -44,6 +44,10 @@ struct IcpOptions {
   // Nominal triangles that are datum surfaces (see triangles_of_surfaces);
   // empty: the whole nominal model.
   std::vector<std::uint32_t> datum_triangles;
+  // Look the nearest scan point up among the previous iteration's nearest
+  // few while the pose moves less than their spacing (the same point the
+  // k-d tree gives, exactly; false asks the tree every time, for tests).
+  bool reuse_neighbours = true;
   // Start value of the scan → workpiece transform.
   Eigen::Isometry3d initial = Eigen::Isometry3d::Identity();
 };

@@ -34,10 +34,13 @@ enum class TrussEdgeWeight {
 };
 
 struct TrussOptions {
-  // kb/kc of the source. Larger smooths more (white noise on a regular
-  // triangulation is reduced to about 1/2 at 0.2, 1/3.5 at 1, see
-  // docs/offline.md); the smoothing length is in edges, not mm.
-  double kb_over_kc = 0.2;
+  // kb/kc. Larger smooths more (white noise on a regular triangulation is
+  // reduced to about 1/2 at 0.2, the source's value, 1/3.5 at 1); the
+  // smoothing length is in edges, not mm. 1 by a closed-loop sweep on the
+  // implant (docs/offline.md, "Noise"): at 50 µm scanner noise the shaft
+  // faces' spread fell from 5.3–9.3 to 3.4–6.8 µm against 0.2, at 20 µm it
+  // did not change; 5 gave the same as 1.
+  double kb_over_kc = 1.0;
   TrussEdgeWeight edge_weight = TrussEdgeWeight::uniform;
 };
 
