@@ -15,8 +15,8 @@
 //                    [--step-down MM] [--operations NAME[,NAME...]] [--list-over UM]
 //
 // --operations keeps only the named operations of the program (default:
-// all); --list-over prints every point whose error exceeds UM. Prints, per spacing and surface, the error statistics in µm and
-// the time the cutting took.
+// all); --list-over prints every point whose error exceeds UM. Prints, per spacing and surface, the
+// error statistics in µm and the time the cutting took.
 #include <time.h>
 
 #include <Eigen/Geometry>
@@ -209,8 +209,8 @@ int main(int argc, char** argv) {
   // The program on the ideal machine, planned as the soft CNC plans it.
   interp::InterpreterOptions io;
   io.tools = interp::ToolTable::parse(tool_table_text(part.metadata), "tools.tbl");
-  const interp::CanonProgram canon = interp::Interpreter(io).run_text(
-      keep_operations(part.program, operations), "program.ngc");
+  const interp::CanonProgram canon =
+      interp::Interpreter(io).run_text(keep_operations(part.program, operations), "program.ngc");
   SoftCncJob job;
   const interp::Plan plan =
       interp::plan_program(canon, soft_cnc_planner_options(job, part_machine_ideal(part)));
@@ -270,11 +270,12 @@ int main(int argc, char** argv) {
       all.add(e_um);
       if (list_over_um >= 0 && std::abs(e_um) > list_over_um) {
         const auto& q = points[i];
-        std::printf("    over: (%.4f, %.4f, %.4f) n (%.3f, %.3f, %.3f) surface %d: model %.2f, "
-                    "reference %.2f um\n",
-                    q.position_mm.x(), q.position_mm.y(), q.position_mm.z(), q.normal.x(),
-                    q.normal.y(), q.normal.z(), q.surface, probed[i].deviation_mm * 1e3,
-                    reference.height_mm(ref_dexel[i]) * 1e3);
+        std::printf(
+            "    over: (%.4f, %.4f, %.4f) n (%.3f, %.3f, %.3f) surface %d: model %.2f, "
+            "reference %.2f um\n",
+            q.position_mm.x(), q.position_mm.y(), q.position_mm.z(), q.normal.x(), q.normal.y(),
+            q.normal.z(), q.surface, probed[i].deviation_mm * 1e3,
+            reference.height_mm(ref_dexel[i]) * 1e3);
       }
     }
     std::printf("spacing %g mm: cutting %.1f s CPU (%.1f us per cycle)\n", spacings[m],
