@@ -140,6 +140,9 @@ int run_machine(const std::vector<std::string>& argv) {
   } catch (const sim::MachineDescriptionError& e) {
     std::fprintf(stderr, "truecut run: %s\n", e.what());
     return kExitUsage;
+  } catch (const sim::SoftCncInputError& e) {
+    std::fprintf(stderr, "truecut run: %s\n", e.what());
+    return kExitUsage;
   } catch (const hal::HalFileError& e) {
     std::fprintf(stderr, "truecut run: %s\n", e.what());
     return kExitUsage;
@@ -150,7 +153,12 @@ int run_machine(const std::vector<std::string>& argv) {
     return kExitFailure;
   }
   if (r.limit_fault) {
-    std::fprintf(stderr, "truecut run: a joint command left the machine's travel\n");
+    // The planned path was checked before machining; what still leaves the
+    // travel is the correction field or the servo loops.
+    std::fprintf(stderr,
+                 "truecut run: %s:%d: a joint command left the machine's travel while "
+                 "machining (seen at this line; the planned path stays inside it)\n",
+                 job.program.string().c_str(), r.limit_fault_line);
     return kExitFailure;
   }
   std::printf("truecut run %s %s\n", job.machine.string().c_str(), job.program.string().c_str());

@@ -314,6 +314,10 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
       last[head] = static_cast<std::uint32_t>(i);
     }
   }
+  m.sweep_kind_.assign(nd, kSweptNone);
+  m.sweep_point_.assign(nd, Eigen::Vector3f::Zero());
+  m.sweep_vector_.assign(nd, Eigen::Vector3f::Zero());
+  m.sweep_radius_.assign(nd, 0.0f);
   m.stamp_.assign(nd, 0);
   m.visit_.assign(nd, 0);
   if (nd == 0) return m;

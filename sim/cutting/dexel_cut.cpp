@@ -81,6 +81,12 @@ Engagement DexelModel::cut(const CutterShape& shape, const CutterPose& from, con
     steps = std::max(1, static_cast<int>(std::ceil(need)));
   }
 
+  // The ball centre's motion over the sweep (its tube, for the output mesh).
+  const double rc = shape.corner_radius_mm;
+  Eigen::Vector3d centre_motion = (to.tip_mm + rc * a1) - (from.tip_mm + rc * a0);
+  const double centre_travel = centre_motion.norm();
+  centre_motion = centre_travel > 1e-9 ? Eigen::Vector3d(centre_motion / centre_travel)
+                                       : Eigen::Vector3d::Zero();
   Eigen::Vector3d normal_sum = Eigen::Vector3d::Zero(), contact_sum = Eigen::Vector3d::Zero();
   e.axial_min_mm = detail::kInf;
   e.axial_max_mm = -detail::kInf;
@@ -94,7 +100,7 @@ Engagement DexelModel::cut(const CutterShape& shape, const CutterPose& from, con
       axis = ((std::sin((1 - s) * angle) * a0 + std::sin(s * angle) * a1) / sin_angle).normalized();
     else
       axis = angle < 1.0 ? ((1 - s) * a0 + s * a1).normalized() : (s < 0.5 ? a0 : a1);
-    apply_instance(shape, tip, axis, e, normal_sum, contact_sum);
+    apply_instance(shape, tip, axis, centre_motion, e, normal_sum, contact_sum);
     ++e.substeps;
   }
   if (e.removed_mm3 > 0) {
@@ -108,8 +114,8 @@ Engagement DexelModel::cut(const CutterShape& shape, const CutterPose& from, con
 }
 
 void DexelModel::apply_instance(const CutterShape& shape, const Eigen::Vector3d& tip,
-                                const Eigen::Vector3d& axis, Engagement& e,
-                                Eigen::Vector3d& normal_sum,
+                                const Eigen::Vector3d& axis, const Eigen::Vector3d& centre_motion,
+                                Engagement& e, Eigen::Vector3d& normal_sum,
                                 Eigen::Vector3d& contact_sum) noexcept {
   if (cell_start_.empty()) return;
   const detail::ToolGeometry g{shape.radius_mm, shape.corner_radius_mm,
@@ -159,6 +165,32 @@ void DexelModel::apply_instance(const CutterShape& shape, const Eigen::Vector3d&
         const double w = (p + new_h * n - tip).dot(axis);
         e.axial_min_mm = std::min(e.axial_min_mm, w);
         e.axial_max_mm = std::max(e.axial_max_mm, w);
+        // The surface this instance leaves at the dexel, for the output
+        // mesh's cusps: the ball's tube, the flank's or the flat bottom's
+        // tangent plane (g: out of the material, into the tool).
+        const Eigen::Vector3d x = p + new_h * n;
+        const Eigen::Vector3d radial = x - tip - w * axis;
+        const double r = radial.norm();
+        constexpr double kOn = 1e-7;  // mm: which face of the cutter the entry lies on
+        std::uint8_t kind = kSweptNone;
+        if (span.t0 <= floor) {
+          // cut to the floor: no surface of the tool here
+        } else if (g.core_mm <= 0 && g.corner_mm > 0 && w < g.corner_mm) {
+          kind = kSweptBall;
+          sweep_point_[d] = (tip + g.corner_mm * axis - position_[d]).cast<float>();
+          sweep_vector_[d] = centre_motion.cast<float>();
+          sweep_radius_[d] = static_cast<float>(g.corner_mm);
+        } else if (w <= kOn && r <= g.core_mm + kOn) {
+          kind = kSweptPlane;  // flat bottom
+          sweep_point_[d] = (x - position_[d]).cast<float>();
+          sweep_vector_[d] = axis.cast<float>();
+        } else if (w >= g.corner_mm - kOn && w <= g.flute_mm - kOn && r > 0.5 * g.radius_mm &&
+                   std::abs(r - g.radius_mm) <= 1e-6) {
+          kind = kSweptPlane;  // flank
+          sweep_point_[d] = (x - position_[d]).cast<float>();
+          sweep_vector_[d] = (-radial / r).cast<float>();
+        }
+        sweep_kind_[d] = kind;
         if (stamp_[d] != epoch_) {
           stamp_[d] = epoch_;
           ++e.dexels_touched;

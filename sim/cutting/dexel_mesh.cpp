@@ -1,5 +1,10 @@
 // The machined surface as a mesh, and the totals of the dexel model.
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <unordered_map>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -9,6 +14,71 @@
 #include "truecut/sim/cutting/dexel_model.hpp"
 
 namespace truecut::sim::cutting {
+
+namespace {
+
+constexpr std::uint32_t kNoSplit = 0xFFFFFFFFu;
+
+// The surface a tool instance swept locally (DexelModel::sweep_kind_).
+struct SweptSurface {
+  std::uint8_t kind = 0;  // DexelModel::kSwept*
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();
+  Eigen::Vector3d vector = Eigen::Vector3d::Zero();
+  double radius = 0;
+};
+
+// Where the line x0 + t·n (t outwards) enters the tool side of the swept
+// surface: the smaller root for a tube (radius r about the line through the
+// ball centre along unit v; v = 0: the ball), the plane's crossing when its
+// normal faces along the line; +inf when the line misses it.
+double entry(const SweptSurface& s, const Eigen::Vector3d& x0, const Eigen::Vector3d& n) {
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  if (s.kind == 2) {
+    const double along = s.vector.dot(n);
+    return along > 0.05 ? s.vector.dot(s.point - x0) / along : kNone;
+  }
+  Eigen::Vector3d q = x0 - s.point, m = n;
+  q -= q.dot(s.vector) * s.vector;
+  m -= m.dot(s.vector) * s.vector;
+  const double a = m.squaredNorm(), b = 2 * q.dot(m), c = q.squaredNorm() - s.radius * s.radius;
+  const double disc = b * b - 4 * a * c;
+  if (a < 1e-18 || disc < 0) return kNone;
+  return (-b - std::sqrt(disc)) / (2 * a);
+}
+
+// The triangle (c0, c1, c2) with its edges c_k → c_(k+1) split at m[k]
+// (kNoSplit: not split), in the same orientation.
+void emit_split(const std::uint32_t c[3], const std::uint32_t m[3],
+                const std::vector<Eigen::Vector3d>& v, std::vector<offline::Triangle>& out) {
+  const int count = (m[0] != kNoSplit) + (m[1] != kNoSplit) + (m[2] != kNoSplit);
+  if (count == 0) {
+    out.push_back({c[0], c[1], c[2]});
+  } else if (count == 1) {
+    const int k = m[0] != kNoSplit ? 0 : m[1] != kNoSplit ? 1 : 2;
+    out.push_back({c[k], m[k], c[(k + 2) % 3]});
+    out.push_back({m[k], c[(k + 1) % 3], c[(k + 2) % 3]});
+  } else if (count == 2) {
+    const int k = m[2] == kNoSplit ? 0 : m[0] == kNoSplit ? 1 : 2;  // edges k, k+1 split
+    const std::uint32_t a = c[k], b = c[(k + 1) % 3], d = c[(k + 2) % 3];
+    const std::uint32_t mk = m[k], ml = m[(k + 1) % 3];
+    out.push_back({mk, b, ml});
+    // The quad a, mk, ml, d along its shorter diagonal; mk–ml (the ridge) stays.
+    if ((v[a] - v[ml]).squaredNorm() <= (v[mk] - v[d]).squaredNorm()) {
+      out.push_back({a, mk, ml});
+      out.push_back({a, ml, d});
+    } else {
+      out.push_back({a, mk, d});
+      out.push_back({mk, ml, d});
+    }
+  } else {
+    out.push_back({c[0], m[0], m[2]});
+    out.push_back({m[0], c[1], m[1]});
+    out.push_back({m[2], m[1], c[2]});
+    out.push_back({m[0], m[1], m[2]});
+  }
+}
+
+}  // namespace
 
 offline::TriangleMesh DexelModel::machined_mesh() const {
   offline::TriangleMesh mesh;
@@ -85,23 +155,139 @@ offline::TriangleMesh DexelModel::machined_mesh() const {
     spread(true);
   }
   mesh.vertices_mm = std::move(vertex);
+
+  // Cusps. Between two dexels left by different passes the machined surface
+  // rises to a cusp that a straight edge cuts off (by up to the cusp's slope
+  // × half the dexel spacing: 17 µm for a Ø6 ball at 1 mm stepover and
+  // 0.3 mm dexels). Each dexel knows the surface its last instance swept (a
+  // ball's tube, a flank's or flat bottom's plane); the cusp lies where the
+  // two surfaces of an edge's dexels meet: that point is added to the edge
+  // (shared by both triangles of the edge) when it stands above the
+  // straight edge, and no other neighbouring surface passes below it.
+  auto swept = [&](std::size_t i) {
+    SweptSurface s;
+    s.kind = sweep_kind_[i];
+    s.point = position_[i] + sweep_point_[i].cast<double>();
+    s.vector = sweep_vector_[i].cast<double>();
+    if (s.vector.squaredNorm() > 0) s.vector.normalize();
+    s.radius = sweep_radius_[i];
+    return s;
+  };
+  // An edge can hold a cusp when both dexels carry a swept surface and the
+  // two differ (the dexels of one flat face or of one straight pass share
+  // theirs: nothing to intersect, and most edges are skipped here).
+  auto candidate = [&](std::uint32_t a, std::uint32_t b) {
+    if (sweep_kind_[a] == kSweptNone || sweep_kind_[b] == kSweptNone || !on_line(a) || !on_line(b))
+      return false;
+    if (sweep_kind_[a] != sweep_kind_[b]) return true;
+    const SweptSurface sa = swept(a), sb = swept(b);
+    constexpr double kSame = 2e-6;  // mm (the offsets are stored as float)
+    const Eigen::Vector3d d = sb.point - sa.point;
+    if (sa.kind == kSweptPlane)
+      return (sa.vector - sb.vector).norm() > 1e-5 || std::abs(sa.vector.dot(d)) > kSame;
+    if (std::abs(sa.radius - sb.radius) > kSame) return true;
+    if (sa.vector.squaredNorm() == 0 || sb.vector.squaredNorm() == 0) return d.norm() > kSame;
+    return sa.vector.cross(sb.vector).norm() > 1e-5 ||
+           (d - d.dot(sa.vector) * sa.vector).norm() > kSame;
+  };
+  auto edge_key = [](std::uint32_t a, std::uint32_t b) {
+    return (std::uint64_t(std::min(a, b)) << 32) | std::max(a, b);
+  };
+  // The vertices opposite each candidate edge (one or two triangles).
+  std::unordered_map<std::uint64_t, std::array<std::uint32_t, 2>> opposite;
+  for (const auto& t : triangles_)
+    for (int k = 0; k < 3; ++k)
+      if (candidate(t[k], t[(k + 1) % 3])) {
+        auto [it, added] =
+            opposite.try_emplace(edge_key(t[k], t[(k + 1) % 3]), std::array{kNoSplit, kNoSplit});
+        it->second[added ? 0 : 1] = t[(k + 2) % 3];
+      }
+  std::unordered_map<std::uint64_t, std::uint32_t> split;
+  auto find_cusp = [&](std::uint32_t a, std::uint32_t b) -> std::uint32_t {
+    const SweptSurface sa = swept(a), sb = swept(b);
+    const Eigen::Vector3d pa = position_[a], dp = position_[b] - position_[a];
+    auto line_at = [&](double s, Eigen::Vector3d& n) {
+      n = ((1 - s) * normal_[a] + s * normal_[b]).normalized();
+      return Eigen::Vector3d(pa + s * dp);
+    };
+    auto heights = [&](double s, double& ha, double& hb) {
+      Eigen::Vector3d n;
+      const Eigen::Vector3d x = line_at(s, n);
+      ha = entry(sa, x, n);
+      hb = entry(sb, x, n);
+    };
+    // Each surface must reproduce its own dexel (to 0.5 µm) and lie above
+    // the other's dexel: a's surface is the lower one near a, b's near b.
+    double ha0, hb0, ha1, hb1;
+    heights(0, ha0, hb0);
+    heights(1, ha1, hb1);
+    constexpr double kAgree = 5e-4;
+    if (!(std::abs(ha0 - height_[a]) < kAgree && std::abs(hb1 - height_[b]) < kAgree &&
+          hb0 > ha0 + 1e-6 && ha1 > hb1 + 1e-6))
+      return kNoSplit;
+    double lo = 0, hi = 1;
+    for (int it = 0; it < 48; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      double ha, hb;
+      heights(mid, ha, hb);
+      (ha < hb ? lo : hi) = mid;
+    }
+    const double s = 0.5 * (lo + hi);
+    if (s < 0.05 || s > 0.95) return kNoSplit;
+    double ha, hb;
+    heights(s, ha, hb);
+    Eigen::Vector3d n;
+    const Eigen::Vector3d x = line_at(s, n);
+    // Any other surface near the edge (of the vertices opposite it) that
+    // passes lower bounds the cusp too.
+    double ridge = std::min(ha, hb);
+    for (const std::uint32_t c : opposite.at(edge_key(a, b)))
+      if (c != kNoSplit && sweep_kind_[c] != kSweptNone && on_line(c))
+        ridge = std::min(ridge, entry(swept(c), x, n));
+    const double straight = (1 - s) * height_[a] + s * height_[b];
+    // Cusps lower than this are left to the straight edge (the creases
+    // between the flanks of neighbouring instances of a deflected tool would
+    // otherwise add vertices all over the walls).
+    constexpr double kMinRise = 5e-4;
+    if (!(ridge > straight + kMinRise && ridge < straight + 0.5 * dp.norm() &&
+          ridge < options_.max_stock_mm))
+      return kNoSplit;
+    mesh.vertices_mm.push_back(x + ridge * n);
+    return static_cast<std::uint32_t>(mesh.vertices_mm.size() - 1);
+  };
+  auto cusp = [&](std::uint32_t a, std::uint32_t b) -> std::uint32_t {
+    if (!candidate(a, b)) return kNoSplit;
+    if (a > b) std::swap(a, b);
+    const auto [it, added] = split.try_emplace(edge_key(a, b), kNoSplit);
+    if (added) it->second = find_cusp(a, b);
+    return it->second;
+  };
+
   // Relocated vertices can collapse a triangle; readers reject those (STL
   // stores float), so drop the ones that are degenerate in float.
   mesh.triangles.reserve(triangles_.size());
+  std::vector<offline::Triangle> pieces;
   for (const auto& t : triangles_) {
-    if (placed[t[0]] + placed[t[1]] + placed[t[2]] == 3 && on_line(t[0]) && on_line(t[1]) &&
-        on_line(t[2])) {
-      mesh.triangles.push_back(t);
-      continue;
+    const std::uint32_t c[3] = {t[0], t[1], t[2]};
+    const std::uint32_t m[3] = {cusp(t[0], t[1]), cusp(t[1], t[2]), cusp(t[2], t[0])};
+    pieces.clear();
+    emit_split(c, m, mesh.vertices_mm, pieces);
+    const bool own = placed[t[0]] + placed[t[1]] + placed[t[2]] == 3 && on_line(t[0]) &&
+                     on_line(t[1]) && on_line(t[2]);
+    for (const auto& piece : pieces) {
+      if (own && m[0] == kNoSplit && m[1] == kNoSplit && m[2] == kNoSplit) {
+        mesh.triangles.push_back(piece);
+        continue;
+      }
+      const Eigen::Vector3d a = mesh.vertices_mm[piece[0]].cast<float>().cast<double>();
+      const Eigen::Vector3d ab = mesh.vertices_mm[piece[1]].cast<float>().cast<double>() - a;
+      const Eigen::Vector3d ac = mesh.vertices_mm[piece[2]].cast<float>().cast<double>() - a;
+      const double longest_sq =
+          std::max({ab.squaredNorm(), ac.squaredNorm(), (ac - ab).squaredNorm()});
+      if (ab.cross(ac).norm() > 1e-9 * longest_sq) mesh.triangles.push_back(piece);
     }
-    const Eigen::Vector3d a = mesh.vertices_mm[t[0]].cast<float>().cast<double>();
-    const Eigen::Vector3d ab = mesh.vertices_mm[t[1]].cast<float>().cast<double>() - a;
-    const Eigen::Vector3d ac = mesh.vertices_mm[t[2]].cast<float>().cast<double>() - a;
-    const double longest_sq =
-        std::max({ab.squaredNorm(), ac.squaredNorm(), (ac - ab).squaredNorm()});
-    if (ab.cross(ac).norm() > 1e-9 * longest_sq) mesh.triangles.push_back(t);
   }
-  const auto base = static_cast<std::uint32_t>(position_.size());
+  const auto base = static_cast<std::uint32_t>(mesh.vertices_mm.size());
   mesh.vertices_mm.insert(mesh.vertices_mm.end(), fixed_vertices_.begin(), fixed_vertices_.end());
   for (const auto& t : fixed_triangles_)
     mesh.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});

@@ -1,4 +1,5 @@
 // The wiring text and the run.ini of a soft-CNC job.
+#include <array>
 #include <sstream>
 
 #include "truecut/sim/soft_cnc.hpp"
@@ -36,7 +37,33 @@ class IniText {
   std::string section_;
 };
 
+long long servo_period_ns(const SoftCncJob& job) {
+  return static_cast<long long>(job.period_us * 1000 + 0.5);
+}
+
+// The program starts with the tool at a safe height: 10 mm below the top of
+// the Z travel (machine zero may lie inside the part).
+std::array<double, 5> start_joints(const MachineDescription& machine) {
+  const JointParams& z = machine.machine.joints[2];
+  return {0.0, 0.0, z.present ? z.max - 10.0 : 0.0, 0.0, 0.0};
+}
+
 }  // namespace
+
+interp::PlannerOptions soft_cnc_planner_options(const SoftCncJob& job,
+                                                const MachineDescription& machine) {
+  const KinematicsParams& k = machine.machine.kinematics;
+  interp::PlannerOptions o;
+  o.servo_period_s = double(servo_period_ns(job)) * 1e-9;
+  o.start_joints = start_joints(machine);
+  o.kinematics.x_rot_point_mm = k.x_rot_point_mm;
+  o.kinematics.y_rot_point_mm = k.y_rot_point_mm;
+  o.kinematics.z_rot_point_mm = k.z_rot_point_mm;
+  o.kinematics.y_offset_mm = k.y_offset_mm;
+  o.kinematics.z_offset_mm = k.z_offset_mm;
+  o.kinematics.conventional_directions = k.conventional_directions;
+  return o;
+}
 
 const std::string& soft_cnc_hal_text() {
   static const std::string text =
@@ -55,13 +82,13 @@ std::string soft_cnc_ini_text(const SoftCncJob& job, const MachineDescription& m
   ini.set("RUN", "NOMINAL", absolute_text(job.nominal));
   ini.set("RUN", "OUT_DIR", absolute_text(job.out_dir));
   ini.set("RUN", "DEXEL_SPACING", number_text(job.dexel_spacing_mm));
-  ini.set("RUN", "SERVO_PERIOD_NS",
-          std::to_string(static_cast<long long>(job.period_us * 1000 + 0.5)));
+  ini.set("RUN", "SERVO_PERIOD_NS", std::to_string(servo_period_ns(job)));
   ini.set("RUN", "RECORD_EVERY", std::to_string(job.record_every));
-  // The program starts with the tool at a safe height: 10 mm below the top
-  // of the Z travel (machine zero may lie inside the part).
-  const JointParams& z = machine.machine.joints[2];
-  ini.set("RUN", "START", "0,0," + number_text(z.present ? z.max - 10.0 : 0.0) + ",0,0");
+  const std::array<double, 5> start = start_joints(machine);
+  std::string start_text;
+  for (double v : start)
+    start_text += (start_text.empty() ? "" : ",") + number_text(v);
+  ini.set("RUN", "START", start_text);
   ini.set("KINS", "X_ROT_POINT", number_text(k.x_rot_point_mm));
   ini.set("KINS", "Y_ROT_POINT", number_text(k.y_rot_point_mm));
   ini.set("KINS", "Z_ROT_POINT", number_text(k.z_rot_point_mm));

@@ -1,11 +1,17 @@
 // Runs a soft-CNC job: writes the wiring and its INI, loads, runs, shuts down.
+#include <algorithm>
 #include <stdexcept>
+#include <vector>
 
+#include "truecut/interp/error.hpp"
+#include "truecut/interp/interpreter.hpp"
+#include "truecut/interp/tool_table.hpp"
 #include "truecut/rt/atomic_write.hpp"
 #include "truecut/rt/executor.hpp"
 #include "truecut/rt/hal.hpp"
 #include "truecut/rt/hal_file.hpp"
 #include "truecut/rt/ini.hpp"
+#include "truecut/sim/program_travel.hpp"
 #include "truecut/sim/soft_cnc.hpp"
 
 namespace truecut::sim {
@@ -24,11 +30,14 @@ struct ServiceHook {
   fs::path field_file;
   std::size_t next_swap = 0;
   bool reload_high = false;
+  int32_t limit_fault_line = 0;
 };
 
 void on_service(void* user, int64_t time_ns) {
   auto& hook = *static_cast<ServiceHook*>(user);
   const double t_s = double(time_ns) * 1e-9;
+  if (hook.limit_fault_line == 0 && hook.hal->get_pin_or_param("machine.limit-fault").b)
+    hook.limit_fault_line = std::max<int32_t>(1, hook.hal->get_pin_or_param("planner.line").s);
   if (hook.reload_high) {
     hook.hal->set_pin_or_param("comp.reload", "0");
     hook.reload_high = false;
@@ -41,6 +50,32 @@ void on_service(void* user, int64_t time_ns) {
   if (*hook.callback) (*hook.callback)(t_s, hook.program_s);
 }
 
+// The program as the planner component will interpret and plan it, checked
+// against the machine's travel before anything is written.
+void check_program(const SoftCncJob& job, const MachineDescription& machine) {
+  try {
+    interp::InterpreterOptions io;
+    io.tools = interp::ToolTable::load(job.tools);
+    const interp::Plan plan = interp::plan_program(interp::Interpreter(io).run_file(job.program),
+                                                   soft_cnc_planner_options(job, machine));
+    const ProgramTravel travel = program_travel(plan, machine.machine, job.program.string());
+    if (!travel.inside())
+      throw SoftCncInputError(travel.first_excursion->message + " (machine " +
+                              job.machine.string() + ")");
+  } catch (const interp::GcodeError& e) {
+    throw SoftCncInputError(e.what());
+  }
+}
+
+// Removes what a job that failed to load wrote: its files, and out_dir if
+// the job created it and it is empty again.
+void remove_written(const std::vector<fs::path>& files, const fs::path& dir, bool dir_created) {
+  std::error_code ec;
+  for (const auto& f : files)
+    fs::remove(f, ec);
+  if (dir_created && fs::is_empty(dir, ec)) fs::remove(dir, ec);
+}
+
 }  // namespace
 
 SoftCncResult run_soft_cnc(const SoftCncJob& given, const SoftCncProgress& progress) {
@@ -50,23 +85,38 @@ SoftCncResult run_soft_cnc(const SoftCncJob& given, const SoftCncProgress& progr
   for (const auto& swap : given.field_swaps)
     if (!fs::is_regular_file(swap.field))
       throw std::runtime_error(swap.field.string() + ": no such file (field swap)");
+  check_program(given, machine);
+  const bool dir_created = !fs::exists(given.out_dir);
   fs::create_directories(given.out_dir);
   SoftCncJob job = given;
-  if (!job.field_swaps.empty()) {
-    job.field = job.out_dir / "field.tcf";
-    rt::copy_file_atomically(*given.field, *job.field);
-  }
   const fs::path hal_file = job.out_dir / "soft_cnc.hal", ini_file = job.out_dir / "run.ini";
-  rt::write_file_atomically(hal_file, soft_cnc_hal_text());
-  rt::write_file_atomically(ini_file, soft_cnc_ini_text(job, machine));
-
+  std::vector<fs::path> written;
   hal::HalOptions options;
   options.component_path = job.component_path;
   options.output_dir = job.out_dir;
   SoftCncResult result;
   hal::Hal h(options);
-  const hal::Ini ini = hal::Ini::load(ini_file);
-  hal::load_hal_file(h, hal_file, &ini);
+  try {
+    if (!job.field_swaps.empty()) {
+      job.field = job.out_dir / "field.tcf";
+      written.push_back(*job.field);
+      rt::copy_file_atomically(*given.field, *job.field);
+    }
+    written.push_back(hal_file);
+    rt::write_file_atomically(hal_file, soft_cnc_hal_text());
+    written.push_back(ini_file);
+    rt::write_file_atomically(ini_file, soft_cnc_ini_text(job, machine));
+    const hal::Ini ini = hal::Ini::load(ini_file);
+    hal::load_hal_file(h, hal_file, &ini);
+  } catch (const hal::HalFileError& e) {
+    // A component refused the job (its message names the file and key);
+    // the wiring file it points to is removed with the rest.
+    remove_written(written, job.out_dir, dir_created);
+    throw SoftCncInputError(e.message());
+  } catch (...) {
+    remove_written(written, job.out_dir, dir_created);
+    throw;
+  }
   result.program_s = h.get_pin_or_param("planner.program-time").as_double();
 
   hal::RunLimits limits;
@@ -75,10 +125,8 @@ SoftCncResult run_soft_cnc(const SoftCncJob& given, const SoftCncProgress& progr
   limits.duration_ns = static_cast<int64_t>((result.program_s * 1.5 + 10.0) * 1e9);
   ServiceHook hook{&progress, result.program_s, &h, &job.field_swaps,
                    job.field ? *job.field : fs::path()};
-  if (progress || !job.field_swaps.empty()) {
-    limits.progress = on_service;
-    limits.progress_user = &hook;
-  }
+  limits.progress = on_service;  // also notes the line of a limit fault
+  limits.progress_user = &hook;
   limits.cycle_probe = job.cycle_probe;
   limits.cycle_probe_user = job.cycle_probe_user;
   hal::Executor executor(h);
@@ -88,6 +136,7 @@ SoftCncResult run_soft_cnc(const SoftCncJob& given, const SoftCncProgress& progr
   result.wall_s = result.report.wall_s;
   result.finished = h.get_pin_or_param("planner.done").as_double() != 0;
   result.limit_fault = h.get_pin_or_param("machine.limit-fault").as_double() != 0;
+  result.limit_fault_line = hook.limit_fault_line;
   result.field_generation = h.get_pin_or_param("comp.field-generation").s;
   result.field_load_errors = h.get_pin_or_param("comp.load-errors").s;
   return result;  // ~Hal: the recorder and the cutting write their files

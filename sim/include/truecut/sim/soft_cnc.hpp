@@ -9,9 +9,11 @@
 #include <filesystem>
 #include <functional>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "truecut/interp/planner.hpp"
 #include "truecut/rt/executor.hpp"
 #include "truecut/sim/machine_description.hpp"
 
@@ -61,9 +63,20 @@ struct SoftCncResult {
   double wall_s = 0.0;
   bool finished = false;         // the planner reached the program end
   bool limit_fault = false;      // a joint command left the machine's travel
+  int32_t limit_fault_line = 0;  // program line at the service point (10 ms) that first saw it
   int32_t field_generation = 0;  // fields truecut_comp took into use
   int32_t field_load_errors = 0;
   hal::RunReport report;  // cycles, overruns, compute time and latency, notes
+};
+
+// Bad input, found before the machine runs: the program or the tool table
+// does not interpret, the program cannot be planned, its planned path
+// leaves the machine's travel, or a component refuses its files. The
+// message names the file and line or key, e.g.
+// "part/program.ngc:123: joint z leaves travel [-50, 350] at 362.5 mm".
+class SoftCncInputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
 };
 
 // The shipped wiring, compiled in (sim/hal/soft_cnc.hal).
@@ -71,15 +84,24 @@ const std::string& soft_cnc_hal_text();
 // The run.ini the wiring reads for this job (absolute paths).
 std::string soft_cnc_ini_text(const SoftCncJob& job, const MachineDescription& machine);
 
+// The options the wiring gives interp_planner for this job (run.ini's
+// [KINS], START and SERVO_PERIOD_NS): what run_soft_cnc plans the program
+// with to check the travel before it machines.
+interp::PlannerOptions soft_cnc_planner_options(const SoftCncJob& job,
+                                                const MachineDescription& machine);
+
 // Called on the non-real-time side with the simulated time reached and the
 // program's planned duration.
 using SoftCncProgress = std::function<void(double time_s, double program_s)>;
 
-// Writes soft_cnc.hal and run.ini into job.out_dir, loads them and runs until
-// the program ends. The HAL shuts down before this returns, so machined.stl,
-// machined.ply and trace.csv are in out_dir. Throws MachineDescriptionError
-// (bad machine file), hal::HalFileError (a component refused the job: the
-// message names the file and line) and std::runtime_error.
+// Checks the job, writes soft_cnc.hal and run.ini into job.out_dir, loads
+// them and runs until the program ends. The HAL shuts down before this
+// returns, so machined.stl, machined.ply and trace.csv are in out_dir.
+// Throws, with nothing written (and out_dir not created): MachineDescriptionError
+// (bad machine file), SoftCncInputError (bad program or tool table, a path
+// outside the travel, or a component refusing the job, e.g. a bad part.json:
+// the message names the file and key; the files written for it are removed
+// again) and std::runtime_error.
 SoftCncResult run_soft_cnc(const SoftCncJob& job, const SoftCncProgress& progress = {});
 
 }  // namespace truecut::sim

@@ -88,8 +88,11 @@ class DexelModel {
   double removed_total_mm3() const;
 
  private:
+  // `centre_motion`: unit direction in which the ball centre moves during
+  // this sweep (zero when it stands still), for the dexels' swept surfaces.
   void apply_instance(const CutterShape& shape, const Eigen::Vector3d& tip,
-                      const Eigen::Vector3d& axis, Engagement& e, Eigen::Vector3d& normal_sum,
+                      const Eigen::Vector3d& axis, const Eigen::Vector3d& centre_motion,
+                      Engagement& e, Eigen::Vector3d& normal_sum,
                       Eigen::Vector3d& contact_sum) noexcept;
 
   // Per dexel (structure of arrays).
@@ -104,6 +107,20 @@ class DexelModel {
   // Next dexel at the same position with another normal (a cycle through the
   // dexels of a sharp edge or corner); its own index when there is none.
   std::vector<std::uint32_t> partner_;
+  // The local swept surface at each dexel, from the tool instance that last
+  // lowered it (sweep_kind_): kSweptBall, the tube of radius sweep_radius_
+  // swept by the ball centre position_ + sweep_point_ moving along unit
+  // sweep_vector_ (zero: the ball itself); kSweptPlane, the plane through
+  // position_ + sweep_point_ with unit normal sweep_vector_ out of the
+  // material (a flank or a flat bottom); kSweptNone: not cut, cut to the
+  // floor, or by a bull-nose corner. machined_mesh() intersects the swept
+  // surfaces of neighbouring dexels to put the cusp between two passes
+  // where it is (dexel_mesh.cpp).
+  static constexpr std::uint8_t kSweptNone = 0, kSweptBall = 1, kSweptPlane = 2;
+  std::vector<std::uint8_t> sweep_kind_;
+  std::vector<Eigen::Vector3f> sweep_point_;
+  std::vector<Eigen::Vector3f> sweep_vector_;
+  std::vector<float> sweep_radius_;
   std::vector<std::uint32_t> stamp_;  // last cut() that lowered the dexel
   std::uint32_t epoch_ = 0;
   std::vector<std::uint32_t> visit_;  // last tool instance that tested the dexel
