@@ -71,6 +71,7 @@ FitContext context(const Trace& tr, const std::vector<char>& use, const std::vec
   c.trace = &tr;
   c.max_period_s = o.max_servo_period_s;
   c.bic_threshold = o.bic_threshold;
+  c.min_effect_ratio = o.min_effect_ratio;
   c.progress = o.progress;
   c.delay_s = delay_s;
   c.layout.axes = tr.axes;
@@ -79,7 +80,7 @@ FitContext context(const Trace& tr, const std::vector<char>& use, const std::vec
     std::vector<std::size_t> ix;
     for (std::size_t k = 0; k < tr.rows(); ++k)
       if (use[k]) ix.push_back(k);
-    c.layout.index.push_back(ix);
+    c.layout.index.push_back(std::move(ix));
     c.layout.weight.push_back(w[a]);
   }
   return c;
@@ -223,7 +224,7 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
   auto say = [&](const std::string& s) {
     if (o.progress) o.progress(s);
   };
-  const Trace tr = make_trace(train_rec);
+  const Trace tr = make_trace(train_rec, o.command_interpolation);
   if (tr.axes.empty())
     throw DiagnosisError(train_rec.file +
                          ": no joint has both a <j>_cmd and a <j>_act or <j>_meas channel "
@@ -253,19 +254,109 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
       " servo periods per interval) with the believed model");
   const Simulated sim0 = resimulate(base, tr, o.max_servo_period_s);
 
-  // Noise floors from the unaligned residual (the high-pass hardly sees a delay).
+  // Where a recorded interval spans several servo periods the command between
+  // the samples is not recorded and the re-simulation reads it from the
+  // samples (cubic or linear). Its error is measured on the recording
+  // itself: keeping every 2nd (4th) sample, re-reading the command from
+  // those and comparing the believed model's response with the full one at
+  // the samples kept gives the error e2 (e4) at twice (four times) the
+  // spacing; the observed order p = log2(e4/e2) (0…3) extrapolates it to the
+  // recording's own spacing: e2 / 2^p (Richardson).
+  std::array<double, kJointCount> interpolation_rms{};
+  std::array<std::vector<double>, kJointCount> interpolation_u;  // per sample; empty: none
+  {
+    bool coarse = false;
+    for (std::size_t k = 0; k + 1 < tr.rows() && !coarse; ++k)
+      coarse = substeps_for(tr.t_s[k + 1] - tr.t_s[k], o.max_servo_period_s) > 1;
+    // Per joint, the response's difference at the samples kept (0 elsewhere)
+    // and its RMS over the fitted block.
+    struct Decimated {
+      std::array<std::vector<double>, kJointCount> diff;
+      std::array<double, kJointCount> rms{};
+    };
+    auto decimated_error = [&](std::size_t every) {
+      Decimated e;
+      Trace few;
+      std::vector<std::size_t> kept;
+      for (std::size_t k = 0; k < tr.rows(); k += every)
+        kept.push_back(k);
+      if (kept.size() < 4) return e;
+      for (std::size_t k : kept)
+        few.t_s.push_back(tr.t_s[k]);
+      auto pick = [&](const std::vector<double>& v) {
+        std::vector<double> out;
+        if (!v.empty())
+          for (std::size_t k : kept)
+            out.push_back(v[k]);
+        return out;
+      };
+      for (int j = 0; j < kJointCount; ++j) {
+        few.cmd[j] = pick(tr.cmd[j]);
+        few.target[j] = pick(tr.target[j]);
+        if (!tr.cmd_slope[j].empty()) few.cmd_slope[j] = command_slopes(few.t_s, few.cmd[j]);
+      }
+      few.meas = tr.meas;
+      few.axes = tr.axes;
+      few.spindle_power_kw = pick(tr.spindle_power_kw);
+      const Simulated sf = resimulate(base, few, o.max_servo_period_s);
+      for (int j : tr.axes) {
+        e.diff[j].assign(tr.rows(), 0.0);
+        double ss = 0;
+        std::size_t n = 0;
+        for (std::size_t i = 0; i < kept.size(); ++i) {
+          const double d = sim0.target[j][kept[i]] - sf.target[j][i];
+          e.diff[j][kept[i]] = d;
+          if (masks.train[kept[i]]) ss += d * d, ++n;
+        }
+        e.rms[j] = n ? std::sqrt(ss / double(n)) : 0.0;
+      }
+      return e;
+    };
+    if (coarse) {
+      const auto e2 = decimated_error(2), e4 = decimated_error(4);
+      for (int j : tr.axes) {
+        if (e2.diff[j].empty()) continue;
+        const double p =
+            e2.rms[j] > 0 ? std::clamp(std::log2(e4.rms[j] / e2.rms[j]), 0.0, 3.0) : 0.0;
+        const double scale = 1.0 / std::exp2(p);
+        interpolation_rms[j] = e2.rms[j] * scale;
+        // Per sample (for locating): the kept samples' own, the larger
+        // neighbour's in between, taken as first order at least — a start or
+        // a stop inside one interval converges more slowly than the average.
+        const double local = 1.0 / std::exp2(std::min(p, 1.0));
+        auto& u = interpolation_u[j];
+        u.assign(tr.rows(), 0.0);
+        for (std::size_t k = 0; k < tr.rows(); ++k)
+          u[k] = local * (k % 2 == 0
+                              ? std::abs(e2.diff[j][k])
+                              : std::max(std::abs(e2.diff[j][k - 1]),
+                                         k + 1 < tr.rows() ? std::abs(e2.diff[j][k + 1]) : 0.0));
+      }
+    }
+  }
+
+  std::array<double, kJointCount> noise_only{};
+  // Floors from the unaligned residual (the high-pass hardly sees a delay):
+  // the noise, never below the recording's resolution, and the uncertainty
+  // of the re-simulation between coarse samples.
   std::vector<double> w;
   for (int j : tr.axes) {
     std::vector<double> r(tr.rows());
     for (std::size_t k = 0; k < r.size(); ++k)
       r[k] = tr.target[j][k] - sim0.target[j][k];
-    const double floor = noise_floor(r, masks.train);
     AxisStats st;
     st.axis = std::string(kJointNames[j]);
     st.target = st.axis + (tr.meas[j] ? "_meas" : "_act");
-    st.noise_floor_mm = floor;
+    st.resolution_mm = grid_step(tr.target[j], masks.train);
+    st.interpolation_mm = interpolation_rms[j];
+    // The model's encoder is quantised too when the encoder is compared.
+    const double q_model = tr.meas[j] ? 0.0 : base.joints[j].drive.encoder_resolution;
+    noise_only[j] =
+        std::max(noise_floor(r, masks.train),
+                 std::sqrt((st.resolution_mm * st.resolution_mm + q_model * q_model) / 12.0));
+    st.noise_floor_mm = std::hypot(noise_only[j], st.interpolation_mm);
     res.axes.push_back(st);
-    w.push_back(1.0 / std::max(floor, 1e-7));
+    w.push_back(1.0 / std::max(st.noise_floor_mm, 1e-7));
   }
 
   // Align: a logging delay and the effects are fitted as competing
@@ -325,7 +416,18 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
     const double dlik =
         n_eff * std::abs(std::log(std::max(hyps[i].fit.rss, 1e-300) / std::max(H.fit.rss, 1e-300)));
     const bool delay_differs = std::abs(hyps[i].delay_s - H.delay_s) > 0.01 * dt;
-    if ((d >= o.bic_threshold && dlik >= o.bic_threshold) || !delay_differs) continue;
+    // A servo loop faster than the sampling (1/Kv below the sample period)
+    // shows only its steady lag, which a delay gives as well: what tells
+    // them apart, the loop's transient, falls between the samples, and the
+    // BIC difference says more about the misfit than about the physics.
+    bool unresolved = false;
+    for (const Hypothesis* h : {&H, static_cast<const Hypothesis*>(&hyps[i])})
+      for (const auto& s : h->fit.selected)
+        if (const auto* sl = h->fit.params.effects.servo_lag.active(s.joint);
+            s.effect == "servo_lag" && sl && dt > 1.0 / sl->kv_per_s)
+          unresolved = true;
+    if ((d >= o.bic_threshold && dlik >= o.bic_threshold && !unresolved) || !delay_differs)
+      continue;
     // Which servo effects trade places with the delay.
     std::string other;
     for (const ModelFit* f : {&H.fit, static_cast<const ModelFit*>(&hyps[i].fit)})
@@ -409,7 +511,7 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
     st.standstill_noise_mm = standstill_noise(r, v, all_valid, std::max(1e-3 * vmax, 1e-9),
                                               std::max<std::size_t>(5, std::size_t(0.05 / dt)));
     floor_ss += st.noise_floor_mm * st.noise_floor_mm;
-    locate_axis(tr, j, r, all_valid, st.noise_floor_mm, res.mismatch);
+    locate_axis(tr, j, r, all_valid, noise_only[j], interpolation_u[j], res.mismatch);
 
     AxisSeries se;
     se.axis = st.axis;
@@ -451,7 +553,7 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
 
   // Held out: the last time block, or a second recording.
   if (holdout_rec) {
-    const Trace ht = make_trace(*holdout_rec);
+    const Trace ht = make_trace(*holdout_rec, o.command_interpolation);
     if (ht.axes != tr.axes)
       throw DiagnosisError(holdout_rec->file +
                            ": the hold-out recording must carry the same "
@@ -513,7 +615,7 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
   // The tool-centre point, when measured: the kinematics' effects.
   if (tr.has_tcp()) {
     std::optional<Trace> ht;
-    if (holdout_rec) ht = make_trace(*holdout_rec);
+    if (holdout_rec) ht = make_trace(*holdout_rec, o.command_interpolation);
     const TcpStage ts = fit_tcp(tr, train_use, held_use, ht ? &*ht : nullptr, base, o);
     res.tcp = ts.comparison;
     res.mismatch.insert(res.mismatch.end(), ts.mismatch.begin(), ts.mismatch.end());
@@ -526,6 +628,37 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
     res.candidates_tested.insert(res.candidates_tested.end(), ts.tested.begin(), ts.tested.end());
     res.fitted.machine.effects.rotary_location = ts.fitted.effects.rotary_location;
     res.fitted.machine.effects.tool_length_error = ts.fitted.effects.tool_length_error;
+  }
+
+  // What this recording cannot show.
+  {
+    std::string encoder_only, never_moves;
+    for (int j : tr.axes) {
+      const std::string ax(kJointNames[j]);
+      const auto [lo, hi] = std::minmax_element(tr.cmd[j].begin(), tr.cmd[j].end());
+      if (*hi - *lo <= 0) {
+        never_moves += (never_moves.empty() ? "" : ", ") + ax;
+        continue;
+      }
+      if (!tr.meas[j]) encoder_only += (encoder_only.empty() ? "" : ", ") + ax;
+      if (const auto* sl = base.effects.servo_lag.active(j); sl && dt > 1.0 / sl->kv_per_s)
+        res.notes.push_back(
+            ax + ": sampled every " + fmt("%.4g", dt * 1e3) +
+            " ms, slower than the believed servo loop's time constant 1/Kv = " +
+            fmt("%.3g", 1e3 / sl->kv_per_s) +
+            " ms: its transients and a friction spike fall between the samples, so an "
+            "adjustment of servo_lag or reversal_spike is claimed only when it moves the residual "
+            "by at least the noise floor; record at least every " +
+            fmt("%.3g", 1e3 / sl->kv_per_s) + " ms to see them");
+    }
+    if (!never_moves.empty())
+      res.notes.push_back(never_moves + ": the command never moves, nothing to test there");
+    if (!encoder_only.empty())
+      res.notes.push_back(
+          encoder_only +
+          ": compared on the encoder (<j>_act); backlash, pitch_error, thermal_drift, squareness "
+          "and straightness act between the encoder and the table and are not tested — record "
+          "<j>_meas (a linear scale, laser or tracker) to test them");
   }
 
   const bool above = !res.mismatch.empty();

@@ -173,6 +173,45 @@ VectorXd weighted_residual(const FitContext& ctx, const MachineParams& params) {
 
 namespace {
 
+// Levenberg–Marquardt on every parameter of fit.selected by re-simulation
+// (numeric Jacobian, at most 12 iterations); updates fit.params and fit.rss.
+void refine(const FitContext& ctx, ModelFit& fit) {
+  const auto keys = keys_of(fit.selected);
+  VectorXd th = get_theta(fit.params, keys);
+  VectorXd r0 = weighted_residual(ctx, fit.params);
+  double rss0 = r0.squaredNorm(), lambda = 1e-3;
+  for (int it = 0; it < 12 && th.size() > 0; ++it) {
+    const MatrixXd J = jacobian(ctx, fit.params, keys, th, r0);
+    const MatrixXd A = J.transpose() * J;
+    const VectorXd g = J.transpose() * r0;
+    bool improved = false;
+    for (int tries = 0; tries < 6 && !improved; ++tries) {
+      MatrixXd Ad = A;
+      Ad.diagonal().array() *= (1.0 + lambda);
+      Ad.diagonal().array() += 1e-12;
+      const VectorXd step = Ad.ldlt().solve(-g);
+      MachineParams p = fit.params;
+      VectorXd t2 = th + step;
+      set_theta(p, keys, t2);
+      t2 = get_theta(p, keys);
+      const VectorXd r1 = weighted_residual(ctx, p);
+      const double rss1 = r1.squaredNorm();
+      if (rss1 < rss0) {
+        const double gain = (rss0 - rss1) / rss0;
+        th = t2, r0 = r1, rss0 = rss1, fit.params = p;
+        lambda = std::max(lambda / 4, 1e-7);
+        improved = true;
+        if (gain < 1e-7) it = 99;
+      } else {
+        lambda *= 8;
+      }
+    }
+    if (!improved) break;
+  }
+  normalise_periodic(fit.params);
+  fit.rss = weighted_residual(ctx, fit.params).squaredNorm();
+}
+
 // A candidate of one parameter that must stay positive (a play, a friction):
 // applied by adding its linear coefficient to the believed value.
 Candidate single_positive(const std::string& effect, int joint, const std::string& axis,
@@ -220,10 +259,17 @@ std::vector<Candidate> build_candidates(const FitContext& ctx, const MachinePara
     return c;
   };
   const double t0 = tr.t_s.front(), span_t = tr.t_s.back() - tr.t_s.front();
+  const double sample_period_s = median_period(tr.t_s);
 
   for (int j : L.axes) {
     const std::string ax(kJointNames[j]);
     const bool dynamic = base.effects.servo_lag.active(j) != nullptr;
+    // Sampled slower than the believed loop's time constant 1/Kv: the loop's
+    // transients (and a friction spike, which decays with them) fall between
+    // the samples, where the command itself is only interpolated; an
+    // adjustment must then move the residual by at least the noise floor.
+    const bool loop_unresolved =
+        dynamic && sample_period_s > 1.0 / base.effects.servo_lag.active(j)->kv_per_s;
     const auto v_cmd = derivative(tr.t_s, tr.cmd[j]);
     double travel = 0, v_max = 0;
     {
@@ -266,6 +312,7 @@ std::vector<Candidate> build_candidates(const FitContext& ctx, const MachinePara
           a.ff1 = clamp_param("ff1", a.ff1 + coef[1]);
           return true;
         };
+        c.min_effect_ratio = loop_unresolved ? 1.0 : 0.0;
       }
       out.push_back(std::move(c));
     }
@@ -276,6 +323,7 @@ std::vector<Candidate> build_candidates(const FitContext& ctx, const MachinePara
       const double h = joint_kind(j) == JointKind::Linear ? 0.05 * inertia
                                                           : 50.0 * inertia * std::numbers::pi / 180;
       c.X = fd_column(base, "reversal_spike", j, coulomb_key(j), std::max(h, 0.5));
+      c.min_effect_ratio = loop_unresolved ? 1.0 : 0.0;
       out.push_back(std::move(c));
     }
     if (!tr.meas[j]) continue;  // the encoder sees only the servo effects
@@ -483,8 +531,29 @@ struct Selection {
 };
 
 // Forward selection over the groups by BIC; among a group's variants the best one.
+// The RMS of a stacked vector over the axes it touches (those with at
+// least 1 % of the largest axis' RMS).
+double rms_on_support(const VectorXd& v, const Layout& layout) {
+  std::vector<double> ms;
+  Eigen::Index r = 0;
+  for (const auto& ix : layout.index) {
+    const Eigen::Index m = Eigen::Index(ix.size());
+    ms.push_back(m ? v.segment(r, m).squaredNorm() / double(m) : 0.0);
+    r += m;
+  }
+  const double top = ms.empty() ? 0.0 : *std::max_element(ms.begin(), ms.end());
+  double ss = 0, n = 0;
+  for (std::size_t a = 0; a < ms.size(); ++a)
+    if (ms[a] > 0 && ms[a] >= 1e-4 * top) {
+      const double m = double(layout.index[a].size());
+      ss += ms[a] * m, n += m;
+    }
+  return n > 0 ? std::sqrt(ss / n) : 0.0;
+}
+
 Selection forward_select(const std::vector<Candidate>& cands, const VectorXd& r, double threshold,
-                         const MachineParams& base, double& n_eff_out) {
+                         double min_effect, const Layout& layout, const MachineParams& base,
+                         double& n_eff_out) {
   const Eigen::Index n = r.size();
   std::map<std::string, std::vector<const Candidate*>> groups;
   for (const auto& c : cands)
@@ -549,7 +618,11 @@ Selection forward_select(const std::vector<Candidate>& cands, const VectorXd& r,
       ok = ok && c->apply(trial, coef.segment(c0, c->X.cols()));
       c0 += c->X.cols();
     }
-    if (!ok) {
+    // Too small to be physics rather than a departure of the noise from the
+    // white Gaussian noise the BIC assumes (weighted units: the floor is 1).
+    const VectorXd contrib = best->X * coef.tail(best->X.cols());
+    const double least = best->min_effect_ratio > 0 ? best->min_effect_ratio : min_effect;
+    if (!ok || rms_on_support(contrib, layout) < least) {
       rejected.insert(best->group);
       continue;
     }
@@ -647,7 +720,8 @@ ModelFit fit_model(const FitContext& ctx, const MachineParams& base) {
       open.push_back(std::move(c));
     }
     double n_eff = 0;
-    const Selection sel = forward_select(open, r, ctx.bic_threshold, fit.params, n_eff);
+    const Selection sel = forward_select(open, r, ctx.bic_threshold, ctx.min_effect_ratio,
+                                         ctx.layout, fit.params, n_eff);
     for (const auto& ni : sel.confusions) {
       bool dup = false;
       for (const auto& e : fit.not_identifiable)
@@ -663,7 +737,8 @@ ModelFit fit_model(const FitContext& ctx, const MachineParams& base) {
       c->apply(fit.params, sel.coef.segment(c0, c->X.cols()));
       c0 += c->X.cols();
       fit.selected.push_back(
-          {c->effect, c->joint, c->axis, c->group, c->variant, c->keys, sel.delta_bic[i]});
+          {c->effect, c->joint, c->axis, c->group, c->variant, c->keys, sel.delta_bic[i],
+           c->min_effect_ratio > 0 ? c->min_effect_ratio : ctx.min_effect_ratio});
       have.insert(c->group);
       say("selected " + c->label() + " (ΔBIC " + fmt(sel.delta_bic[i]) + ")");
     }
@@ -689,41 +764,8 @@ ModelFit fit_model(const FitContext& ctx, const MachineParams& base) {
     }
 
     // Nonlinear fit of every selected parameter by re-simulation.
-    const auto keys = keys_of(fit.selected);
-    VectorXd th = get_theta(fit.params, keys);
-    VectorXd r0 = weighted_residual(ctx, fit.params);
-    double rss0 = r0.squaredNorm(), lambda = 1e-3;
-    const Eigen::Index m = th.size();
-    for (int it = 0; it < 12; ++it) {
-      const MatrixXd J = jacobian(ctx, fit.params, keys, th, r0);
-      const MatrixXd A = J.transpose() * J;
-      const VectorXd g = J.transpose() * r0;
-      bool improved = false;
-      for (int tries = 0; tries < 6 && !improved; ++tries) {
-        MatrixXd Ad = A;
-        Ad.diagonal().array() *= (1.0 + lambda);
-        Ad.diagonal().array() += 1e-12;
-        const VectorXd step = Ad.ldlt().solve(-g);
-        MachineParams p = fit.params;
-        VectorXd t2 = th + step;
-        set_theta(p, keys, t2);
-        t2 = get_theta(p, keys);
-        const VectorXd r1 = weighted_residual(ctx, p);
-        const double rss1 = r1.squaredNorm();
-        if (rss1 < rss0) {
-          const double gain = (rss0 - rss1) / rss0;
-          th = t2, r0 = r1, rss0 = rss1, fit.params = p;
-          lambda = std::max(lambda / 4, 1e-7);
-          improved = true;
-          if (gain < 1e-7) it = 99;
-        } else {
-          lambda *= 8;
-        }
-      }
-      if (!improved) break;
-    }
-    normalise_periodic(fit.params);
-    fit.rss = weighted_residual(ctx, fit.params).squaredNorm();
+    refine(ctx, fit);
+    const Eigen::Index m = Eigen::Index(keys_of(fit.selected).size());
     // Verified by re-simulation: the round's effects must pay for their
     // parameters in the real model too, not only in the linearisation.
     const int added = int(m) - int(keys_of(before_round.selected).size());
@@ -750,7 +792,8 @@ ModelFit fit_model(const FitContext& ctx, const MachineParams& base) {
       fit.params = without_effect(fit.params, base, fit.selected[weakest]);
       have.erase(fit.selected[weakest].group);
       fit.selected.erase(fit.selected.begin() + std::ptrdiff_t(weakest));
-      fit.rss = weighted_residual(ctx, fit.params).squaredNorm();
+      // The others were fitted beside it: fit them again without it.
+      refine(ctx, fit);
     }
     if (gain > -ctx.bic_threshold || fit.selected.empty()) {
       say("re-simulation does not confirm the round's effects; dropped");
@@ -799,8 +842,34 @@ ModelFit fit_model(const FitContext& ctx, const MachineParams& base) {
       say("dropped " + sel.group + ": the believed value lies inside the fitted interval");
       fit.params = without_effect(fit.params, base, sel);
       fit.selected.erase(fit.selected.begin() + std::ptrdiff_t(e));
+      refine(ctx, fit);
       dropped = true;
     }
+  }
+
+  // Too small to matter, re-simulated: an effect (or an adjustment of a
+  // believed one) whose contribution stays below min_effect_ratio of the
+  // noise floor is not claimed, however strongly the BIC favours it (with
+  // noise-free or quantised data the BIC sees any systematic misfit).
+  for (bool dropped = true; dropped && !fit.selected.empty();) {
+    dropped = false;
+    const VectorXd r_fit = weighted_residual(ctx, fit.params);
+    std::size_t smallest = 0;
+    double smallest_rms = INFINITY, smallest_share = INFINITY;
+    for (std::size_t e = 0; e < fit.selected.size(); ++e) {
+      const VectorXd diff =
+          weighted_residual(ctx, without_effect(fit.params, base, fit.selected[e])) - r_fit;
+      const double rms = rms_on_support(diff, ctx.layout);
+      const double share = rms / fit.selected[e].min_effect_ratio;
+      if (share < smallest_share) smallest_share = share, smallest_rms = rms, smallest = e;
+    }
+    if (smallest_share >= 1.0) break;
+    say("dropped " + fit.selected[smallest].group + ": its contribution is " + fmt(smallest_rms) +
+        " of the noise floor");
+    fit.params = without_effect(fit.params, base, fit.selected[smallest]);
+    fit.selected.erase(fit.selected.begin() + std::ptrdiff_t(smallest));
+    refine(ctx, fit);
+    dropped = true;
   }
 
   // Confidence intervals from the Jacobian at the solution, inflated for

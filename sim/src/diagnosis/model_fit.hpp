@@ -34,6 +34,7 @@ struct Candidate {
   std::string group;              // effect:axis[:part]; variants of a group exclude each other
   std::string variant;            // e.g. "tau_s=120" (empty when none)
   std::vector<std::string> keys;  // parameters the nonlinear fit moves
+  double min_effect_ratio = 0.0;  // > 0: overrides FitContext::min_effect_ratio
   Eigen::MatrixXd X;              // weighted, centred signature columns
   // Puts the effect into `params` from the linear coefficients of X; false
   // when they have no physical meaning (e.g. a negative lag).
@@ -48,6 +49,7 @@ struct FitContext {
   Layout layout;
   double max_period_s = 1e-3;
   double bic_threshold = 10.0;
+  double min_effect_ratio = 0.1;  // DiagnosisOptions::min_effect_ratio
   std::function<void(const std::string&)> progress;
 };
 
@@ -63,6 +65,7 @@ struct SelectedEffect {
   std::string axis, group, variant;
   std::vector<std::string> keys;
   double delta_bic = 0.0;
+  double min_effect_ratio = 0.1;  // least contribution claimed, in units of the floor
 };
 
 struct ModelFit {

@@ -106,12 +106,19 @@ std::string diagnosis_html(const DiagnosisResult& r) {
        (r.map.empty() ? "" : ", map <code>" + esc(r.map) + "</code>") +
        "; believed model: " + esc(r.believed.name) + "</p>\n";
   s += "<p><b>Verdict:</b> " + esc(r.verdict) + "</p>\n";
+  if (!r.notes.empty()) {
+    s += "<ul>";
+    for (const auto& n : r.notes)
+      s += "<li>" + esc(n) + "</li>";
+    s += "</ul>\n";
+  }
   s += "<p>Logging delay removed: " + f(r.delay_s * 1e3, "%.4g") + " ms" +
        (r.delay_ci95_s ? " (95 %: " + f(r.delay_ci95_s->first * 1e3, "%.4g") + " .. " +
                              f(r.delay_ci95_s->second * 1e3, "%.4g") + " ms)"
                        : std::string()) +
        (r.delay_note.empty() ? "" : "; " + esc(r.delay_note)) + ". Noise floor " +
-       f(r.noise_floor_mm * 1e3, "%.3g") + " µm (robust high-pass MAD).</p>\n";
+       f(r.noise_floor_mm * 1e3, "%.3g") +
+       " µm (robust high-pass MAD, at least the recording's resolution).</p>\n";
 
   s += "<section><h2>Fit</h2><table><tr><th></th><th>samples</th><th>RMS before</th><th>RMS "
        "after</th><th>max before</th><th>max after</th></tr>";
