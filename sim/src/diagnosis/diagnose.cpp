@@ -34,23 +34,27 @@ Masks make_masks(const Trace& tr, double margin_s, double holdout_fraction) {
   m.train.assign(n, 0);
   m.heldout.assign(n, 0);
   m.valid.assign(n, 0);
-  // Recorder glitches: a command jump far beyond the path's own speeds
-  // (20 × the median speed while moving) is not motion; the two
-  // samples around it are left out of every fit and statistic.
+  // Recorder glitches: an isolated command jump — far beyond the path's own
+  // speeds (20 × the median speed while moving) and 5 × faster than both
+  // neighbouring intervals — is not motion (a rapid move ramps up and down
+  // over several samples, or spans several at its speed); the two samples
+  // around it are left out of every fit and statistic.
   std::vector<char> glitch(n, 0);
   for (int j = 0; j < kJointCount; ++j) {
-    if (tr.cmd[j].empty()) continue;
+    if (tr.cmd[j].empty() || n < 3) continue;
+    std::vector<double> v(n, 0.0);  // v[k]: speed over the interval k-1 → k
+    for (std::size_t k = 1; k < n; ++k)
+      v[k] = std::abs(tr.cmd[j][k] - tr.cmd[j][k - 1]) / (tr.t_s[k] - tr.t_s[k - 1]);
     std::vector<double> speeds;
-    for (std::size_t k = 1; k < n; ++k) {
-      const double v = std::abs(tr.cmd[j][k] - tr.cmd[j][k - 1]) / (tr.t_s[k] - tr.t_s[k - 1]);
-      if (v > 0) speeds.push_back(v);
-    }
+    for (std::size_t k = 1; k < n; ++k)
+      if (v[k] > 0) speeds.push_back(v[k]);
     if (speeds.size() < 10) continue;
     std::nth_element(speeds.begin(), speeds.begin() + speeds.size() / 2, speeds.end());
     const double limit = 20 * speeds[speeds.size() / 2];
-    for (std::size_t k = 1; k < n; ++k)
-      if (std::abs(tr.cmd[j][k] - tr.cmd[j][k - 1]) / (tr.t_s[k] - tr.t_s[k - 1]) > limit)
-        glitch[k] = glitch[k - 1] = 1;
+    for (std::size_t k = 1; k < n; ++k) {
+      const double neighbours = std::max(v[k - 1], k + 1 < n ? v[k + 1] : 0.0);
+      if (v[k] > limit && v[k] > 5 * neighbours) glitch[k] = glitch[k - 1] = 1;
+    }
   }
   for (std::size_t k = 0; k < n; ++k) {
     const double t = tr.t_s[k];
@@ -249,6 +253,21 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
     say(std::to_string(masks.excluded) +
         " samples around command jumps left out (recorder glitches)");
   const MachineParams& base = believed.machine;
+  // A hold-out recording must carry the same joints.
+  std::optional<Trace> hold_tr;
+  Masks hold_masks;
+  if (holdout_rec) {
+    hold_tr = make_trace(*holdout_rec, o.command_interpolation);
+    if (hold_tr->axes != tr.axes)
+      throw DiagnosisError(holdout_rec->file +
+                           ": the hold-out recording must carry the same joints (with a "
+                           "command and a target) as " +
+                           train_rec.file);
+    if (hold_tr->rows() < 20)
+      throw DiagnosisError(holdout_rec->file + ": " + std::to_string(hold_tr->rows()) +
+                           " samples; at least 20 are needed");
+    hold_masks = make_masks(*hold_tr, dmax, 0.0);
+  }
 
   say("re-simulating " + std::to_string(tr.rows()) + " samples (" + std::to_string(res.substeps) +
       " servo periods per interval) with the believed model");
@@ -369,7 +388,14 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
     say("fitting with delay " + fmt("%.5g", d) + " s");
     Hypothesis h;
     h.delay_s = d;
-    h.fit = fit_model(context(tr, masks.train, w, d, o), base);
+    FitContext ctx = context(tr, masks.train, w, d, o);
+    FitContext held;
+    if (hold_tr)
+      held = context(*hold_tr, hold_masks.train, w, d, o);
+    else if (holdout_fraction > 0)
+      held = context(tr, masks.heldout, w, d, o);
+    if (held.layout.size() > 0) ctx.heldout = &held;
+    h.fit = fit_model(ctx, base);
     hyps.push_back(h);
     return hyps.back();
   };
@@ -455,6 +481,7 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
   const ModelFit& fit = H.fit;
   res.not_identifiable.insert(res.not_identifiable.end(), fit.not_identifiable.begin(),
                               fit.not_identifiable.end());
+  res.not_confirmed = fit.not_confirmed;
   res.candidates_tested = fit.tested;
   res.candidates_tested.insert(res.candidates_tested.begin(), "logging_delay");
   res.fitted = believed;
@@ -511,7 +538,8 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
     st.standstill_noise_mm = standstill_noise(r, v, all_valid, std::max(1e-3 * vmax, 1e-9),
                                               std::max<std::size_t>(5, std::size_t(0.05 / dt)));
     floor_ss += st.noise_floor_mm * st.noise_floor_mm;
-    locate_axis(tr, j, r, all_valid, noise_only[j], interpolation_u[j], res.mismatch);
+    locate_axis(tr, j, r, all_valid, noise_only[j], st.resolution_mm, interpolation_u[j],
+                res.mismatch);
 
     AxisSeries se;
     se.axis = st.axis;
@@ -553,12 +581,7 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
 
   // Held out: the last time block, or a second recording.
   if (holdout_rec) {
-    const Trace ht = make_trace(*holdout_rec, o.command_interpolation);
-    if (ht.axes != tr.axes)
-      throw DiagnosisError(holdout_rec->file +
-                           ": the hold-out recording must carry the same "
-                           "joints as " +
-                           train_rec.file);
+    const Trace& ht = *hold_tr;
     say("re-simulating the hold-out recording " + holdout_rec->file);
     const Masks hm = make_masks(ht, std::abs(H.delay_s), 0.0);
     const Simulated hs0 = resimulate(base, ht, o.max_servo_period_s);
@@ -614,9 +637,7 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
 
   // The tool-centre point, when measured: the kinematics' effects.
   if (tr.has_tcp()) {
-    std::optional<Trace> ht;
-    if (holdout_rec) ht = make_trace(*holdout_rec, o.command_interpolation);
-    const TcpStage ts = fit_tcp(tr, train_use, held_use, ht ? &*ht : nullptr, base, o);
+    const TcpStage ts = fit_tcp(tr, train_use, held_use, hold_tr ? &*hold_tr : nullptr, base, o);
     res.tcp = ts.comparison;
     res.mismatch.insert(res.mismatch.end(), ts.mismatch.begin(), ts.mismatch.end());
     std::stable_sort(

@@ -41,9 +41,10 @@ struct Acc {
 
 // Significant: at least 10 samples and an RMS 1.5 times the floor or more
 // (for white noise at the floor the RMS of 10 samples exceeds 1.5σ with a
-// probability below 0.1 %).
-bool significant(const Acc& a, double noise) {
-  return a.n >= 10 && a.rms() > 1.5 * a.floor(noise);
+// probability below 0.1 %), and above one step of the recording's grid
+// (below that, rounding flips between recording and model are all it shows).
+bool significant(const Acc& a, double noise, double step) {
+  return a.n >= 10 && a.rms() > 1.5 * a.floor(noise) && a.rms() > step;
 }
 
 Mismatch make(const std::string& axis, const std::string& where, const std::string& what,
@@ -193,7 +194,8 @@ std::vector<Motion> classify_motion(const std::vector<double>& t, const std::vec
 }
 
 void locate_axis(const Trace& tr, int j, const std::vector<double>& r, const std::vector<char>& use,
-                 double floor, const std::vector<double>& uncertainty, std::vector<Mismatch>& out) {
+                 double floor, double step, const std::vector<double>& uncertainty,
+                 std::vector<Mismatch>& out) {
   const std::string ax(kJointNames[j]);
   auto u = [&](std::size_t k) { return uncertainty.empty() ? 0.0 : uncertainty[k]; };
   const auto motion = classify_motion(tr.t_s, tr.cmd[j]);
@@ -203,9 +205,10 @@ void locate_axis(const Trace& tr, int j, const std::vector<double>& r, const std
     whole.add(r[k], u(k));
     by_motion[int(motion[k])].add(r[k], u(k));
   }
-  if (significant(whole, floor)) out.push_back(make(ax, "axis", "whole recording", whole, floor));
+  if (significant(whole, floor, step))
+    out.push_back(make(ax, "axis", "whole recording", whole, floor));
   for (int m = 0; m < 4; ++m)
-    if (significant(by_motion[m], floor))
+    if (significant(by_motion[m], floor, step))
       out.push_back(make(ax, "condition", motion_name(Motion(m)), by_motion[m], floor));
 
   // Time windows: 20 equal windows, neighbours above the floor merged.
@@ -215,13 +218,13 @@ void locate_axis(const Trace& tr, int j, const std::vector<double>& r, const std
   for (std::size_t k = 0; k < r.size(); ++k)
     if (use[k]) win[std::min(W - 1, int((tr.t_s[k] - t0) / (t1 - t0 + 1e-12) * W))].add(r[k], u(k));
   for (int w = 0; w < W;) {
-    if (!significant(win[w], floor)) {
+    if (!significant(win[w], floor, step)) {
       ++w;
       continue;
     }
     Acc merged;
     int e = w;
-    for (; e < W && significant(win[e], floor); ++e)
+    for (; e < W && significant(win[e], floor, step); ++e)
       merged.merge(win[e]);
     out.push_back(make(ax, "time",
                        fmt("t %.3f–%.3f s", t0 + (t1 - t0) * w / W, t0 + (t1 - t0) * e / W), merged,
@@ -234,7 +237,8 @@ void locate_axis(const Trace& tr, int j, const std::vector<double>& r, const std
       if (use[k]) lines[tr.line[k]].add(r[k], u(k));
     std::vector<Mismatch> ms;
     for (const auto& [l, a] : lines)
-      if (significant(a, floor)) ms.push_back(make(ax, "line", fmt("line %.0f", l), a, floor));
+      if (significant(a, floor, step))
+        ms.push_back(make(ax, "line", fmt("line %.0f", l), a, floor));
     std::sort(ms.begin(), ms.end(),
               [](const Mismatch& a, const Mismatch& b) { return a.rms_mm > b.rms_mm; });
     if (ms.size() > 10) ms.resize(10);
@@ -250,7 +254,7 @@ void locate_axis(const Trace& tr, int j, const std::vector<double>& r, const std
       bins[std::min(11, int(ang / 30))].add(r[k], u(k));
     }
     for (int b = 0; b < 12; ++b)
-      if (significant(bins[b], floor))
+      if (significant(bins[b], floor, step))
         out.push_back(
             make(ax, "rotary_angle",
                  std::string(kJointNames[rj]) + fmt(" %.0f–%.0f deg", b * 30.0, b * 30.0 + 30),

@@ -36,10 +36,11 @@ std::vector<Motion> classify_motion(const std::vector<double>& t, const std::vec
 
 // Appends the regions of axis `axis` where the residual is significantly
 // above its floor: the noise `floor` and, per sample, the re-simulation's
-// own `uncertainty` (empty: none), added in quadrature over the region.
+// own `uncertainty` (empty: none), added in quadrature over the region; and
+// above `step`, the recording's resolution (0: continuous).
 void locate_axis(const Trace& trace, int joint, const std::vector<double>& residual,
-                 const std::vector<char>& use, double floor, const std::vector<double>& uncertainty,
-                 std::vector<Mismatch>& out);
+                 const std::vector<char>& use, double floor, double step,
+                 const std::vector<double>& uncertainty, std::vector<Mismatch>& out);
 
 // Ljung–Box over lags 1..h of residual series (each a separate axis).
 Whiteness whiteness(const std::vector<std::vector<double>>& series, int lags = 10);

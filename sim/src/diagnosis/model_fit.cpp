@@ -806,12 +806,6 @@ ModelFit fit_model(const FitContext& ctx, const MachineParams& base) {
     }
   }
 
-  // Confusions found on the linearisation count only for effects that stayed.
-  std::erase_if(fit.not_identifiable, [&](const NotIdentifiable& ni) {
-    return std::none_of(fit.selected.begin(), fit.selected.end(),
-                        [&](const SelectedEffect& s) { return s.group == ni.first; });
-  });
-
   // An adjustment of an effect the believed model already has is kept only
   // when the data move it: when the 95 % interval of every one of its
   // parameters still covers the believed value, the believed value stands.
@@ -871,6 +865,68 @@ ModelFit fit_model(const FitContext& ctx, const MachineParams& base) {
     refine(ctx, fit);
     dropped = true;
   }
+
+  // Proven on data it was not fitted on: an effect that raises the held-out
+  // residual (the fitted model against the same model without it; the
+  // offsets those of the fitted block, as a prediction must carry them) is
+  // not confirmed and left out; the others are fitted again without it.
+  if (ctx.heldout) {
+    // Weighted held-out RSS and the sample count.
+    auto heldout_rss = [&](const MachineParams& p) {
+      const Simulated st = simulate_aligned(ctx, p);
+      const Simulated sh = ctx.heldout->trace == ctx.trace ? st : simulate_aligned(*ctx.heldout, p);
+      const Layout& tl = ctx.layout;
+      const Layout& hl = ctx.heldout->layout;
+      double rss = 0;
+      for (std::size_t a = 0; a < tl.axes.size(); ++a) {
+        const int j = tl.axes[a];
+        double off = 0;
+        for (std::size_t k : tl.index[a])
+          off += ctx.aligned[j][k] - st.target[j][k];
+        off /= std::max<std::size_t>(1, tl.index[a].size());
+        for (std::size_t k : hl.index[a]) {
+          const double r = (ctx.heldout->aligned[j][k] - sh.target[j][k] - off) * hl.weight[a];
+          rss += r * r;
+        }
+      }
+      return rss;
+    };
+    // An RMS in mm for the report: the weighted RSS over the sum of squared weights.
+    auto rms_mm = [&](double rss) {
+      const Layout& hl = ctx.heldout->layout;
+      double ww = 0;
+      for (std::size_t a = 0; a < hl.index.size(); ++a)
+        ww += hl.weight[a] * hl.weight[a] * double(hl.index[a].size());
+      return ww > 0 ? std::sqrt(rss / ww) : 0.0;
+    };
+    for (bool dropped = true; dropped && !fit.selected.empty();) {
+      dropped = false;
+      const double with = heldout_rss(fit.params);
+      std::size_t worst = 0;
+      double worst_gain = INFINITY, worst_without = 0;
+      for (std::size_t e = 0; e < fit.selected.size(); ++e) {
+        const double without = heldout_rss(without_effect(fit.params, base, fit.selected[e]));
+        if (without - with < worst_gain)
+          worst_gain = without - with, worst = e, worst_without = without;
+      }
+      // About zero: the held-out data do not see the effect (e.g. no
+      // reversal of that axis there); they neither confirm nor refute it.
+      if (worst_gain >= -1e-9 * with) break;
+      const auto& sel = fit.selected[worst];
+      say("dropped " + sel.group + ": it raises the held-out residual");
+      fit.not_confirmed.push_back({sel.effect, sel.axis, rms_mm(with), rms_mm(worst_without)});
+      fit.params = without_effect(fit.params, base, sel);
+      fit.selected.erase(fit.selected.begin() + std::ptrdiff_t(worst));
+      refine(ctx, fit);
+      dropped = true;
+    }
+  }
+
+  // Confusions found on the linearisation count only for effects that stayed.
+  std::erase_if(fit.not_identifiable, [&](const NotIdentifiable& ni) {
+    return std::none_of(fit.selected.begin(), fit.selected.end(),
+                        [&](const SelectedEffect& s) { return s.group == ni.first; });
+  });
 
   // Confidence intervals from the Jacobian at the solution, inflated for
   // correlated residuals (effective sample count).

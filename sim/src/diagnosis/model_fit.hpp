@@ -50,6 +50,9 @@ struct FitContext {
   double max_period_s = 1e-3;
   double bic_threshold = 10.0;
   double min_effect_ratio = 0.1;  // DiagnosisOptions::min_effect_ratio
+  // The held-out samples (same weights and delay), or null: an effect must
+  // lower their residual to be kept.
+  const FitContext* heldout = nullptr;
   std::function<void(const std::string&)> progress;
 };
 
@@ -74,6 +77,7 @@ struct ModelFit {
   std::vector<Parameter> parameters;  // parallel to the concatenated keys of `selected`
   std::vector<std::vector<Parameter>> per_effect;
   std::vector<NotIdentifiable> not_identifiable;
+  std::vector<NotConfirmed> not_confirmed;
   std::vector<std::string> tested;
   double rss = 0.0;  // weighted, centred
   std::size_t n = 0;

@@ -162,6 +162,14 @@ std::string diagnosis_html(const DiagnosisResult& r) {
            "</b>: " + esc(n.separate_by) + "</li>";
     s += "</ul>";
   }
+  if (!r.not_confirmed.empty()) {
+    s += "<h3>Not confirmed on the held-out data (left out of the fitted model)</h3><ul>";
+    for (const auto& n : r.not_confirmed)
+      s += "<li><b>" + esc(n.effect) + (n.axis.empty() ? "" : " " + esc(n.axis)) +
+           "</b>: held-out RMS " + f(n.heldout_rms_with_mm * 1e3, "%.3g") + " µm with it, " +
+           f(n.heldout_rms_without_mm * 1e3, "%.3g") + " µm without</li>";
+    s += "</ul>";
+  }
   s += "</section>\n";
 
   s += "<section><h2>Where the residual is above the noise floor</h2>";

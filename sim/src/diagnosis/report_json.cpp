@@ -104,6 +104,12 @@ std::string diagnosis_json(const DiagnosisResult& r) {
                                      {"second", n.second},
                                      {"correlation", num(n.correlation)},
                                      {"separate_by", n.separate_by}});
+  j["not_confirmed"] = json::array();
+  for (const auto& n : r.not_confirmed)
+    j["not_confirmed"].push_back({{"effect", n.effect},
+                                  {"axis", n.axis},
+                                  {"heldout_rms_with_mm", num(n.heldout_rms_with_mm)},
+                                  {"heldout_rms_without_mm", num(n.heldout_rms_without_mm)}});
   j["candidates_tested"] = r.candidates_tested;
   j["fit"]["train"] = fit_json(r.train);
   j["fit"]["heldout"] = r.has_heldout ? fit_json(r.heldout) : json(nullptr);
@@ -168,6 +174,10 @@ std::string diagnosis_summary(const DiagnosisResult& r) {
   }
   for (const auto& n : r.not_identifiable)
     s += "not identifiable: " + n.first + " vs " + n.second + " — " + n.separate_by + "\n";
+  for (const auto& n : r.not_confirmed)
+    s += "not confirmed on the held-out data (left out): " + n.effect +
+         (n.axis.empty() ? "" : " " + n.axis) + ", held-out rms " + g(n.heldout_rms_with_mm * 1e3) +
+         " µm with it, " + g(n.heldout_rms_without_mm * 1e3) + " µm without\n";
   s += "fit: rms " + g(r.train.rms_unaligned_mm * 1e3) + " (delay not removed) → " +
        g(r.train.rms_before_mm * 1e3) + " → " + g(r.train.rms_after_mm * 1e3) + " µm (fitted data)";
   if (r.has_heldout)

@@ -95,6 +95,15 @@ struct NotIdentifiable {
   std::string separate_by;  // what motion or measurement would tell them apart
 };
 
+// An effect the fitted data selected but the held-out data do not support:
+// left out of the fitted description.
+struct NotConfirmed {
+  std::string effect;
+  std::string axis;
+  double heldout_rms_with_mm = 0.0;     // held-out RMS with the effect fitted
+  double heldout_rms_without_mm = 0.0;  // and without it
+};
+
 struct AxisStats {
   std::string axis;
   std::string target;  // channel compared: <j>_meas or <j>_act
@@ -157,6 +166,7 @@ struct DiagnosisResult {
   std::vector<Mismatch> mismatch;
   std::vector<Explanation> explanations;
   std::vector<NotIdentifiable> not_identifiable;
+  std::vector<NotConfirmed> not_confirmed;
   std::vector<std::string> candidates_tested;
   FitFigures train, heldout;
   bool has_heldout = false;
