@@ -69,8 +69,11 @@ Masks make_masks(const Trace& tr, double margin_s, double holdout_fraction) {
   return m;
 }
 
+// Per axis of tr.axes, per row: the factor on the axis' weight (empty: 1).
+using SampleWeights = std::vector<std::vector<double>>;
+
 FitContext context(const Trace& tr, const std::vector<char>& use, const std::vector<double>& w,
-                   double delay_s, const DiagnosisOptions& o) {
+                   const SampleWeights& sw, double delay_s, const DiagnosisOptions& o) {
   FitContext c;
   c.trace = &tr;
   c.max_period_s = o.max_servo_period_s;
@@ -82,55 +85,57 @@ FitContext context(const Trace& tr, const std::vector<char>& use, const std::vec
   for (std::size_t a = 0; a < tr.axes.size(); ++a) {
     c.aligned[tr.axes[a]] = tr.target[tr.axes[a]];
     std::vector<std::size_t> ix;
+    std::vector<double> f;
     for (std::size_t k = 0; k < tr.rows(); ++k)
-      if (use[k]) ix.push_back(k);
+      if (use[k]) ix.push_back(k), f.push_back(sw.empty() ? 1.0 : sw[a][k]);
     c.layout.index.push_back(std::move(ix));
     c.layout.weight.push_back(w[a]);
+    if (!sw.empty()) c.layout.sample_weight.push_back(std::move(f));
   }
   return c;
 }
 
 // Weighted, centred RSS of the recording read at t + d against a fixed simulation.
 double delay_rss(const Trace& tr, const Simulated& sim, const std::vector<char>& use,
-                 const std::vector<double>& w, double d) {
+                 const std::vector<double>& w, const SampleWeights& sw, double d) {
   double total = 0;
   for (std::size_t a = 0; a < tr.axes.size(); ++a) {
     const int j = tr.axes[a];
     const auto& y = tr.target[j];
     const auto sd = delayed(tr.t_s, sim.target[j], d);
-    double s = 0, ss = 0;
-    std::size_t n = 0;
+    double s = 0, ss = 0, uu = 0;
     for (std::size_t k = 0; k < y.size(); ++k)
       if (use[k]) {
-        const double r = (y[k] - sd[k]) * w[a];
-        s += r, ss += r * r, ++n;
+        const double u = w[a] * (sw.empty() ? 1.0 : sw[a][k]), r = y[k] - sd[k];
+        s += u * u * r, ss += u * u * r * r, uu += u * u;
       }
-    total += n ? ss - s * s / double(n) : 0;
+    total += uu > 0 ? ss - s * s / uu : 0;
   }
   return total;
 }
 
 // The delay minimising delay_rss in [lo, hi]: a grid, then golden section.
 double best_delay(const Trace& tr, const Simulated& sim, const std::vector<char>& use,
-                  const std::vector<double>& w, double lo, double hi, double step) {
-  double best = 0, best_rss = delay_rss(tr, sim, use, w, 0.0);
+                  const std::vector<double>& w, const SampleWeights& sw, double lo, double hi,
+                  double step) {
+  double best = 0, best_rss = delay_rss(tr, sim, use, w, sw, 0.0);
   const int steps = std::min(800, int(std::ceil((hi - lo) / step)));
   for (int i = 0; i <= steps; ++i) {
     const double d = lo + (hi - lo) * i / std::max(1, steps);
-    const double r = delay_rss(tr, sim, use, w, d);
+    const double r = delay_rss(tr, sim, use, w, sw, d);
     if (r < best_rss) best_rss = r, best = d;
   }
   const double g = (std::sqrt(5.0) - 1) / 2;
   double a = best - (hi - lo) / std::max(1, steps), b = best + (hi - lo) / std::max(1, steps);
   for (int it = 0; it < 30; ++it) {
     const double c = b - g * (b - a), d = a + g * (b - a);
-    if (delay_rss(tr, sim, use, w, c) < delay_rss(tr, sim, use, w, d))
+    if (delay_rss(tr, sim, use, w, sw, c) < delay_rss(tr, sim, use, w, sw, d))
       b = d;
     else
       a = c;
   }
   const double m = (a + b) / 2;
-  return delay_rss(tr, sim, use, w, m) < best_rss ? m : best;
+  return delay_rss(tr, sim, use, w, sw, m) < best_rss ? m : best;
 }
 
 struct Hypothesis {
@@ -339,7 +344,7 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
             e2.rms[j] > 0 ? std::clamp(std::log2(e4.rms[j] / e2.rms[j]), 0.0, 3.0) : 0.0;
         const double scale = 1.0 / std::exp2(p);
         interpolation_rms[j] = e2.rms[j] * scale;
-        // Per sample (for locating): the kept samples' own, the larger
+        // Per sample (weights, locating): the kept samples' own, the larger
         // neighbour's in between, taken as first order at least — a start or
         // a stop inside one interval converges more slowly than the average.
         const double local = 1.0 / std::exp2(std::min(p, 1.0));
@@ -377,23 +382,38 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
     res.axes.push_back(st);
     w.push_back(1.0 / std::max(st.noise_floor_mm, 1e-7));
   }
+  // Where the re-simulation between coarse samples is itself uncertain by u
+  // (more than the noise), the sample counts less: 1 / √(1 + (u/σ)²).
+  SampleWeights sw;
+  if (std::any_of(interpolation_u.begin(), interpolation_u.end(),
+                  [](const auto& u) { return !u.empty(); }))
+    for (std::size_t a = 0; a < tr.axes.size(); ++a) {
+      const int j = tr.axes[a];
+      std::vector<double> f(tr.rows(), 1.0);
+      const double sigma = std::max(noise_only[j], 1e-7);
+      if (!interpolation_u[j].empty())
+        for (std::size_t k = 0; k < tr.rows(); ++k)
+          f[k] = 1.0 / std::hypot(1.0, interpolation_u[j][k] / sigma);
+      sw.push_back(std::move(f));
+      w[a] = 1.0 / sigma;  // the uncertainty is per sample now: w · f = 1 / √(σ² + u²)
+    }
 
   // Align: a logging delay and the effects are fitted as competing
   // hypotheses, so that neither masquerades as the other.
   const double step = std::max(dt / 4, dmax / 400);
   say("searching a logging delay within ±" + fmt("%.4g", dmax) + " s");
-  const double d_a = best_delay(tr, sim0, masks.train, w, -dmax, dmax, step);
+  const double d_a = best_delay(tr, sim0, masks.train, w, sw, -dmax, dmax, step);
   std::vector<Hypothesis> hyps;
   auto fit_at = [&](double d) {
     say("fitting with delay " + fmt("%.5g", d) + " s");
     Hypothesis h;
     h.delay_s = d;
-    FitContext ctx = context(tr, masks.train, w, d, o);
+    FitContext ctx = context(tr, masks.train, w, sw, d, o);
     FitContext held;
     if (hold_tr)
-      held = context(*hold_tr, hold_masks.train, w, d, o);
+      held = context(*hold_tr, hold_masks.train, w, {}, d, o);
     else if (holdout_fraction > 0)
-      held = context(tr, masks.heldout, w, d, o);
+      held = context(tr, masks.heldout, w, sw, d, o);
     if (held.layout.size() > 0) ctx.heldout = &held;
     h.fit = fit_model(ctx, base);
     hyps.push_back(h);
@@ -405,12 +425,12 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
     Hypothesis h1 = fit_at(d_a);
     const Simulated s1 = resimulate(h1.fit.params, tr, o.max_servo_period_s);
     const double d_a2 =
-        best_delay(tr, s1, masks.train, w, d_a - 2 * step, d_a + 2 * step, step / 8);
+        best_delay(tr, s1, masks.train, w, sw, d_a - 2 * step, d_a + 2 * step, step / 8);
     if (std::abs(d_a2 - d_a) > 0.02 * dt) fit_at(d_a2);
   }
   {
     const Simulated s0f = resimulate(h0.fit.params, tr, o.max_servo_period_s);
-    const double d0 = best_delay(tr, s0f, masks.train, w, -dmax, dmax, step);
+    const double d0 = best_delay(tr, s0f, masks.train, w, sw, -dmax, dmax, step);
     bool known = false;
     for (const auto& h : hyps)
       known = known || std::abs(h.delay_s - d0) <= 0.05 * dt;
@@ -492,9 +512,9 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
   // Delay confidence interval from the profile of the RSS.
   const Simulated simf = resimulate(fit.params, tr, o.max_servo_period_s);
   {
-    const double rmin = delay_rss(tr, simf, masks.train, w, H.delay_s);
+    const double rmin = delay_rss(tr, simf, masks.train, w, sw, H.delay_s);
     auto inside = [&](double d) {
-      return fit.n_eff * std::log(delay_rss(tr, simf, masks.train, w, d) / rmin) <= 3.84;
+      return fit.n_eff * std::log(delay_rss(tr, simf, masks.train, w, sw, d) / rmin) <= 3.84;
     };
     // Each side: step out until outside, then bisect the crossing.
     auto edge = [&](double dir) {

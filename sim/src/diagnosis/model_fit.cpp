@@ -124,17 +124,23 @@ VectorXd Layout::stack(const std::array<std::vector<double>, kJointCount>& v) co
   Eigen::Index r = 0;
   for (std::size_t a = 0; a < axes.size(); ++a) {
     const auto& src = v[axes[a]];
-    for (std::size_t k : index[a])
-      out[r++] = src.empty() ? 0.0 : src[k] * weight[a];
+    for (std::size_t i = 0; i < index[a].size(); ++i)
+      out[r++] = src.empty() ? 0.0 : src[index[a][i]] * w(a, i);
   }
   return out;
 }
 
 void Layout::center(Eigen::Ref<VectorXd> v) const {
   Eigen::Index r = 0;
-  for (const auto& ix : index) {
-    const Eigen::Index m = Eigen::Index(ix.size());
-    if (m > 0) v.segment(r, m).array() -= v.segment(r, m).mean();
+  for (std::size_t a = 0; a < index.size(); ++a) {
+    const Eigen::Index m = Eigen::Index(index[a].size());
+    if (m > 0 && sample_weight.empty()) {
+      v.segment(r, m).array() -= v.segment(r, m).mean();
+    } else if (m > 0) {
+      const Eigen::Map<const VectorXd> u(sample_weight[a].data(), m);
+      const double uu = u.squaredNorm();
+      if (uu > 0) v.segment(r, m) -= u * (u.dot(v.segment(r, m)) / uu);
+    }
     r += m;
   }
 }
@@ -880,12 +886,16 @@ ModelFit fit_model(const FitContext& ctx, const MachineParams& base) {
       double rss = 0;
       for (std::size_t a = 0; a < tl.axes.size(); ++a) {
         const int j = tl.axes[a];
-        double off = 0;
-        for (std::size_t k : tl.index[a])
-          off += ctx.aligned[j][k] - st.target[j][k];
-        off /= std::max<std::size_t>(1, tl.index[a].size());
-        for (std::size_t k : hl.index[a]) {
-          const double r = (ctx.heldout->aligned[j][k] - sh.target[j][k] - off) * hl.weight[a];
+        double off = 0, uu = 0;
+        for (std::size_t i = 0; i < tl.index[a].size(); ++i) {
+          const std::size_t k = tl.index[a][i];
+          const double u2 = tl.w(a, i) * tl.w(a, i);
+          off += u2 * (ctx.aligned[j][k] - st.target[j][k]), uu += u2;
+        }
+        off = uu > 0 ? off / uu : 0.0;
+        for (std::size_t i = 0; i < hl.index[a].size(); ++i) {
+          const std::size_t k = hl.index[a][i];
+          const double r = (ctx.heldout->aligned[j][k] - sh.target[j][k] - off) * hl.w(a, i);
           rss += r * r;
         }
       }
@@ -896,7 +906,8 @@ ModelFit fit_model(const FitContext& ctx, const MachineParams& base) {
       const Layout& hl = ctx.heldout->layout;
       double ww = 0;
       for (std::size_t a = 0; a < hl.index.size(); ++a)
-        ww += hl.weight[a] * hl.weight[a] * double(hl.index[a].size());
+        for (std::size_t i = 0; i < hl.index[a].size(); ++i)
+          ww += hl.w(a, i) * hl.w(a, i);
       return ww > 0 ? std::sqrt(rss / ww) : 0.0;
     };
     for (bool dropped = true; dropped && !fit.selected.empty();) {

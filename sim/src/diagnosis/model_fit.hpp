@@ -19,9 +19,17 @@ struct Layout {
   std::vector<int> axes;
   std::vector<std::vector<std::size_t>> index;  // per axis, the samples used
   std::vector<double> weight;                   // per axis
+  // Per axis, per sample used (parallel to index), a factor on `weight`:
+  // 1 / √(1 + (u/σ)²) where the re-simulation itself is uncertain by u
+  // (coarse samples); empty: 1 everywhere.
+  std::vector<std::vector<double>> sample_weight;
+  double w(std::size_t axis, std::size_t i) const {
+    return weight[axis] * (sample_weight.empty() ? 1.0 : sample_weight[axis][i]);
+  }
   std::size_t size() const;
   Eigen::VectorXd stack(const std::array<std::vector<double>, kJointCount>& per_joint) const;
-  // Subtracts each axis' mean (the constant offset is a nuisance, profiled out).
+  // Profiles out each axis' constant offset (a nuisance): removes the
+  // projection on the axis' weights (its weighted mean).
   void center(Eigen::Ref<Eigen::VectorXd> v) const;
   // Lag-1 autocorrelation within the axes.
   double lag1(const Eigen::VectorXd& v) const;
