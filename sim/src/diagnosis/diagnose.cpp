@@ -694,6 +694,27 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
     }
     if (!never_moves.empty())
       res.notes.push_back(never_moves + ": the command never moves, nothing to test there");
+    // Believed cross-axis terms that need a joint the recording lacks.
+    auto coupling = [&](const std::string& what, int target, int other) {
+      if (!tr.meas[target] || tr.target[target].empty() || tr.cmd[target].empty() ||
+          !tr.cmd[other].empty())
+        return;
+      const std::string t(kJointNames[target]), o(kJointNames[other]);
+      res.notes.push_back("the believed " + what + " moves " + t + " with " + o +
+                          ", which the recording does not carry (held at 0 in the "
+                          "re-simulation): its share of " +
+                          t + "_meas stays in the residual; record " + o + "_cmd");
+    };
+    if (const auto* sq = base.effects.squareness.active()) {
+      if (sq->xy_urad != 0) coupling("squareness xy", kX, kY);
+      if (sq->zx_urad != 0) coupling("squareness zx", kX, kZ);
+      if (sq->yz_urad != 0) coupling("squareness yz", kY, kZ);
+    }
+    if (const auto* st = base.effects.straightness.active())
+      for (int i = 0; i < kStraightnessCount; ++i)
+        if (st->components[i])
+          coupling(std::string("straightness ") + kStraightnessNames[i], kStraightnessDirection[i],
+                   kStraightnessMoving[i]);
     if (!encoder_only.empty())
       res.notes.push_back(
           encoder_only +

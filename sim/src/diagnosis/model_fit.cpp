@@ -459,39 +459,59 @@ std::vector<Candidate> build_candidates(const FitContext& ctx, const MachinePara
       }
     }
   }
-  // straightness: the bow of a moving axis' path seen in another axis
-  // (the quadratic term about the middle of the commanded travel; the cubic
-  // term is left at its believed value: over a travel of a few hundred mm
-  // it is nearly collinear with the quadratic one and with the offsets).
+  // straightness: the bow of a moving axis' path seen in another axis: its
+  // quadratic term and where the bow is flat (reference_mm; a description's
+  // reference need not be the middle of the travel recorded, and a
+  // quadratic about the wrong point carries a slope that nothing else in
+  // the model takes up). Linear selection on s² and s about the believed
+  // (or middle-of-travel) reference: q(s − δ)² = q s² − 2qδ s + const. The
+  // cubic term is held at its believed value (over a few hundred mm it is
+  // nearly collinear with the quadratic one); a component with a cubic term
+  // keeps its reference.
   for (int i = 0; i < kStraightnessCount; ++i) {
     const int moving = kStraightnessMoving[i], dir = kStraightnessDirection[i];
     const bool has_target =
         std::find(L.axes.begin(), L.axes.end(), dir) != L.axes.end() && tr.meas[dir];
     if (!has_target || tr.cmd[moving].empty()) continue;
-    if (base.effects.straightness.active() && base.effects.straightness.params.components[i])
-      continue;
     const auto [lo, hi] = std::minmax_element(tr.cmd[moving].begin(), tr.cmd[moving].end());
-    if (*hi - *lo <= 1.0) continue;
-    const double ref = std::round((*lo + *hi) / 2 * 1000) / 1000;
+    const double span = *hi - *lo;
+    if (span <= 1.0) continue;
+    const auto* believed = base.effects.straightness.active()
+                               ? &base.effects.straightness.params.components[i]
+                               : nullptr;
+    const bool has = believed && *believed;
+    const double ref = has ? (*believed)->reference_mm : std::round((*lo + *hi) / 2 * 1000) / 1000;
+    const bool move_ref = !has || (*believed)->cubic_um_per_m3 == 0.0;
     const std::string name = kStraightnessNames[i];
     Candidate c;
     c.effect = "straightness";
     c.axis = name;
     c.group = "straightness:" + name;
     c.keys = {name + ".quadratic_um_per_m2"};
+    if (move_ref) c.keys.push_back(name + ".reference_mm");
     const auto& pos = sim0.motor[moving].empty() ? tr.cmd[moving] : sim0.motor[moving];
-    std::vector<double> q(tr.rows());
-    for (std::size_t k = 0; k < q.size(); ++k) {
-      const double sm = (pos[k] - ref) * 1e-3;
-      q[k] = sm * sm * 1e-3;
+    std::vector<double> sq(tr.rows()), sl(tr.rows());
+    for (std::size_t k = 0; k < sq.size(); ++k) {
+      const double sm = (pos[k] - ref) * 1e-3;  // m
+      sq[k] = sm * sm * 1e-3;                   // mm per µm/m²
+      sl[k] = sm * 1e-3;                        // mm per µm/m
     }
-    c.X = column(dir, q);
-    c.apply = [i, ref](MachineParams& p, const VectorXd& coef) {
+    c.X.resize(s0.size(), move_ref ? 2 : 1);
+    c.X.col(0) = column(dir, sq);
+    if (move_ref) c.X.col(1) = column(dir, sl);
+    const double lo_ok = *lo - span, hi_ok = *hi + span;
+    c.apply = [i, ref, move_ref, lo_ok, hi_ok](MachineParams& p, const VectorXd& coef) {
       p.effects.straightness.enabled = true;
       auto& comp = p.effects.straightness.params.components[i];
       if (!comp) comp = StraightnessComponent{0.0, 0.0, ref};
       comp->quadratic_um_per_m2 += coef[0];
-      return true;
+      if (!move_ref) return true;
+      const double q = comp->quadratic_um_per_m2;
+      if (q == 0.0) return false;
+      // q s² + b s = q (s + b/(2q))² − …: the bow is flat at s = −b/(2q).
+      comp->reference_mm = ref - coef[1] / (2 * q) * 1e3;
+      // A flat point far outside the travel is a slope, not a bow.
+      return comp->reference_mm >= lo_ok && comp->reference_mm <= hi_ok;
     };
     out.push_back(std::move(c));
   }
@@ -706,6 +726,37 @@ MachineParams without_effect(const MachineParams& fitted, const MachineParams& r
   return p;
 }
 
+namespace {
+
+// Covariance of the parameters from the Jacobian J of the weighted
+// residual r: each axis with its own residual variance and its own
+// correlation inflation (1 + ρ₁)/(1 − ρ₁), cov = (Σ_a J_aᵀJ_a / (s²_a f_a))⁻¹.
+// Pooling the axes would let an axis the effect does not touch (e.g. one
+// that matches its model to the count) shrink the interval of one it does.
+MatrixXd parameter_covariance(const Layout& layout, const MatrixXd& J, const VectorXd& r) {
+  const Eigen::Index p = J.cols();
+  const double n = double(r.size());
+  MatrixXd info = MatrixXd::Zero(p, p);
+  Eigen::Index row = 0;
+  for (const auto& ix : layout.index) {
+    const Eigen::Index m = Eigen::Index(ix.size());
+    if (m == 0) continue;
+    const auto seg = r.segment(row, m);
+    double num = 0, den = seg.squaredNorm();
+    for (Eigen::Index i = 1; i < m; ++i)
+      if (ix[std::size_t(i)] == ix[std::size_t(i - 1)] + 1) num += seg[i] * seg[i - 1];
+    const double rho = std::clamp(den > 0 ? num / den : 0.0, 0.0, 0.99);
+    const double s2 = den / double(m) * n / std::max(1.0, n - double(p));
+    const double var = std::max(s2 * (1 + rho) / (1 - rho), 1e-4);
+    const auto Ja = J.middleRows(row, m);
+    info += Ja.transpose() * Ja / var;
+    row += m;
+  }
+  return Eigen::CompleteOrthogonalDecomposition<MatrixXd>(info).pseudoInverse();
+}
+
+}  // namespace
+
 ModelFit fit_model(const FitContext& ctx, const MachineParams& base) {
   ModelFit fit;
   fit.params = base;
@@ -818,15 +869,10 @@ ModelFit fit_model(const FitContext& ctx, const MachineParams& base) {
   for (bool dropped = true; dropped && !fit.selected.empty();) {
     dropped = false;
     const auto ks = keys_of(fit.selected);
-    const Eigen::Index mk = Eigen::Index(ks.size());
     const VectorXd rr = weighted_residual(ctx, fit.params);
-    const double ne = n_eff_of(double(fit.n), ctx.layout.lag1(rr));
     const VectorXd t0 = get_theta(fit.params, ks);
     const MatrixXd J = jacobian(ctx, fit.params, ks, t0, rr);
-    const double s2 =
-        rr.squaredNorm() / std::max(1.0, double(fit.n) - double(mk)) * (double(fit.n) / ne);
-    const MatrixXd cv =
-        s2 * Eigen::CompleteOrthogonalDecomposition<MatrixXd>(J.transpose() * J).pseudoInverse();
+    const MatrixXd cv = parameter_covariance(ctx.layout, J, rr);
     Eigen::Index i = 0;
     for (std::size_t e = 0; e < fit.selected.size() && !dropped; ++e) {
       const auto& sel = fit.selected[e];
@@ -952,9 +998,7 @@ ModelFit fit_model(const FitContext& ctx, const MachineParams& base) {
   MatrixXd cov = MatrixXd::Zero(m, m);
   if (m > 0) {
     const MatrixXd J = jacobian(ctx, fit.params, keys, th, r0);
-    const double dof = std::max(1.0, double(fit.n) - double(m));
-    const double s2 = fit.rss / dof * (double(fit.n) / fit.n_eff);
-    cov = s2 * Eigen::CompleteOrthogonalDecomposition<MatrixXd>(J.transpose() * J).pseudoInverse();
+    cov = parameter_covariance(ctx.layout, J, r0);
   }
   Eigen::Index i = 0;
   for (const auto& s : fit.selected) {

@@ -414,10 +414,25 @@ TcpStage fit_tcp(const Trace& tr, const std::vector<char>& train,
     for (Eigen::Index i = 0; i < p; ++i)
       j.col(i) = column(tr, tr_rows, m, len, kParams[sel[std::size_t(i)]], w);
     VectorXd delta;
-    const double rss = rss_after(j, e, &delta);
-    const MatrixXd jtj = j.transpose() * j;
-    const double s2 = rss / std::max(1.0, big_n - double(p + k0)) * big_n / n_eff;
-    cov = jtj.completeOrthogonalDecomposition().pseudoInverse() * s2;
+    rss_after(j, e, &delta);
+    // Per component its own residual variance and correlation inflation
+    // (pooling would let a component the parameters do not move shrink the
+    // interval): cov = (Σ_c J_cᵀJ_c / (s²_c f_c))⁻¹.
+    const VectorXd rest = e - j * delta;
+    const Eigen::Index nc = rest.size() / 3;
+    MatrixXd info = MatrixXd::Zero(p, p);
+    for (int c = 0; c < 3; ++c) {
+      const auto seg = rest.segment(c * nc, nc);
+      double num = 0;
+      for (Eigen::Index i = 1; i < nc; ++i)
+        num += seg[i] * seg[i - 1];
+      const double den = seg.squaredNorm();
+      const double rho = std::clamp(den > 0 ? num / den : 0.0, 0.0, 0.99);
+      const double s2 = den / double(nc) * big_n / std::max(1.0, big_n - double(p + k0));
+      const auto jc = j.middleRows(c * nc, nc);
+      info += jc.transpose() * jc / std::max(s2 * (1 + rho) / (1 - rho), 1e-4);
+    }
+    cov = info.completeOrthogonalDecomposition().pseudoInverse();
     theta += delta;
     bool small = true;
     for (Eigen::Index i = 0; i < p; ++i)
