@@ -36,9 +36,10 @@ Masks make_masks(const Trace& tr, double margin_s, double holdout_fraction) {
   m.valid.assign(n, 0);
   // Recorder glitches: an isolated command jump — far beyond the path's own
   // speeds (20 × the median speed while moving) and 5 × faster than both
-  // neighbouring intervals — is not motion (a rapid move ramps up and down
-  // over several samples, or spans several at its speed); the two samples
-  // around it are left out of every fit and statistic.
+  // neighbouring intervals, or a one-sample spike out and back — is not
+  // motion (a rapid move ramps up and down over several samples, or spans
+  // several at its speed); the samples around it are left out of every fit
+  // and statistic.
   std::vector<char> glitch(n, 0);
   for (int j = 0; j < kJointCount; ++j) {
     if (tr.cmd[j].empty() || n < 3) continue;
@@ -51,9 +52,14 @@ Masks make_masks(const Trace& tr, double margin_s, double holdout_fraction) {
     if (speeds.size() < 10) continue;
     std::nth_element(speeds.begin(), speeds.begin() + speeds.size() / 2, speeds.end());
     const double limit = 20 * speeds[speeds.size() / 2];
+    const auto& c = tr.cmd[j];
     for (std::size_t k = 1; k < n; ++k) {
       const double neighbours = std::max(v[k - 1], k + 1 < n ? v[k + 1] : 0.0);
       if (v[k] > limit && v[k] > 5 * neighbours) glitch[k] = glitch[k - 1] = 1;
+      // One sample off and straight back: a spike, whatever its neighbours.
+      if (k + 1 < n && v[k] > limit && v[k + 1] > limit &&
+          std::abs(c[k + 1] - c[k - 1]) < 0.2 * std::abs(c[k] - c[k - 1]))
+        glitch[k - 1] = glitch[k] = glitch[k + 1] = 1;
     }
   }
   for (std::size_t k = 0; k < n; ++k) {

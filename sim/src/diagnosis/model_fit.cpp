@@ -956,6 +956,7 @@ ModelFit fit_model(const FitContext& ctx, const MachineParams& base) {
           ww += hl.w(a, i) * hl.w(a, i);
       return ww > 0 ? std::sqrt(rss / ww) : 0.0;
     };
+    const double none = heldout_rss(base);
     for (bool dropped = true; dropped && !fit.selected.empty();) {
       dropped = false;
       const double with = heldout_rss(fit.params);
@@ -968,9 +969,11 @@ ModelFit fit_model(const FitContext& ctx, const MachineParams& base) {
       }
       // About zero: the held-out data do not see the effect (e.g. no
       // reversal of that axis there); they neither confirm nor refute it.
-      if (worst_gain >= -1e-9 * with) break;
+      // Effects that help each other to a worse prediction than the
+      // believed model are dropped too, the least useful first.
+      if (worst_gain >= -1e-9 * with && with <= none * (1 + 1e-9)) break;
       const auto& sel = fit.selected[worst];
-      say("dropped " + sel.group + ": it raises the held-out residual");
+      say("dropped " + sel.group + ": the held-out residual does not confirm it");
       fit.not_confirmed.push_back({sel.effect, sel.axis, rms_mm(with), rms_mm(worst_without)});
       fit.params = without_effect(fit.params, base, sel);
       fit.selected.erase(fit.selected.begin() + std::ptrdiff_t(worst));

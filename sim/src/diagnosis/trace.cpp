@@ -101,9 +101,12 @@ Simulated resimulate(const MachineParams& params, const Trace& tr, double max_pe
     return (2 * s3 - 3 * s2 + 1) * p0 + (s3 - 2 * s2 + s) * dt * tr.cmd_slope[j][k] +
            (3 * s2 - 2 * s3) * p1 + (s3 - s2) * dt * tr.cmd_slope[j][k1];
   };
+  const double nominal_dt = median_period(tr.t_s);
   for (std::size_t k = 0; k < n; ++k) {
-    const double dt =
-        k + 1 < n ? tr.t_s[k + 1] - tr.t_s[k] : (n > 1 ? tr.t_s[k] - tr.t_s[k - 1] : 1e-3);
+    double dt = k + 1 < n ? tr.t_s[k + 1] - tr.t_s[k] : (n > 1 ? tr.t_s[k] - tr.t_s[k - 1] : 1e-3);
+    // Time stamps printed or summed in floating point jitter by parts in
+    // 10⁹ about the recorder's period; the servo steps at the period itself.
+    if (std::abs(dt - nominal_dt) <= 1e-6 * nominal_dt) dt = nominal_dt;
     const int sub = substeps_for(dt, max_period_s);
     const std::size_t k1 = std::min(k + 1, n - 1);
     for (int i = 0; i < sub; ++i) {
