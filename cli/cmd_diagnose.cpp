@@ -53,9 +53,14 @@ const char* kDiagnoseHelp =
     "                          0.3 without --holdout; 0: none)\n"
     "  --servo-period S        longest simulated servo period (default 0.001): each\n"
     "                          recorded interval is split into equal sub-steps\n"
+    "  --command-interpolation cubic|linear\n"
+    "                          the command between recorded samples (default cubic:\n"
+    "                          monotone, exact for constant accelerations)\n"
     "  --max-delay S           largest logging delay searched (default: 10 samples or\n"
     "                          50 ms, whichever is longer)\n"
     "  --bic-threshold D       BIC gain needed to select an effect (default 10)\n"
+    "  --min-effect R          smallest effect selected, RMS over the fitted block in\n"
+    "                          units of the noise floor (default 0.1)\n"
     "  --tcp-datum free|known  with tcp_true_x/y/z (a measured tool-centre point): free\n"
     "                          (default) profiles out its constant offset, known takes\n"
     "                          it as absolute in the workpiece frame (rotary_location,\n"
@@ -221,8 +226,10 @@ int cmd_diagnose(const std::vector<std::string>& argv) {
                       {"holdout", true},
                       {"split", true},
                       {"servo-period", true},
+                      {"command-interpolation", true},
                       {"max-delay", true},
                       {"bic-threshold", true},
+                      {"min-effect", true},
                       {"tcp-datum", true},
                       {"help", false}});
   if (a.flag("help")) {
@@ -246,7 +253,15 @@ int cmd_diagnose(const std::vector<std::string>& argv) {
   options.holdout_fraction = a.number("split", 0.3, 0.0, 0.9);
   options.max_servo_period_s = a.number("servo-period", 1e-3, 1e-6, 1.0);
   options.max_delay_s = a.number("max-delay", 0.0, 0.0, 1e3);
+  if (const auto ci = a.value("command-interpolation")) {
+    if (*ci != "cubic" && *ci != "linear")
+      throw UsageError("--command-interpolation " + *ci + ": expected cubic or linear");
+    options.command_interpolation = *ci == "linear"
+                                        ? dg::DiagnosisOptions::CommandInterpolation::Linear
+                                        : dg::DiagnosisOptions::CommandInterpolation::Cubic;
+  }
   options.bic_threshold = a.number("bic-threshold", 10.0, 0.0, 1e6);
+  options.min_effect_ratio = a.number("min-effect", 0.1, 0.0, 100.0);
   if (const auto d = a.value("tcp-datum")) {
     if (*d != "free" && *d != "known")
       throw UsageError("--tcp-datum " + *d + ": expected free or known");

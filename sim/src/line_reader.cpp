@@ -61,7 +61,20 @@ bool LineReader::next(std::string& line) {
   }
 }
 
-void split_csv(const std::string& line, std::vector<std::string>& fields) {
+char detect_delimiter(const std::string& header) {
+  std::size_t comma = 0, semicolon = 0, tab = 0;
+  bool quoted = false;
+  for (char c : header) {
+    if (c == '"') quoted = !quoted;
+    if (quoted) continue;
+    comma += c == ',', semicolon += c == ';', tab += c == '\t';
+  }
+  if (semicolon > comma && semicolon >= tab) return ';';
+  if (tab > comma && tab > semicolon) return '\t';
+  return ',';
+}
+
+void split_csv(const std::string& line, std::vector<std::string>& fields, char delimiter) {
   std::size_t n = 0;
   auto next_field = [&]() -> std::string& {
     if (n == fields.size()) fields.emplace_back();
@@ -72,7 +85,7 @@ void split_csv(const std::string& line, std::vector<std::string>& fields) {
   const std::size_t size = line.size();
   for (;;) {
     std::string& f = next_field();
-    while (i < size && (line[i] == ' ' || line[i] == '\t'))
+    while (i < size && (line[i] == ' ' || (line[i] == '\t' && delimiter != '\t')))
       ++i;
     if (i < size && line[i] == '"') {
       ++i;
@@ -88,19 +101,20 @@ void split_csv(const std::string& line, std::vector<std::string>& fields) {
         }
         f += line[i++];
       }
-      while (i < size && line[i] != ',')
+      while (i < size && line[i] != delimiter)
         ++i;
     } else {
       const std::size_t start = i;
-      while (i < size && line[i] != ',')
+      while (i < size && line[i] != delimiter)
         ++i;
       std::size_t stop = i;
-      while (stop > start && (line[stop - 1] == ' ' || line[stop - 1] == '\t'))
+      while (stop > start &&
+             (line[stop - 1] == ' ' || (line[stop - 1] == '\t' && delimiter != '\t')))
         --stop;
       f.assign(line, start, stop - start);
     }
     if (i >= size) break;
-    ++i;  // the comma
+    ++i;  // the delimiter
   }
   fields.resize(n);
 }

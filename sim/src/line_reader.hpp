@@ -34,8 +34,13 @@ class LineReader {
   std::size_t line_number_ = 0;
 };
 
-// Splits one CSV line at commas; double-quoted fields may hold commas and
-// "" for a quote. Leading and trailing blanks of unquoted fields are dropped.
-void split_csv(const std::string& line, std::vector<std::string>& fields);
+// Splits one CSV line at `delimiter` (',' ';' or '\t'); double-quoted fields
+// may hold delimiters and "" for a quote. Leading and trailing blanks of
+// unquoted fields are dropped.
+void split_csv(const std::string& line, std::vector<std::string>& fields, char delimiter = ',');
+
+// The delimiter of a header line: the most frequent of ',', ';' and tab
+// outside quotes (',' when none occurs).
+char detect_delimiter(const std::string& header);
 
 }  // namespace truecut::sim::detail

@@ -34,6 +34,7 @@ ChannelSource parse_source(const std::string& name, std::string_view text) {
     if (auto k = number(text.substr(star + 1))) {
       if (*k == 0) throw RecordingError("--map " + item + ": the factor after '*' must not be 0");
       src.scale = *k;
+      src.factor_given = true;
       base = trim(text.substr(0, star));
     } else if (trim(text.substr(0, star)) == "@index") {
       throw RecordingError("--map " + item + ": '@index*' needs a number (the sample period)");

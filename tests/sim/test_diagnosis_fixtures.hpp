@@ -71,6 +71,7 @@ struct RecordingSpec {
   bool meas = true;            // record <j>_meas (true position) besides <j>_act
   double logging_delay_s = 0;  // the recorded targets lag the commands by this
   unsigned seed = 1;
+  int record_every = 1;  // keep every n-th servo period (a recorder slower than the servo)
 };
 
 inline MovePath default_x_path(int variant = 0) {
@@ -108,13 +109,14 @@ inline Recording make_recording(const MachineParams& truth, const RecordingSpec&
     outs.push_back(out);
   }
   std::mt19937_64 rng(spec.seed);
-  std::normal_distribution<double> noise(0.0, spec.noise_mm);
+  std::normal_distribution<double> unit_noise(0.0, 1.0);
+  auto noise = [&](std::mt19937_64& g) { return spec.noise_mm * unit_noise(g); };
   Recording rec;
   rec.file = "simulated.csv";
   for (const char* c : {"x_cmd", "y_cmd", "x_act", "y_act"})
     rec.channels[c];
   if (spec.meas) rec.channels["x_meas"], rec.channels["y_meas"];
-  for (int k = 0; k < n; ++k) {
+  for (int k = 0; k < n; k += spec.record_every) {
     // The target row k holds the value of cycle k − lag.
     const int src = std::max(0, k - lag);
     rec.t_s.push_back(k * spec.period_s);
@@ -154,16 +156,23 @@ inline MachineDescription trunnion_with_servo() {
 
 // X, Y, Z sweep, A tilts 0…90° and back every 5 s, C turns once every 8 s;
 // 20 s at 200 Hz (the model stepped at 1 kHz).
-inline Recording five_axis_recording(const MachineParams& truth, unsigned seed) {
+inline Recording five_axis_recording(const MachineParams& truth, unsigned seed,
+                                     double tcp_noise_mm = kTcpNoiseMm,
+                                     double encoder_noise_mm = 0.2e-3) {
   MachineModel model(truth);
   MachineState state;
   std::mt19937_64 rng(seed);
-  std::normal_distribution<double> noise(0.0, kTcpNoiseMm), encoder_noise(0.0, 0.2e-3);
+  // Unit draws scaled (σ = 0 is allowed), one distribution per channel kind
+  // as before, so the default recordings keep their noise sequence.
+  std::normal_distribution<double> unit_tcp(0.0, 1.0), unit_encoder(0.0, 1.0);
+  auto noise = [&](std::mt19937_64& g) { return tcp_noise_mm * unit_tcp(g); };
+  auto encoder_noise = [&](std::mt19937_64& g) { return encoder_noise_mm * unit_encoder(g); };
   Recording rec;
   rec.file = "five_axis.csv";
   const double dt = 1e-3;
-  // The 1 kHz command is linear between the 200 Hz samples (as the
-  // re-simulation interpolates them), so the joints' believed model is exact.
+  // The machine is commanded every 1 ms along smooth curves and recorded
+  // every 5 ms; the re-simulation reads the command back between the
+  // samples (cubic), which is exact to far below the encoder noise here.
   auto command = [](double t) {
     std::array<double, kJointCount> q{};
     q[kX] = 30 * std::sin(2 * std::numbers::pi * t / 7);
@@ -175,11 +184,10 @@ inline Recording five_axis_recording(const MachineParams& truth, unsigned seed) 
   };
   for (int k = 0; k < 20000; ++k) {
     const double t = k * dt;
-    const double t0 = (k / 5) * 5 * dt, w = (k % 5) / 5.0;
-    const auto q0 = command(t0), q1 = command(t0 + 5 * dt);
+    const auto q = command(t);
     MachineInputs in;
     for (int j = 0; j < kJointCount; ++j)
-      in.pos_cmd[j] = q0[j] + (q1[j] - q0[j]) * w;
+      in.pos_cmd[j] = q[j];
     MachineOutputs out;
     model.step(state, in, dt, out);
     if (k % 5 != 0) continue;

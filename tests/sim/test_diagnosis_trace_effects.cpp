@@ -62,7 +62,10 @@ Recording powered_recording(const MachineParams& truth, double noise_mm, unsigne
 }
 
 dg::DiagnosisResult run(const MachineDescription& believed, const Recording& rec) {
-  auto r = dg::diagnose(rec, nullptr, believed, {});
+  dg::DiagnosisOptions o;
+  if (std::getenv("TRUECUT_DIAGNOSIS_VERBOSE"))
+    o.progress = [](const std::string& s) { std::printf("  %s\n", s.c_str()); };
+  auto r = dg::diagnose(rec, nullptr, believed, o);
   if (std::getenv("TRUECUT_DIAGNOSIS_VERBOSE"))
     std::printf("%s\n", dg::diagnosis_summary(r).c_str());
   return r;

@@ -34,23 +34,33 @@ Masks make_masks(const Trace& tr, double margin_s, double holdout_fraction) {
   m.train.assign(n, 0);
   m.heldout.assign(n, 0);
   m.valid.assign(n, 0);
-  // Recorder glitches: a command jump far beyond the path's own speeds
-  // (20 × the median speed while moving) is not motion; the two
-  // samples around it are left out of every fit and statistic.
+  // Recorder glitches: an isolated command jump — far beyond the path's own
+  // speeds (20 × the median speed while moving) and 5 × faster than both
+  // neighbouring intervals, or a one-sample spike out and back — is not
+  // motion (a rapid move ramps up and down over several samples, or spans
+  // several at its speed); the samples around it are left out of every fit
+  // and statistic.
   std::vector<char> glitch(n, 0);
   for (int j = 0; j < kJointCount; ++j) {
-    if (tr.cmd[j].empty()) continue;
+    if (tr.cmd[j].empty() || n < 3) continue;
+    std::vector<double> v(n, 0.0);  // v[k]: speed over the interval k-1 → k
+    for (std::size_t k = 1; k < n; ++k)
+      v[k] = std::abs(tr.cmd[j][k] - tr.cmd[j][k - 1]) / (tr.t_s[k] - tr.t_s[k - 1]);
     std::vector<double> speeds;
-    for (std::size_t k = 1; k < n; ++k) {
-      const double v = std::abs(tr.cmd[j][k] - tr.cmd[j][k - 1]) / (tr.t_s[k] - tr.t_s[k - 1]);
-      if (v > 0) speeds.push_back(v);
-    }
+    for (std::size_t k = 1; k < n; ++k)
+      if (v[k] > 0) speeds.push_back(v[k]);
     if (speeds.size() < 10) continue;
     std::nth_element(speeds.begin(), speeds.begin() + speeds.size() / 2, speeds.end());
     const double limit = 20 * speeds[speeds.size() / 2];
-    for (std::size_t k = 1; k < n; ++k)
-      if (std::abs(tr.cmd[j][k] - tr.cmd[j][k - 1]) / (tr.t_s[k] - tr.t_s[k - 1]) > limit)
-        glitch[k] = glitch[k - 1] = 1;
+    const auto& c = tr.cmd[j];
+    for (std::size_t k = 1; k < n; ++k) {
+      const double neighbours = std::max(v[k - 1], k + 1 < n ? v[k + 1] : 0.0);
+      if (v[k] > limit && v[k] > 5 * neighbours) glitch[k] = glitch[k - 1] = 1;
+      // One sample off and straight back: a spike, whatever its neighbours.
+      if (k + 1 < n && v[k] > limit && v[k + 1] > limit &&
+          std::abs(c[k + 1] - c[k - 1]) < 0.2 * std::abs(c[k] - c[k - 1]))
+        glitch[k - 1] = glitch[k] = glitch[k + 1] = 1;
+    }
   }
   for (std::size_t k = 0; k < n; ++k) {
     const double t = tr.t_s[k];
@@ -65,67 +75,73 @@ Masks make_masks(const Trace& tr, double margin_s, double holdout_fraction) {
   return m;
 }
 
+// Per axis of tr.axes, per row: the factor on the axis' weight (empty: 1).
+using SampleWeights = std::vector<std::vector<double>>;
+
 FitContext context(const Trace& tr, const std::vector<char>& use, const std::vector<double>& w,
-                   double delay_s, const DiagnosisOptions& o) {
+                   const SampleWeights& sw, double delay_s, const DiagnosisOptions& o) {
   FitContext c;
   c.trace = &tr;
   c.max_period_s = o.max_servo_period_s;
   c.bic_threshold = o.bic_threshold;
+  c.min_effect_ratio = o.min_effect_ratio;
   c.progress = o.progress;
   c.delay_s = delay_s;
   c.layout.axes = tr.axes;
   for (std::size_t a = 0; a < tr.axes.size(); ++a) {
     c.aligned[tr.axes[a]] = tr.target[tr.axes[a]];
     std::vector<std::size_t> ix;
+    std::vector<double> f;
     for (std::size_t k = 0; k < tr.rows(); ++k)
-      if (use[k]) ix.push_back(k);
-    c.layout.index.push_back(ix);
+      if (use[k]) ix.push_back(k), f.push_back(sw.empty() ? 1.0 : sw[a][k]);
+    c.layout.index.push_back(std::move(ix));
     c.layout.weight.push_back(w[a]);
+    if (!sw.empty()) c.layout.sample_weight.push_back(std::move(f));
   }
   return c;
 }
 
 // Weighted, centred RSS of the recording read at t + d against a fixed simulation.
 double delay_rss(const Trace& tr, const Simulated& sim, const std::vector<char>& use,
-                 const std::vector<double>& w, double d) {
+                 const std::vector<double>& w, const SampleWeights& sw, double d) {
   double total = 0;
   for (std::size_t a = 0; a < tr.axes.size(); ++a) {
     const int j = tr.axes[a];
     const auto& y = tr.target[j];
     const auto sd = delayed(tr.t_s, sim.target[j], d);
-    double s = 0, ss = 0;
-    std::size_t n = 0;
+    double s = 0, ss = 0, uu = 0;
     for (std::size_t k = 0; k < y.size(); ++k)
       if (use[k]) {
-        const double r = (y[k] - sd[k]) * w[a];
-        s += r, ss += r * r, ++n;
+        const double u = w[a] * (sw.empty() ? 1.0 : sw[a][k]), r = y[k] - sd[k];
+        s += u * u * r, ss += u * u * r * r, uu += u * u;
       }
-    total += n ? ss - s * s / double(n) : 0;
+    total += uu > 0 ? ss - s * s / uu : 0;
   }
   return total;
 }
 
 // The delay minimising delay_rss in [lo, hi]: a grid, then golden section.
 double best_delay(const Trace& tr, const Simulated& sim, const std::vector<char>& use,
-                  const std::vector<double>& w, double lo, double hi, double step) {
-  double best = 0, best_rss = delay_rss(tr, sim, use, w, 0.0);
+                  const std::vector<double>& w, const SampleWeights& sw, double lo, double hi,
+                  double step) {
+  double best = 0, best_rss = delay_rss(tr, sim, use, w, sw, 0.0);
   const int steps = std::min(800, int(std::ceil((hi - lo) / step)));
   for (int i = 0; i <= steps; ++i) {
     const double d = lo + (hi - lo) * i / std::max(1, steps);
-    const double r = delay_rss(tr, sim, use, w, d);
+    const double r = delay_rss(tr, sim, use, w, sw, d);
     if (r < best_rss) best_rss = r, best = d;
   }
   const double g = (std::sqrt(5.0) - 1) / 2;
   double a = best - (hi - lo) / std::max(1, steps), b = best + (hi - lo) / std::max(1, steps);
   for (int it = 0; it < 30; ++it) {
     const double c = b - g * (b - a), d = a + g * (b - a);
-    if (delay_rss(tr, sim, use, w, c) < delay_rss(tr, sim, use, w, d))
+    if (delay_rss(tr, sim, use, w, sw, c) < delay_rss(tr, sim, use, w, sw, d))
       b = d;
     else
       a = c;
   }
   const double m = (a + b) / 2;
-  return delay_rss(tr, sim, use, w, m) < best_rss ? m : best;
+  return delay_rss(tr, sim, use, w, sw, m) < best_rss ? m : best;
 }
 
 struct Hypothesis {
@@ -223,7 +239,7 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
   auto say = [&](const std::string& s) {
     if (o.progress) o.progress(s);
   };
-  const Trace tr = make_trace(train_rec);
+  const Trace tr = make_trace(train_rec, o.command_interpolation);
   if (tr.axes.empty())
     throw DiagnosisError(train_rec.file +
                          ": no joint has both a <j>_cmd and a <j>_act or <j>_meas channel "
@@ -248,37 +264,164 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
     say(std::to_string(masks.excluded) +
         " samples around command jumps left out (recorder glitches)");
   const MachineParams& base = believed.machine;
+  // A hold-out recording must carry the same joints.
+  std::optional<Trace> hold_tr;
+  Masks hold_masks;
+  if (holdout_rec) {
+    hold_tr = make_trace(*holdout_rec, o.command_interpolation);
+    if (hold_tr->axes != tr.axes)
+      throw DiagnosisError(holdout_rec->file +
+                           ": the hold-out recording must carry the same joints (with a "
+                           "command and a target) as " +
+                           train_rec.file);
+    if (hold_tr->rows() < 20)
+      throw DiagnosisError(holdout_rec->file + ": " + std::to_string(hold_tr->rows()) +
+                           " samples; at least 20 are needed");
+    hold_masks = make_masks(*hold_tr, dmax, 0.0);
+  }
 
   say("re-simulating " + std::to_string(tr.rows()) + " samples (" + std::to_string(res.substeps) +
       " servo periods per interval) with the believed model");
   const Simulated sim0 = resimulate(base, tr, o.max_servo_period_s);
 
-  // Noise floors from the unaligned residual (the high-pass hardly sees a delay).
+  // Where a recorded interval spans several servo periods the command between
+  // the samples is not recorded and the re-simulation reads it from the
+  // samples (cubic or linear). Its error is measured on the recording
+  // itself: keeping every 2nd (4th) sample, re-reading the command from
+  // those and comparing the believed model's response with the full one at
+  // the samples kept gives the error e2 (e4) at twice (four times) the
+  // spacing; the observed order p = log2(e4/e2) (0…3) extrapolates it to the
+  // recording's own spacing: e2 / 2^p (Richardson).
+  std::array<double, kJointCount> interpolation_rms{};
+  std::array<std::vector<double>, kJointCount> interpolation_u;  // per sample; empty: none
+  {
+    bool coarse = false;
+    for (std::size_t k = 0; k + 1 < tr.rows() && !coarse; ++k)
+      coarse = substeps_for(tr.t_s[k + 1] - tr.t_s[k], o.max_servo_period_s) > 1;
+    // Per joint, the response's difference at the samples kept (0 elsewhere)
+    // and its RMS over the fitted block.
+    struct Decimated {
+      std::array<std::vector<double>, kJointCount> diff;
+      std::array<double, kJointCount> rms{};
+    };
+    auto decimated_error = [&](std::size_t every) {
+      Decimated e;
+      Trace few;
+      std::vector<std::size_t> kept;
+      for (std::size_t k = 0; k < tr.rows(); k += every)
+        kept.push_back(k);
+      if (kept.size() < 4) return e;
+      for (std::size_t k : kept)
+        few.t_s.push_back(tr.t_s[k]);
+      auto pick = [&](const std::vector<double>& v) {
+        std::vector<double> out;
+        if (!v.empty())
+          for (std::size_t k : kept)
+            out.push_back(v[k]);
+        return out;
+      };
+      for (int j = 0; j < kJointCount; ++j) {
+        few.cmd[j] = pick(tr.cmd[j]);
+        few.target[j] = pick(tr.target[j]);
+        if (!tr.cmd_slope[j].empty()) few.cmd_slope[j] = command_slopes(few.t_s, few.cmd[j]);
+      }
+      few.meas = tr.meas;
+      few.axes = tr.axes;
+      few.spindle_power_kw = pick(tr.spindle_power_kw);
+      const Simulated sf = resimulate(base, few, o.max_servo_period_s);
+      for (int j : tr.axes) {
+        e.diff[j].assign(tr.rows(), 0.0);
+        double ss = 0;
+        std::size_t n = 0;
+        for (std::size_t i = 0; i < kept.size(); ++i) {
+          const double d = sim0.target[j][kept[i]] - sf.target[j][i];
+          e.diff[j][kept[i]] = d;
+          if (masks.train[kept[i]]) ss += d * d, ++n;
+        }
+        e.rms[j] = n ? std::sqrt(ss / double(n)) : 0.0;
+      }
+      return e;
+    };
+    if (coarse) {
+      const auto e2 = decimated_error(2), e4 = decimated_error(4);
+      for (int j : tr.axes) {
+        if (e2.diff[j].empty()) continue;
+        const double p =
+            e2.rms[j] > 0 ? std::clamp(std::log2(e4.rms[j] / e2.rms[j]), 0.0, 3.0) : 0.0;
+        const double scale = 1.0 / std::exp2(p);
+        interpolation_rms[j] = e2.rms[j] * scale;
+        // Per sample (weights, locating): the kept samples' own, the larger
+        // neighbour's in between, taken as first order at least — a start or
+        // a stop inside one interval converges more slowly than the average.
+        const double local = 1.0 / std::exp2(std::min(p, 1.0));
+        auto& u = interpolation_u[j];
+        u.assign(tr.rows(), 0.0);
+        for (std::size_t k = 0; k < tr.rows(); ++k)
+          u[k] = local * (k % 2 == 0
+                              ? std::abs(e2.diff[j][k])
+                              : std::max(std::abs(e2.diff[j][k - 1]),
+                                         k + 1 < tr.rows() ? std::abs(e2.diff[j][k + 1]) : 0.0));
+      }
+    }
+  }
+
+  std::array<double, kJointCount> noise_only{};
+  // Floors from the unaligned residual (the high-pass hardly sees a delay):
+  // the noise, never below the recording's resolution, and the uncertainty
+  // of the re-simulation between coarse samples.
   std::vector<double> w;
   for (int j : tr.axes) {
     std::vector<double> r(tr.rows());
     for (std::size_t k = 0; k < r.size(); ++k)
       r[k] = tr.target[j][k] - sim0.target[j][k];
-    const double floor = noise_floor(r, masks.train);
     AxisStats st;
     st.axis = std::string(kJointNames[j]);
     st.target = st.axis + (tr.meas[j] ? "_meas" : "_act");
-    st.noise_floor_mm = floor;
+    st.resolution_mm = grid_step(tr.target[j], masks.train);
+    st.interpolation_mm = interpolation_rms[j];
+    // The model's encoder is quantised too when the encoder is compared.
+    const double q_model = tr.meas[j] ? 0.0 : base.joints[j].drive.encoder_resolution;
+    noise_only[j] =
+        std::max(noise_floor(r, masks.train),
+                 std::sqrt((st.resolution_mm * st.resolution_mm + q_model * q_model) / 12.0));
+    st.noise_floor_mm = std::hypot(noise_only[j], st.interpolation_mm);
     res.axes.push_back(st);
-    w.push_back(1.0 / std::max(floor, 1e-7));
+    w.push_back(1.0 / std::max(st.noise_floor_mm, 1e-7));
   }
+  // Where the re-simulation between coarse samples is itself uncertain by u
+  // (more than the noise), the sample counts less: 1 / √(1 + (u/σ)²).
+  SampleWeights sw;
+  if (std::any_of(interpolation_u.begin(), interpolation_u.end(),
+                  [](const auto& u) { return !u.empty(); }))
+    for (std::size_t a = 0; a < tr.axes.size(); ++a) {
+      const int j = tr.axes[a];
+      std::vector<double> f(tr.rows(), 1.0);
+      const double sigma = std::max(noise_only[j], 1e-7);
+      if (!interpolation_u[j].empty())
+        for (std::size_t k = 0; k < tr.rows(); ++k)
+          f[k] = 1.0 / std::hypot(1.0, interpolation_u[j][k] / sigma);
+      sw.push_back(std::move(f));
+      w[a] = 1.0 / sigma;  // the uncertainty is per sample now: w · f = 1 / √(σ² + u²)
+    }
 
   // Align: a logging delay and the effects are fitted as competing
   // hypotheses, so that neither masquerades as the other.
   const double step = std::max(dt / 4, dmax / 400);
   say("searching a logging delay within ±" + fmt("%.4g", dmax) + " s");
-  const double d_a = best_delay(tr, sim0, masks.train, w, -dmax, dmax, step);
+  const double d_a = best_delay(tr, sim0, masks.train, w, sw, -dmax, dmax, step);
   std::vector<Hypothesis> hyps;
   auto fit_at = [&](double d) {
     say("fitting with delay " + fmt("%.5g", d) + " s");
     Hypothesis h;
     h.delay_s = d;
-    h.fit = fit_model(context(tr, masks.train, w, d, o), base);
+    FitContext ctx = context(tr, masks.train, w, sw, d, o);
+    FitContext held;
+    if (hold_tr)
+      held = context(*hold_tr, hold_masks.train, w, {}, d, o);
+    else if (holdout_fraction > 0)
+      held = context(tr, masks.heldout, w, sw, d, o);
+    if (held.layout.size() > 0) ctx.heldout = &held;
+    h.fit = fit_model(ctx, base);
     hyps.push_back(h);
     return hyps.back();
   };
@@ -288,12 +431,12 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
     Hypothesis h1 = fit_at(d_a);
     const Simulated s1 = resimulate(h1.fit.params, tr, o.max_servo_period_s);
     const double d_a2 =
-        best_delay(tr, s1, masks.train, w, d_a - 2 * step, d_a + 2 * step, step / 8);
+        best_delay(tr, s1, masks.train, w, sw, d_a - 2 * step, d_a + 2 * step, step / 8);
     if (std::abs(d_a2 - d_a) > 0.02 * dt) fit_at(d_a2);
   }
   {
     const Simulated s0f = resimulate(h0.fit.params, tr, o.max_servo_period_s);
-    const double d0 = best_delay(tr, s0f, masks.train, w, -dmax, dmax, step);
+    const double d0 = best_delay(tr, s0f, masks.train, w, sw, -dmax, dmax, step);
     bool known = false;
     for (const auto& h : hyps)
       known = known || std::abs(h.delay_s - d0) <= 0.05 * dt;
@@ -325,7 +468,18 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
     const double dlik =
         n_eff * std::abs(std::log(std::max(hyps[i].fit.rss, 1e-300) / std::max(H.fit.rss, 1e-300)));
     const bool delay_differs = std::abs(hyps[i].delay_s - H.delay_s) > 0.01 * dt;
-    if ((d >= o.bic_threshold && dlik >= o.bic_threshold) || !delay_differs) continue;
+    // A servo loop faster than the sampling (1/Kv below the sample period)
+    // shows only its steady lag, which a delay gives as well: what tells
+    // them apart, the loop's transient, falls between the samples, and the
+    // BIC difference says more about the misfit than about the physics.
+    bool unresolved = false;
+    for (const Hypothesis* h : {&H, static_cast<const Hypothesis*>(&hyps[i])})
+      for (const auto& s : h->fit.selected)
+        if (const auto* sl = h->fit.params.effects.servo_lag.active(s.joint);
+            s.effect == "servo_lag" && sl && dt > 1.0 / sl->kv_per_s)
+          unresolved = true;
+    if ((d >= o.bic_threshold && dlik >= o.bic_threshold && !unresolved) || !delay_differs)
+      continue;
     // Which servo effects trade places with the delay.
     std::string other;
     for (const ModelFit* f : {&H.fit, static_cast<const ModelFit*>(&hyps[i].fit)})
@@ -353,6 +507,7 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
   const ModelFit& fit = H.fit;
   res.not_identifiable.insert(res.not_identifiable.end(), fit.not_identifiable.begin(),
                               fit.not_identifiable.end());
+  res.not_confirmed = fit.not_confirmed;
   res.candidates_tested = fit.tested;
   res.candidates_tested.insert(res.candidates_tested.begin(), "logging_delay");
   res.fitted = believed;
@@ -363,9 +518,9 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
   // Delay confidence interval from the profile of the RSS.
   const Simulated simf = resimulate(fit.params, tr, o.max_servo_period_s);
   {
-    const double rmin = delay_rss(tr, simf, masks.train, w, H.delay_s);
+    const double rmin = delay_rss(tr, simf, masks.train, w, sw, H.delay_s);
     auto inside = [&](double d) {
-      return fit.n_eff * std::log(delay_rss(tr, simf, masks.train, w, d) / rmin) <= 3.84;
+      return fit.n_eff * std::log(delay_rss(tr, simf, masks.train, w, sw, d) / rmin) <= 3.84;
     };
     // Each side: step out until outside, then bisect the crossing.
     auto edge = [&](double dir) {
@@ -409,7 +564,8 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
     st.standstill_noise_mm = standstill_noise(r, v, all_valid, std::max(1e-3 * vmax, 1e-9),
                                               std::max<std::size_t>(5, std::size_t(0.05 / dt)));
     floor_ss += st.noise_floor_mm * st.noise_floor_mm;
-    locate_axis(tr, j, r, all_valid, st.noise_floor_mm, res.mismatch);
+    locate_axis(tr, j, r, all_valid, noise_only[j], st.resolution_mm, interpolation_u[j],
+                res.mismatch);
 
     AxisSeries se;
     se.axis = st.axis;
@@ -451,12 +607,7 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
 
   // Held out: the last time block, or a second recording.
   if (holdout_rec) {
-    const Trace ht = make_trace(*holdout_rec);
-    if (ht.axes != tr.axes)
-      throw DiagnosisError(holdout_rec->file +
-                           ": the hold-out recording must carry the same "
-                           "joints as " +
-                           train_rec.file);
+    const Trace& ht = *hold_tr;
     say("re-simulating the hold-out recording " + holdout_rec->file);
     const Masks hm = make_masks(ht, std::abs(H.delay_s), 0.0);
     const Simulated hs0 = resimulate(base, ht, o.max_servo_period_s);
@@ -512,9 +663,7 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
 
   // The tool-centre point, when measured: the kinematics' effects.
   if (tr.has_tcp()) {
-    std::optional<Trace> ht;
-    if (holdout_rec) ht = make_trace(*holdout_rec);
-    const TcpStage ts = fit_tcp(tr, train_use, held_use, ht ? &*ht : nullptr, base, o);
+    const TcpStage ts = fit_tcp(tr, train_use, held_use, hold_tr ? &*hold_tr : nullptr, base, o);
     res.tcp = ts.comparison;
     res.mismatch.insert(res.mismatch.end(), ts.mismatch.begin(), ts.mismatch.end());
     std::stable_sort(
@@ -526,6 +675,58 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
     res.candidates_tested.insert(res.candidates_tested.end(), ts.tested.begin(), ts.tested.end());
     res.fitted.machine.effects.rotary_location = ts.fitted.effects.rotary_location;
     res.fitted.machine.effects.tool_length_error = ts.fitted.effects.tool_length_error;
+  }
+
+  // What this recording cannot show.
+  {
+    std::string encoder_only, never_moves;
+    for (int j : tr.axes) {
+      const std::string ax(kJointNames[j]);
+      const auto [lo, hi] = std::minmax_element(tr.cmd[j].begin(), tr.cmd[j].end());
+      if (*hi - *lo <= 0) {
+        never_moves += (never_moves.empty() ? "" : ", ") + ax;
+        continue;
+      }
+      if (!tr.meas[j]) encoder_only += (encoder_only.empty() ? "" : ", ") + ax;
+      if (const auto* sl = base.effects.servo_lag.active(j); sl && dt > 1.0 / sl->kv_per_s)
+        res.notes.push_back(
+            ax + ": sampled every " + fmt("%.4g", dt * 1e3) +
+            " ms, slower than the believed servo loop's time constant 1/Kv = " +
+            fmt("%.3g", 1e3 / sl->kv_per_s) +
+            " ms: its transients and a friction spike fall between the samples, so an "
+            "adjustment of servo_lag or reversal_spike is claimed only when it moves the residual "
+            "by at least the noise floor; record at least every " +
+            fmt("%.3g", 1e3 / sl->kv_per_s) + " ms to see them");
+    }
+    if (!never_moves.empty())
+      res.notes.push_back(never_moves + ": the command never moves, nothing to test there");
+    // Believed cross-axis terms that need a joint the recording lacks.
+    auto coupling = [&](const std::string& what, int target, int other) {
+      if (!tr.meas[target] || tr.target[target].empty() || tr.cmd[target].empty() ||
+          !tr.cmd[other].empty())
+        return;
+      const std::string t(kJointNames[target]), o(kJointNames[other]);
+      res.notes.push_back("the believed " + what + " moves " + t + " with " + o +
+                          ", which the recording does not carry (held at 0 in the "
+                          "re-simulation): its share of " +
+                          t + "_meas stays in the residual; record " + o + "_cmd");
+    };
+    if (const auto* sq = base.effects.squareness.active()) {
+      if (sq->xy_urad != 0) coupling("squareness xy", kX, kY);
+      if (sq->zx_urad != 0) coupling("squareness zx", kX, kZ);
+      if (sq->yz_urad != 0) coupling("squareness yz", kY, kZ);
+    }
+    if (const auto* st = base.effects.straightness.active())
+      for (int i = 0; i < kStraightnessCount; ++i)
+        if (st->components[i])
+          coupling(std::string("straightness ") + kStraightnessNames[i], kStraightnessDirection[i],
+                   kStraightnessMoving[i]);
+    if (!encoder_only.empty())
+      res.notes.push_back(
+          encoder_only +
+          ": compared on the encoder (<j>_act); backlash, pitch_error, thermal_drift, squareness "
+          "and straightness act between the encoder and the table and are not tested — record "
+          "<j>_meas (a linear scale, laser or tracker) to test them");
   }
 
   const bool above = !res.mismatch.empty();

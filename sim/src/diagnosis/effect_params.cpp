@@ -65,7 +65,7 @@ double* param_ptr(MachineParams& p, const std::string& effect, int j, const std:
     return nullptr;
   }
   if (effect == "straightness") {
-    // "eyx.quadratic_um_per_m2", "eyx.cubic_um_per_m3"
+    // "eyx.quadratic_um_per_m2", "eyx.cubic_um_per_m3", "eyx.reference_mm"
     const auto dot = key.find('.');
     if (dot == std::string::npos) return nullptr;
     for (int i = 0; i < kStraightnessCount; ++i) {
@@ -73,6 +73,7 @@ double* param_ptr(MachineParams& p, const std::string& effect, int j, const std:
       if (key.compare(0, dot, kStraightnessNames[i]) != 0 || !c) continue;
       if (key.substr(dot + 1) == "quadratic_um_per_m2") return &c->quadratic_um_per_m2;
       if (key.substr(dot + 1) == "cubic_um_per_m3") return &c->cubic_um_per_m3;
+      if (key.substr(dot + 1) == "reference_mm") return &c->reference_mm;
     }
     return nullptr;
   }

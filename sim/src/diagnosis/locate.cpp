@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <set>
 
 namespace truecut::sim::diagnosis {
 
@@ -24,19 +25,26 @@ std::string fmt(const char* f, double a, double b = 0) {
 
 struct Acc {
   std::size_t n = 0;
-  double ss = 0, sum = 0, mx = 0;
-  void add(double r) {
-    ++n, ss += r * r, sum += r;
+  double ss = 0, sum = 0, mx = 0, uu = 0;
+  void add(double r, double u) {
+    ++n, ss += r * r, sum += r, uu += u * u;
     mx = std::max(mx, std::abs(r));
   }
+  void merge(const Acc& o) {
+    n += o.n, ss += o.ss, sum += o.sum, uu += o.uu;
+    mx = std::max(mx, o.mx);
+  }
   double rms() const { return n ? std::sqrt(ss / n) : 0; }
+  // The region's floor: the noise and its mean squared re-simulation uncertainty.
+  double floor(double noise) const { return std::sqrt(noise * noise + (n ? uu / n : 0.0)); }
 };
 
 // Significant: at least 10 samples and an RMS 1.5 times the floor or more
 // (for white noise at the floor the RMS of 10 samples exceeds 1.5σ with a
-// probability below 0.1 %).
-bool significant(const Acc& a, double floor) {
-  return a.n >= 10 && a.rms() > 1.5 * floor;
+// probability below 0.1 %), and above one step of the recording's grid
+// (below that, rounding flips between recording and model are all it shows).
+bool significant(const Acc& a, double noise, double step) {
+  return a.n >= 10 && a.rms() > 1.5 * a.floor(noise) && a.rms() > step;
 }
 
 Mismatch make(const std::string& axis, const std::string& where, const std::string& what,
@@ -49,7 +57,7 @@ Mismatch make(const std::string& axis, const std::string& where, const std::stri
   m.rms_mm = a.rms();
   m.max_mm = a.mx;
   m.mean_mm = a.n ? a.sum / a.n : 0;
-  m.ratio_to_floor = floor > 0 ? a.rms() / floor : INFINITY;
+  m.ratio_to_floor = a.floor(floor) > 0 ? a.rms() / a.floor(floor) : INFINITY;
   return m;
 }
 
@@ -70,6 +78,38 @@ double noise_floor(const std::vector<double>& r, const std::vector<char>& use) {
   for (double v : d2)
     ss += v * v;
   return std::sqrt(ss / d2.size() / 6.0);
+}
+
+double grid_step(const std::vector<double>& y, const std::vector<char>& use) {
+  double scale = 0;
+  for (std::size_t k = 0; k < y.size(); ++k)
+    if (use[k]) scale = std::max(scale, std::abs(y[k]));
+  const double tiny = 1e-9 * std::max(1.0, scale);  // below: decimal-to-binary rounding
+  std::vector<double> steps;
+  for (std::size_t k = 1; k < y.size(); ++k)
+    if (use[k] && use[k - 1]) {
+      const double d = std::abs(y[k] - y[k - 1]);
+      if (d > tiny) steps.push_back(d);
+    }
+  if (steps.size() < 10) return 0.0;
+  const double smallest = *std::min_element(steps.begin(), steps.end());
+  // The smallest change may itself be a few counts: try its divisors.
+  for (int divisor : {1, 2, 3, 4, 5, 10}) {
+    const double q = smallest / divisor;
+    if (q <= 2 * tiny) break;
+    std::size_t off_grid = 0;
+    std::set<double> multiples;
+    for (double d : steps) {
+      const double m = d / q;
+      if (m > 1e6 || std::abs(m - std::round(m)) > 0.02)
+        ++off_grid;
+      else if (multiples.size() < 3)
+        multiples.insert(std::round(m));
+    }
+    // Steps of one size only are a constant speed, not a grid.
+    if (off_grid <= steps.size() / 200 && multiples.size() >= 3) return q;
+  }
+  return 0.0;
 }
 
 std::optional<double> standstill_noise(const std::vector<double>& r, const std::vector<double>& v,
@@ -154,18 +194,21 @@ std::vector<Motion> classify_motion(const std::vector<double>& t, const std::vec
 }
 
 void locate_axis(const Trace& tr, int j, const std::vector<double>& r, const std::vector<char>& use,
-                 double floor, std::vector<Mismatch>& out) {
+                 double floor, double step, const std::vector<double>& uncertainty,
+                 std::vector<Mismatch>& out) {
   const std::string ax(kJointNames[j]);
+  auto u = [&](std::size_t k) { return uncertainty.empty() ? 0.0 : uncertainty[k]; };
   const auto motion = classify_motion(tr.t_s, tr.cmd[j]);
   Acc whole, by_motion[4];
   for (std::size_t k = 0; k < r.size(); ++k) {
     if (!use[k]) continue;
-    whole.add(r[k]);
-    by_motion[int(motion[k])].add(r[k]);
+    whole.add(r[k], u(k));
+    by_motion[int(motion[k])].add(r[k], u(k));
   }
-  if (significant(whole, floor)) out.push_back(make(ax, "axis", "whole recording", whole, floor));
+  if (significant(whole, floor, step))
+    out.push_back(make(ax, "axis", "whole recording", whole, floor));
   for (int m = 0; m < 4; ++m)
-    if (significant(by_motion[m], floor))
+    if (significant(by_motion[m], floor, step))
       out.push_back(make(ax, "condition", motion_name(Motion(m)), by_motion[m], floor));
 
   // Time windows: 20 equal windows, neighbours above the floor merged.
@@ -173,18 +216,16 @@ void locate_axis(const Trace& tr, int j, const std::vector<double>& r, const std
   const int W = 20;
   std::vector<Acc> win(W);
   for (std::size_t k = 0; k < r.size(); ++k)
-    if (use[k]) win[std::min(W - 1, int((tr.t_s[k] - t0) / (t1 - t0 + 1e-12) * W))].add(r[k]);
+    if (use[k]) win[std::min(W - 1, int((tr.t_s[k] - t0) / (t1 - t0 + 1e-12) * W))].add(r[k], u(k));
   for (int w = 0; w < W;) {
-    if (!significant(win[w], floor)) {
+    if (!significant(win[w], floor, step)) {
       ++w;
       continue;
     }
     Acc merged;
     int e = w;
-    for (; e < W && significant(win[e], floor); ++e) {
-      merged.n += win[e].n, merged.ss += win[e].ss, merged.sum += win[e].sum;
-      merged.mx = std::max(merged.mx, win[e].mx);
-    }
+    for (; e < W && significant(win[e], floor, step); ++e)
+      merged.merge(win[e]);
     out.push_back(make(ax, "time",
                        fmt("t %.3f–%.3f s", t0 + (t1 - t0) * w / W, t0 + (t1 - t0) * e / W), merged,
                        floor));
@@ -193,10 +234,11 @@ void locate_axis(const Trace& tr, int j, const std::vector<double>& r, const std
   if (!tr.line.empty()) {
     std::map<double, Acc> lines;
     for (std::size_t k = 0; k < r.size(); ++k)
-      if (use[k]) lines[tr.line[k]].add(r[k]);
+      if (use[k]) lines[tr.line[k]].add(r[k], u(k));
     std::vector<Mismatch> ms;
     for (const auto& [l, a] : lines)
-      if (significant(a, floor)) ms.push_back(make(ax, "line", fmt("line %.0f", l), a, floor));
+      if (significant(a, floor, step))
+        ms.push_back(make(ax, "line", fmt("line %.0f", l), a, floor));
     std::sort(ms.begin(), ms.end(),
               [](const Mismatch& a, const Mismatch& b) { return a.rms_mm > b.rms_mm; });
     if (ms.size() > 10) ms.resize(10);
@@ -209,10 +251,10 @@ void locate_axis(const Trace& tr, int j, const std::vector<double>& r, const std
       if (!use[k]) continue;
       double ang = std::fmod(tr.cmd[rj][k], 360.0);
       if (ang < 0) ang += 360;
-      bins[std::min(11, int(ang / 30))].add(r[k]);
+      bins[std::min(11, int(ang / 30))].add(r[k], u(k));
     }
     for (int b = 0; b < 12; ++b)
-      if (significant(bins[b], floor))
+      if (significant(bins[b], floor, step))
         out.push_back(
             make(ax, "rotary_angle",
                  std::string(kJointNames[rj]) + fmt(" %.0f–%.0f deg", b * 30.0, b * 30.0 + 30),

@@ -124,17 +124,23 @@ VectorXd Layout::stack(const std::array<std::vector<double>, kJointCount>& v) co
   Eigen::Index r = 0;
   for (std::size_t a = 0; a < axes.size(); ++a) {
     const auto& src = v[axes[a]];
-    for (std::size_t k : index[a])
-      out[r++] = src.empty() ? 0.0 : src[k] * weight[a];
+    for (std::size_t i = 0; i < index[a].size(); ++i)
+      out[r++] = src.empty() ? 0.0 : src[index[a][i]] * w(a, i);
   }
   return out;
 }
 
 void Layout::center(Eigen::Ref<VectorXd> v) const {
   Eigen::Index r = 0;
-  for (const auto& ix : index) {
-    const Eigen::Index m = Eigen::Index(ix.size());
-    if (m > 0) v.segment(r, m).array() -= v.segment(r, m).mean();
+  for (std::size_t a = 0; a < index.size(); ++a) {
+    const Eigen::Index m = Eigen::Index(index[a].size());
+    if (m > 0 && sample_weight.empty()) {
+      v.segment(r, m).array() -= v.segment(r, m).mean();
+    } else if (m > 0) {
+      const Eigen::Map<const VectorXd> u(sample_weight[a].data(), m);
+      const double uu = u.squaredNorm();
+      if (uu > 0) v.segment(r, m) -= u * (u.dot(v.segment(r, m)) / uu);
+    }
     r += m;
   }
 }
@@ -172,6 +178,45 @@ VectorXd weighted_residual(const FitContext& ctx, const MachineParams& params) {
 }
 
 namespace {
+
+// Levenberg–Marquardt on every parameter of fit.selected by re-simulation
+// (numeric Jacobian, at most 12 iterations); updates fit.params and fit.rss.
+void refine(const FitContext& ctx, ModelFit& fit) {
+  const auto keys = keys_of(fit.selected);
+  VectorXd th = get_theta(fit.params, keys);
+  VectorXd r0 = weighted_residual(ctx, fit.params);
+  double rss0 = r0.squaredNorm(), lambda = 1e-3;
+  for (int it = 0; it < 12 && th.size() > 0; ++it) {
+    const MatrixXd J = jacobian(ctx, fit.params, keys, th, r0);
+    const MatrixXd A = J.transpose() * J;
+    const VectorXd g = J.transpose() * r0;
+    bool improved = false;
+    for (int tries = 0; tries < 6 && !improved; ++tries) {
+      MatrixXd Ad = A;
+      Ad.diagonal().array() *= (1.0 + lambda);
+      Ad.diagonal().array() += 1e-12;
+      const VectorXd step = Ad.ldlt().solve(-g);
+      MachineParams p = fit.params;
+      VectorXd t2 = th + step;
+      set_theta(p, keys, t2);
+      t2 = get_theta(p, keys);
+      const VectorXd r1 = weighted_residual(ctx, p);
+      const double rss1 = r1.squaredNorm();
+      if (rss1 < rss0) {
+        const double gain = (rss0 - rss1) / rss0;
+        th = t2, r0 = r1, rss0 = rss1, fit.params = p;
+        lambda = std::max(lambda / 4, 1e-7);
+        improved = true;
+        if (gain < 1e-7) it = 99;
+      } else {
+        lambda *= 8;
+      }
+    }
+    if (!improved) break;
+  }
+  normalise_periodic(fit.params);
+  fit.rss = weighted_residual(ctx, fit.params).squaredNorm();
+}
 
 // A candidate of one parameter that must stay positive (a play, a friction):
 // applied by adding its linear coefficient to the believed value.
@@ -220,10 +265,17 @@ std::vector<Candidate> build_candidates(const FitContext& ctx, const MachinePara
     return c;
   };
   const double t0 = tr.t_s.front(), span_t = tr.t_s.back() - tr.t_s.front();
+  const double sample_period_s = median_period(tr.t_s);
 
   for (int j : L.axes) {
     const std::string ax(kJointNames[j]);
     const bool dynamic = base.effects.servo_lag.active(j) != nullptr;
+    // Sampled slower than the believed loop's time constant 1/Kv: the loop's
+    // transients (and a friction spike, which decays with them) fall between
+    // the samples, where the command itself is only interpolated; an
+    // adjustment must then move the residual by at least the noise floor.
+    const bool loop_unresolved =
+        dynamic && sample_period_s > 1.0 / base.effects.servo_lag.active(j)->kv_per_s;
     const auto v_cmd = derivative(tr.t_s, tr.cmd[j]);
     double travel = 0, v_max = 0;
     {
@@ -266,6 +318,7 @@ std::vector<Candidate> build_candidates(const FitContext& ctx, const MachinePara
           a.ff1 = clamp_param("ff1", a.ff1 + coef[1]);
           return true;
         };
+        c.min_effect_ratio = loop_unresolved ? 1.0 : 0.0;
       }
       out.push_back(std::move(c));
     }
@@ -276,6 +329,7 @@ std::vector<Candidate> build_candidates(const FitContext& ctx, const MachinePara
       const double h = joint_kind(j) == JointKind::Linear ? 0.05 * inertia
                                                           : 50.0 * inertia * std::numbers::pi / 180;
       c.X = fd_column(base, "reversal_spike", j, coulomb_key(j), std::max(h, 0.5));
+      c.min_effect_ratio = loop_unresolved ? 1.0 : 0.0;
       out.push_back(std::move(c));
     }
     if (!tr.meas[j]) continue;  // the encoder sees only the servo effects
@@ -405,39 +459,59 @@ std::vector<Candidate> build_candidates(const FitContext& ctx, const MachinePara
       }
     }
   }
-  // straightness: the bow of a moving axis' path seen in another axis
-  // (the quadratic term about the middle of the commanded travel; the cubic
-  // term is left at its believed value: over a travel of a few hundred mm
-  // it is nearly collinear with the quadratic one and with the offsets).
+  // straightness: the bow of a moving axis' path seen in another axis: its
+  // quadratic term and where the bow is flat (reference_mm; a description's
+  // reference need not be the middle of the travel recorded, and a
+  // quadratic about the wrong point carries a slope that nothing else in
+  // the model takes up). Linear selection on s² and s about the believed
+  // (or middle-of-travel) reference: q(s − δ)² = q s² − 2qδ s + const. The
+  // cubic term is held at its believed value (over a few hundred mm it is
+  // nearly collinear with the quadratic one); a component with a cubic term
+  // keeps its reference.
   for (int i = 0; i < kStraightnessCount; ++i) {
     const int moving = kStraightnessMoving[i], dir = kStraightnessDirection[i];
     const bool has_target =
         std::find(L.axes.begin(), L.axes.end(), dir) != L.axes.end() && tr.meas[dir];
     if (!has_target || tr.cmd[moving].empty()) continue;
-    if (base.effects.straightness.active() && base.effects.straightness.params.components[i])
-      continue;
     const auto [lo, hi] = std::minmax_element(tr.cmd[moving].begin(), tr.cmd[moving].end());
-    if (*hi - *lo <= 1.0) continue;
-    const double ref = std::round((*lo + *hi) / 2 * 1000) / 1000;
+    const double span = *hi - *lo;
+    if (span <= 1.0) continue;
+    const auto* believed = base.effects.straightness.active()
+                               ? &base.effects.straightness.params.components[i]
+                               : nullptr;
+    const bool has = believed && *believed;
+    const double ref = has ? (*believed)->reference_mm : std::round((*lo + *hi) / 2 * 1000) / 1000;
+    const bool move_ref = !has || (*believed)->cubic_um_per_m3 == 0.0;
     const std::string name = kStraightnessNames[i];
     Candidate c;
     c.effect = "straightness";
     c.axis = name;
     c.group = "straightness:" + name;
     c.keys = {name + ".quadratic_um_per_m2"};
+    if (move_ref) c.keys.push_back(name + ".reference_mm");
     const auto& pos = sim0.motor[moving].empty() ? tr.cmd[moving] : sim0.motor[moving];
-    std::vector<double> q(tr.rows());
-    for (std::size_t k = 0; k < q.size(); ++k) {
-      const double sm = (pos[k] - ref) * 1e-3;
-      q[k] = sm * sm * 1e-3;
+    std::vector<double> sq(tr.rows()), sl(tr.rows());
+    for (std::size_t k = 0; k < sq.size(); ++k) {
+      const double sm = (pos[k] - ref) * 1e-3;  // m
+      sq[k] = sm * sm * 1e-3;                   // mm per µm/m²
+      sl[k] = sm * 1e-3;                        // mm per µm/m
     }
-    c.X = column(dir, q);
-    c.apply = [i, ref](MachineParams& p, const VectorXd& coef) {
+    c.X.resize(s0.size(), move_ref ? 2 : 1);
+    c.X.col(0) = column(dir, sq);
+    if (move_ref) c.X.col(1) = column(dir, sl);
+    const double lo_ok = *lo - span, hi_ok = *hi + span;
+    c.apply = [i, ref, move_ref, lo_ok, hi_ok](MachineParams& p, const VectorXd& coef) {
       p.effects.straightness.enabled = true;
       auto& comp = p.effects.straightness.params.components[i];
       if (!comp) comp = StraightnessComponent{0.0, 0.0, ref};
       comp->quadratic_um_per_m2 += coef[0];
-      return true;
+      if (!move_ref) return true;
+      const double q = comp->quadratic_um_per_m2;
+      if (q == 0.0) return false;
+      // q s² + b s = q (s + b/(2q))² − …: the bow is flat at s = −b/(2q).
+      comp->reference_mm = ref - coef[1] / (2 * q) * 1e3;
+      // A flat point far outside the travel is a slope, not a bow.
+      return comp->reference_mm >= lo_ok && comp->reference_mm <= hi_ok;
     };
     out.push_back(std::move(c));
   }
@@ -483,8 +557,29 @@ struct Selection {
 };
 
 // Forward selection over the groups by BIC; among a group's variants the best one.
+// The RMS of a stacked vector over the axes it touches (those with at
+// least 1 % of the largest axis' RMS).
+double rms_on_support(const VectorXd& v, const Layout& layout) {
+  std::vector<double> ms;
+  Eigen::Index r = 0;
+  for (const auto& ix : layout.index) {
+    const Eigen::Index m = Eigen::Index(ix.size());
+    ms.push_back(m ? v.segment(r, m).squaredNorm() / double(m) : 0.0);
+    r += m;
+  }
+  const double top = ms.empty() ? 0.0 : *std::max_element(ms.begin(), ms.end());
+  double ss = 0, n = 0;
+  for (std::size_t a = 0; a < ms.size(); ++a)
+    if (ms[a] > 0 && ms[a] >= 1e-4 * top) {
+      const double m = double(layout.index[a].size());
+      ss += ms[a] * m, n += m;
+    }
+  return n > 0 ? std::sqrt(ss / n) : 0.0;
+}
+
 Selection forward_select(const std::vector<Candidate>& cands, const VectorXd& r, double threshold,
-                         const MachineParams& base, double& n_eff_out) {
+                         double min_effect, const Layout& layout, const MachineParams& base,
+                         double& n_eff_out) {
   const Eigen::Index n = r.size();
   std::map<std::string, std::vector<const Candidate*>> groups;
   for (const auto& c : cands)
@@ -549,7 +644,11 @@ Selection forward_select(const std::vector<Candidate>& cands, const VectorXd& r,
       ok = ok && c->apply(trial, coef.segment(c0, c->X.cols()));
       c0 += c->X.cols();
     }
-    if (!ok) {
+    // Too small to be physics rather than a departure of the noise from the
+    // white Gaussian noise the BIC assumes (weighted units: the floor is 1).
+    const VectorXd contrib = best->X * coef.tail(best->X.cols());
+    const double least = best->min_effect_ratio > 0 ? best->min_effect_ratio : min_effect;
+    if (!ok || rms_on_support(contrib, layout) < least) {
       rejected.insert(best->group);
       continue;
     }
@@ -627,6 +726,37 @@ MachineParams without_effect(const MachineParams& fitted, const MachineParams& r
   return p;
 }
 
+namespace {
+
+// Covariance of the parameters from the Jacobian J of the weighted
+// residual r: each axis with its own residual variance and its own
+// correlation inflation (1 + ρ₁)/(1 − ρ₁), cov = (Σ_a J_aᵀJ_a / (s²_a f_a))⁻¹.
+// Pooling the axes would let an axis the effect does not touch (e.g. one
+// that matches its model to the count) shrink the interval of one it does.
+MatrixXd parameter_covariance(const Layout& layout, const MatrixXd& J, const VectorXd& r) {
+  const Eigen::Index p = J.cols();
+  const double n = double(r.size());
+  MatrixXd info = MatrixXd::Zero(p, p);
+  Eigen::Index row = 0;
+  for (const auto& ix : layout.index) {
+    const Eigen::Index m = Eigen::Index(ix.size());
+    if (m == 0) continue;
+    const auto seg = r.segment(row, m);
+    double num = 0, den = seg.squaredNorm();
+    for (Eigen::Index i = 1; i < m; ++i)
+      if (ix[std::size_t(i)] == ix[std::size_t(i - 1)] + 1) num += seg[i] * seg[i - 1];
+    const double rho = std::clamp(den > 0 ? num / den : 0.0, 0.0, 0.99);
+    const double s2 = den / double(m) * n / std::max(1.0, n - double(p));
+    const double var = std::max(s2 * (1 + rho) / (1 - rho), 1e-4);
+    const auto Ja = J.middleRows(row, m);
+    info += Ja.transpose() * Ja / var;
+    row += m;
+  }
+  return Eigen::CompleteOrthogonalDecomposition<MatrixXd>(info).pseudoInverse();
+}
+
+}  // namespace
+
 ModelFit fit_model(const FitContext& ctx, const MachineParams& base) {
   ModelFit fit;
   fit.params = base;
@@ -647,7 +777,8 @@ ModelFit fit_model(const FitContext& ctx, const MachineParams& base) {
       open.push_back(std::move(c));
     }
     double n_eff = 0;
-    const Selection sel = forward_select(open, r, ctx.bic_threshold, fit.params, n_eff);
+    const Selection sel = forward_select(open, r, ctx.bic_threshold, ctx.min_effect_ratio,
+                                         ctx.layout, fit.params, n_eff);
     for (const auto& ni : sel.confusions) {
       bool dup = false;
       for (const auto& e : fit.not_identifiable)
@@ -663,7 +794,8 @@ ModelFit fit_model(const FitContext& ctx, const MachineParams& base) {
       c->apply(fit.params, sel.coef.segment(c0, c->X.cols()));
       c0 += c->X.cols();
       fit.selected.push_back(
-          {c->effect, c->joint, c->axis, c->group, c->variant, c->keys, sel.delta_bic[i]});
+          {c->effect, c->joint, c->axis, c->group, c->variant, c->keys, sel.delta_bic[i],
+           c->min_effect_ratio > 0 ? c->min_effect_ratio : ctx.min_effect_ratio});
       have.insert(c->group);
       say("selected " + c->label() + " (ΔBIC " + fmt(sel.delta_bic[i]) + ")");
     }
@@ -689,41 +821,8 @@ ModelFit fit_model(const FitContext& ctx, const MachineParams& base) {
     }
 
     // Nonlinear fit of every selected parameter by re-simulation.
-    const auto keys = keys_of(fit.selected);
-    VectorXd th = get_theta(fit.params, keys);
-    VectorXd r0 = weighted_residual(ctx, fit.params);
-    double rss0 = r0.squaredNorm(), lambda = 1e-3;
-    const Eigen::Index m = th.size();
-    for (int it = 0; it < 12; ++it) {
-      const MatrixXd J = jacobian(ctx, fit.params, keys, th, r0);
-      const MatrixXd A = J.transpose() * J;
-      const VectorXd g = J.transpose() * r0;
-      bool improved = false;
-      for (int tries = 0; tries < 6 && !improved; ++tries) {
-        MatrixXd Ad = A;
-        Ad.diagonal().array() *= (1.0 + lambda);
-        Ad.diagonal().array() += 1e-12;
-        const VectorXd step = Ad.ldlt().solve(-g);
-        MachineParams p = fit.params;
-        VectorXd t2 = th + step;
-        set_theta(p, keys, t2);
-        t2 = get_theta(p, keys);
-        const VectorXd r1 = weighted_residual(ctx, p);
-        const double rss1 = r1.squaredNorm();
-        if (rss1 < rss0) {
-          const double gain = (rss0 - rss1) / rss0;
-          th = t2, r0 = r1, rss0 = rss1, fit.params = p;
-          lambda = std::max(lambda / 4, 1e-7);
-          improved = true;
-          if (gain < 1e-7) it = 99;
-        } else {
-          lambda *= 8;
-        }
-      }
-      if (!improved) break;
-    }
-    normalise_periodic(fit.params);
-    fit.rss = weighted_residual(ctx, fit.params).squaredNorm();
+    refine(ctx, fit);
+    const Eigen::Index m = Eigen::Index(keys_of(fit.selected).size());
     // Verified by re-simulation: the round's effects must pay for their
     // parameters in the real model too, not only in the linearisation.
     const int added = int(m) - int(keys_of(before_round.selected).size());
@@ -750,7 +849,8 @@ ModelFit fit_model(const FitContext& ctx, const MachineParams& base) {
       fit.params = without_effect(fit.params, base, fit.selected[weakest]);
       have.erase(fit.selected[weakest].group);
       fit.selected.erase(fit.selected.begin() + std::ptrdiff_t(weakest));
-      fit.rss = weighted_residual(ctx, fit.params).squaredNorm();
+      // The others were fitted beside it: fit them again without it.
+      refine(ctx, fit);
     }
     if (gain > -ctx.bic_threshold || fit.selected.empty()) {
       say("re-simulation does not confirm the round's effects; dropped");
@@ -763,27 +863,16 @@ ModelFit fit_model(const FitContext& ctx, const MachineParams& base) {
     }
   }
 
-  // Confusions found on the linearisation count only for effects that stayed.
-  std::erase_if(fit.not_identifiable, [&](const NotIdentifiable& ni) {
-    return std::none_of(fit.selected.begin(), fit.selected.end(),
-                        [&](const SelectedEffect& s) { return s.group == ni.first; });
-  });
-
   // An adjustment of an effect the believed model already has is kept only
   // when the data move it: when the 95 % interval of every one of its
   // parameters still covers the believed value, the believed value stands.
   for (bool dropped = true; dropped && !fit.selected.empty();) {
     dropped = false;
     const auto ks = keys_of(fit.selected);
-    const Eigen::Index mk = Eigen::Index(ks.size());
     const VectorXd rr = weighted_residual(ctx, fit.params);
-    const double ne = n_eff_of(double(fit.n), ctx.layout.lag1(rr));
     const VectorXd t0 = get_theta(fit.params, ks);
     const MatrixXd J = jacobian(ctx, fit.params, ks, t0, rr);
-    const double s2 =
-        rr.squaredNorm() / std::max(1.0, double(fit.n) - double(mk)) * (double(fit.n) / ne);
-    const MatrixXd cv =
-        s2 * Eigen::CompleteOrthogonalDecomposition<MatrixXd>(J.transpose() * J).pseudoInverse();
+    const MatrixXd cv = parameter_covariance(ctx.layout, J, rr);
     Eigen::Index i = 0;
     for (std::size_t e = 0; e < fit.selected.size() && !dropped; ++e) {
       const auto& sel = fit.selected[e];
@@ -799,9 +888,105 @@ ModelFit fit_model(const FitContext& ctx, const MachineParams& base) {
       say("dropped " + sel.group + ": the believed value lies inside the fitted interval");
       fit.params = without_effect(fit.params, base, sel);
       fit.selected.erase(fit.selected.begin() + std::ptrdiff_t(e));
+      refine(ctx, fit);
       dropped = true;
     }
   }
+
+  // Too small to matter, re-simulated: an effect (or an adjustment of a
+  // believed one) whose contribution stays below min_effect_ratio of the
+  // noise floor is not claimed, however strongly the BIC favours it (with
+  // noise-free or quantised data the BIC sees any systematic misfit).
+  for (bool dropped = true; dropped && !fit.selected.empty();) {
+    dropped = false;
+    const VectorXd r_fit = weighted_residual(ctx, fit.params);
+    std::size_t smallest = 0;
+    double smallest_rms = INFINITY, smallest_share = INFINITY;
+    for (std::size_t e = 0; e < fit.selected.size(); ++e) {
+      const VectorXd diff =
+          weighted_residual(ctx, without_effect(fit.params, base, fit.selected[e])) - r_fit;
+      const double rms = rms_on_support(diff, ctx.layout);
+      const double share = rms / fit.selected[e].min_effect_ratio;
+      if (share < smallest_share) smallest_share = share, smallest_rms = rms, smallest = e;
+    }
+    if (smallest_share >= 1.0) break;
+    say("dropped " + fit.selected[smallest].group + ": its contribution is " + fmt(smallest_rms) +
+        " of the noise floor");
+    fit.params = without_effect(fit.params, base, fit.selected[smallest]);
+    fit.selected.erase(fit.selected.begin() + std::ptrdiff_t(smallest));
+    refine(ctx, fit);
+    dropped = true;
+  }
+
+  // Proven on data it was not fitted on: an effect that raises the held-out
+  // residual (the fitted model against the same model without it; the
+  // offsets those of the fitted block, as a prediction must carry them) is
+  // not confirmed and left out; the others are fitted again without it.
+  if (ctx.heldout) {
+    // Weighted held-out RSS and the sample count.
+    auto heldout_rss = [&](const MachineParams& p) {
+      const Simulated st = simulate_aligned(ctx, p);
+      const Simulated sh = ctx.heldout->trace == ctx.trace ? st : simulate_aligned(*ctx.heldout, p);
+      const Layout& tl = ctx.layout;
+      const Layout& hl = ctx.heldout->layout;
+      double rss = 0;
+      for (std::size_t a = 0; a < tl.axes.size(); ++a) {
+        const int j = tl.axes[a];
+        double off = 0, uu = 0;
+        for (std::size_t i = 0; i < tl.index[a].size(); ++i) {
+          const std::size_t k = tl.index[a][i];
+          const double u2 = tl.w(a, i) * tl.w(a, i);
+          off += u2 * (ctx.aligned[j][k] - st.target[j][k]), uu += u2;
+        }
+        off = uu > 0 ? off / uu : 0.0;
+        for (std::size_t i = 0; i < hl.index[a].size(); ++i) {
+          const std::size_t k = hl.index[a][i];
+          const double r = (ctx.heldout->aligned[j][k] - sh.target[j][k] - off) * hl.w(a, i);
+          rss += r * r;
+        }
+      }
+      return rss;
+    };
+    // An RMS in mm for the report: the weighted RSS over the sum of squared weights.
+    auto rms_mm = [&](double rss) {
+      const Layout& hl = ctx.heldout->layout;
+      double ww = 0;
+      for (std::size_t a = 0; a < hl.index.size(); ++a)
+        for (std::size_t i = 0; i < hl.index[a].size(); ++i)
+          ww += hl.w(a, i) * hl.w(a, i);
+      return ww > 0 ? std::sqrt(rss / ww) : 0.0;
+    };
+    const double none = heldout_rss(base);
+    for (bool dropped = true; dropped && !fit.selected.empty();) {
+      dropped = false;
+      const double with = heldout_rss(fit.params);
+      std::size_t worst = 0;
+      double worst_gain = INFINITY, worst_without = 0;
+      for (std::size_t e = 0; e < fit.selected.size(); ++e) {
+        const double without = heldout_rss(without_effect(fit.params, base, fit.selected[e]));
+        if (without - with < worst_gain)
+          worst_gain = without - with, worst = e, worst_without = without;
+      }
+      // About zero: the held-out data do not see the effect (e.g. no
+      // reversal of that axis there); they neither confirm nor refute it.
+      // Effects that help each other to a worse prediction than the
+      // believed model are dropped too, the least useful first.
+      if (worst_gain >= -1e-9 * with && with <= none * (1 + 1e-9)) break;
+      const auto& sel = fit.selected[worst];
+      say("dropped " + sel.group + ": the held-out residual does not confirm it");
+      fit.not_confirmed.push_back({sel.effect, sel.axis, rms_mm(with), rms_mm(worst_without)});
+      fit.params = without_effect(fit.params, base, sel);
+      fit.selected.erase(fit.selected.begin() + std::ptrdiff_t(worst));
+      refine(ctx, fit);
+      dropped = true;
+    }
+  }
+
+  // Confusions found on the linearisation count only for effects that stayed.
+  std::erase_if(fit.not_identifiable, [&](const NotIdentifiable& ni) {
+    return std::none_of(fit.selected.begin(), fit.selected.end(),
+                        [&](const SelectedEffect& s) { return s.group == ni.first; });
+  });
 
   // Confidence intervals from the Jacobian at the solution, inflated for
   // correlated residuals (effective sample count).
@@ -816,9 +1001,7 @@ ModelFit fit_model(const FitContext& ctx, const MachineParams& base) {
   MatrixXd cov = MatrixXd::Zero(m, m);
   if (m > 0) {
     const MatrixXd J = jacobian(ctx, fit.params, keys, th, r0);
-    const double dof = std::max(1.0, double(fit.n) - double(m));
-    const double s2 = fit.rss / dof * (double(fit.n) / fit.n_eff);
-    cov = s2 * Eigen::CompleteOrthogonalDecomposition<MatrixXd>(J.transpose() * J).pseudoInverse();
+    cov = parameter_covariance(ctx.layout, J, r0);
   }
   Eigen::Index i = 0;
   for (const auto& s : fit.selected) {

@@ -19,9 +19,17 @@ struct Layout {
   std::vector<int> axes;
   std::vector<std::vector<std::size_t>> index;  // per axis, the samples used
   std::vector<double> weight;                   // per axis
+  // Per axis, per sample used (parallel to index), a factor on `weight`:
+  // 1 / √(1 + (u/σ)²) where the re-simulation itself is uncertain by u
+  // (coarse samples); empty: 1 everywhere.
+  std::vector<std::vector<double>> sample_weight;
+  double w(std::size_t axis, std::size_t i) const {
+    return weight[axis] * (sample_weight.empty() ? 1.0 : sample_weight[axis][i]);
+  }
   std::size_t size() const;
   Eigen::VectorXd stack(const std::array<std::vector<double>, kJointCount>& per_joint) const;
-  // Subtracts each axis' mean (the constant offset is a nuisance, profiled out).
+  // Profiles out each axis' constant offset (a nuisance): removes the
+  // projection on the axis' weights (its weighted mean).
   void center(Eigen::Ref<Eigen::VectorXd> v) const;
   // Lag-1 autocorrelation within the axes.
   double lag1(const Eigen::VectorXd& v) const;
@@ -34,6 +42,7 @@ struct Candidate {
   std::string group;              // effect:axis[:part]; variants of a group exclude each other
   std::string variant;            // e.g. "tau_s=120" (empty when none)
   std::vector<std::string> keys;  // parameters the nonlinear fit moves
+  double min_effect_ratio = 0.0;  // > 0: overrides FitContext::min_effect_ratio
   Eigen::MatrixXd X;              // weighted, centred signature columns
   // Puts the effect into `params` from the linear coefficients of X; false
   // when they have no physical meaning (e.g. a negative lag).
@@ -48,6 +57,10 @@ struct FitContext {
   Layout layout;
   double max_period_s = 1e-3;
   double bic_threshold = 10.0;
+  double min_effect_ratio = 0.1;  // DiagnosisOptions::min_effect_ratio
+  // The held-out samples (same weights and delay), or null: an effect must
+  // lower their residual to be kept.
+  const FitContext* heldout = nullptr;
   std::function<void(const std::string&)> progress;
 };
 
@@ -63,6 +76,7 @@ struct SelectedEffect {
   std::string axis, group, variant;
   std::vector<std::string> keys;
   double delta_bic = 0.0;
+  double min_effect_ratio = 0.1;  // least contribution claimed, in units of the floor
 };
 
 struct ModelFit {
@@ -71,6 +85,7 @@ struct ModelFit {
   std::vector<Parameter> parameters;  // parallel to the concatenated keys of `selected`
   std::vector<std::vector<Parameter>> per_effect;
   std::vector<NotIdentifiable> not_identifiable;
+  std::vector<NotConfirmed> not_confirmed;
   std::vector<std::string> tested;
   double rss = 0.0;  // weighted, centred
   std::size_t n = 0;

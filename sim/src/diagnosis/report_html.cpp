@@ -106,12 +106,19 @@ std::string diagnosis_html(const DiagnosisResult& r) {
        (r.map.empty() ? "" : ", map <code>" + esc(r.map) + "</code>") +
        "; believed model: " + esc(r.believed.name) + "</p>\n";
   s += "<p><b>Verdict:</b> " + esc(r.verdict) + "</p>\n";
+  if (!r.notes.empty()) {
+    s += "<ul>";
+    for (const auto& n : r.notes)
+      s += "<li>" + esc(n) + "</li>";
+    s += "</ul>\n";
+  }
   s += "<p>Logging delay removed: " + f(r.delay_s * 1e3, "%.4g") + " ms" +
        (r.delay_ci95_s ? " (95 %: " + f(r.delay_ci95_s->first * 1e3, "%.4g") + " .. " +
                              f(r.delay_ci95_s->second * 1e3, "%.4g") + " ms)"
                        : std::string()) +
        (r.delay_note.empty() ? "" : "; " + esc(r.delay_note)) + ". Noise floor " +
-       f(r.noise_floor_mm * 1e3, "%.3g") + " µm (robust high-pass MAD).</p>\n";
+       f(r.noise_floor_mm * 1e3, "%.3g") +
+       " µm (robust high-pass MAD, at least the recording's resolution).</p>\n";
 
   s += "<section><h2>Fit</h2><table><tr><th></th><th>samples</th><th>RMS before</th><th>RMS "
        "after</th><th>max before</th><th>max after</th></tr>";
@@ -153,6 +160,14 @@ std::string diagnosis_html(const DiagnosisResult& r) {
     for (const auto& n : r.not_identifiable)
       s += "<li><b>" + esc(n.first) + "</b> vs <b>" + esc(n.second) +
            "</b>: " + esc(n.separate_by) + "</li>";
+    s += "</ul>";
+  }
+  if (!r.not_confirmed.empty()) {
+    s += "<h3>Not confirmed on the held-out data (left out of the fitted model)</h3><ul>";
+    for (const auto& n : r.not_confirmed)
+      s += "<li><b>" + esc(n.effect) + (n.axis.empty() ? "" : " " + esc(n.axis)) +
+           "</b>: held-out RMS " + f(n.heldout_rms_with_mm * 1e3, "%.3g") + " µm with it, " +
+           f(n.heldout_rms_without_mm * 1e3, "%.3g") + " µm without</li>";
     s += "</ul>";
   }
   s += "</section>\n";

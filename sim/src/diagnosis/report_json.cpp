@@ -66,6 +66,8 @@ std::string diagnosis_json(const DiagnosisResult& r) {
                          {"max_mm", num(a.max_mm)},
                          {"mean_mm", num(a.mean_mm)},
                          {"noise_floor_mm", num(a.noise_floor_mm)},
+                         {"resolution_mm", num(a.resolution_mm)},
+                         {"interpolation_mm", num(a.interpolation_mm)},
                          {"standstill_noise_mm",
                           a.standstill_noise_mm ? num(*a.standstill_noise_mm) : json(nullptr)},
                          {"offset_mm", num(a.offset_mm)}});
@@ -102,6 +104,12 @@ std::string diagnosis_json(const DiagnosisResult& r) {
                                      {"second", n.second},
                                      {"correlation", num(n.correlation)},
                                      {"separate_by", n.separate_by}});
+  j["not_confirmed"] = json::array();
+  for (const auto& n : r.not_confirmed)
+    j["not_confirmed"].push_back({{"effect", n.effect},
+                                  {"axis", n.axis},
+                                  {"heldout_rms_with_mm", num(n.heldout_rms_with_mm)},
+                                  {"heldout_rms_without_mm", num(n.heldout_rms_without_mm)}});
   j["candidates_tested"] = r.candidates_tested;
   j["fit"]["train"] = fit_json(r.train);
   j["fit"]["heldout"] = r.has_heldout ? fit_json(r.heldout) : json(nullptr);
@@ -127,6 +135,7 @@ std::string diagnosis_json(const DiagnosisResult& r) {
                     {"q", num(r.whiteness.ljung_box_q)},
                     {"p_value", num(r.whiteness.p_value)},
                     {"white", r.whiteness.white}};
+  j["notes"] = r.notes;
   j["verdict"] = r.verdict;
   return j.dump(2) + "\n";
 }
@@ -142,7 +151,12 @@ std::string diagnosis_summary(const DiagnosisResult& r) {
   if (!r.delay_note.empty()) s += "  " + r.delay_note + "\n";
   for (const auto& a : r.axes)
     s += "  " + a.target + ": rms " + g(a.rms_mm * 1e3) + " µm, max " + g(a.max_mm * 1e3) +
-         " µm, noise floor " + g(a.noise_floor_mm * 1e3) + " µm\n";
+         " µm, noise floor " + g(a.noise_floor_mm * 1e3) + " µm" +
+         (a.resolution_mm > 0 ? ", recorded in steps of " + g(a.resolution_mm * 1e3) + " µm" : "") +
+         (a.interpolation_mm > 0 ? ", re-simulation between samples uncertain by " +
+                                       g(a.interpolation_mm * 1e3) + " µm"
+                                 : "") +
+         "\n";
   if (!r.mismatch.empty()) {
     s += "above the noise floor:\n";
     for (std::size_t i = 0; i < r.mismatch.size() && i < 8; ++i) {
@@ -160,6 +174,10 @@ std::string diagnosis_summary(const DiagnosisResult& r) {
   }
   for (const auto& n : r.not_identifiable)
     s += "not identifiable: " + n.first + " vs " + n.second + " — " + n.separate_by + "\n";
+  for (const auto& n : r.not_confirmed)
+    s += "not confirmed on the held-out data (left out): " + n.effect +
+         (n.axis.empty() ? "" : " " + n.axis) + ", held-out rms " + g(n.heldout_rms_with_mm * 1e3) +
+         " µm with it, " + g(n.heldout_rms_without_mm * 1e3) + " µm without\n";
   s += "fit: rms " + g(r.train.rms_unaligned_mm * 1e3) + " (delay not removed) → " +
        g(r.train.rms_before_mm * 1e3) + " → " + g(r.train.rms_after_mm * 1e3) + " µm (fitted data)";
   if (r.has_heldout)
@@ -176,6 +194,8 @@ std::string diagnosis_summary(const DiagnosisResult& r) {
   s += "\nwhiteness: Ljung–Box Q=" + g(r.whiteness.ljung_box_q, "%.1f") +
        " p=" + g(r.whiteness.p_value, "%.3g") + (r.whiteness.white ? " (white)" : " (not white)") +
        "\n";
+  for (const auto& n : r.notes)
+    s += "note: " + n + "\n";
   s += "verdict: " + r.verdict + "\n";
   return s;
 }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <set>
 
 #include "effect_params.hpp"
 #include "locate.hpp"
@@ -218,6 +219,54 @@ void figures(const VectorXd& before, const VectorXd& after, FitFigures& f) {
         std::sqrt(after.segment(c * n, n).squaredNorm() / double(n))};
 }
 
+// The noise the recording's resolution puts into the TCP residual, per
+// component: the measured TCP's own grid step and the joints' grid steps
+// carried through the kinematics (RMS of ∂tcp/∂joint over the rows), each
+// quantisation uniform (q/√12). Zero for continuous, noisy channels.
+std::array<double, 3> quantisation_noise(const Trace& tr, const std::vector<char>& use,
+                                         const MachineParams& m, const std::vector<double>& len) {
+  std::array<double, 3> var{};
+  for (int c = 0; c < 3; ++c) {
+    const double q = grid_step(tr.tcp[c], use);
+    var[c] += q * q / 12.0;
+  }
+  const auto rows = rows_of(use);
+  if (rows.empty()) return {std::sqrt(var[0]), std::sqrt(var[1]), std::sqrt(var[2])};
+  // The joints at most 500 rows spread over the block, for their sensitivities.
+  Trace few;
+  std::vector<double> few_len;
+  const std::size_t stride = std::max<std::size_t>(1, rows.size() / 500);
+  for (int j = 0; j < kJointCount; ++j)
+    if (!tr.joint_pos[j].empty())
+      for (std::size_t i = 0; i < rows.size(); i += stride)
+        few.joint_pos[j].push_back(tr.joint_pos[j][rows[i]]);
+  for (std::size_t i = 0; i < rows.size(); i += stride)
+    few_len.push_back(len[rows[i]]);
+  std::vector<std::size_t> sample(few_len.size());
+  for (std::size_t i = 0; i < sample.size(); ++i)
+    sample[i] = i;
+  const Eigen::Index n = Eigen::Index(sample.size());
+  for (int j = 0; j < kJointCount; ++j) {
+    if (tr.joint_pos[j].empty()) continue;
+    const double q = grid_step(tr.joint_pos[j], use);
+    if (q <= 0) continue;
+    constexpr double h = 1e-3;  // mm or deg
+    Trace up = few, down = few;
+    for (auto& v : up.joint_pos[j])
+      v += h;
+    for (auto& v : down.joint_pos[j])
+      v -= h;
+    const VectorXd d =
+        (predict(up, sample, m, few_len) - predict(down, sample, m, few_len)) / (2 * h);
+    for (int c = 0; c < 3; ++c)
+      var[c] += d.segment(c * n, n).squaredNorm() / double(n) * q * q / 12.0;
+  }
+  std::array<double, 3> out{};
+  for (int c = 0; c < 3; ++c)
+    out[c] = std::sqrt(var[c]);
+  return out;
+}
+
 }  // namespace
 
 TcpStage fit_tcp(const Trace& tr, const std::vector<char>& train,
@@ -242,14 +291,15 @@ TcpStage fit_tcp(const Trace& tr, const std::vector<char>& train,
   Weights w;
   w.center = !o.tcp_datum_known;
   {
+    const auto all_rows = rows_of(std::vector<char>(tr.rows(), 1));
+    const VectorXd all = measured(tr, all_rows) - predict(tr, all_rows, base, len);
+    const auto resolution = quantisation_noise(tr, train, base, len);
     std::vector<double> full(tr.rows(), 0.0);
-    const VectorXd all = measured(tr, rows_of(std::vector<char>(tr.rows(), 1))) -
-                         predict(tr, rows_of(std::vector<char>(tr.rows(), 1)), base, len);
     const Eigen::Index N = Eigen::Index(tr.rows());
     for (int c = 0; c < 3; ++c) {
       for (Eigen::Index k = 0; k < N; ++k)
         full[std::size_t(k)] = all[c * N + k];
-      cmp.noise_floor_mm[c] = noise_floor(full, train);
+      cmp.noise_floor_mm[c] = std::max(noise_floor(full, train), resolution[c]);
       w.w[c] = 1.0 / std::max(cmp.noise_floor_mm[c], 1e-7);
     }
   }
@@ -294,21 +344,43 @@ TcpStage fit_tcp(const Trace& tr, const std::vector<char>& train,
            double(k0 + int(sel.size())) * std::log(n_eff);
   };
 
-  // Forward selection, one parameter at a time.
+  // Forward selection, one parameter at a time; a parameter whose share of
+  // the joint fit is below min_effect_ratio of the floor is not physics
+  // (weighted units: the floor is 1).
   std::vector<int> sel;
+  std::set<int> too_small;
   std::map<int, double> gain;
   double current = bic(sel);
   for (;;) {
     int best = -1;
     double best_bic = current;
     for (int i : cand) {
-      if (std::find(sel.begin(), sel.end(), i) != sel.end()) continue;
+      if (std::find(sel.begin(), sel.end(), i) != sel.end() || too_small.count(i)) continue;
       auto s = sel;
       s.push_back(i);
       const double b = bic(s);
       if (b < best_bic) best_bic = b, best = i;
     }
     if (best < 0 || current - best_bic <= o.bic_threshold) break;
+    {
+      auto s = sel;
+      s.push_back(best);
+      VectorXd coef;
+      rss_after(design(s), e0, &coef);
+      const VectorXd contrib = cols[best] * coef[coef.size() - 1];
+      double ss = 0;
+      Eigen::Index support = 0;
+      const Eigen::Index n = contrib.size() / 3;
+      for (int c = 0; c < 3; ++c)
+        if (const double sc = contrib.segment(c * n, n).squaredNorm(); sc > 0)
+          ss += sc, support += n;
+      if (support == 0 || std::sqrt(ss / double(support)) < o.min_effect_ratio) {
+        say("TCP: " + label(kParams[best]) + " passes the BIC but is below " +
+            std::to_string(o.min_effect_ratio) + " of the noise floor; not selected");
+        too_small.insert(best);
+        continue;
+      }
+    }
     gain[best] = best_bic - current;
     say("TCP: selected " + label(kParams[best]) + " (ΔBIC " + std::to_string(best_bic - current) +
         ")");
@@ -342,10 +414,25 @@ TcpStage fit_tcp(const Trace& tr, const std::vector<char>& train,
     for (Eigen::Index i = 0; i < p; ++i)
       j.col(i) = column(tr, tr_rows, m, len, kParams[sel[std::size_t(i)]], w);
     VectorXd delta;
-    const double rss = rss_after(j, e, &delta);
-    const MatrixXd jtj = j.transpose() * j;
-    const double s2 = rss / std::max(1.0, big_n - double(p + k0)) * big_n / n_eff;
-    cov = jtj.completeOrthogonalDecomposition().pseudoInverse() * s2;
+    rss_after(j, e, &delta);
+    // Per component its own residual variance and correlation inflation
+    // (pooling would let a component the parameters do not move shrink the
+    // interval): cov = (Σ_c J_cᵀJ_c / (s²_c f_c))⁻¹.
+    const VectorXd rest = e - j * delta;
+    const Eigen::Index nc = rest.size() / 3;
+    MatrixXd info = MatrixXd::Zero(p, p);
+    for (int c = 0; c < 3; ++c) {
+      const auto seg = rest.segment(c * nc, nc);
+      double num = 0;
+      for (Eigen::Index i = 1; i < nc; ++i)
+        num += seg[i] * seg[i - 1];
+      const double den = seg.squaredNorm();
+      const double rho = std::clamp(den > 0 ? num / den : 0.0, 0.0, 0.99);
+      const double s2 = den / double(nc) * big_n / std::max(1.0, big_n - double(p + k0));
+      const auto jc = j.middleRows(c * nc, nc);
+      info += jc.transpose() * jc / std::max(s2 * (1 + rho) / (1 - rho), 1e-4);
+    }
+    cov = info.completeOrthogonalDecomposition().pseudoInverse();
     theta += delta;
     bool small = true;
     for (Eigen::Index i = 0; i < p; ++i)

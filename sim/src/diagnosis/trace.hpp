@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "truecut/sim/diagnosis/diagnosis.hpp"
 #include "truecut/sim/machine_description.hpp"
 #include "truecut/sim/recording.hpp"
 
@@ -15,7 +16,10 @@ namespace truecut::sim::diagnosis {
 struct Trace {
   std::string file;
   std::vector<double> t_s;
-  std::array<std::vector<double>, kJointCount> cmd;     // empty: joint not commanded (held at 0)
+  std::array<std::vector<double>, kJointCount> cmd;  // empty: joint not commanded (held at 0)
+  // d cmd / dt at each sample for a cubic Hermite command between samples;
+  // empty: the command is linear between samples.
+  std::array<std::vector<double>, kJointCount> cmd_slope;
   std::array<std::vector<double>, kJointCount> target;  // recorded _meas or _act, empty: none
   std::array<bool, kJointCount> meas{};                 // target is <j>_meas
   std::vector<double> spindle_power_kw;                 // empty: none
@@ -32,7 +36,16 @@ struct Trace {
   std::size_t rows() const { return t_s.size(); }
 };
 
-Trace make_trace(const Recording& rec);
+Trace make_trace(const Recording& rec, DiagnosisOptions::CommandInterpolation interpolation =
+                                           DiagnosisOptions::CommandInterpolation::Cubic);
+
+// Slopes for a cubic Hermite command through (t, y): the three-point
+// derivative (the parabola through three samples: exact for a constant
+// acceleration, and a reversal may turn between two samples, as a real one
+// does), zero next to a standstill (a start or stop is no reversal), limited
+// by Fritsch–Carlson between samples that do not enclose a turn (no
+// overshoot).
+std::vector<double> command_slopes(const std::vector<double>& t, const std::vector<double>& y);
 
 // What the model says the recorder would have seen, per joint.
 struct Simulated {
@@ -41,13 +54,15 @@ struct Simulated {
 };
 
 // Each recorded interval dt is simulated in ceil(dt / max_period_s) equal
-// servo periods, the command interpolated linearly; the output of the first
-// period of an interval is the sample at its start.
+// servo periods, the command interpolated between the samples (cubic Hermite
+// with trace.cmd_slope, else linear); the output of the first period of an
+// interval is the sample at its start.
 Simulated resimulate(const MachineParams& params, const Trace& trace, double max_period_s);
 int substeps_for(double dt_s, double max_period_s);
 
-// A simulated series read at t − delay (linear interpolation, held at the
-// ends): the simulation shifted to match a recorder that logs late by delay.
+// A simulated series read at t − delay (cubic Hermite with the slopes of
+// command_slopes, as the command is read between samples; held at the ends):
+// the simulation shifted to match a recorder that logs late by delay.
 std::vector<double> delayed(const std::vector<double>& t, const std::vector<double>& y,
                             double delay_s);
 // Every target and motor series of `sim` delayed.

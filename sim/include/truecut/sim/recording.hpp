@@ -30,6 +30,7 @@ struct ChannelSource {
   std::string column;  // empty when from_index
   bool from_index = false;
   double scale = 1.0;
+  bool factor_given = false;  // `*FACTOR` was written: a unit in the header is not applied
 };
 
 // NAME=SOURCE[,NAME=SOURCE...]; see docs/formats.md. Throws RecordingError
@@ -59,8 +60,13 @@ struct RecordingHeader {
 
 using RowSink = std::function<void(const RecordingHeader&, const std::vector<double>& row)>;
 
-// Reads the file once, in chunks, calling `sink` per data row (blank lines
-// skipped). CR, LF and CRLF line endings are accepted. Only mapped or
+// Reads the file once, in chunks, calling `sink` per data row. CR, LF and
+// CRLF line endings are accepted; blank lines and lines starting with '#'
+// are skipped; the delimiter is the header's most frequent of ',' ';' and
+// tab (with ';' a decimal comma is accepted). A header name may carry a unit
+// in brackets or parentheses ("x_cmd [um]", "t (ms)"): the values are
+// converted to the channel's unit (s, mm, deg, mm/s, kW); names are matched
+// exactly, then without the unit, then ignoring case. Only mapped or
 // canonically named columns are parsed; other columns may hold anything.
 // Returns the header; throws RecordingError.
 RecordingHeader stream_recording(const std::filesystem::path& file, const RecordingOptions& options,

@@ -24,13 +24,27 @@ struct DiagnosisOptions {
   // hold-out recording is given; 0 disables the split.
   double holdout_fraction = 0.3;
   // Longest simulated servo period: a recording interval dt is simulated in
-  // ceil(dt / max_servo_period_s) equal sub-steps, commands interpolated
-  // linearly between the recorded samples.
+  // ceil(dt / max_servo_period_s) equal sub-steps, the command interpolated
+  // between the recorded samples (see CommandInterpolation).
   double max_servo_period_s = 1e-3;
+  // How the command moves between two recorded samples when a recorded
+  // interval spans several servo periods. Cubic: a cubic Hermite curve
+  // through the samples with three-point slopes (exact for the constant
+  // accelerations of a planner's trapezoid; a reversal may turn between
+  // samples), zero slope next to a standstill and no overshoot on monotone
+  // stretches (so a start from standstill is no reversal). Linear: straight
+  // lines (a controller that interpolates its own coarse command linearly).
+  enum class CommandInterpolation { Cubic, Linear };
+  CommandInterpolation command_interpolation = CommandInterpolation::Cubic;
   // Largest logging delay searched, s (0: automatic, 10 samples or 50 ms).
   double max_delay_s = 0.0;
   // Minimum BIC improvement for an effect to be selected.
   double bic_threshold = 10.0;
+  // An effect is selected only when its contribution (RMS over the fitted
+  // block, in units of the noise floor) reaches this: with many samples the
+  // BIC alone takes tiny departures of the noise from white Gaussian noise
+  // (quantisation, colour) for physics.
+  double min_effect_ratio = 0.1;
   // With a tool-centre-point measurement (tcp_true_x/y/z): true when it is
   // taken against a datum fixed in the workpiece frame (absolute); false
   // (default) when its constant offset is unknown (a tracker's or a test
@@ -81,12 +95,26 @@ struct NotIdentifiable {
   std::string separate_by;  // what motion or measurement would tell them apart
 };
 
+// An effect the fitted data selected but the held-out data do not support:
+// left out of the fitted description.
+struct NotConfirmed {
+  std::string effect;
+  std::string axis;
+  double heldout_rms_with_mm = 0.0;     // held-out RMS with the effect fitted
+  double heldout_rms_without_mm = 0.0;  // and without it
+};
+
 struct AxisStats {
   std::string axis;
   std::string target;  // channel compared: <j>_meas or <j>_act
   std::size_t samples = 0;
   double rms_mm = 0.0, max_mm = 0.0, mean_mm = 0.0;
-  double noise_floor_mm = 0.0;                // robust high-pass MAD estimate
+  // The floor mismatches and effects are judged against: the noise (robust
+  // high-pass MAD estimate, at least the resolution's q/√12) and the
+  // interpolation uncertainty, added in quadrature.
+  double noise_floor_mm = 0.0;
+  double resolution_mm = 0.0;     // grid step of the recorded target; 0: continuous
+  double interpolation_mm = 0.0;  // RMS re-simulation uncertainty between coarse samples
   std::optional<double> standstill_noise_mm;  // std in standstill windows, when any
   double offset_mm = 0.0;                     // constant removed in the alignment
 };
@@ -138,6 +166,7 @@ struct DiagnosisResult {
   std::vector<Mismatch> mismatch;
   std::vector<Explanation> explanations;
   std::vector<NotIdentifiable> not_identifiable;
+  std::vector<NotConfirmed> not_confirmed;
   std::vector<std::string> candidates_tested;
   FitFigures train, heldout;
   bool has_heldout = false;
@@ -145,6 +174,9 @@ struct DiagnosisResult {
   Whiteness whiteness;
   TcpComparison tcp;
   std::string verdict;  // one line: "nothing missing" or the effects found
+  // What this recording cannot show and why (e.g. effects the encoder does
+  // not see, transients shorter than the sampling).
+  std::vector<std::string> notes;
   std::vector<AxisSeries> series;
   MachineDescription believed, fitted;
 };
