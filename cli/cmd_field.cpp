@@ -46,6 +46,10 @@ const char* kFieldHelp =
     "  --out DIR             output folder (created if missing)\n"
     "  --base FIELD.tcf      a further iteration: the field the scanned part was cut\n"
     "                        with; the new field is it plus the new compensation\n"
+    "  --expected MESH       the surface the program leaves on an error-free machine\n"
+    "                        (STL/PLY, workpiece frame; e.g. truecut run on the ideal\n"
+    "                        machine): errors are measured against it, so scallops\n"
+    "                        and what else the program leaves are not compensated\n"
     "options:\n"
     "  --method ray|sphere   error vectors: rays to a scanned mesh (default when the\n"
     "                        scan has faces) or plane fits in spheres (point clouds)\n"
@@ -187,6 +191,7 @@ offline::TriangleMesh read_input_mesh(const fs::path& file) {
 
 struct Inputs {
   offline::TriangleMesh nominal, scan;
+  std::optional<offline::TriangleMesh> expected;
   interp::CanonProgram program;
   interp::ToolTable tools;
   std::optional<PartFile> part;
@@ -215,6 +220,12 @@ Inputs read_inputs(const ParsedArgs& a, const fs::path& program_file, const fs::
         offline::digest_file(i == 0 ? "program" : "subroutine", in.program.files[i]));
   in.digests.push_back(offline::digest_file("tools", tools_file));
   if (auto p = a.value("part")) in.digests.push_back(offline::digest_file("part", *p));
+  if (auto e = a.value("expected")) {
+    in.expected = read_input_mesh(*e);
+    if (in.expected->triangles.empty())
+      throw InputError(*e + ": the expected cut must be a mesh with faces");
+    in.digests.push_back(offline::digest_file("expected", *e));
+  }
   if (auto b = a.value("base")) {
     try {
       in.base = rt::read_field_file(*b).field;
@@ -321,6 +332,7 @@ int run_field(const ParsedArgs& a, const std::vector<std::string>& argv) {
   pin.program = &in.program;
   pin.tools = tool_shapes(in.tools, *tools, in.part, a);
   if (in.base) pin.base_field = &*in.base;
+  if (in.expected) pin.expected = &*in.expected;
   if (in.part) {
     if (in.part->triangle_surface_ids.size() != in.nominal.triangles.size())
       throw InputError(*a.value("part") + ": " +
@@ -383,6 +395,7 @@ int cmd_field(const std::vector<std::string>& argv) {
                       {"kb-kc", true},
                       {"significance", true},
                       {"scan-noise", true},
+                      {"expected", true},
                       {"resolution", true},
                       {"smoothness", true},
                       {"path-step", true},

@@ -285,6 +285,78 @@ TEST(FieldPipeline, RecoversKnownDisplacementsWithoutNoise) {
   }
 }
 
+// Scallops of a Ø6 ball at 1 mm stepover (41.7 µm at the cusps, on the
+// integer y where the nominal's 1 mm vertices lie) on top of the machine's
+// displacement: measured against the nominal, every vertex sees a cusp and
+// the field takes the scallop for an error; against the expected cut (the
+// same scallops, as the ideal machine leaves them) only the displacement is
+// left.
+TEST(FieldPipeline, ExpectedCutTakesTheScallopsOut) {
+  const auto scallop = [](double, double y) {
+    const double d = std::abs(y - std::floor(y) - 0.5);  // to the valley at k + 0.5
+    return d * d / (2 * 3.0);
+  };
+  PlateCase c = plate_case(kLinear, 0.0);
+  c.scan = test_geo::plate(40, 20, 400, 200,
+                           [&](double x, double y) { return kLinear(x, y) + scallop(x, y); });
+  const TriangleMesh expected = test_geo::plate(40, 20, 400, 200, scallop);
+
+  const FieldError against_nominal = field_error(run_case(c), kLinear);
+  FieldPipelineInputs in;
+  in.nominal = &c.nominal;
+  in.scan = &c.scan;
+  in.expected = &expected;
+  in.program = &c.program;
+  in.tools = c.tools;
+  FieldPipelineOptions o;
+  o.register_scan = false;
+  o.fit.spacing_mm = 1.0;
+  const FieldPipelineResult r = run_field_pipeline(in, o);
+  const FieldError against_expected = field_error(r, kLinear);
+  ASSERT_GT(against_expected.points, 5000);
+  EXPECT_GT(against_nominal.rms_mm, 0.03);  // the 41.7 µm cusps, aliased
+  EXPECT_LT(against_expected.max_mm, 2e-3);
+  EXPECT_LT(against_expected.rms_mm, 1e-3);
+  // Sampled on the flat plate the two meshes agree to float precision.
+  EXPECT_EQ(r.error_summary.valid, run_case(c).error_summary.valid);
+}
+
+// The expected cut must cover the compensation points: where its rays find
+// nothing, the point is invalid (not compensated against the nominal).
+TEST(FieldPipeline, PointsOutsideTheExpectedCutAreInvalid) {
+  PlateCase c = plate_case(kConstant, 0.0);
+  const TriangleMesh expected =
+      test_geo::plate(20, 20, 40, 40, [](double, double) { return 0.0; });  // x in [0, 20] only
+  FieldPipelineInputs in;
+  in.nominal = &c.nominal;
+  in.scan = &c.scan;
+  in.expected = &expected;
+  in.program = &c.program;
+  in.tools = c.tools;
+  FieldPipelineOptions o;
+  o.register_scan = false;
+  o.fit.spacing_mm = 1.0;
+  const FieldPipelineResult r = run_field_pipeline(in, o);
+  int checked = 0;
+  for (std::size_t i = 0; i < r.points.size(); ++i) {
+    const Eigen::Vector3d& p = r.points.positions_mm[i];
+    if (p.y() < 2 || p.y() > 18) continue;
+    if (p.x() > 21 && p.x() < 39) {
+      EXPECT_EQ(r.errors.status[i], ErrorStatus::no_hit) << p.transpose();
+      ++checked;
+    } else if (p.x() > 1 && p.x() < 19) {
+      EXPECT_TRUE(r.errors.valid(i)) << p.transpose();
+      EXPECT_NEAR(r.errors.normal_mm[i], 0.05, 1e-6) << p.transpose();
+    }
+  }
+  EXPECT_GT(checked, 100);
+  ASSERT_EQ(r.errors.support_begin.size(), r.errors.size() + 1);
+  for (std::size_t i = 0; i < r.errors.size(); ++i)
+    if (!r.errors.valid(i)) {
+      EXPECT_EQ(r.errors.support_begin[i], r.errors.support_begin[i + 1]);
+    }
+}
+
 // With 20 and 50 µm of scanner noise the field at the path points stays
 // well inside the noise: the truss (×0.51) and the fit's regularisation
 // both smooth. Measured RMS/σ is written to docs/offline.md.

@@ -155,6 +155,36 @@ TrussResult smooth_per_surface(const TriangleMesh& nominal, const std::vector<st
 
 // Truss smoothing of the vertex compensation, the adapted mesh and the
 // vectors the field is fitted to.
+// The machine's error alone: the measured error minus the expected cut's
+// (FieldPipelineInputs::expected), point by point along the same normal. A
+// point the expected cut gives no vector for becomes invalid with its
+// status and loses its scan support (which only valid points carry).
+void subtract_expected(ErrorVectors& e, const ErrorVectors& expected) {
+  std::vector<std::uint32_t> begin{0}, point;
+  std::vector<float> weight;
+  begin.reserve(e.size() + 1);
+  point.reserve(e.support_point.size());
+  weight.reserve(e.support_weight.size());
+  for (std::size_t i = 0; i < e.size(); ++i) {
+    if (e.valid(i) && !expected.valid(i)) {
+      e.status[i] = expected.status[i];
+      e.vectors_mm[i].setZero();
+      e.normal_mm[i] = 0.0;
+    } else if (e.valid(i)) {
+      e.vectors_mm[i] -= expected.vectors_mm[i];
+      e.normal_mm[i] -= expected.normal_mm[i];
+      for (std::uint32_t k = e.support_begin[i]; k < e.support_begin[i + 1]; ++k) {
+        point.push_back(e.support_point[k]);
+        weight.push_back(e.support_weight[k]);
+      }
+    }
+    begin.push_back(static_cast<std::uint32_t>(point.size()));
+  }
+  e.support_begin = std::move(begin);
+  e.support_point = std::move(point);
+  e.support_weight = std::move(weight);
+}
+
 void smooth_and_adapt(const TriangleMesh& nominal, const FieldPipelineOptions& opt,
                       bool at_vertices, const CompensationMatrix& vertex_matrix, StageTimer& timer,
                       FieldPipelineResult& r) {
@@ -247,6 +277,8 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
         "the ray method needs a scanned mesh with faces; use the sphere method for a point cloud");
   if (in.scan->vertices_mm.empty()) throw std::invalid_argument("the scan has no points");
   if (!(opt.spacing_mm >= 0.0)) throw std::invalid_argument("spacing must not be negative");
+  if (in.expected && in.expected->triangles.empty())
+    throw std::invalid_argument("the expected cut has no triangles");
 
   FieldPipelineResult r;
   StageTimer timer(r, progress);
@@ -290,7 +322,8 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
   // chain (tool path, tool-centre placement). Each chain's result is the
   // same as run alone.
   std::optional<RayScene> scene;
-  std::vector<Eigen::Vector3d> cloud;  // sphere method: the registered scan points
+  std::optional<RayScene> expected_scene;  // the expected cut, workpiece frame
+  std::vector<Eigen::Vector3d> cloud;      // sphere method: the registered scan points
   auto registration = [&] {
     if (!opt.register_scan) return;
     const auto t0 = timer.now();
@@ -302,10 +335,15 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
   // The scene is built on the scan as it is and placed by the registration
   // (RayScene::set_world_from_mesh): the scan is neither copied nor moved.
   auto build_scene = [&] {
-    if (opt.method != ErrorMethod::ray) return;
     const auto t0 = timer.now();
-    scene.emplace(*in.scan);
-    timer.done(kSceneStage, t0, "scan ray scene", text("%zu faces", in.scan->triangles.size()));
+    if (in.expected) expected_scene.emplace(*in.expected);
+    if (opt.method == ErrorMethod::ray) scene.emplace(*in.scan);
+    if (!scene && !expected_scene) return;
+    timer.done(kSceneStage, t0, "scan ray scene",
+               in.expected ? text("%zu + %zu faces (scan + expected cut)",
+                                  opt.method == ErrorMethod::ray ? in.scan->triangles.size() : 0,
+                                  in.expected->triangles.size())
+                           : text("%zu faces", in.scan->triangles.size()));
   };
   auto scan_chain = [&] {
     if (opt.concurrent_stages) {
@@ -323,10 +361,16 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
       cloud = in.scan->vertices_mm;
       if (r.registration) transform_points(r.registration->scan_to_nominal, cloud);
     }
-    auto error_vectors = [&](const CompensationPoints& points) {
+    auto measured_error_vectors = [&](const CompensationPoints& points) {
       if (opt.method == ErrorMethod::ray)
         return error_vectors_by_rays(nominal, points, *scene, opt.ray);
       return error_vectors_by_spheres(nominal, points, cloud, opt.sphere);
+    };
+    auto error_vectors = [&](const CompensationPoints& points) {
+      ErrorVectors e = measured_error_vectors(points);
+      if (expected_scene)
+        subtract_expected(e, error_vectors_by_rays(nominal, points, *expected_scene, opt.ray));
+      return e;
     };
     r.errors = error_vectors(r.points);
     const RigidBodyFit rbm_fit = opt.method == ErrorMethod::ray ? RigidBodyFit::normal_components

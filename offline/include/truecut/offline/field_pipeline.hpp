@@ -59,6 +59,17 @@ struct FieldPipelineInputs {
   // The scan: a mesh for the ray method, its vertices are the cloud for the
   // sphere method.
   const TriangleMesh* scan = nullptr;
+  // Optional: the surface the program leaves on an error-free machine (the
+  // as-programmed cut — scallops, cusps, chordal facets — e.g. `truecut run`
+  // on the ideal machine), in the workpiece frame. The error vectors are then
+  // measured against it instead of the nominal: the scan minus the expected
+  // cut along the same ray is the machine's error alone, and what the program
+  // itself leaves (a ball's 42 µm scallops at 1 mm stepover) is not
+  // compensated — a correction placed at the tool centre cannot remove it,
+  // and sampled at the compensation points it only aliases into the field.
+  // Its error vectors use the ray method with the same options; a point
+  // where it gives none is invalid.
+  const TriangleMesh* expected = nullptr;
   const interp::CanonProgram* program = nullptr;
   std::vector<ToolShape> tools;
   // A further iteration: the field in use when the scanned part was cut.
