@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The README's first command: install what is missing, build, run the main
-# job — the closed-loop demo on the implant (machine with hidden physics,
+# job — the closed-loop demo on all three parts (machine with hidden physics,
 # scan, correction field, real-time and G-code compensation, CMM), writing
 # out/demo/report.html and out/demo/results.json. Extra arguments go to
 # `truecut demo` (e.g. --part all, --sigma-um 50).

@@ -212,10 +212,12 @@ PlateCase plate_case(const Displacement& w, double sigma_mm, unsigned seed = 7) 
   return c;
 }
 
-FieldPipelineResult run_case(const PlateCase& c, FieldPipelineOptions o = {}) {
+FieldPipelineResult run_case(const PlateCase& c, FieldPipelineOptions o = {},
+                             const TriangleMesh* expected = nullptr) {
   FieldPipelineInputs in;
   in.nominal = &c.nominal;
   in.scan = &c.scan;
+  in.expected = expected;
   in.program = &c.program;
   in.tools = c.tools;
   o.register_scan = false;  // the scan is in the workpiece frame: the displacement is the error
@@ -302,16 +304,7 @@ TEST(FieldPipeline, ExpectedCutTakesTheScallopsOut) {
   const TriangleMesh expected = test_geo::plate(40, 20, 400, 200, scallop);
 
   const FieldError against_nominal = field_error(run_case(c), kLinear);
-  FieldPipelineInputs in;
-  in.nominal = &c.nominal;
-  in.scan = &c.scan;
-  in.expected = &expected;
-  in.program = &c.program;
-  in.tools = c.tools;
-  FieldPipelineOptions o;
-  o.register_scan = false;
-  o.fit.spacing_mm = 1.0;
-  const FieldPipelineResult r = run_field_pipeline(in, o);
+  const FieldPipelineResult r = run_case(c, {}, &expected);
   const FieldError against_expected = field_error(r, kLinear);
   ASSERT_GT(against_expected.points, 5000);
   EXPECT_GT(against_nominal.rms_mm, 0.03);  // the 41.7 µm cusps, aliased
@@ -327,16 +320,7 @@ TEST(FieldPipeline, PointsOutsideTheExpectedCutAreInvalid) {
   PlateCase c = plate_case(kConstant, 0.0);
   const TriangleMesh expected =
       test_geo::plate(20, 20, 40, 40, [](double, double) { return 0.0; });  // x in [0, 20] only
-  FieldPipelineInputs in;
-  in.nominal = &c.nominal;
-  in.scan = &c.scan;
-  in.expected = &expected;
-  in.program = &c.program;
-  in.tools = c.tools;
-  FieldPipelineOptions o;
-  o.register_scan = false;
-  o.fit.spacing_mm = 1.0;
-  const FieldPipelineResult r = run_field_pipeline(in, o);
+  const FieldPipelineResult r = run_case(c, {}, &expected);
   int checked = 0;
   for (std::size_t i = 0; i < r.points.size(); ++i) {
     const Eigen::Vector3d& p = r.points.positions_mm[i];

@@ -15,30 +15,16 @@
 #include <utility>
 #include <vector>
 
+#include "cutting_test_meshes.hpp"
 #include "truecut/sim/cutting/dexel_model.hpp"
 #include "truecut/sim/measure/cmm.hpp"
 
 using namespace truecut::sim;
 using namespace truecut::sim::cutting;
 using truecut::offline::TriangleMesh;
+using truecut::sim::test::grid;
 
 namespace {
-
-// A gridded rectangle origin + [0, nu·cell]·u + [0, nv·cell]·v, normal u × v.
-TriangleMesh grid(const Eigen::Vector3d& origin, const Eigen::Vector3d& u, const Eigen::Vector3d& v,
-                  int nu, int nv, double cell) {
-  TriangleMesh m;
-  for (int j = 0; j <= nv; ++j)
-    for (int i = 0; i <= nu; ++i)
-      m.vertices_mm.push_back(origin + (i * cell) * u + (j * cell) * v);
-  auto id = [&](int i, int j) { return std::uint32_t(j * (nu + 1) + i); };
-  for (int j = 0; j < nv; ++j)
-    for (int i = 0; i < nu; ++i) {
-      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
-      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
-    }
-  return m;
-}
 
 // The surface under test at 0.3 mm dexels and the exact reference at the
 // probe points, cut by the same sweeps.

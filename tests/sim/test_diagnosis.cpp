@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <string>
 
+#include "test_diagnosis_checks.hpp"
 #include "test_diagnosis_fixtures.hpp"
 
 namespace truecut::sim::test {
@@ -16,45 +17,8 @@ namespace {
 
 namespace dg = diagnosis;
 
-// The believed model of every case: a known servo loop on X and Y.
-MachineDescription believed_with_servo() {
-  MachineDescription d = xy_machine();
-  enable_servo_lag(d.machine, kX, 40.0, 0.9);
-  enable_servo_lag(d.machine, kY, 35.0, 0.8);
-  return d;
-}
-
-dg::DiagnosisResult run(const MachineDescription& believed, const Recording& rec) {
-  dg::DiagnosisOptions o;
-  auto r = dg::diagnose(rec, nullptr, believed, o);
-  if (std::getenv("TRUECUT_DIAGNOSIS_VERBOSE"))
-    std::printf("%s\n", dg::diagnosis_summary(r).c_str());
-  return r;
-}
-
-const dg::Explanation* find(const dg::DiagnosisResult& r, const std::string& effect,
-                            const std::string& axis) {
-  for (const auto& e : r.explanations)
-    if (e.effect == effect && e.axis == axis) return &e;
-  return nullptr;
-}
-
-const dg::Parameter* param(const dg::Explanation& e, const std::string& name) {
-  for (const auto& p : e.parameters)
-    if (p.name == name) return &p;
-  return nullptr;
-}
-
 std::string describe(const dg::DiagnosisResult& r) {
   return dg::diagnosis_summary(r);
-}
-
-void expect_covers(const dg::Explanation& e, const std::string& name, double truth,
-                   const dg::DiagnosisResult& r) {
-  const auto* p = param(e, name);
-  ASSERT_NE(p, nullptr) << name << "\n" << describe(r);
-  EXPECT_LE(p->ci95_lo, truth) << name << "\n" << describe(r);
-  EXPECT_GE(p->ci95_hi, truth) << name << "\n" << describe(r);
 }
 
 // Held-out RMS after the fit near the noise the recording was made with.

@@ -9,50 +9,13 @@
 #include <cstdlib>
 #include <string>
 
+#include "test_diagnosis_checks.hpp"
 #include "test_diagnosis_fixtures.hpp"
 
 namespace truecut::sim::test {
 namespace {
 
 namespace dg = diagnosis;
-
-MachineDescription believed_with_servo() {
-  MachineDescription d = xy_machine();
-  enable_servo_lag(d.machine, kX, 40.0, 0.9);
-  enable_servo_lag(d.machine, kY, 35.0, 0.8);
-  return d;
-}
-
-dg::DiagnosisResult run(const MachineDescription& believed, const Recording& rec) {
-  dg::DiagnosisOptions o;
-  if (std::getenv("TRUECUT_DIAGNOSIS_VERBOSE"))
-    o.progress = [](const std::string& s) { std::printf("  %s\n", s.c_str()); };
-  auto r = dg::diagnose(rec, nullptr, believed, o);
-  if (std::getenv("TRUECUT_DIAGNOSIS_VERBOSE"))
-    std::printf("%s\n", dg::diagnosis_summary(r).c_str());
-  return r;
-}
-
-const dg::Explanation* find(const dg::DiagnosisResult& r, const std::string& effect,
-                            const std::string& axis) {
-  for (const auto& e : r.explanations)
-    if (e.effect == effect && e.axis == axis) return &e;
-  return nullptr;
-}
-
-const dg::Parameter* param(const dg::Explanation& e, const std::string& name) {
-  for (const auto& p : e.parameters)
-    if (p.name == name) return &p;
-  return nullptr;
-}
-
-void expect_covers(const dg::Explanation& e, const std::string& name, double truth,
-                   const dg::DiagnosisResult& r) {
-  const auto* p = param(e, name);
-  ASSERT_NE(p, nullptr) << name << "\n" << dg::diagnosis_summary(r);
-  EXPECT_LE(p->ci95_lo, truth) << name << "\n" << dg::diagnosis_summary(r);
-  EXPECT_GE(p->ci95_hi, truth) << name << "\n" << dg::diagnosis_summary(r);
-}
 
 MachineDescription with_backlash(MachineDescription d, double play_mm) {
   d.machine.effects.backlash.enabled = true;

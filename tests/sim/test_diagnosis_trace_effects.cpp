@@ -9,19 +9,13 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "test_diagnosis_checks.hpp"
 #include "test_diagnosis_fixtures.hpp"
 
 namespace truecut::sim::test {
 namespace {
 
 namespace dg = diagnosis;
-
-MachineDescription believed_with_servo() {
-  MachineDescription d = xy_machine();
-  enable_servo_lag(d.machine, kX, 40.0, 0.9);
-  enable_servo_lag(d.machine, kY, 35.0, 0.8);
-  return d;
-}
 
 // Spindle power of the synthetic job: off, a heavy cut, a light cut.
 double power_kw(double t) {
@@ -59,33 +53,6 @@ Recording powered_recording(const MachineParams& truth, double noise_mm, unsigne
     rec.channels["spindle_power"].push_back(in.spindle_power_kw);
   }
   return rec;
-}
-
-dg::DiagnosisResult run(const MachineDescription& believed, const Recording& rec) {
-  dg::DiagnosisOptions o;
-  if (std::getenv("TRUECUT_DIAGNOSIS_VERBOSE"))
-    o.progress = [](const std::string& s) { std::printf("  %s\n", s.c_str()); };
-  auto r = dg::diagnose(rec, nullptr, believed, o);
-  if (std::getenv("TRUECUT_DIAGNOSIS_VERBOSE"))
-    std::printf("%s\n", dg::diagnosis_summary(r).c_str());
-  return r;
-}
-
-const dg::Explanation* find(const dg::DiagnosisResult& r, const std::string& effect,
-                            const std::string& axis) {
-  for (const auto& e : r.explanations)
-    if (e.effect == effect && e.axis == axis) return &e;
-  return nullptr;
-}
-
-void expect_covers(const dg::Explanation& e, const std::string& name, double truth,
-                   const dg::DiagnosisResult& r) {
-  const dg::Parameter* p = nullptr;
-  for (const auto& q : e.parameters)
-    if (q.name == name) p = &q;
-  ASSERT_NE(p, nullptr) << name << "\n" << dg::diagnosis_summary(r);
-  EXPECT_LE(p->ci95_lo, truth) << name << "\n" << dg::diagnosis_summary(r);
-  EXPECT_GE(p->ci95_hi, truth) << name << "\n" << dg::diagnosis_summary(r);
 }
 
 void expect_only(const dg::DiagnosisResult& r, const std::string& effect) {
