@@ -58,6 +58,9 @@ const char* kFieldHelp =
     "  --surfaces ID,...     compensated surfaces (default: part.json's, else all)\n"
     "  --datum ID,...        register on these surfaces only (default: all)\n"
     "  --no-register         the scan is already in the workpiece frame\n"
+    "  --register-significance P  apply the registration only when a motion that\n"
+    "                        large arises from the scan's noise with probability\n"
+    "                        below P (default 0.001; 0: always apply)\n"
     "  --remove-rbm          remove the rigid-body motion left in the error vectors\n"
     "  --sphere-radius MM    sphere method radius Rs (default 1.5)\n"
     "  --max-distance MM     ray method search distance each way (default 1)\n"
@@ -259,6 +262,7 @@ offline::FieldPipelineOptions pipeline_options(const ParsedArgs& a, const Inputs
   }
   if (auto d = a.value("datum")) o.datum_surfaces = id_list("datum", *d);
   o.register_scan = !a.flag("no-register");
+  o.icp.significance_level = a.number("register-significance", 0.001, 0.0, 0.5);
   o.remove_rigid_body_motion = a.flag("remove-rbm");
   o.sphere.radius_mm = a.number("sphere-radius", o.sphere.radius_mm, 0.01, 100.0);
   o.ray.max_distance_mm = a.number("max-distance", o.ray.max_distance_mm, 0.001, 100.0);
@@ -281,7 +285,13 @@ offline::FieldPipelineOptions pipeline_options(const ParsedArgs& a, const Inputs
 
 void print_summary(const offline::FieldPipelineResult& r,
                    const std::vector<offline::FileDigest>& out, bool forced) {
-  if (r.registration)
+  if (r.registration && !r.registration->applied)
+    std::printf(
+        "registration: not applied, the motion found is within the scan's noise (chi2 %.1f <= "
+        "%.1f); RMS residual %.4f mm\n",
+        r.registration->motion_chi2, r.registration->motion_threshold,
+        r.registration->rms_after_mm);
+  else if (r.registration)
     std::printf(
         "registration: %d iterations, RMS residual %.4f mm, translation %.4f %.4f %.4f mm, "
         "rotation %.4f deg\n",
@@ -396,6 +406,7 @@ int cmd_field(const std::vector<std::string>& argv) {
                       {"significance", true},
                       {"scan-noise", true},
                       {"expected", true},
+                      {"register-significance", true},
                       {"resolution", true},
                       {"smoothness", true},
                       {"path-step", true},

@@ -56,6 +56,37 @@ TEST(Registration, RecoversRigidMisalignmentUnderNoise) {
   EXPECT_NEAR((r.transform.matrix - r.scan_to_nominal.matrix()).norm(), 0.0, 1e-15);
 }
 
+// A scan already in place moves only by its noise: the registration finds
+// a motion of about its standard error, which the significance test does
+// not apply (a false alarm has probability 0.001; none in 10 seeds). A
+// misplacement of 0.03° and 3 µm — five times the pose's scatter — is applied.
+TEST(Registration, MotionWithinTheNoiseIsNotApplied) {
+  const TriangleMesh nominal = nominal_block();
+  for (std::uint32_t seed = 1; seed <= 10; ++seed) {
+    const IcpResult r =
+        register_scan(nominal, scan_of(nominal, Eigen::Isometry3d::Identity(), seed));
+    EXPECT_FALSE(r.applied) << "seed " << seed << ": chi2 " << r.motion_chi2;
+    EXPECT_LE(r.motion_chi2, r.motion_threshold) << seed;
+    EXPECT_NEAR(r.motion_threshold, 22.46, 0.5);  // χ²(6) at 0.001 (Wilson–Hilferty)
+    EXPECT_TRUE(r.scan_to_nominal.isApprox(Eigen::Isometry3d::Identity(), 0.0)) << seed;
+    EXPECT_EQ(r.rms_after_mm, r.rms_before_mm) << seed;
+
+    IcpOptions always;
+    always.significance_level = 0.0;
+    const IcpResult moved =
+        register_scan(nominal, scan_of(nominal, Eigen::Isometry3d::Identity(), seed), always);
+    EXPECT_TRUE(moved.applied);
+    EXPECT_GT(moved.transform.rotation_angle_deg, 0.0);
+  }
+  const Eigen::Isometry3d misplaced = rigid({0.3, -0.5, 1}, 0.03, {0.002, 0.002, -0.001});
+  const IcpResult r = register_scan(nominal, scan_of(nominal, misplaced, 3));
+  EXPECT_TRUE(r.applied) << "chi2 " << r.motion_chi2;
+  EXPECT_GT(r.motion_chi2, r.motion_threshold);
+  const auto [angle_deg, shift_mm] = difference(r.scan_to_nominal, misplaced.inverse());
+  EXPECT_LT(angle_deg, 0.01);
+  EXPECT_LT(shift_mm, kShiftTolerance_mm);
+}
+
 TEST(Registration, IsDeterministic) {
   const TriangleMesh nominal = nominal_block();
   const std::vector<Eigen::Vector3d> scan = scan_of(nominal, rigid({0, 0, 1}, 0.5, {0.2, 0, 0}), 2);

@@ -79,7 +79,8 @@ json parameters_json(const FieldPipelineOptions& o, const AuditContext& c) {
             {"sharp_edge_deg", o.icp.sharp_edge_deg},
             {"max_correspondence_mm", o.icp.max_correspondence_mm},
             {"kernel", kernel[static_cast<int>(o.icp.kernel)]},
-            {"min_robust_scale_mm", o.icp.min_robust_scale_mm}}},
+            {"min_robust_scale_mm", o.icp.min_robust_scale_mm},
+            {"significance_level", o.icp.significance_level}}},
           {"ray",
            {{"max_distance_mm", o.ray.max_distance_mm},
             {"grazing_angle_deg", o.ray.grazing_angle_deg},
@@ -150,6 +151,9 @@ std::string audit_json(const FieldPipelineResult& r, const FieldPipelineOptions&
     reg["rms_residual_mm"] = g.rms_after_mm;
     reg["robust_scale_mm"] = g.robust_scale_mm;
     reg["determined_directions"] = g.determined_directions;
+    reg["applied"] = g.applied;
+    reg["motion_chi2"] = g.motion_chi2;
+    reg["motion_threshold"] = g.motion_threshold;
     j["registration"] = reg;
   } else {
     j["registration"] = nullptr;

@@ -328,9 +328,13 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
     if (!opt.register_scan) return;
     const auto t0 = timer.now();
     r.registration = register_scan(nominal, in.scan->vertices_mm, icp);
+    const IcpResult& g = *r.registration;
     timer.done(kRegistrationStage, t0, "registration",
-               text("%d iterations, RMS %.4f -> %.4f mm", r.registration->iterations,
-                    r.registration->rms_before_mm, r.registration->rms_after_mm));
+               g.applied ? text("%d iterations, RMS %.4f -> %.4f mm", g.iterations, g.rms_before_mm,
+                                g.rms_after_mm)
+                         : text("%d iterations; the motion found is within the scan's noise "
+                                "(chi2 %.1f <= %.1f): scan left in place, RMS %.4f mm",
+                                g.iterations, g.motion_chi2, g.motion_threshold, g.rms_after_mm));
   };
   // The scene is built on the scan as it is and placed by the registration
   // (RayScene::set_world_from_mesh): the scan is neither copied nor moved.

@@ -1,6 +1,7 @@
 #include "geometry/sharp_edges.hpp"
 #include "registration/least_squares6.hpp"
 #include "spatial/kd_tree.hpp"
+#include "truecut/offline/compensation_significance.hpp"
 #include "truecut/offline/mesh_geometry.hpp"
 #include "truecut/offline/registration.hpp"
 
@@ -234,6 +235,11 @@ IcpResult register_scan(const TriangleMesh& nominal, std::span<const Eigen::Vect
   find_pairs(samples, tree, scan, T, options.max_correspondence_mm, options.reuse_neighbours, cache,
              pairs);
   result.rms_before_mm = rms_of(pairs, nullptr);
+  // The last iteration's normal matrix, scale, centroid and lever, for the
+  // significance test of the whole motion.
+  Matrix6d last_H = Matrix6d::Zero();
+  double last_sigma = 0.0, last_L = 1.0;
+  Eigen::Vector3d last_centroid = Eigen::Vector3d::Zero();
 
   for (int it = 0; it < options.max_iterations; ++it) {
     result.iterations = it + 1;
@@ -270,6 +276,10 @@ IcpResult register_scan(const TriangleMesh& nominal, std::span<const Eigen::Vect
       g -= w[i] * pairs[i].r * J;
     }
     H.triangularView<Eigen::StrictlyLower>() = H.transpose();
+    last_H = H;
+    last_sigma = sigma;
+    last_L = L;
+    last_centroid = centroid;
     const registration::Solution6 s = registration::solve_in_determined_subspace(H, g);
     result.determined_directions = s.rank;
     const Eigen::Vector3d omega = s.x.head<3>() / L;
@@ -296,6 +306,24 @@ IcpResult register_scan(const TriangleMesh& nominal, std::span<const Eigen::Vect
   }
   // Rotations composed many times drift from orthonormal by rounding.
   T.linear() = Eigen::Quaterniond(T.linear()).normalized().toRotationMatrix();
+  if (options.significance_level > 0.0 && result.determined_directions > 0 && last_sigma > 0.0) {
+    // The motion from the start pose, about the last centroid, in the
+    // unknowns of the normal equations (rotation × L, translation).
+    const Eigen::Isometry3d motion = T * options.initial.inverse();
+    const Eigen::AngleAxisd aa(motion.linear());
+    Vector6d x;
+    x.head<3>() = aa.angle() * aa.axis() * last_L;
+    x.tail<3>() = motion * last_centroid - last_centroid;
+    result.motion_chi2 = x.dot(last_H * x) / (last_sigma * last_sigma);
+    result.motion_threshold =
+        chi2_quantile_upper(options.significance_level, result.determined_directions);
+    if (result.motion_chi2 <= result.motion_threshold) {
+      result.applied = false;
+      T = options.initial;
+      find_pairs(samples, tree, scan, T, options.max_correspondence_mm, options.reuse_neighbours,
+                 cache, pairs);
+    }
+  }
   result.scan_to_nominal = T;
   result.transform = describe_transform(T);
   result.rms_after_mm = rms_of(pairs, &result.correspondences);
