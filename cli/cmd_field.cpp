@@ -70,7 +70,8 @@ const char* kFieldHelp =
     "                        surface)\n"
     "  --scan-noise MM       the scanner's noise along the normal (default: estimated\n"
     "                        from the scan)\n"
-    "  --kb-kc X             truss smoothing kb/kc (default 1)\n"
+    "  --kb-kc X             truss smoothing kb/kc (default 1, times (noise / 20 um)^2\n"
+    "                        for scans noisier than 20 um; given: used as is)\n"
     "  --resolution MM       field grid spacing (default 1)\n"
     "  --smoothness X        field fit regularisation lambda (default 0.1)\n"
     "  --path-step MM        tool path sampling step (default 0.1)\n"
@@ -270,6 +271,8 @@ offline::FieldPipelineOptions pipeline_options(const ParsedArgs& a, const Inputs
       a.number("significance", o.significance.significance_level, 0.0, 0.5);
   o.significance.noise_mm = a.number("scan-noise", 0.0, 0.0, 10.0);
   o.truss.kb_over_kc = a.number("kb-kc", o.truss.kb_over_kc, 0.0, 1e6);
+  // A kb/kc given is used as given; the default scales with the scan's noise.
+  if (a.value("kb-kc")) o.truss_reference_noise_mm = 0.0;
   o.fit.spacing_mm = a.number("resolution", o.fit.spacing_mm, 0.05, 100.0);
   o.fit.smoothness = a.number("smoothness", o.fit.smoothness, 0.0, 1e6);
   o.path.step_mm = a.number("path-step", o.path.step_mm, 0.001, 10.0);

@@ -57,7 +57,7 @@ json transform_json(const RigidTransformReport& t) {
           {"rotation_axis", vec(t.rotation_axis)}};
 }
 
-json parameters_json(const FieldPipelineOptions& o, const AuditContext& c) {
+json parameters_json(const FieldPipelineOptions& o, const AuditContext& c, double kb_used) {
   json tools = json::array();
   for (const ToolShape& t : c.tools)
     tools.push_back({{"tool", t.tool},
@@ -99,6 +99,8 @@ json parameters_json(const FieldPipelineOptions& o, const AuditContext& c) {
             {"min_noise_points", o.significance.min_noise_points}}},
           {"truss",
            {{"kb_over_kc", o.truss.kb_over_kc},
+            {"reference_noise_mm", o.truss_reference_noise_mm},
+            {"kb_over_kc_used", kb_used},
             {"edge_weight",
              o.truss.edge_weight == TrussEdgeWeight::uniform ? "uniform" : "inverse_length"}}},
           {"field",
@@ -139,7 +141,7 @@ std::string audit_json(const FieldPipelineResult& r, const FieldPipelineOptions&
     out.push_back(digest_json(d));
   j["inputs"] = in;
   j["outputs"] = out;
-  j["parameters"] = parameters_json(o, c);
+  j["parameters"] = parameters_json(o, c, r.truss_kb_over_kc);
   if (r.registration) {
     const IcpResult& g = *r.registration;
     json reg = transform_json(g.transform);

@@ -434,7 +434,14 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
     for (std::size_t i = 0; i < vertex_matrix.size(); ++i)
       if (!r.significance.compensated(vertex_matrix.surface_ids[i]))
         vertex_matrix.vectors_mm[i].setZero();
-    smooth_and_adapt(nominal, opt, at_vertices, vertex_matrix, timer, r);
+    FieldPipelineOptions smoothing = opt;
+    const double noise_mm = r.significance.pooled_noise_mm;
+    if (opt.truss_reference_noise_mm > 0.0 && noise_mm > opt.truss_reference_noise_mm) {
+      const double ratio = noise_mm / opt.truss_reference_noise_mm;
+      smoothing.truss.kb_over_kc = opt.truss.kb_over_kc * ratio * ratio;
+    }
+    r.truss_kb_over_kc = smoothing.truss.kb_over_kc;
+    smooth_and_adapt(nominal, smoothing, at_vertices, vertex_matrix, timer, r);
   };
   auto program_chain = [&] {
     auto t0 = timer.now();

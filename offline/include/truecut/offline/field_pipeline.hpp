@@ -43,6 +43,12 @@ struct FieldPipelineOptions {
   // compensation (compensation_significance.hpp).
   SignificanceOptions significance;
   TrussOptions truss;
+  // The truss is a Tikhonov smoother: the weight that balances bias against
+  // noise grows with the noise's variance. kb/kc is chosen for a scanner of
+  // this noise (the demo's 20 µm) and scaled by (σ / this)² when the scan is
+  // noisier (σ the significance test's estimate from the scan itself); never
+  // below kb_over_kc. 0: kb/kc as given.
+  double truss_reference_noise_mm = 0.02;
   FieldFitOptions fit;  // fit.spacing_mm is the field resolution
   ToolPathOptions path;
   PlacementOptions placement;
@@ -112,6 +118,7 @@ struct FieldPipelineResult {
   // Per nominal vertex: the truss-smoothed compensation (zero off the
   // compensated surfaces) and the adapted mesh (nominal + that).
   TrussResult truss;
+  double truss_kb_over_kc = 0.0;                 // the kb/kc used (truss_reference_noise_mm)
   std::vector<std::uint8_t> vertex_compensated;  // 1 where the adapted mesh moved the vertex
   TriangleMesh adapted;
   // The vectors the field is fitted to, one per compensation point: the
