@@ -184,6 +184,12 @@ int cmd_run(const std::vector<std::string>& argv) {
                   us(t.latency.percentile_ns(0.99)).c_str(),
                   us(t.latency.percentile_ns(0.9999)).c_str(), us(t.latency.max_ns()).c_str());
   }
+  // The components write their files as they unload (recorder, cutting).
+  if (const int errors = h.unload(); errors > 0) {
+    std::fprintf(stderr, "truecut run: %d output file(s) could not be written (see above)\n",
+                 errors);
+    return kExitFailure;
+  }
   return kExitOk;
 }
 

@@ -148,6 +148,11 @@ int run_machine(const std::vector<std::string>& argv) {
     return kExitUsage;
   }
   if (progress.tty && progress.last_ns >= 0) std::fputs("\n", stderr);
+  if (r.output_errors > 0) {
+    std::fprintf(stderr, "truecut run: %d output file(s) could not be written (see above)\n",
+                 r.output_errors);
+    return kExitFailure;
+  }
   if (!r.finished) {
     std::fprintf(stderr, "truecut run: the program did not reach its end\n");
     return kExitFailure;

@@ -124,11 +124,20 @@ Hal::Hal(HalOptions options) : state_(std::make_unique<tc_hal>()) {
   state_->output_dir_text = state_->options.output_dir.string();
 }
 
-Hal::~Hal() {
+int Hal::unload() {
   auto& st = *state_;
+  if (st.unloaded) return 0;
+  st.unloaded = true;
+  const int before = st.error_messages;
   for (auto it = st.modules.rbegin(); it != st.modules.rend(); ++it) {
     if (it->exit) it->exit(api(), state_.get(), it->state);
   }
+  return st.error_messages - before;
+}
+
+Hal::~Hal() {
+  auto& st = *state_;
+  unload();
   // Nothing may point into a library once it is closed.
   st.services.clear();
   st.functs.clear();
@@ -400,8 +409,7 @@ std::vector<PinInfo> Hal::pins() const {
 std::vector<ParamInfo> Hal::params() const {
   std::vector<ParamInfo> out;
   for (const auto& [name, p] : state_->params)
-    out.push_back(
-        {name, p->type, p->dir, state_->component(p->comp_id)->name});
+    out.push_back({name, p->type, p->dir, state_->component(p->comp_id)->name});
   return out;
 }
 

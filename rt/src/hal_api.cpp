@@ -139,6 +139,7 @@ void api_request_stop(tc_hal* hal) {
 }
 
 void api_message(tc_hal* hal, tc_hal_msg_level_t level, const char* text) {
+  if (level == TC_HAL_MSG_ERR) ++hal->error_messages;
   const char* tag = level == TC_HAL_MSG_ERR    ? "error"
                     : level == TC_HAL_MSG_WARN ? "warning"
                                                : "info";

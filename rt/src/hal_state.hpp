@@ -114,6 +114,8 @@ struct tc_hal {
   std::vector<truecut::hal::detail::Module> modules;  // load order
   std::vector<std::unique_ptr<unsigned char[]>> allocations;
   std::atomic<bool> stop{false};
+  int error_messages = 0;  // api_message calls at TC_HAL_MSG_ERR
+  bool unloaded = false;   // the modules' exit functions have run
 
   truecut::hal::detail::Component* component(int id) const;
   truecut::hal::detail::Thread* thread(const std::string& name) const;

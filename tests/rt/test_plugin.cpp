@@ -93,3 +93,50 @@ TEST(Plugin, ComponentNewOutsideLoadrtIsRefused) {
   Hal hal(opts());
   EXPECT_LT(Hal::api()->component_new(hal.state(), "rogue"), 0);
 }
+
+// A component that fails to write its output at exit (a full disk) reports
+// an error; unload() counts it, so `truecut run` can fail instead of
+// reporting a file it never wrote. Once only: the destructor does not call
+// the exits again.
+namespace {
+int writer_exits = 0;
+int writer_init(const tc_hal_api_t* api, tc_hal_t* hal, int, const char* const*, void**) {
+  const int id = api->component_new(hal, "writer");
+  return id < 0 ? id : api->component_ready(hal, id);
+}
+void writer_exit(const tc_hal_api_t* api, tc_hal_t* hal, void*) {
+  ++writer_exits;
+  api->message(hal, TC_HAL_MSG_ERR, "writer: cannot write out.stl: No space left on device");
+}
+void quiet_exit(const tc_hal_api_t* api, tc_hal_t* hal, void*) {
+  api->message(hal, TC_HAL_MSG_INFO, "quiet: wrote nothing");
+}
+}  // namespace
+
+TEST(Plugin, UnloadCountsTheErrorsComponentsReportWritingTheirFiles) {
+  writer_exits = 0;
+  {
+    Hal hal(opts());
+    hal.load("writer", writer_init, writer_exit);
+    hal.load(
+        "quiet",
+        [](const tc_hal_api_t* api, tc_hal_t* hal, int, const char* const*, void**) {
+          return api->component_ready(hal, api->component_new(hal, "quiet"));
+        },
+        quiet_exit);
+    EXPECT_EQ(1, hal.unload());
+    EXPECT_EQ(1, writer_exits);
+    EXPECT_EQ(0, hal.unload());  // once only
+  }
+  EXPECT_EQ(1, writer_exits);  // not again in the destructor
+  {
+    Hal hal(opts());
+    hal.load(
+        "quiet",
+        [](const tc_hal_api_t* api, tc_hal_t* hal, int, const char* const*, void**) {
+          return api->component_ready(hal, api->component_new(hal, "quiet"));
+        },
+        quiet_exit);
+    EXPECT_EQ(0, hal.unload());
+  }
+}

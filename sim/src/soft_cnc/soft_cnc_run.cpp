@@ -139,7 +139,8 @@ SoftCncResult run_soft_cnc(const SoftCncJob& given, const SoftCncProgress& progr
   result.limit_fault_line = hook.limit_fault_line;
   result.field_generation = h.get_pin_or_param("comp.field-generation").s;
   result.field_load_errors = h.get_pin_or_param("comp.load-errors").s;
-  return result;  // ~Hal: the recorder and the cutting write their files
+  result.output_errors = h.unload();  // the recorder and the cutting write their files
+  return result;
 }
 
 }  // namespace truecut::sim

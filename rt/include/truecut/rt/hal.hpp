@@ -90,7 +90,11 @@ struct ThreadInfo {
 class Hal {
  public:
   explicit Hal(HalOptions options = {});
-  ~Hal();  // calls every module's exit, last loaded first
+  ~Hal();  // calls every module's exit, last loaded first (unless unload() did)
+  // Calls every module's exit now, last loaded first (components write
+  // their files there); returns how many errors they reported doing so.
+  // Once only: later calls, and the destructor, do nothing more.
+  int unload();
   Hal(const Hal&) = delete;
   Hal& operator=(const Hal&) = delete;
 
