@@ -474,10 +474,11 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
     // BIC difference says more about the misfit than about the physics.
     bool unresolved = false;
     for (const Hypothesis* h : {&H, static_cast<const Hypothesis*>(&hyps[i])})
-      for (const auto& s : h->fit.selected)
-        if (const auto* sl = h->fit.params.effects.servo_lag.active(s.joint);
-            s.effect == "servo_lag" && sl && dt > 1.0 / sl->kv_per_s)
-          unresolved = true;
+      for (const auto& s : h->fit.selected) {
+        if (s.effect != "servo_lag") continue;
+        const auto* sl = h->fit.params.effects.servo_lag.active(s.joint);
+        if (sl && dt > 1.0 / sl->kv_per_s) unresolved = true;
+      }
     if ((d >= o.bic_threshold && dlik >= o.bic_threshold && !unresolved) || !delay_differs)
       continue;
     // Which servo effects trade places with the delay.

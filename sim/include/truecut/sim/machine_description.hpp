@@ -58,10 +58,12 @@ template <class Axis>
 struct PerAxisEffect {
   bool enabled = false;
   std::array<std::optional<Axis>, kJointCount> axes;
-  // The parameters in force for a joint: null when the effect is off or the
-  // joint is not listed.
+  // The parameters in force for a joint: null when the effect is off, the
+  // joint is not listed or not a joint (−1: an effect of no axis).
   const Axis* active(int joint) const noexcept {
-    return enabled && axes[joint] ? &*axes[joint] : nullptr;
+    if (!enabled || joint < 0 || joint >= kJointCount) return nullptr;
+    return axes[static_cast<std::size_t>(joint)] ? &*axes[static_cast<std::size_t>(joint)]
+                                                 : nullptr;
   }
   bool operator==(const PerAxisEffect&) const = default;
 };
