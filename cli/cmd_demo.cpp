@@ -9,9 +9,9 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "demo_part.hpp"
+#include "truecut/analysis/report/closed_loop_report.hpp"
 #include "truecut/rt/atomic_write.hpp"
 #include "truecut/sim/part_file.hpp"
-#include "truecut/sim/report/closed_loop_report.hpp"
 
 namespace truecut::cli {
 namespace {
@@ -120,7 +120,7 @@ int cmd_demo(const std::vector<std::string>& argv) {
   for (const auto& p : parts)
     results.push_back(run_demo_part(p, o));
 
-  std::vector<sim::report::ReportPart> report_parts;
+  std::vector<analysis::report::ReportPart> report_parts;
   nlohmann::ordered_json json;
   json["truecut_demo"] = 1;
   json["scanner_sigma_um"] = o.sigma_um;
@@ -128,7 +128,7 @@ int cmd_demo(const std::vector<std::string>& argv) {
   std::printf("%-13s %-28s %9s %9s %9s %9s %10s\n", "part", "stage", "RMS um", "max um", "P95 um",
               "std um", "RMS cut");
   for (const auto& r : results) {
-    sim::report::ReportPart rp;
+    analysis::report::ReportPart rp;
     rp.name = r.part;
     rp.nominal_stl = r.dir / "part" / "nominal.stl";
     rp.triangle_surface_ids =
@@ -145,7 +145,7 @@ int cmd_demo(const std::vector<std::string>& argv) {
     double reference_rms = 0;
     for (const auto& st : r.stages) {
       rp.stages.push_back({st.key, st.title, st.dir / "machined.stl", st.cmm});
-      const auto stats = sim::report::judged_statistics(st.cmm, rp.surfaces);
+      const auto stats = analysis::report::judged_statistics(st.cmm, rp.surfaces);
       const auto& all = stats.back();
       if (st.key == "uncompensated") reference_rms = all.rms_um;
       nlohmann::ordered_json sj;
@@ -175,12 +175,12 @@ int cmd_demo(const std::vector<std::string>& argv) {
     json["parts"].push_back(pj);
     report_parts.push_back(std::move(rp));
   }
-  sim::report::ReportOptions ro;
+  analysis::report::ReportOptions ro;
   ro.tolerance_um = tolerance_um;
   ro.scanner_sigma_um = o.sigma_um;
   std::fprintf(stderr, "demo: writing the report\n");
   rt::write_file_atomically(o.out_dir / "report.html",
-                            sim::report::closed_loop_html(report_parts, ro));
+                            analysis::report::closed_loop_html(report_parts, ro));
   rt::write_file_atomically(o.out_dir / "results.json", json.dump(2) + "\n");
   std::printf("report: %s\nresults: %s\n", (o.out_dir / "report.html").string().c_str(),
               (o.out_dir / "results.json").string().c_str());

@@ -10,20 +10,20 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "run_support.hpp"
+#include "truecut/analysis/diagnosis/diagnosis.hpp"
+#include "truecut/analysis/diagnosis/surface.hpp"
+#include "truecut/analysis/recording.hpp"
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/tool_table.hpp"
 #include "truecut/offline/stl_io.hpp"
-#include "truecut/sim/diagnosis/diagnosis.hpp"
-#include "truecut/sim/diagnosis/surface.hpp"
 #include "truecut/sim/machine_description.hpp"
 #include "truecut/sim/measure/part_surfaces.hpp"
-#include "truecut/sim/recording.hpp"
 
 namespace truecut::cli {
 namespace {
 
 namespace fs = std::filesystem;
-namespace dg = sim::diagnosis;
+namespace dg = analysis::diagnosis;
 
 const char* kDiagnoseHelp =
     "usage: truecut diagnose --recording REC.csv --out DIR [options]\n"
@@ -287,20 +287,20 @@ int cmd_diagnose(const std::vector<std::string>& argv) {
 
   dg::DiagnosisResult result;
   try {
-    sim::RecordingOptions ro;
-    ro.map = sim::parse_column_map(map_text);
+    analysis::RecordingOptions ro;
+    ro.map = analysis::parse_column_map(map_text);
     std::fprintf(stderr, "diagnose: reading %s\n", recording->c_str());
-    const auto rec = sim::read_recording(*recording, ro);
-    std::optional<sim::Recording> held;
+    const auto rec = analysis::read_recording(*recording, ro);
+    std::optional<analysis::Recording> held;
     if (holdout) {
       std::fprintf(stderr, "diagnose: reading %s\n", holdout->c_str());
-      held = sim::read_recording(*holdout, ro);
+      held = analysis::read_recording(*holdout, ro);
     }
     const auto believed = a.value("machine") ? sim::read_machine_description(*a.value("machine"))
                                              : dg::ideal_machine_for(rec);
     result = dg::diagnose(rec, held ? &*held : nullptr, believed, options);
     result.map = map_text;
-  } catch (const sim::RecordingError& e) {
+  } catch (const analysis::RecordingError& e) {
     return bad_input(e);
   } catch (const sim::MachineDescriptionError& e) {
     return bad_input(e);

@@ -9,14 +9,14 @@
 
 #include "args.hpp"
 #include "commands.hpp"
-#include "truecut/sim/iso230_report.hpp"
-#include "truecut/sim/recording.hpp"
+#include "truecut/analysis/iso230_report.hpp"
+#include "truecut/analysis/recording.hpp"
 
 namespace truecut::cli {
 namespace {
 
 namespace fs = std::filesystem;
-using sim::RecordingError;
+using analysis::RecordingError;
 
 const char* kIso230Help =
     "usage: truecut iso230 --recording REC.csv --out DIR [options]\n"
@@ -58,12 +58,12 @@ std::vector<std::string> split_list(const std::string& s) {
 }
 
 std::string joint_arg(const std::string& j, const char* option) {
-  for (const char* k : sim::kRecordingJoints)
+  for (const char* k : analysis::kRecordingJoints)
     if (j == k) return j;
   throw UsageError(std::string(option) + ": '" + j + "' is not a joint (x y z a c)");
 }
 
-std::string columns_of(const sim::Recording& rec) {
+std::string columns_of(const analysis::Recording& rec) {
   std::string s;
   for (const auto& c : rec.columns)
     s += (s.empty() ? "" : ", ") + c;
@@ -133,7 +133,7 @@ int cmd_iso230(const std::vector<std::string>& argv) {
   const auto out_dir = a.value("out");
   if (!out_dir) throw UsageError("--out DIR is required");
 
-  sim::StandstillOptions standstill;
+  analysis::StandstillOptions standstill;
   standstill.velocity_threshold =
       a.number("velocity-threshold", standstill.velocity_threshold, 1e-12, 1e9);
   standstill.min_dwell_s = a.number("min-dwell", standstill.min_dwell_s, 0, 1e6);
@@ -144,12 +144,12 @@ int cmd_iso230(const std::vector<std::string>& argv) {
   if (auto list = a.value("axis"))
     for (const auto& j : split_list(*list))
       axes.push_back(joint_arg(j, "--axis"));
-  std::vector<sim::CircleOptions> circles;
+  std::vector<analysis::CircleOptions> circles;
   for (const auto& spec : a.values("circle")) {
     const auto pq = split_list(spec);
     if (pq.size() != 2 || pq[0] == pq[1])
       throw UsageError("--circle " + spec + ": expected two different joints, e.g. --circle x,y");
-    sim::CircleOptions c;
+    analysis::CircleOptions c;
     c.axis_p = joint_arg(pq[0], "--circle");
     c.axis_q = joint_arg(pq[1], "--circle");
     if (a.value("radius")) c.radius_mm = a.number("radius", 0, 1e-9, 1e9);
@@ -161,19 +161,19 @@ int cmd_iso230(const std::vector<std::string>& argv) {
   for (const auto& m : a.values("map"))
     map_text += (map_text.empty() ? "" : ",") + m;
 
-  sim::Iso230Report report;
+  analysis::Iso230Report report;
   report.recording = *recording;
   report.map = map_text;
   report.standstill = standstill;
   try {
-    sim::RecordingOptions options;
-    options.map = sim::parse_column_map(map_text);
+    analysis::RecordingOptions options;
+    options.map = analysis::parse_column_map(map_text);
     for (const auto& j : axes)
       options.required.push_back(j + "_cmd");
     for (const auto& c : circles)
       for (const auto& j : {c.axis_p, c.axis_q})
         options.required.push_back(j + "_cmd");
-    const auto rec = sim::read_recording(*recording, options);
+    const auto rec = analysis::read_recording(*recording, options);
     report.rows = rec.rows();
     auto need_measured = [&](const std::string& j) {
       if (!rec.measured(j))
@@ -183,11 +183,11 @@ int cmd_iso230(const std::vector<std::string>& argv) {
     };
     const bool automatic = axes.empty() && circles.empty();
     if (automatic)
-      for (const char* j : sim::kRecordingJoints)
+      for (const char* j : analysis::kRecordingJoints)
         if (rec.has(std::string(j) + "_cmd") && rec.measured(j)) axes.push_back(j);
     for (const auto& j : axes) {
       need_measured(j);
-      auto result = sim::evaluate_positioning(rec, j, standstill);
+      auto result = analysis::evaluate_positioning(rec, j, standstill);
       if (result) {
         report.axes.push_back(std::move(*result));
         continue;
@@ -202,7 +202,7 @@ int cmd_iso230(const std::vector<std::string>& argv) {
     for (const auto& c : circles) {
       need_measured(c.axis_p);
       need_measured(c.axis_q);
-      report.circles.push_back(sim::evaluate_circle(rec, c));
+      report.circles.push_back(analysis::evaluate_circle(rec, c));
     }
     if (report.axes.empty() && report.circles.empty())
       throw RecordingError(rec.file + ": nothing to evaluate: " +
@@ -219,8 +219,8 @@ int cmd_iso230(const std::vector<std::string>& argv) {
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) throw std::runtime_error("cannot create " + dir.string() + ": " + ec.message());
-  write_all({{dir / "iso230.json", sim::iso230_json(report)},
-             {dir / "iso230.html", sim::iso230_html(report)}});
+  write_all({{dir / "iso230.json", analysis::iso230_json(report)},
+             {dir / "iso230.html", analysis::iso230_html(report)}});
 
   for (const auto& ax : report.axes) {
     const char* u = ax.rotary ? "deg" : "mm";
