@@ -15,10 +15,10 @@ namespace {
 
 namespace fs = std::filesystem;
 using truecut::test::cli_path;
+using truecut::test::data_dir;
 using truecut::test::read_file;
 using truecut::test::run_process;
 using truecut::test::scratch_dir;
-using truecut::test::shared_data_dir;
 
 // A recording with foreign column names (read through --map).
 fs::path write_csv(const Recording& rec, const fs::path& file) {
@@ -172,8 +172,8 @@ TEST(DiagnosisCli, BadInputExitsTwoAndWritesNothing) {
 }
 
 TEST(DiagnosisCli, UmichExperimentRunsAndHeldOutDoesNotGetWorse) {
-  const auto data = shared_data_dir() / "umich_cnc_mill" / "experiment_01.csv";
-  if (!fs::exists(data)) GTEST_SKIP() << data << " not present";
+  const auto data = data_dir() / "umich_cnc_mill" / "experiment_01.csv";
+  ASSERT_TRUE(fs::is_regular_file(data)) << data << " is missing (data/ is part of the repository)";
   const auto out = scratch_dir() / "out";
   auto r = run_process(
       {cli_path().string(), "diagnose", "--recording", data.string(), "--map",

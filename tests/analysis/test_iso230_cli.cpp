@@ -124,9 +124,9 @@ TEST(Iso230Cli, CircleThroughMapWithCrlf) {
 TEST(Iso230Cli, UmichThroughMap) {
   const auto out = scratch_dir() / "out";
   auto r = run_process({cli_path().string(), "iso230", "--recording",
-                        (shared_data_dir() / "umich_cnc_mill" / "experiment_12.csv").string(),
-                        "--map", "t=@index*0.1,x_cmd=X1_CommandPosition,x_act=X1_ActualPosition",
-                        "--out", out.string()});
+                        (data_dir() / "umich_cnc_mill" / "experiment_12.csv").string(), "--map",
+                        "t=@index*0.1,x_cmd=X1_CommandPosition,x_act=X1_ActualPosition", "--out",
+                        out.string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = nlohmann::json::parse(read_file(out / "iso230.json"));
   EXPECT_EQ(j["rows"], 2276);

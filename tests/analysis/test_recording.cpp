@@ -161,7 +161,7 @@ TEST(RecordingUmich, Experiment01ThroughMap) {
   RecordingOptions o;
   o.map = parse_column_map(kUmichMap);
   o.required = {"x_cmd", "y_cmd", "z_cmd"};
-  auto rec = read_recording(test::shared_data_dir() / "umich_cnc_mill" / "experiment_01.csv", o);
+  auto rec = read_recording(test::data_dir() / "umich_cnc_mill" / "experiment_01.csv", o);
   ASSERT_EQ(rec.rows(), 1055u);
   EXPECT_EQ(rec.columns.size(), 48u);
   EXPECT_EQ(rec.channel("x_cmd").front(), 198.0);
@@ -171,7 +171,7 @@ TEST(RecordingUmich, Experiment01ThroughMap) {
 }
 
 TEST(RecordingUmich, Experiment12HasCrOnlyLineEndings) {
-  const auto file = test::shared_data_dir() / "umich_cnc_mill" / "experiment_12.csv";
+  const auto file = test::data_dir() / "umich_cnc_mill" / "experiment_12.csv";
   ASSERT_NE(test::read_file(file).find('\r'), std::string::npos);
   ASSERT_EQ(test::read_file(file).find('\n'), std::string::npos);
   RecordingOptions o;

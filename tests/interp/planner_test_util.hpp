@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "interp_test_util.hpp"
+#include "rs274_oracle.hpp"
 #include "run_process.hpp"
 #include "test_paths.hpp"
 #include "truecut/interp/interpolator.hpp"
@@ -92,24 +93,12 @@ inline LimitCheck check_limits(const std::vector<CycleOutput>& s, const MachineL
   return c;
 }
 
-// LinuxCNC's sample programs, from the package fetched for the rs274 oracle
-// (tests/interp/fetch_rs274.sh); nullopt with the reason when unavailable.
+// LinuxCNC's sample programs, from the package of the rs274 oracle
+// (rs274_oracle.hpp); nullopt with the reason when unavailable.
 inline std::optional<std::filesystem::path> linuxcnc_share(std::string& why) {
-  static std::string reason;
-  static const std::optional<std::filesystem::path> share =
-      []() -> std::optional<std::filesystem::path> {
-    const auto dir = truecut::test::binary_dir() / "rs274-oracle";
-    auto r = truecut::test::run_process(
-        {"/bin/bash", (truecut::test::source_dir() / "tests/interp/fetch_rs274.sh").string(),
-         dir.string()});
-    if (r.exit_code != 0) {
-      reason = r.err.empty() ? "fetch_rs274.sh failed" : r.err;
-      return std::nullopt;
-    }
-    return dir / "root/usr/share";
-  }();
-  why = reason;
-  return share;
+  const auto& oracle = rs274_oracle(why);
+  if (!oracle) return std::nullopt;
+  return oracle->share;
 }
 
 inline std::filesystem::path five_axis_demo(const std::filesystem::path& share, const char* name) {

@@ -43,7 +43,7 @@ TEST(PlannerLimits, OwnCorpus) {
 TEST(PlannerLimits, LinuxCncFiveAxisDemos) {
   std::string why;
   const auto share = linuxcnc_share(why);
-  if (!share) GTEST_SKIP() << "LinuxCNC sample programs not available: " << why;
+  if (!share) TRUECUT_ORACLE_MISSING(rs274_missing(why));
   for (const char* name : {"boat-xyzac.ngc", "impeller-7bl-xyzac.ngc"})
     for (bool tcp : {false, true}) {
       const CanonProgram program = run(demo_text(five_axis_demo(*share, name), tcp));

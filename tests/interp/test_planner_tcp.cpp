@@ -76,7 +76,7 @@ TEST(PlannerTcp, SwitchingTcpKeepsTheJointsContinuous) {
 TEST(PlannerTcp, FiveAxisDemosHaveNoCSpin) {
   std::string why;
   const auto share = linuxcnc_share(why);
-  if (!share) GTEST_SKIP() << "LinuxCNC sample programs not available: " << why;
+  if (!share) TRUECUT_ORACLE_MISSING(rs274_missing(why));
   const PlannerOptions o = with_pivots();
   for (const char* name : {"boat-xyzac.ngc", "impeller-7bl-xyzac.ngc"})
     for (bool tcp : {false, true}) {

@@ -2,8 +2,10 @@
 // `rs274` and through `truecut canon` must give the same canonical calls
 // (positions, arc centres, feeds, planes, offsets, tools, comments).
 //
-// rs274 comes from Debian's linuxcnc-uspace package, fetched and unpacked at
-// test time by fetch_rs274.sh (skipped with a message when it cannot be had).
+// rs274 comes from Debian's linuxcnc-uspace package: the installed one, or
+// fetched and unpacked at test time by fetch_rs274.sh (rs274_oracle.hpp).
+// Without it the tests are skipped with a message saying what to install,
+// or fail under TRUECUT_REQUIRE_ORACLES=1.
 // LinuxCNC's sample programs are GPL: they are read from that package only.
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -16,6 +18,7 @@
 #include <set>
 
 #include "rs274_compare.hpp"
+#include "rs274_oracle.hpp"
 #include "run_process.hpp"
 #include "test_paths.hpp"
 
@@ -23,7 +26,6 @@ namespace truecut::interp::testing {
 namespace {
 
 namespace fs = std::filesystem;
-using truecut::test::binary_dir;
 using truecut::test::cli_path;
 using truecut::test::run_process;
 using truecut::test::source_dir;
@@ -62,24 +64,19 @@ const std::map<std::string, std::string>& out_of_scope() {
 
 struct Oracle {
   fs::path rs274;  // wrapper script
-  fs::path share;  // .../root/usr/share
+  fs::path share;  // holds linuxcnc/ncfiles and doc/linuxcnc/examples
   fs::path work;   // tool tables, filtered copies
 };
 
-// Fetches rs274 once per test run; nullopt (with the reason) when unavailable.
+// rs274 once per test process; nullopt (with the reason) when unavailable.
 const std::optional<Oracle>& oracle(std::string& why) {
-  static std::string reason;
   static const std::optional<Oracle> o = [&]() -> std::optional<Oracle> {
-    const fs::path dir = binary_dir() / "rs274-oracle";
-    auto r = run_process(
-        {"/bin/bash", (source_dir() / "tests/interp/fetch_rs274.sh").string(), dir.string()});
-    if (r.exit_code != 0) {
-      reason = r.err.empty() ? "fetch_rs274.sh failed" : r.err;
-      return std::nullopt;
-    }
+    const auto& found = rs274_oracle(why);
+    if (!found) return std::nullopt;
     // ctest runs the tests of this file as parallel processes: each writes
     // its tool tables and filtered copies into a folder of its own.
-    Oracle out{dir / "rs274", dir / "root/usr/share", dir / "work" / std::to_string(getpid())};
+    Oracle out{found->program, found->share,
+               found->program.parent_path() / "work" / std::to_string(getpid())};
     fs::create_directories(out.work);
     // The same tools twice: rs274 without an INI reads its table in inches,
     // truecut's is in mm.
@@ -95,7 +92,7 @@ const std::optional<Oracle>& oracle(std::string& why) {
     }
     return out;
   }();
-  why = reason;
+  rs274_oracle(why);
   return o;
 }
 
@@ -177,7 +174,7 @@ std::vector<fs::path> programs_under(const fs::path& dir) {
 #define REQUIRE_ORACLE(o)      \
   std::string why;             \
   const auto& o = oracle(why); \
-  if (!o) GTEST_SKIP() << "LinuxCNC rs274 is not available: " << why;
+  if (!o) TRUECUT_ORACLE_MISSING(rs274_missing(why));
 
 TEST(Rs274Oracle, OwnCorpusMatches) {
   REQUIRE_ORACLE(o);

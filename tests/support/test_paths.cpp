@@ -25,8 +25,8 @@ std::filesystem::path test_component_dir() {
 std::filesystem::path cli_path() {
   return TRUECUT_CLI;
 }
-std::filesystem::path shared_data_dir() {
-  return TRUECUT_SHARED_DATA_DIR;
+std::filesystem::path data_dir() {
+  return source_dir() / "data";
 }
 
 std::filesystem::path scratch_dir() {
