@@ -5,7 +5,7 @@
 #include "truecut/rt/executor.hpp"
 #include "truecut/rt/hal_file.hpp"
 
-using namespace truecut::hal;
+using namespace truecut::rt::hal;
 
 static void BM_ServoCycle_SiggenFivePosLoops(benchmark::State& state) {
   HalOptions opt;

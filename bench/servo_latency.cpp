@@ -19,7 +19,7 @@
 #include "truecut/rt/executor.hpp"
 #include "truecut/rt/hal_file.hpp"
 
-using namespace truecut::hal;
+using namespace truecut::rt::hal;
 
 namespace {
 

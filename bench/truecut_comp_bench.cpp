@@ -3,7 +3,7 @@
 //
 //   truecut_comp_bench [--calls N] [--cycles N] [--wall-seconds S] [--no-load] [--no-fifo]
 //
-// 1. The component's per-cycle logic alone (comp::step(), the code
+// 1. The component's per-cycle logic alone (rt::comp::step(), the code
 //    truecut_comp.so runs between its pin reads and writes), with the field
 //    in cache (a smooth path: consecutive cycles touch the same cells) and
 //    cold (random points in a field far larger than the caches), next to a
@@ -32,7 +32,7 @@
 #include <thread>
 #include <vector>
 
-#include "../rt/components/truecut_comp/comp_core.hpp"
+#include "truecut/rt/comp.hpp"
 #include "truecut/rt/duration_histogram.hpp"
 #include "truecut/rt/executor.hpp"
 #include "truecut/rt/field_file.hpp"
@@ -134,23 +134,23 @@ struct Points {
 volatile double g_sink;
 
 struct ComponentVariant {
-  comp::CompState state;
+  rt::comp::CompState state;
   const rt::CorrectionField* field;
-  comp::CompLimits limits{10.0, 1e6, 0.0};
+  rt::comp::CompLimits limits{10.0, 1e6, 0.0};
   explicit ComponentVariant(const rt::CorrectionField* f) : field(f) {
-    comp::CycleInput in;
+    rt::comp::CycleInput in;
     in.enable = true;
     in.tool = 1;
     in.tcp_mm = Vec3::Constant(1.0);
     in.candidate = f;
-    comp::step(state, in, limits, 1e-3);
+    rt::comp::step(state, in, limits, 1e-3);
   }
   void run(const Vec3& p) {
-    comp::CycleInput in;
+    rt::comp::CycleInput in;
     in.enable = true;
     in.tool = 1;
     in.tcp_mm = p;
-    g_sink = comp::step(state, in, limits, 1e-3).correction_mm.x();
+    g_sink = rt::comp::step(state, in, limits, 1e-3).correction_mm.x();
   }
 };
 
@@ -267,22 +267,22 @@ std::string chain(int64_t period_ns, const std::string& field_file) {
   return s;
 }
 
-hal::HalOptions hal_options() {
-  hal::HalOptions o;
+rt::hal::HalOptions hal_options() {
+  rt::hal::HalOptions o;
   o.component_path = {TRUECUT_COMPONENT_DIR};
   o.output_dir = std::filesystem::temp_directory_path();
   return o;
 }
 
-hal::ThreadStats run_chain(const std::string& field_file, uint64_t cycles, int64_t period_ns,
-                           const hal::WallClockOptions* wall,
-                           std::vector<std::string>* notes = nullptr) {
-  hal::Hal h(hal_options());
-  hal::load_hal_text(h, chain(period_ns, field_file), "bench.hal");
-  hal::Executor ex(h);
-  hal::RunLimits lim;
+rt::hal::ThreadStats run_chain(const std::string& field_file, uint64_t cycles, int64_t period_ns,
+                               const rt::hal::WallClockOptions* wall,
+                               std::vector<std::string>* notes = nullptr) {
+  rt::hal::Hal h(hal_options());
+  rt::hal::load_hal_text(h, chain(period_ns, field_file), "bench.hal");
+  rt::hal::Executor ex(h);
+  rt::hal::RunLimits lim;
   lim.max_cycles = cycles;
-  const hal::RunReport r = wall ? ex.run_wall_clock(lim, *wall) : ex.run_simulated(lim);
+  const rt::hal::RunReport r = wall ? ex.run_wall_clock(lim, *wall) : ex.run_simulated(lim);
   if (notes) *notes = r.notes;
   return r.threads.at(0);
 }
@@ -339,7 +339,7 @@ void bench_cycle(uint64_t cycles, double wall_seconds, bool load) {
     std::atomic<bool> stop{false};
     std::thread loader;
     if (load) loader = std::thread(load_cpu, 0, std::ref(stop));
-    hal::WallClockOptions w;
+    rt::hal::WallClockOptions w;
     w.cpu = 1;
     w.fifo_priority = 80;
     const uint64_t n = static_cast<uint64_t>(wall_seconds * 8000);

@@ -334,7 +334,8 @@ int run_field(const ParsedArgs& a, const std::vector<std::string>& argv) {
   if (!program) throw UsageError("--program FILE is required");
   if (!tools) throw UsageError("--tools FILE is required");
   if (!out) throw UsageError("--out DIR is required");
-  const double max_correction = a.number("max-correction", 0.2, 0.0, 100.0);
+  const double max_correction =
+      a.number("max-correction", offline::kFieldMaxCorrectionMm, 0.0, 100.0);
   const bool quiet = a.flag("quiet");
 
   Inputs in = read_inputs(a, *program, *tools);

@@ -223,12 +223,9 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
     if (auto m = a.value("machine")) {
       add_input("machine", *m, read_bytes(*m, "machine description"));
       const auto k = sim::read_machine_description(*m).machine.kinematics;
-      o.kinematics.x_rot_point_mm = k.x_rot_point_mm;
-      o.kinematics.y_rot_point_mm = k.y_rot_point_mm;
-      o.kinematics.z_rot_point_mm = k.z_rot_point_mm;
-      o.kinematics.y_offset_mm = k.y_offset_mm;
-      o.kinematics.z_offset_mm = k.z_offset_mm;
-      o.kinematics.conventional_directions = k.conventional_directions;
+      // The description's pivots and directions; its kinematics hold no tool
+      // length or A travel (see KinematicsParams), so those keep rt's defaults.
+      o.kinematics = k.ac;
     }
     if (matrix_path) {
       const std::string bytes = read_bytes(*matrix_path, "compensation matrix");

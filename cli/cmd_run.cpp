@@ -50,7 +50,7 @@ std::string us(int64_t ns) {
   return buf;
 }
 
-void print_show(const hal::Hal& h) {
+void print_show(const rt::hal::Hal& h) {
   std::printf("Threads:\n");
   for (const auto& t : h.threads()) {
     std::printf("  %-20s period %lld ns%s\n", t.name.c_str(), (long long)t.period_ns,
@@ -61,11 +61,11 @@ void print_show(const hal::Hal& h) {
   }
   std::printf("Pins:\n");
   for (const auto& p : h.pins())
-    std::printf("  %-6s %-4s %-36s %s%s\n", hal::to_string(p.type), hal::to_string(p.dir),
+    std::printf("  %-6s %-4s %-36s %s%s\n", rt::hal::to_string(p.type), rt::hal::to_string(p.dir),
                 p.name.c_str(), p.signal.empty() ? "" : "<-> ", p.signal.c_str());
   std::printf("Signals:\n");
   for (const auto& s : h.signals())
-    std::printf("  %-6s %-36s %s\n", hal::to_string(s.type), s.name.c_str(),
+    std::printf("  %-6s %-36s %s\n", rt::hal::to_string(s.type), s.name.c_str(),
                 h.get_signal(s.name).to_text().c_str());
 }
 
@@ -102,23 +102,23 @@ int cmd_run(const std::vector<std::string>& argv) {
     throw UsageError("--cpu, --fifo, --no-mlock and --spin-us apply only with --realtime");
   if (a.value("time") && a.value("cycles")) throw UsageError("give --time or --cycles, not both");
 
-  hal::RunLimits limits;
+  rt::hal::RunLimits limits;
   limits.duration_ns = static_cast<int64_t>(a.number("time", 0.0, 1e-6, 1e7) * 1e9 + 0.5);
   limits.max_cycles = static_cast<uint64_t>(a.integer("cycles", 0, 1, 2'000'000'000'000L));
-  hal::WallClockOptions wall;
+  rt::hal::WallClockOptions wall;
   wall.cpu = static_cast<int>(a.integer("cpu", -1, 0, 1023));
   wall.fifo_priority = static_cast<int>(a.integer("fifo", 0, 1, 99));
   wall.lock_memory = !a.flag("no-mlock");
   wall.spin_ns = a.integer("spin-us", 0, 0, 100'000) * 1000;
 
-  hal::HalOptions opt;
+  rt::hal::HalOptions opt;
   opt.component_path = component_path(a);
   opt.output_dir = a.value("out").value_or(".");
 
-  std::optional<hal::Ini> ini;
+  std::optional<rt::hal::Ini> ini;
   try {
-    if (auto f = a.value("ini")) ini = hal::Ini::load(*f);
-  } catch (const hal::IniError& e) {
+    if (auto f = a.value("ini")) ini = rt::hal::Ini::load(*f);
+  } catch (const rt::hal::IniError& e) {
     std::fprintf(stderr, "truecut run: %s\n", e.what());
     return kExitUsage;
   }
@@ -136,10 +136,10 @@ int cmd_run(const std::vector<std::string>& argv) {
     }
   }
 
-  hal::Hal h(opt);
+  rt::hal::Hal h(opt);
   try {
-    hal::load_hal_file(h, config, ini ? &*ini : nullptr);
-  } catch (const hal::HalFileError& e) {
+    rt::hal::load_hal_file(h, config, ini ? &*ini : nullptr);
+  } catch (const rt::hal::HalFileError& e) {
     std::fprintf(stderr, "truecut run: %s\n", e.what());
     return kExitUsage;
   }
@@ -160,7 +160,7 @@ int cmd_run(const std::vector<std::string>& argv) {
   if (limits.duration_ns == 0 && limits.max_cycles == 0)
     std::fprintf(stderr, "running until a component stops or Ctrl-C (--time S to limit)\n");
 
-  hal::RunReport r = run_interruptible(h, limits, realtime, wall);
+  rt::hal::RunReport r = run_interruptible(h, limits, realtime, wall);
   if (progress.tty && progress.last_ns >= 0) std::fputs("\n", stderr);
 
   std::printf("truecut run %s\n", config.c_str());

@@ -116,7 +116,7 @@ int run_machine(const std::vector<std::string>& argv) {
   job.period_us = a.number("period-us", 1000.0, 50.0, 100000.0);
   job.dexel_spacing_mm = a.number("dexel-spacing", 0.1, 0.01, 5.0);
   job.record_every = a.integer("record-every", 1, 1, 1000000);
-  job.max_correction_mm = a.number("max-correction", 0.5, 0.0, 10.0);
+  job.max_correction_mm = a.number("max-correction", sim::kSoftCncMaxCorrectionMm, 0.0, 10.0);
   job.max_rate_mm_per_s = a.number("max-rate", 5.0, 0.0, 1000.0);
   job.fade_time_s = a.number("fade-time", 0.2, 0.0, 60.0);
   job.component_path = component_path(a);
@@ -143,7 +143,7 @@ int run_machine(const std::vector<std::string>& argv) {
   } catch (const sim::SoftCncInputError& e) {
     std::fprintf(stderr, "truecut run: %s\n", e.what());
     return kExitUsage;
-  } catch (const hal::HalFileError& e) {
+  } catch (const rt::hal::HalFileError& e) {
     std::fprintf(stderr, "truecut run: %s\n", e.what());
     return kExitUsage;
   }

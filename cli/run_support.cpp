@@ -8,7 +8,7 @@
 namespace truecut::cli {
 namespace {
 
-hal::Hal* g_running_hal = nullptr;
+rt::hal::Hal* g_running_hal = nullptr;
 void on_sigint(int) {
   if (g_running_hal) g_running_hal->request_stop();
 }
@@ -54,12 +54,13 @@ void print_progress(void* user, int64_t t_ns) {
     std::fprintf(stderr, "%s  %.1f s%s", p.tty ? "\r" : "", t_ns * 1e-9, p.tty ? "" : "\n");
 }
 
-hal::RunReport run_interruptible(hal::Hal& h, const hal::RunLimits& limits, bool wall_clock,
-                                 const hal::WallClockOptions& wall) {
-  hal::Executor exec(h);
+rt::hal::RunReport run_interruptible(rt::hal::Hal& h, const rt::hal::RunLimits& limits,
+                                     bool wall_clock, const rt::hal::WallClockOptions& wall) {
+  rt::hal::Executor exec(h);
   g_running_hal = &h;
   auto previous = std::signal(SIGINT, on_sigint);
-  hal::RunReport r = wall_clock ? exec.run_wall_clock(limits, wall) : exec.run_simulated(limits);
+  rt::hal::RunReport r =
+      wall_clock ? exec.run_wall_clock(limits, wall) : exec.run_simulated(limits);
   std::signal(SIGINT, previous);
   g_running_hal = nullptr;
   return r;

@@ -26,7 +26,7 @@ struct Progress {
 void print_progress(void* user, int64_t time_ns);
 
 // Runs the executor with Ctrl-C asking the HAL to stop.
-hal::RunReport run_interruptible(hal::Hal& h, const hal::RunLimits& limits, bool wall_clock,
-                                 const hal::WallClockOptions& wall);
+rt::hal::RunReport run_interruptible(rt::hal::Hal& h, const rt::hal::RunLimits& limits,
+                                     bool wall_clock, const rt::hal::WallClockOptions& wall);
 
 }  // namespace truecut::cli

@@ -93,7 +93,8 @@ void update(void* arg, long period_ns) {
   }
 }
 
-std::vector<double> five(hal::component::Args& args, const std::string& key, bool positive = true) {
+std::vector<double> five(rt::hal::component::Args& args, const std::string& key,
+                         bool positive = true) {
   auto v = args.take(key);
   if (!v) return {};
   std::vector<double> out;
@@ -103,16 +104,16 @@ std::vector<double> five(hal::component::Args& args, const std::string& key, boo
     char* end = nullptr;
     const double d = std::strtod(item.c_str(), &end);
     if (item.empty() || *end != '\0' || !std::isfinite(d) || (positive && !(d > 0)))
-      throw hal::component::InitError(key + "='" + *v + "': expected 5 " +
-                                      (positive ? "positive " : "") + "numbers X,Y,Z,A,C");
+      throw rt::hal::component::InitError(key + "='" + *v + "': expected 5 " +
+                                          (positive ? "positive " : "") + "numbers X,Y,Z,A,C");
     out.push_back(d);
   }
   if (out.size() != 5)
-    throw hal::component::InitError(key + "='" + *v + "': expected 5 numbers X,Y,Z,A,C");
+    throw rt::hal::component::InitError(key + "='" + *v + "': expected 5 numbers X,Y,Z,A,C");
   return out;
 }
 
-PlannerOptions planner_options(hal::component::Args& args) {
+PlannerOptions planner_options(rt::hal::component::Args& args) {
   PlannerOptions o;
   o.servo_period_s = double(args.take_long("period-ns", 1'000'000, 1000, 1'000'000'000)) * 1e-9;
   o.spline_tolerance_mm = args.take_double("spline-tolerance", o.spline_tolerance_mm);
@@ -141,7 +142,7 @@ PlannerOptions planner_options(hal::component::Args& args) {
 extern "C" TC_COMPONENT_EXPORT int truecut_component_init(const tc_hal_api_t* api, tc_hal_t* hal,
                                                           int argc, const char* const* argv,
                                                           void** module_state) {
-  using namespace truecut::hal::component;
+  using namespace truecut::rt::hal::component;
   return init_guard(api, hal, [&] {
     Args args(argc, argv);
     auto program = args.take("program");

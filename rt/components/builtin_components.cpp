@@ -2,7 +2,7 @@
 
 #include "truecut/rt/hal.hpp"
 
-namespace truecut::hal {
+namespace truecut::rt::hal {
 
 const std::vector<BuiltinComponent>& builtin_components() {
   static const std::vector<BuiltinComponent> table = {
@@ -12,4 +12,4 @@ const std::vector<BuiltinComponent>& builtin_components() {
   return table;
 }
 
-}  // namespace truecut::hal
+}  // namespace truecut::rt::hal

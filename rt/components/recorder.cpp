@@ -22,7 +22,7 @@
 #include "builtin_components.hpp"
 #include "truecut/rt/component_support.hpp"
 
-namespace truecut::hal::builtin {
+namespace truecut::rt::hal::builtin {
 namespace {
 
 constexpr int kMaxColumns = 64;
@@ -238,4 +238,4 @@ void recorder_exit(const tc_hal_api_t* api, tc_hal_t* hal, void* state) {
                      .c_str());
 }
 
-}  // namespace truecut::hal::builtin
+}  // namespace truecut::rt::hal::builtin

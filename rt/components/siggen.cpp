@@ -7,7 +7,7 @@
 #include "builtin_components.hpp"
 #include "truecut/rt/component_support.hpp"
 
-namespace truecut::hal::builtin {
+namespace truecut::rt::hal::builtin {
 namespace {
 
 struct Siggen {
@@ -76,4 +76,4 @@ int siggen_init(const tc_hal_api_t* api, tc_hal_t* hal, int argc, const char* co
 
 void siggen_exit(const tc_hal_api_t*, tc_hal_t*, void*) {}
 
-}  // namespace truecut::hal::builtin
+}  // namespace truecut::rt::hal::builtin

@@ -14,9 +14,9 @@
 
 #include "hal_state.hpp"
 
-using namespace truecut::hal::detail;
+using namespace truecut::rt::hal::detail;
 
-namespace truecut::hal {
+namespace truecut::rt::hal {
 namespace {
 
 int64_t mono_ns() noexcept {
@@ -253,4 +253,4 @@ RunReport Executor::run_wall_clock(const RunLimits& limits, const WallClockOptio
   return r;
 }
 
-}  // namespace truecut::hal
+}  // namespace truecut::rt::hal

@@ -7,10 +7,10 @@
 
 #include "hal_state.hpp"
 
-using truecut::hal::HalError;
-using namespace truecut::hal::detail;
+using truecut::rt::hal::HalError;
+using namespace truecut::rt::hal::detail;
 
-namespace truecut::hal {
+namespace truecut::rt::hal {
 namespace {
 
 Value read_data(Type type, const void* data) {
@@ -453,7 +453,7 @@ void Hal::run_services() {
     s.fn(s.arg);
 }
 
-}  // namespace truecut::hal
+}  // namespace truecut::rt::hal
 
 Component* tc_hal::component(int id) const {
   for (auto& c : components)
@@ -467,8 +467,8 @@ Thread* tc_hal::thread(const std::string& name) const {
   return nullptr;
 }
 
-void tc_hal::add_pin(int comp_id, const std::string& name, truecut::hal::Type type,
-                     truecut::hal::PinDir dir, void** data_ptr_addr) {
+void tc_hal::add_pin(int comp_id, const std::string& name, truecut::rt::hal::Type type,
+                     truecut::rt::hal::PinDir dir, void** data_ptr_addr) {
   if (!component(comp_id)) throw HalError("pin '" + name + "': no component with that id");
   if (name.empty()) throw HalError("pin name is empty");
   if (!data_ptr_addr) throw HalError("pin '" + name + "': data pointer address is NULL");
@@ -484,8 +484,8 @@ void tc_hal::add_pin(int comp_id, const std::string& name, truecut::hal::Type ty
   pins.emplace(name, std::move(pin));
 }
 
-void tc_hal::add_param(int comp_id, const std::string& name, truecut::hal::Type type,
-                       truecut::hal::ParamDir dir, void* data) {
+void tc_hal::add_param(int comp_id, const std::string& name, truecut::rt::hal::Type type,
+                       truecut::rt::hal::ParamDir dir, void* data) {
   if (!component(comp_id)) throw HalError("parameter '" + name + "': no component with that id");
   if (name.empty()) throw HalError("parameter name is empty");
   if (!data) throw HalError("parameter '" + name + "': data address is NULL");

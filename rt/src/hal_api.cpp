@@ -6,8 +6,8 @@
 
 #include "hal_state.hpp"
 
-using namespace truecut::hal;
-using namespace truecut::hal::detail;
+using namespace truecut::rt::hal;
+using namespace truecut::rt::hal::detail;
 
 namespace {
 
@@ -165,6 +165,6 @@ const tc_hal_api_t kApi = {
 
 }  // namespace
 
-const tc_hal_api_t* truecut::hal::Hal::api() {
+const tc_hal_api_t* truecut::rt::hal::Hal::api() {
   return &kApi;
 }

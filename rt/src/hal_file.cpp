@@ -8,7 +8,7 @@
 
 #include "text_util.hpp"
 
-namespace truecut::hal {
+namespace truecut::rt::hal {
 
 HalFileError::HalFileError(const std::string& file, int line, const std::string& message)
     : std::runtime_error(file + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": " +
@@ -227,4 +227,4 @@ void load_hal_file(Hal& hal, const std::filesystem::path& file, const Ini* ini) 
   load_hal_text(hal, text, file.string(), ini, file.parent_path());
 }
 
-}  // namespace truecut::hal
+}  // namespace truecut::rt::hal

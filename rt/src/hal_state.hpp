@@ -11,7 +11,7 @@
 
 #include "truecut/rt/hal.hpp"
 
-namespace truecut::hal::detail {
+namespace truecut::rt::hal::detail {
 
 // Storage of a pin or signal; pins point at `f`, `s`, `u` or `b` through the
 // component's pointer, all of which share the union's address.
@@ -96,32 +96,32 @@ struct Module {
   void* state = nullptr;
 };
 
-}  // namespace truecut::hal::detail
+}  // namespace truecut::rt::hal::detail
 
 struct tc_hal {
-  truecut::hal::HalOptions options;
+  truecut::rt::hal::HalOptions options;
   std::string output_dir_text;
   int next_comp_id = 1;
   std::string loading_module;  // set while a module's init runs
   std::string load_error;      // set_error() text of the module being loaded
-  std::vector<std::unique_ptr<truecut::hal::detail::Component>> components;
-  std::map<std::string, std::unique_ptr<truecut::hal::detail::Pin>> pins;
-  std::map<std::string, std::unique_ptr<truecut::hal::detail::Param>> params;
-  std::map<std::string, std::unique_ptr<truecut::hal::detail::Signal>> signals;
-  std::map<std::string, std::unique_ptr<truecut::hal::detail::Funct>> functs;
-  std::vector<std::unique_ptr<truecut::hal::detail::Thread>> threads;  // creation order
-  std::vector<truecut::hal::detail::Service> services;
-  std::vector<truecut::hal::detail::Module> modules;  // load order
+  std::vector<std::unique_ptr<truecut::rt::hal::detail::Component>> components;
+  std::map<std::string, std::unique_ptr<truecut::rt::hal::detail::Pin>> pins;
+  std::map<std::string, std::unique_ptr<truecut::rt::hal::detail::Param>> params;
+  std::map<std::string, std::unique_ptr<truecut::rt::hal::detail::Signal>> signals;
+  std::map<std::string, std::unique_ptr<truecut::rt::hal::detail::Funct>> functs;
+  std::vector<std::unique_ptr<truecut::rt::hal::detail::Thread>> threads;  // creation order
+  std::vector<truecut::rt::hal::detail::Service> services;
+  std::vector<truecut::rt::hal::detail::Module> modules;  // load order
   std::vector<std::unique_ptr<unsigned char[]>> allocations;
   std::atomic<bool> stop{false};
   int error_messages = 0;  // api_message calls at TC_HAL_MSG_ERR
   bool unloaded = false;   // the modules' exit functions have run
 
-  truecut::hal::detail::Component* component(int id) const;
-  truecut::hal::detail::Thread* thread(const std::string& name) const;
+  truecut::rt::hal::detail::Component* component(int id) const;
+  truecut::rt::hal::detail::Thread* thread(const std::string& name) const;
   // Creates a pin or parameter; throws HalError (duplicate name, bad comp).
-  void add_pin(int comp_id, const std::string& name, truecut::hal::Type type,
-               truecut::hal::PinDir dir, void** data_ptr_addr);
-  void add_param(int comp_id, const std::string& name, truecut::hal::Type type,
-                 truecut::hal::ParamDir dir, void* data);
+  void add_pin(int comp_id, const std::string& name, truecut::rt::hal::Type type,
+               truecut::rt::hal::PinDir dir, void** data_ptr_addr);
+  void add_param(int comp_id, const std::string& name, truecut::rt::hal::Type type,
+                 truecut::rt::hal::ParamDir dir, void* data);
 };

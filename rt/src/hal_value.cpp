@@ -6,7 +6,7 @@
 
 #include "truecut/rt/hal.hpp"
 
-namespace truecut::hal {
+namespace truecut::rt::hal {
 
 const char* to_string(Type type) {
   switch (type) {
@@ -140,4 +140,4 @@ Value parse_value(Type type, const std::string& text) {
   bad_value(type, text, "unknown type");
 }
 
-}  // namespace truecut::hal
+}  // namespace truecut::rt::hal

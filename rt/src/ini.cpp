@@ -5,7 +5,7 @@
 
 #include "text_util.hpp"
 
-namespace truecut::hal {
+namespace truecut::rt::hal {
 
 Ini Ini::load(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
@@ -55,4 +55,4 @@ void Ini::set(const std::string& section, const std::string& key, const std::str
   values_[{section, key}] = value;
 }
 
-}  // namespace truecut::hal
+}  // namespace truecut::rt::hal

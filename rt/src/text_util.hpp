@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-namespace truecut::hal {
+namespace truecut::rt::hal {
 
 inline std::string trim(const std::string& s) {
   const char* ws = " \t\r\n\f\v";
@@ -29,4 +29,4 @@ inline std::vector<std::string> split(const std::string& s, char sep) {
   return out;
 }
 
-}  // namespace truecut::hal
+}  // namespace truecut::rt::hal

@@ -147,8 +147,8 @@ std::vector<int> parse_ids(const std::string& text) {
     char* end = nullptr;
     const long v = std::strtol(cur.c_str(), &end, 10);
     if (cur.empty() || *end != '\0')
-      throw truecut::hal::component::InitError("surfaces='" + text +
-                                               "' must be surface ids separated by commas");
+      throw truecut::rt::hal::component::InitError("surfaces='" + text +
+                                                   "' must be surface ids separated by commas");
     ids.push_back(static_cast<int>(v));
     cur.clear();
   }
@@ -160,7 +160,7 @@ std::vector<int> parse_ids(const std::string& text) {
 extern "C" TC_COMPONENT_EXPORT int truecut_component_init(const tc_hal_api_t* api, tc_hal_t* hal,
                                                           int argc, const char* const* argv,
                                                           void** module_state) {
-  using namespace truecut::hal::component;
+  using namespace truecut::rt::hal::component;
   return init_guard(api, hal, [&] {
     Args args(argc, argv);
     auto nominal = args.take("nominal");

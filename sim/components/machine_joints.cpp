@@ -112,7 +112,7 @@ void update(void* arg, long period_ns) {
 extern "C" TC_COMPONENT_EXPORT int truecut_component_init(const tc_hal_api_t* api, tc_hal_t* hal,
                                                           int argc, const char* const* argv,
                                                           void**) {
-  using namespace truecut::hal::component;
+  using namespace truecut::rt::hal::component;
   return init_guard(api, hal, [&] {
     Args args(argc, argv);
     auto file = args.take("machine");

@@ -52,7 +52,7 @@ void update(void* arg, long) {
   *s.known = row != nullptr;
 }
 
-using truecut::hal::component::InitError;
+using truecut::rt::hal::component::InitError;
 
 int read_tools(const std::string& file, std::array<ToolRow, kMaxTools>& rows) {
   truecut::sim::PartFile part;
@@ -75,7 +75,7 @@ int read_tools(const std::string& file, std::array<ToolRow, kMaxTools>& rows) {
 extern "C" TC_COMPONENT_EXPORT int truecut_component_init(const tc_hal_api_t* api, tc_hal_t* hal,
                                                           int argc, const char* const* argv,
                                                           void**) {
-  using namespace truecut::hal::component;
+  using namespace truecut::rt::hal::component;
   return init_guard(api, hal, [&] {
     Args args(argc, argv);
     auto file = args.take("part");

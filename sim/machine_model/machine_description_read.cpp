@@ -251,13 +251,13 @@ KinematicsParams read_kinematics(const JsonNode& n) {
   if (const std::string t = type.string(); t != "xyzac-trt")
     type.fail("unknown kinematics type '" + t + "'; known: xyzac-trt");
   k.type = KinematicsType::XyzacTrt;
-  k.x_rot_point_mm = optional(n, "x_rot_point_mm", 0.0, any);
-  k.y_rot_point_mm = optional(n, "y_rot_point_mm", 0.0, any);
-  k.z_rot_point_mm = optional(n, "z_rot_point_mm", 0.0, any);
-  k.y_offset_mm = optional(n, "y_offset_mm", 0.0, any);
-  k.z_offset_mm = optional(n, "z_offset_mm", 0.0, any);
+  k.ac.x_rot_point_mm = optional(n, "x_rot_point_mm", 0.0, any);
+  k.ac.y_rot_point_mm = optional(n, "y_rot_point_mm", 0.0, any);
+  k.ac.z_rot_point_mm = optional(n, "z_rot_point_mm", 0.0, any);
+  k.ac.y_offset_mm = optional(n, "y_offset_mm", 0.0, any);
+  k.ac.z_offset_mm = optional(n, "z_offset_mm", 0.0, any);
   if (n.has("conventional_directions"))
-    k.conventional_directions = n.child("conventional_directions").boolean();
+    k.ac.conventional_directions = n.child("conventional_directions").boolean();
   if (n.has("tool")) {
     const JsonNode t = n.child("tool");
     t.allow_only({"length_mm", "radius_mm", "corner_radius_mm"}, "parameter");

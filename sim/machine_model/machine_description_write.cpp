@@ -114,12 +114,12 @@ Json effects_json(const Effects& fx) {
 
 Json kinematics_json(const KinematicsParams& k) {
   return Json{{"type", "xyzac-trt"},
-              {"x_rot_point_mm", k.x_rot_point_mm},
-              {"y_rot_point_mm", k.y_rot_point_mm},
-              {"z_rot_point_mm", k.z_rot_point_mm},
-              {"y_offset_mm", k.y_offset_mm},
-              {"z_offset_mm", k.z_offset_mm},
-              {"conventional_directions", k.conventional_directions},
+              {"x_rot_point_mm", k.ac.x_rot_point_mm},
+              {"y_rot_point_mm", k.ac.y_rot_point_mm},
+              {"z_rot_point_mm", k.ac.z_rot_point_mm},
+              {"y_offset_mm", k.ac.y_offset_mm},
+              {"z_offset_mm", k.ac.z_offset_mm},
+              {"conventional_directions", k.ac.conventional_directions},
               {"tool", Json{{"length_mm", k.tool.length_mm},
                             {"radius_mm", k.tool.radius_mm},
                             {"corner_radius_mm", k.tool.corner_radius_mm}}}};

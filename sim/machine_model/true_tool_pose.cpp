@@ -35,14 +35,8 @@ double to_rad(double deg) noexcept {
 
 rt::AcTrtParams nominal_ac_params(const MachineParams& m) noexcept {
   const KinematicsParams& k = m.kinematics;
-  rt::AcTrtParams p;
-  p.x_rot_point_mm = k.x_rot_point_mm;
-  p.y_rot_point_mm = k.y_rot_point_mm;
-  p.z_rot_point_mm = k.z_rot_point_mm;
-  p.y_offset_mm = k.y_offset_mm;
-  p.z_offset_mm = k.z_offset_mm;
+  rt::AcTrtParams p = k.ac;
   p.tool_length_mm = k.tool.length_mm;
-  p.conventional_directions = k.conventional_directions;
   if (m.joints[kA].present) {
     p.a_min_deg = m.joints[kA].min;
     p.a_max_deg = m.joints[kA].max;
@@ -68,10 +62,10 @@ TrueTool true_tool(const NominalTool& n, const Effects& effects) noexcept {
 TrueKinematics true_kinematics(const MachineParams& m) noexcept {
   const KinematicsParams& k = m.kinematics;
   TrueKinematics t;
-  t.a_point_mm = {k.x_rot_point_mm, k.y_rot_point_mm + k.y_offset_mm,
-                  k.z_rot_point_mm + k.z_offset_mm};
-  t.c_point_mm = {k.x_rot_point_mm, k.y_rot_point_mm, k.z_rot_point_mm};
-  t.conventional_directions = k.conventional_directions;
+  t.a_point_mm = {k.ac.x_rot_point_mm, k.ac.y_rot_point_mm + k.ac.y_offset_mm,
+                  k.ac.z_rot_point_mm + k.ac.z_offset_mm};
+  t.c_point_mm = {k.ac.x_rot_point_mm, k.ac.y_rot_point_mm, k.ac.z_rot_point_mm};
+  t.conventional_directions = k.ac.conventional_directions;
   t.tool_length_mm = true_tool(m).length_mm;
   if (const auto* r = m.effects.rotary_location.active()) {
     t.a_point_mm[1] += r->a.e_y0a_um * 1e-3;

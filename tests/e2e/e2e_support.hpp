@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "test_paths.hpp"
-#include "truecut/rt/correction_field.hpp"
+#include "truecut/rt/core/correction_field.hpp"
 #include "truecut/rt/field_file.hpp"
 #include "truecut/sim/benchmark_parts.hpp"
 #include "truecut/sim/soft_cnc.hpp"

@@ -92,7 +92,7 @@ class SoftCncTiming : public ::testing::TestWithParam<int64_t> {
     });
   }
 
-  LoopRun run(const std::string& name, const hal::WallClockOptions* wall) {
+  LoopRun run(const std::string& name, const rt::hal::WallClockOptions* wall) {
     sim::SoftCncJob job = ideal_job(dir_ / "part", dir_ / name);
     job.field = dir_ / "field.tcf";
     job.period_us = double(GetParam()) * 1e-3;
@@ -119,7 +119,7 @@ TEST_P(SoftCncTiming, LoadedTwoCoreWallClockRunMachinesWhatSimulatedTimeMachines
   EXPECT_EQ(1, sim_run.result.field_generation);
   EXPECT_EQ(0u, sim_run.allocations);
 
-  hal::WallClockOptions w;
+  rt::hal::WallClockOptions w;
   w.cpu = 1;
   w.fifo_priority = 80;
   LoopRun wall;
@@ -127,7 +127,7 @@ TEST_P(SoftCncTiming, LoadedTwoCoreWallClockRunMachinesWhatSimulatedTimeMachines
     CpuLoad load(0);
     wall = run("wall", &w);
   }
-  const hal::RunReport& rep = wall.result.report;
+  const rt::hal::RunReport& rep = wall.result.report;
   for (const auto& note : rep.notes)
     std::printf("  note: %s\n", note.c_str());
   ASSERT_EQ(1u, rep.threads.size());

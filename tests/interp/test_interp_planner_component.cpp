@@ -7,8 +7,8 @@
 namespace truecut::interp::testing {
 namespace {
 
-hal::HalOptions options(const std::filesystem::path& dir) {
-  hal::HalOptions o;
+rt::hal::HalOptions options(const std::filesystem::path& dir) {
+  rt::hal::HalOptions o;
   o.component_path = {truecut::test::component_dir()};
   o.output_dir = dir;
   return o;
@@ -17,20 +17,20 @@ hal::HalOptions options(const std::filesystem::path& dir) {
 TEST(InterpPlannerComponent, RunsTheProgramAndStops) {
   const auto dir = truecut::test::scratch_dir();
   std::ofstream(dir / "p.ngc") << "(OPERATION: FACE)\nG0 X0 Y0 Z5\nG1 Z0 F600\nG1 X10 Y4\nM2\n";
-  hal::Hal h(options(dir));
-  hal::load_hal_text(h,
-                     "loadrt threads name1=servo-thread period1=1000000\n"
-                     "loadrt interp_planner names=ip program=" +
-                         (dir / "p.ngc").string() +
-                         " vmax=100,100,100,90,180\n"
-                         "loadrt recorder file=trace.csv columns=x,y,line:s32\n"
-                         "net x ip.joint-x => recorder.0.x\n"
-                         "net y ip.tcp-y => recorder.0.y\n"
-                         "net line ip.line => recorder.0.line\n"
-                         "addf ip.update servo-thread\naddf recorder.0.sample servo-thread\n",
-                     "p.hal");
-  hal::Executor ex(h);
-  hal::RunLimits lim;
+  rt::hal::Hal h(options(dir));
+  rt::hal::load_hal_text(h,
+                         "loadrt threads name1=servo-thread period1=1000000\n"
+                         "loadrt interp_planner names=ip program=" +
+                             (dir / "p.ngc").string() +
+                             " vmax=100,100,100,90,180\n"
+                             "loadrt recorder file=trace.csv columns=x,y,line:s32\n"
+                             "net x ip.joint-x => recorder.0.x\n"
+                             "net y ip.tcp-y => recorder.0.y\n"
+                             "net line ip.line => recorder.0.line\n"
+                             "addf ip.update servo-thread\naddf recorder.0.sample servo-thread\n",
+                         "p.hal");
+  rt::hal::Executor ex(h);
+  rt::hal::RunLimits lim;
   lim.max_cycles = 100'000;
   const auto r = ex.run_simulated(lim);
   EXPECT_TRUE(r.stopped_by_request);
@@ -57,10 +57,10 @@ TEST(InterpPlannerComponent, RunsTheProgramAndStops) {
 TEST(InterpPlannerComponent, BadProgramFailsTheLoadWithItsLocation) {
   const auto dir = truecut::test::scratch_dir();
   std::ofstream(dir / "bad.ngc") << "G1 X10 F100\nG2 X5\nM2\n";
-  hal::Hal h(options(dir));
+  rt::hal::Hal h(options(dir));
   try {
-    hal::load_hal_text(h, "loadrt interp_planner program=" + (dir / "bad.ngc").string() + "\n",
-                       "p.hal");
+    rt::hal::load_hal_text(h, "loadrt interp_planner program=" + (dir / "bad.ngc").string() + "\n",
+                           "p.hal");
     FAIL() << "the load should fail";
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("bad.ngc:2:"), std::string::npos) << e.what();
@@ -70,8 +70,8 @@ TEST(InterpPlannerComponent, BadProgramFailsTheLoadWithItsLocation) {
 TEST(InterpPlannerComponent, RejectsBadLimits) {
   const auto dir = truecut::test::scratch_dir();
   std::ofstream(dir / "p.ngc") << "G1 X1 F100\nM2\n";
-  hal::Hal h(options(dir));
-  EXPECT_ANY_THROW(hal::load_hal_text(
+  rt::hal::Hal h(options(dir));
+  EXPECT_ANY_THROW(rt::hal::load_hal_text(
       h, "loadrt interp_planner program=" + (dir / "p.ngc").string() + " vmax=1,2,3\n", "p.hal"));
 }
 

@@ -39,17 +39,18 @@ TEST(InterpolatorNoAlloc, StepAllocatesNothing) {
 TEST(InterpolatorNoAlloc, ComponentCycleAllocatesNothing) {
   const auto dir = truecut::test::scratch_dir();
   std::ofstream(dir / "p.ngc") << kProgram;
-  hal::HalOptions ho;
+  rt::hal::HalOptions ho;
   ho.component_path = {truecut::test::component_dir()};
   ho.output_dir = dir;
-  hal::Hal h(ho);
-  hal::load_hal_text(h,
-                     "loadrt threads name1=servo-thread period1=1000000\n"
-                     "loadrt interp_planner program=" +
-                         (dir / "p.ngc").string() + "\naddf interp_planner.0.update servo-thread\n",
-                     "p.hal");
-  hal::Executor ex(h);
-  hal::RunLimits lim;
+  rt::hal::Hal h(ho);
+  rt::hal::load_hal_text(h,
+                         "loadrt threads name1=servo-thread period1=1000000\n"
+                         "loadrt interp_planner program=" +
+                             (dir / "p.ngc").string() +
+                             "\naddf interp_planner.0.update servo-thread\n",
+                         "p.hal");
+  rt::hal::Executor ex(h);
+  rt::hal::RunLimits lim;
   lim.max_cycles = 200'000;
   lim.cycle_probe = truecut::test::alloc_counting_probe;
   truecut::test::reset_alloc_counter();

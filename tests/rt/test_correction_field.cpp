@@ -1,4 +1,4 @@
-#include "truecut/rt/correction_field.hpp"
+#include "truecut/rt/core/correction_field.hpp"
 
 #include <gtest/gtest.h>
 

@@ -9,7 +9,7 @@
 #include "truecut/rt/executor.hpp"
 #include "truecut/rt/hal_file.hpp"
 
-using namespace truecut::hal;
+using namespace truecut::rt::hal;
 using namespace truecut::test;
 
 namespace {

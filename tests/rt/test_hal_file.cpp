@@ -6,7 +6,7 @@
 #include "test_paths.hpp"
 #include "truecut/rt/hal_file.hpp"
 
-using namespace truecut::hal;
+using namespace truecut::rt::hal;
 
 namespace {
 

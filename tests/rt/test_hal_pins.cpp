@@ -3,7 +3,7 @@
 
 #include "truecut/rt/hal.hpp"
 
-using namespace truecut::hal;
+using namespace truecut::rt::hal;
 
 namespace {
 

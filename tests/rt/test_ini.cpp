@@ -2,8 +2,8 @@
 
 #include "truecut/rt/ini.hpp"
 
-using truecut::hal::Ini;
-using truecut::hal::IniError;
+using truecut::rt::hal::Ini;
+using truecut::rt::hal::IniError;
 
 TEST(Ini, SectionsKeysCommentsAndFirstValueWins) {
   Ini ini = Ini::parse(

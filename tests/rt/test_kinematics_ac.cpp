@@ -1,4 +1,4 @@
-#include "truecut/rt/kinematics_ac.hpp"
+#include "truecut/rt/core/kinematics_ac.hpp"
 
 #include <gtest/gtest.h>
 

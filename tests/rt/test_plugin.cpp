@@ -6,7 +6,7 @@
 #include "truecut/rt/executor.hpp"
 #include "truecut/rt/hal.hpp"
 
-using namespace truecut::hal;
+using namespace truecut::rt::hal;
 
 namespace {
 HalOptions opts() {

@@ -10,14 +10,14 @@
 #include <limits>
 
 #include "test_truecut_comp_support.hpp"
+#include "truecut/rt/core/kinematics_ac.hpp"
 #include "truecut/rt/executor.hpp"
 #include "truecut/rt/hal_file.hpp"
-#include "truecut/rt/kinematics_ac.hpp"
 
 using namespace truecut;
 using namespace truecut::test;
 using namespace truecut::test::comp;
-using hal::Hal;
+using rt::hal::Hal;
 
 namespace {
 
@@ -40,7 +40,7 @@ bool getbit(const Hal& h, const std::string& pin) {
 // One truecut_comp instance `c` in a servo thread, stepped by hand.
 struct Rig {
   Hal hal{hal_options()};
-  std::unique_ptr<hal::Executor> ex;
+  std::unique_ptr<rt::hal::Executor> ex;
 
   explicit Rig(const std::string& loadrt_args, const std::string& extra = "") {
     load_hal_text(hal,
@@ -48,7 +48,7 @@ struct Rig {
                   "loadrt truecut_comp names=c " +
                       loadrt_args + "\naddf c.update servo-thread\n" + extra,
                   "rig.hal");
-    ex = std::make_unique<hal::Executor>(hal);
+    ex = std::make_unique<rt::hal::Executor>(hal);
   }
   void set(const std::string& pin, double v) { hal.set_pin_or_param("c." + pin, text(v)); }
   void set(const std::string& pin, const char* v) { hal.set_pin_or_param("c." + pin, v); }
@@ -76,7 +76,7 @@ std::string field_path(const char* name = "field.tcf") {
 
 bool all_outputs_finite(const Hal& h) {
   for (const auto& p : h.pins())
-    if (p.owner == "c" && p.dir == hal::PinDir::Out && p.type == hal::Type::Float &&
+    if (p.owner == "c" && p.dir == rt::hal::PinDir::Out && p.type == rt::hal::Type::Float &&
         !std::isfinite(getf(h, p.name)))
       return false;
   return true;
@@ -113,11 +113,11 @@ TEST(TruecutComp, ExportsTheDocumentedPins) {
 
 TEST(TruecutComp, RejectsBadLoadArguments) {
   Hal h(hal_options());
-  EXPECT_THROW(h.load("truecut_comp", {"mode=world"}), hal::HalError);
-  EXPECT_THROW(h.load("truecut_comp", {"field=" + field_path("missing.tcf")}), hal::HalError);
+  EXPECT_THROW(h.load("truecut_comp", {"mode=world"}), rt::hal::HalError);
+  EXPECT_THROW(h.load("truecut_comp", {"field=" + field_path("missing.tcf")}), rt::hal::HalError);
   const auto path = write_field(field_path(), {});
-  EXPECT_THROW(h.load("truecut_comp", {"field=" + path.string(), "tools=1,5"}), hal::HalError);
-  EXPECT_THROW(h.load("truecut_comp", {"tools=1"}), hal::HalError);
+  EXPECT_THROW(h.load("truecut_comp", {"field=" + path.string(), "tools=1,5"}), rt::hal::HalError);
+  EXPECT_THROW(h.load("truecut_comp", {"tools=1"}), rt::hal::HalError);
   EXPECT_FALSE(h.has_pin("truecut_comp.0.enable"));
   h.load("truecut_comp", {"field=" + path.string(), "tools=1,2"});
   EXPECT_TRUE(h.has_pin("truecut_comp.0.enable"));
@@ -234,7 +234,7 @@ TEST(TruecutComp, EveryFaultHasItsCodeAndFadesWithoutNaN) {
     const double initial[] = {1.0, 2.0, 3.0, 0.0, 0.0, 1.0, 1.0, 20.0, 0.05};
     for (int i = 0; i < 9; ++i)
       *src.pins[i] = initial[i];
-    r.ex = std::make_unique<hal::Executor>(r.hal);
+    r.ex = std::make_unique<rt::hal::Executor>(r.hal);
     r.run(80);
     ASSERT_EQ(0, r.fault());
     const Eigen::Vector3d full = r.corr(), out_before = r.tcp_out();
@@ -306,7 +306,7 @@ namespace {
 struct PathRun {
   Capture cap;
   std::unique_ptr<Hal> hal;
-  std::unique_ptr<hal::Executor> ex;
+  std::unique_ptr<rt::hal::Executor> ex;
 
   explicit PathRun(const std::string& field) {
     hal = std::make_unique<Hal>(hal_options());
@@ -331,11 +331,11 @@ struct PathRun {
                       "addf path.update servo-thread\naddf lift.update servo-thread\n"
                       "addf c.update servo-thread\naddf capture.sample servo-thread\n",
                   "path.hal");
-    ex = std::make_unique<hal::Executor>(*hal);
+    ex = std::make_unique<rt::hal::Executor>(*hal);
     cap.reserve(20000);
   }
   void run(uint64_t cycles) {
-    hal::RunLimits lim;
+    rt::hal::RunLimits lim;
     lim.max_cycles = cycles;
     lim.service_period_ns = 10'000'000;
     ex->run_simulated(lim);

@@ -1,5 +1,5 @@
 // The per-cycle logic of truecut_comp without the HAL: ramp, limits, and
-// comp::step() on synthetic fields.
+// rt::comp::step() on synthetic fields.
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -8,12 +8,11 @@
 #include <limits>
 #include <random>
 
-#include "../../rt/components/truecut_comp/comp_core.hpp"
-#include "../../rt/components/truecut_comp/joint_mode.hpp"
 #include "test_truecut_comp_support.hpp"
+#include "truecut/rt/comp.hpp"
 
 using namespace truecut;
-using namespace truecut::comp;
+using namespace truecut::rt::comp;
 using truecut::test::comp::FieldSpec;
 using truecut::test::comp::make_field;
 
@@ -109,7 +108,7 @@ TEST(CompMath, SanitizeReplacesInvalidTunablesBySafeValues) {
 
 namespace {
 
-// Runs comp::step() along a path; checks the contract every cycle.
+// Runs rt::comp::step() along a path; checks the contract every cycle.
 struct Driver {
   CompState state;
   CompLimits limits{10.0, 1000.0, 0.1};

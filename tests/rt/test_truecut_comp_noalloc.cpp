@@ -20,7 +20,7 @@
 using namespace truecut;
 using namespace truecut::test;
 using namespace truecut::test::comp;
-using hal::Hal;
+using rt::hal::Hal;
 
 namespace {
 
@@ -41,7 +41,7 @@ TEST(CompNoAlloc, CounterSeesAllocationsMadeInsideTheComponentLibrary) {
                 "loadrt truecut_comp names=c field=" +
                     file.string() + "\naddf c.update servo-thread\nsetp c.reload 1\n",
                 "t.hal");
-  hal::Executor ex(h);
+  rt::hal::Executor ex(h);
   ex.step();  // the cycle sees the reload edge
   reset_alloc_counter();
   arm_alloc_counter();
@@ -71,8 +71,8 @@ TEST(CompNoAlloc, CyclesAllocateNothingWhileFieldsAreSwapped) {
                     "addf c.update servo-thread\naddf x.update servo-thread\n"
                     "addf y.update servo-thread\n",
                 "swap.hal");
-  hal::Executor ex(h);
-  hal::RunLimits lim;
+  rt::hal::Executor ex(h);
+  rt::hal::RunLimits lim;
   lim.max_cycles = 1000;
   lim.service_period_ns = 1'000'000;
   lim.cycle_probe = alloc_counting_probe;
@@ -100,8 +100,8 @@ TEST(CompNoAlloc, JointModeCyclesAllocateNothing) {
                     "net x path.cosine => c.joint-x\nnet a path.sine => c.joint-a\n"
                     "addf path.update servo-thread\naddf c.update servo-thread\n",
                 "joint.hal");
-  hal::Executor ex(h);
-  hal::RunLimits lim;
+  rt::hal::Executor ex(h);
+  rt::hal::RunLimits lim;
   lim.max_cycles = 3000;  // A leaves its travel every cycle of the sine
   lim.cycle_probe = alloc_counting_probe;
   reset_alloc_counter();
@@ -117,12 +117,12 @@ TEST(CompNoAlloc, JointModeCyclesAllocateNothing) {
 struct LoopResult {
   std::vector<double> samples;
   int32_t generation = 0;
-  hal::RunReport report;
+  rt::hal::RunReport report;
   uint32_t overrun_pin = 0;
   uint64_t allocations = 0;
 };
 
-LoopResult run_loop(int64_t period_ns, uint64_t cycles, const hal::WallClockOptions* wall) {
+LoopResult run_loop(int64_t period_ns, uint64_t cycles, const rt::hal::WallClockOptions* wall) {
   const auto file = scratch_dir() / "loop.tcf";
   write_field(file, wide_field(1.0));
   const double span_s = double(period_ns) * 1e-9 * double(cycles);
@@ -171,11 +171,11 @@ LoopResult run_loop(int64_t period_ns, uint64_t cycles, const hal::WallClockOpti
     // before the timed run, and swap-inhibit holds it until `gate` falls.
     write_field(file, wide_field(-1.5));
     h.set_pin_or_param("comp.reload", "1");
-    hal::Executor ex(h);
+    rt::hal::Executor ex(h);
     ex.step();
     h.run_services();
 
-    hal::RunLimits lim;
+    rt::hal::RunLimits lim;
     lim.max_cycles = cycles;
     lim.service_period_ns = 1'000'000;
     lim.cycle_probe = alloc_counting_probe;
@@ -243,7 +243,7 @@ TEST_P(CompWallClock, LoadedTwoCoreRunComputesWhatSimulatedTimeComputes) {
   const int64_t period_ns = GetParam();
   const uint64_t cycles = period_ns == 125'000 ? 400 : 300;
   const LoopResult sim = run_loop(period_ns, cycles, nullptr);
-  hal::WallClockOptions w;
+  rt::hal::WallClockOptions w;
   w.cpu = 1;
   w.fifo_priority = 80;
   LoopResult wall;

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "test_paths.hpp"
-#include "truecut/rt/correction_field.hpp"
+#include "truecut/rt/core/correction_field.hpp"
 #include "truecut/rt/field_file.hpp"
 #include "truecut/rt/hal.hpp"
 
@@ -67,8 +67,8 @@ inline std::filesystem::path write_field(const std::filesystem::path& path, cons
   return path;
 }
 
-inline hal::HalOptions hal_options() {
-  hal::HalOptions o;
+inline rt::hal::HalOptions hal_options() {
+  rt::hal::HalOptions o;
   o.component_path = {component_dir()};
   o.output_dir = scratch_dir();
   return o;
@@ -112,7 +112,7 @@ inline int capture_init(const tc_hal_api_t* api, tc_hal_t* hal, int, const char*
 }
 
 // Loads `capture` with `n` pins into `hal`; `c` must outlive the HAL.
-inline void load_capture(hal::Hal& hal, Capture& c, std::size_t n) {
+inline void load_capture(rt::hal::Hal& hal, Capture& c, std::size_t n) {
   c.pins.assign(n, nullptr);
   capture_slot() = &c;
   hal.load("capture", capture_init, nullptr);
@@ -143,7 +143,7 @@ inline int source_init(const tc_hal_api_t* api, tc_hal_t* hal, int, const char* 
   return api->component_ready(hal, id);
 }
 
-inline void load_source(hal::Hal& hal, Source& s, std::size_t n) {
+inline void load_source(rt::hal::Hal& hal, Source& s, std::size_t n) {
   s.pins.assign(n, nullptr);
   source_slot() = &s;
   hal.load("source", source_init, nullptr);

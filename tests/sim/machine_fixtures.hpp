@@ -43,12 +43,12 @@ inline MachineParams ideal_params() {
 inline MachineParams trunnion_params(bool conventional_directions = false) {
   MachineParams m = ideal_params();
   KinematicsParams& k = m.kinematics;
-  k.x_rot_point_mm = 120.0;
-  k.y_rot_point_mm = -40.0;
-  k.z_rot_point_mm = -250.0;
-  k.y_offset_mm = 30.0;
-  k.z_offset_mm = 60.0;
-  k.conventional_directions = conventional_directions;
+  k.ac.x_rot_point_mm = 120.0;
+  k.ac.y_rot_point_mm = -40.0;
+  k.ac.z_rot_point_mm = -250.0;
+  k.ac.y_offset_mm = 30.0;
+  k.ac.z_offset_mm = 60.0;
+  k.ac.conventional_directions = conventional_directions;
   k.tool = NominalTool{80.0, 5.0, 0.0};
   return m;
 }

@@ -12,7 +12,7 @@
 #include "truecut/rt/hal_file.hpp"
 #include "truecut/sim/benchmark_parts.hpp"
 
-using namespace truecut::hal;
+using namespace truecut::rt::hal;
 
 namespace {
 

@@ -58,12 +58,12 @@ TEST(CuttingNoAlloc, ComponentServoCyclesAllocateNothing) {
   const auto dir = scratch_dir();
   const auto part = make_part(PartId::kImplant, {2.0, 0.8, 1.0, 2.0});
   write_part(part, dir / "implant");
-  truecut::hal::HalOptions o;
+  truecut::rt::hal::HalOptions o;
   o.component_path = {component_dir()};
   o.output_dir = dir;
-  truecut::hal::Hal hal(o);
+  truecut::rt::hal::Hal hal(o);
   // The tool sweeps across the shaft top (siggen triangle, ±6 mm at 2 Hz).
-  truecut::hal::load_hal_text(
+  truecut::rt::hal::load_hal_text(
       hal,
       "loadrt threads name1=servo period1=1000000\nloadrt siggen names=p\n"
       "loadrt cutting nominal=" +
@@ -74,8 +74,8 @@ TEST(CuttingNoAlloc, ComponentServoCyclesAllocateNothing) {
           "setp cutting.0.enable 1\nnet x p.triangle => cutting.0.tcp-x\n"
           "addf p.update servo\naddf cutting.0.update servo\n",
       "cut.hal");
-  truecut::hal::Executor ex(hal);
-  truecut::hal::RunLimits lim;
+  truecut::rt::hal::Executor ex(hal);
+  truecut::rt::hal::RunLimits lim;
   lim.max_cycles = 2000;
   lim.cycle_probe = alloc_counting_probe;
   reset_alloc_counter();

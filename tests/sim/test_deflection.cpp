@@ -372,7 +372,8 @@ TEST(DeflectionJson, BadInputNamesFileAndKey) {
   j["kinematics"]["tool"]["length_mm"] = 0;
   EXPECT_EQ("(no error)", error_of(j));
   j["effects"]["tool_deflection"]["stickout_mm"] = 0;
-  EXPECT_NE(std::string::npos, error_of(j).find("effects.tool_deflection.stickout_mm")) << error_of(j);
+  EXPECT_NE(std::string::npos, error_of(j).find("effects.tool_deflection.stickout_mm"))
+      << error_of(j);
 }
 
 TEST(DeflectionJson, RoundTripsThroughTheWriter) {
@@ -402,7 +403,7 @@ TEST(DeflectionJson, RoundTripsThroughTheWriter) {
 // --- The machine_joints component ---------------------------------------
 
 TEST(DeflectionComponent, PinsCarryForceAndDeflections) {
-  using namespace truecut::hal;
+  using namespace truecut::rt::hal;
   const auto dir = truecut::test::scratch_dir();
   const auto machine = dir / "m.json";
   std::ofstream(machine) << kDeflecting;

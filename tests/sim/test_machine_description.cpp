@@ -85,12 +85,12 @@ TEST(MachineDescription, ReadsValuesAndDefaults) {
 TEST(MachineDescription, ReadsKinematicsAndPoseEffects) {
   const auto m = parse_machine_description(kBase, "m.json").machine;
   EXPECT_EQ(KinematicsType::XyzacTrt, m.kinematics.type);
-  EXPECT_EQ(120.0, m.kinematics.x_rot_point_mm);
-  EXPECT_EQ(-40.0, m.kinematics.y_rot_point_mm);
-  EXPECT_EQ(-250.0, m.kinematics.z_rot_point_mm);
-  EXPECT_EQ(30.0, m.kinematics.y_offset_mm);
-  EXPECT_EQ(60.0, m.kinematics.z_offset_mm);
-  EXPECT_FALSE(m.kinematics.conventional_directions);
+  EXPECT_EQ(120.0, m.kinematics.ac.x_rot_point_mm);
+  EXPECT_EQ(-40.0, m.kinematics.ac.y_rot_point_mm);
+  EXPECT_EQ(-250.0, m.kinematics.ac.z_rot_point_mm);
+  EXPECT_EQ(30.0, m.kinematics.ac.y_offset_mm);
+  EXPECT_EQ(60.0, m.kinematics.ac.z_offset_mm);
+  EXPECT_FALSE(m.kinematics.ac.conventional_directions);
   EXPECT_EQ((NominalTool{80.0, 3.0, 3.0}), m.kinematics.tool);
   const auto* loc = m.effects.rotary_location.active();
   ASSERT_NE(nullptr, loc);
@@ -108,7 +108,7 @@ TEST(MachineDescription, KinematicsDefaultsToZeros) {
                          "tool": {"radius_mm": 2}}})",
       "m.json");
   KinematicsParams want;
-  want.conventional_directions = true;
+  want.ac.conventional_directions = true;
   want.tool.radius_mm = 2.0;
   EXPECT_EQ(want, d.machine.kinematics);
   // Written back with every key explicit, and left out when all default.
@@ -180,8 +180,13 @@ TEST(MachineDescription, RandomParametersRoundTripExactly) {
       if (coin(rng)) c = StraightnessComponent{u(rng) * 50, u(rng) * 50 - 25, u(rng) * 100};
     if (coin(rng)) {
       auto& k = m.kinematics;
-      k = {KinematicsType::XyzacTrt, u(rng) * 600 - 300, u(rng) * 600 - 300, u(rng) * 600 - 300,
-           u(rng) * 100 - 50,        u(rng) * 100 - 50,  coin(rng),          {}};
+      k = {};
+      k.ac.x_rot_point_mm = u(rng) * 600 - 300;
+      k.ac.y_rot_point_mm = u(rng) * 600 - 300;
+      k.ac.z_rot_point_mm = u(rng) * 600 - 300;
+      k.ac.y_offset_mm = u(rng) * 100 - 50;
+      k.ac.z_offset_mm = u(rng) * 100 - 50;
+      k.ac.conventional_directions = coin(rng);
       k.tool.length_mm = u(rng) * 200;
       k.tool.radius_mm = u(rng) * 10;
       k.tool.corner_radius_mm = coin(rng) ? k.tool.radius_mm : u(rng) * k.tool.radius_mm;

@@ -5,12 +5,12 @@
 #include <fstream>
 
 #include "test_paths.hpp"
+#include "truecut/rt/core/kinematics_ac.hpp"
 #include "truecut/rt/executor.hpp"
 #include "truecut/rt/hal_file.hpp"
-#include "truecut/rt/kinematics_ac.hpp"
 #include "truecut/sim/machine_model.hpp"
 
-using namespace truecut::hal;
+using namespace truecut::rt::hal;
 
 namespace {
 

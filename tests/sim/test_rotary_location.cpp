@@ -12,7 +12,7 @@
 #include <Eigen/Geometry>
 
 #include "machine_fixtures.hpp"
-#include "truecut/rt/kinematics_ac.hpp"
+#include "truecut/rt/core/kinematics_ac.hpp"
 #include "truecut/sim/true_tool_pose.hpp"
 
 using namespace truecut::sim;

@@ -6,7 +6,7 @@
 #include <random>
 
 #include "machine_fixtures.hpp"
-#include "truecut/rt/kinematics_ac.hpp"
+#include "truecut/rt/core/kinematics_ac.hpp"
 #include "truecut/sim/true_tool_pose.hpp"
 
 using namespace truecut::sim;

@@ -7,7 +7,7 @@
 #include <random>
 
 #include "machine_fixtures.hpp"
-#include "truecut/rt/kinematics_ac.hpp"
+#include "truecut/rt/core/kinematics_ac.hpp"
 #include "truecut/sim/true_tool_pose.hpp"
 
 using namespace truecut::sim;
@@ -32,12 +32,12 @@ MachineParams random_kinematics(std::mt19937_64& rng) {
   std::uniform_real_distribution<double> u(-300.0, 300.0), len(0.0, 200.0);
   MachineParams m = ideal_params();
   KinematicsParams& k = m.kinematics;
-  k.x_rot_point_mm = u(rng);
-  k.y_rot_point_mm = u(rng);
-  k.z_rot_point_mm = u(rng);
-  k.y_offset_mm = u(rng) / 10;
-  k.z_offset_mm = u(rng) / 10;
-  k.conventional_directions = std::bernoulli_distribution(0.5)(rng);
+  k.ac.x_rot_point_mm = u(rng);
+  k.ac.y_rot_point_mm = u(rng);
+  k.ac.z_rot_point_mm = u(rng);
+  k.ac.y_offset_mm = u(rng) / 10;
+  k.ac.z_offset_mm = u(rng) / 10;
+  k.ac.conventional_directions = std::bernoulli_distribution(0.5)(rng);
   k.tool.length_mm = len(rng);
   return m;
 }

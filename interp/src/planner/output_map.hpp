@@ -6,7 +6,7 @@
 #pragma once
 
 #include "truecut/interp/plan_segment.hpp"
-#include "truecut/rt/kinematics_ac.hpp"
+#include "truecut/rt/core/kinematics_ac.hpp"
 
 namespace truecut::interp::plan {
 

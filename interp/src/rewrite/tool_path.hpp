@@ -11,7 +11,7 @@
 
 #include "neighbours.hpp"
 #include "truecut/interp/canon.hpp"
-#include "truecut/rt/kinematics_ac.hpp"
+#include "truecut/rt/core/kinematics_ac.hpp"
 
 namespace truecut::interp::rewrite {
 

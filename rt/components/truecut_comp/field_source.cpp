@@ -5,7 +5,7 @@
 
 #include "truecut/rt/field_file.hpp"
 
-namespace truecut::comp {
+namespace truecut::rt::comp {
 
 std::unique_ptr<const rt::CorrectionField> load_field(const std::string& path,
                                                       const std::vector<int32_t>& required_tools) {
@@ -41,4 +41,4 @@ std::string FieldSource::service() {
   return error;
 }
 
-}  // namespace truecut::comp
+}  // namespace truecut::rt::comp

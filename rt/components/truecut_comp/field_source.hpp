@@ -11,9 +11,9 @@
 #include <vector>
 
 #include "truecut/rt/channel.hpp"
-#include "truecut/rt/correction_field.hpp"
+#include "truecut/rt/core/correction_field.hpp"
 
-namespace truecut::comp {
+namespace truecut::rt::comp {
 
 using FieldHandover = rt::Handover<rt::CorrectionField>;
 
@@ -53,4 +53,4 @@ class FieldSource {
   std::unique_ptr<const rt::CorrectionField> unpublished_;
 };
 
-}  // namespace truecut::comp
+}  // namespace truecut::rt::comp

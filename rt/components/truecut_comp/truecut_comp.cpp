@@ -5,7 +5,7 @@
 //                       [count=N | names=A,B]
 //
 // Pins, fault codes and the hand-over protocol: docs/compensation.md. This
-// file is the HAL edge only: it reads pins, calls comp::step() (comp_core.hpp)
+// file is the HAL edge only: it reads pins, calls rt::comp::step() (truecut/rt/comp.hpp)
 // and writes pins; the field is loaded and freed by field_source.cpp in the
 // component's non-real-time service.
 #include <array>
@@ -13,16 +13,15 @@
 #include <string>
 #include <vector>
 
-#include "comp_core.hpp"
 #include "field_source.hpp"
-#include "joint_mode.hpp"
+#include "truecut/rt/comp.hpp"
 #include "truecut/rt/component_support.hpp"
 
 namespace {
 
 using namespace truecut;
-using comp::Fault;
-using comp::Vec3;
+using rt::comp::Fault;
+using rt::comp::Vec3;
 
 enum class Mode { tcp, joint };
 
@@ -77,8 +76,8 @@ struct Instance {
   std::string name;
   Mode mode;
   Pins p{};
-  comp::CompState core;
-  comp::FieldSource source;
+  rt::comp::CompState core;
+  rt::comp::FieldSource source;
   const rt::CorrectionField* pending = nullptr;         // taken from the hand-over, not adopted yet
   std::array<const rt::CorrectionField*, 4> backlog{};  // retired while the queue was full
   bool reload_before = false;
@@ -142,7 +141,7 @@ void update(void* arg, long period_ns) {
   const bool can_swap = backlog_empty(s);
   if (can_swap) s.source.handover().take_latest(s.pending);
 
-  comp::CycleInput in;
+  rt::comp::CycleInput in;
   in.enable = *p.enable;
   in.tool = *p.tool;
   in.candidate = can_swap ? s.pending : nullptr;
@@ -159,7 +158,7 @@ void update(void* arg, long period_ns) {
   } else {
     kins = kinematics(p);
     joints = {*p.joint_in[0], *p.joint_in[1], *p.joint_in[2], *p.joint_in[3], *p.joint_in[4]};
-    if (!comp::joints_finite(joints) || !comp::params_finite(kins)) {
+    if (!rt::comp::joints_finite(joints) || !rt::comp::params_finite(kins)) {
       in.input_fault = Fault::input_not_finite;
     } else {
       pose = rt::forward_ac(kins, joints);
@@ -171,8 +170,8 @@ void update(void* arg, long period_ns) {
   }
   in.tcp_mm = pose.tcp_mm;
 
-  const comp::CompLimits limits{*p.max_correction, *p.max_rate, *p.fade_time};
-  const comp::CycleOutput out = comp::step(s.core, in, limits, double(period_ns) * 1e-9);
+  const rt::comp::CompLimits limits{*p.max_correction, *p.max_rate, *p.fade_time};
+  const rt::comp::CycleOutput out = rt::comp::step(s.core, in, limits, double(period_ns) * 1e-9);
   if (out.adopted) {
     s.pending = nullptr;
     ++*p.field_generation;
@@ -191,7 +190,7 @@ void update(void* arg, long period_ns) {
   write3(p.tcp_out, pose.tcp_mm + out.correction_mm);
   write3(p.axis_out, pose.axis);
   if (s.mode == Mode::joint) {
-    const rt::AcJoints j = comp::correct_joints(kins, joints, pose, out.correction_mm);
+    const rt::AcJoints j = rt::comp::correct_joints(kins, joints, pose, out.correction_mm);
     const double v[5] = {j.x_mm, j.y_mm, j.z_mm, j.a_deg, j.c_deg};
     for (int i = 0; i < 5; ++i)
       *p.joint_out[i] = v[i];
@@ -221,14 +220,15 @@ std::vector<int32_t> parse_tools(const std::string& text) {
     char* end = nullptr;
     const long t = std::strtol(cur.c_str(), &end, 10);
     if (cur.empty() || *end != '\0' || t < 0 || t > INT32_MAX)
-      throw hal::component::InitError("tools='" + text + "': '" + cur + "' is not a tool number");
+      throw rt::hal::component::InitError("tools='" + text + "': '" + cur +
+                                          "' is not a tool number");
     tools.push_back(static_cast<int32_t>(t));
     cur.clear();
   }
   return tools;
 }
 
-void make_pins(hal::component::Builder& b, const std::string& n, Mode mode, Pins& p) {
+void make_pins(rt::hal::component::Builder& b, const std::string& n, Mode mode, Pins& p) {
   auto in_f = [&](const char* pin, double** ptr) {
     b.pin(n + "." + pin, TC_HAL_FLOAT, TC_HAL_IN, ptr);
   };
@@ -278,7 +278,7 @@ void make_pins(hal::component::Builder& b, const std::string& n, Mode mode, Pins
   b.pin(n + ".field-generation", TC_HAL_S32, TC_HAL_OUT, &p.field_generation);
   b.pin(n + ".load-errors", TC_HAL_S32, TC_HAL_OUT, &p.load_errors);
 
-  const comp::CompLimits defaults;
+  const rt::comp::CompLimits defaults;
   *p.max_correction = defaults.max_correction_mm;
   *p.max_rate = defaults.max_rate_mm_per_s;
   *p.fade_time = defaults.fade_time_s;
@@ -296,7 +296,7 @@ void make_pins(hal::component::Builder& b, const std::string& n, Mode mode, Pins
 extern "C" TC_COMPONENT_EXPORT int truecut_component_init(const tc_hal_api_t* api, tc_hal_t* hal,
                                                           int argc, const char* const* argv,
                                                           void** module_state) {
-  using namespace truecut::hal::component;
+  using namespace truecut::rt::hal::component;
   return init_guard(api, hal, [&] {
     Args args(argc, argv);
     const auto names = instance_names(args, "truecut_comp");

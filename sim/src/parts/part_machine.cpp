@@ -29,12 +29,12 @@ MachineParams base_machine() {
   m.joints[kC] = joint(-36000, 36000, {40.0, 0.010, 1.5, 12000.0, 0.0001});
   // The C axis passes through the workpiece origin (the part is centred on
   // the table); the A axis lies 100 mm below it.
-  m.kinematics.x_rot_point_mm = 0;
-  m.kinematics.y_rot_point_mm = 0;
-  m.kinematics.z_rot_point_mm = -100;
-  m.kinematics.y_offset_mm = 0;
-  m.kinematics.z_offset_mm = 0;
-  m.kinematics.conventional_directions = false;
+  m.kinematics.ac.x_rot_point_mm = 0;
+  m.kinematics.ac.y_rot_point_mm = 0;
+  m.kinematics.ac.z_rot_point_mm = -100;
+  m.kinematics.ac.y_offset_mm = 0;
+  m.kinematics.ac.z_offset_mm = 0;
+  m.kinematics.ac.conventional_directions = false;
   return m;
 }
 

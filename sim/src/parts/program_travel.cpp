@@ -9,7 +9,7 @@
 #include <stdexcept>
 
 #include "truecut/interp/plan_segment.hpp"
-#include "truecut/rt/kinematics_ac.hpp"
+#include "truecut/rt/core/kinematics_ac.hpp"
 #include "truecut/sim/true_tool_pose.hpp"
 
 namespace truecut::sim {

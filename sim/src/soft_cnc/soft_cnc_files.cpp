@@ -56,12 +56,9 @@ interp::PlannerOptions soft_cnc_planner_options(const SoftCncJob& job,
   interp::PlannerOptions o;
   o.servo_period_s = double(servo_period_ns(job)) * 1e-9;
   o.start_joints = start_joints(machine);
-  o.kinematics.x_rot_point_mm = k.x_rot_point_mm;
-  o.kinematics.y_rot_point_mm = k.y_rot_point_mm;
-  o.kinematics.z_rot_point_mm = k.z_rot_point_mm;
-  o.kinematics.y_offset_mm = k.y_offset_mm;
-  o.kinematics.z_offset_mm = k.z_offset_mm;
-  o.kinematics.conventional_directions = k.conventional_directions;
+  // The description's pivots and directions; its kinematics hold no tool
+  // length or A travel (see KinematicsParams), so those keep rt's defaults.
+  o.kinematics = k.ac;
   return o;
 }
 
@@ -89,12 +86,12 @@ std::string soft_cnc_ini_text(const SoftCncJob& job, const MachineDescription& m
   for (double v : start)
     start_text += (start_text.empty() ? "" : ",") + number_text(v);
   ini.set("RUN", "START", start_text);
-  ini.set("KINS", "X_ROT_POINT", number_text(k.x_rot_point_mm));
-  ini.set("KINS", "Y_ROT_POINT", number_text(k.y_rot_point_mm));
-  ini.set("KINS", "Z_ROT_POINT", number_text(k.z_rot_point_mm));
-  ini.set("KINS", "Y_OFFSET", number_text(k.y_offset_mm));
-  ini.set("KINS", "Z_OFFSET", number_text(k.z_offset_mm));
-  ini.set("KINS", "CONVENTIONAL_DIRECTIONS", k.conventional_directions ? "1" : "0");
+  ini.set("KINS", "X_ROT_POINT", number_text(k.ac.x_rot_point_mm));
+  ini.set("KINS", "Y_ROT_POINT", number_text(k.ac.y_rot_point_mm));
+  ini.set("KINS", "Z_ROT_POINT", number_text(k.ac.z_rot_point_mm));
+  ini.set("KINS", "Y_OFFSET", number_text(k.ac.y_offset_mm));
+  ini.set("KINS", "Z_OFFSET", number_text(k.ac.z_offset_mm));
+  ini.set("KINS", "CONVENTIONAL_DIRECTIONS", k.ac.conventional_directions ? "1" : "0");
   ini.set("COMP", "FIELD", job.field ? absolute_text(*job.field) : "");
   ini.set("COMP", "ENABLE", job.field ? "1" : "0");
   ini.set("COMP", "MAX_CORRECTION", number_text(job.max_correction_mm));

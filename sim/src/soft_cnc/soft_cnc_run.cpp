@@ -25,7 +25,7 @@ namespace fs = std::filesystem;
 struct ServiceHook {
   const SoftCncProgress* callback;
   double program_s;
-  hal::Hal* hal;
+  rt::hal::Hal* hal;
   const std::vector<SoftCncFieldSwap>* swaps;
   fs::path field_file;
   std::size_t next_swap = 0;
@@ -91,11 +91,11 @@ SoftCncResult run_soft_cnc(const SoftCncJob& given, const SoftCncProgress& progr
   SoftCncJob job = given;
   const fs::path hal_file = job.out_dir / "soft_cnc.hal", ini_file = job.out_dir / "run.ini";
   std::vector<fs::path> written;
-  hal::HalOptions options;
+  rt::hal::HalOptions options;
   options.component_path = job.component_path;
   options.output_dir = job.out_dir;
   SoftCncResult result;
-  hal::Hal h(options);
+  rt::hal::Hal h(options);
   try {
     if (!job.field_swaps.empty()) {
       job.field = job.out_dir / "field.tcf";
@@ -106,9 +106,9 @@ SoftCncResult run_soft_cnc(const SoftCncJob& given, const SoftCncProgress& progr
     rt::write_file_atomically(hal_file, soft_cnc_hal_text());
     written.push_back(ini_file);
     rt::write_file_atomically(ini_file, soft_cnc_ini_text(job, machine));
-    const hal::Ini ini = hal::Ini::load(ini_file);
-    hal::load_hal_file(h, hal_file, &ini);
-  } catch (const hal::HalFileError& e) {
+    const rt::hal::Ini ini = rt::hal::Ini::load(ini_file);
+    rt::hal::load_hal_file(h, hal_file, &ini);
+  } catch (const rt::hal::HalFileError& e) {
     // A component refused the job (its message names the file and key);
     // the wiring file it points to is removed with the rest.
     remove_written(written, job.out_dir, dir_created);
@@ -119,7 +119,7 @@ SoftCncResult run_soft_cnc(const SoftCncJob& given, const SoftCncProgress& progr
   }
   result.program_s = h.get_pin_or_param("planner.program-time").as_double();
 
-  hal::RunLimits limits;
+  rt::hal::RunLimits limits;
   // The planner stops the run at the program end; the limit only guards a
   // plan that never ends.
   limits.duration_ns = static_cast<int64_t>((result.program_s * 1.5 + 10.0) * 1e9);
@@ -129,7 +129,7 @@ SoftCncResult run_soft_cnc(const SoftCncJob& given, const SoftCncProgress& progr
   limits.progress_user = &hook;
   limits.cycle_probe = job.cycle_probe;
   limits.cycle_probe_user = job.cycle_probe_user;
-  hal::Executor executor(h);
+  rt::hal::Executor executor(h);
   result.report = job.wall_clock ? executor.run_wall_clock(limits, job.wall_clock_options)
                                  : executor.run_simulated(limits);
   result.simulated_s = double(result.report.simulated_ns) * 1e-9;

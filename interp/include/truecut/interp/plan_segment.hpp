@@ -11,7 +11,7 @@
 #include <array>
 #include <cstdint>
 
-#include "truecut/rt/kinematics_ac.hpp"
+#include "truecut/rt/core/kinematics_ac.hpp"
 
 namespace truecut::interp {
 

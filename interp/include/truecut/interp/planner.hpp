@@ -32,7 +32,7 @@
 #include "truecut/interp/machine_limits.hpp"
 #include "truecut/interp/plan_segment.hpp"
 #include "truecut/interp/spline.hpp"
-#include "truecut/rt/kinematics_ac.hpp"
+#include "truecut/rt/core/kinematics_ac.hpp"
 
 namespace truecut::interp {
 

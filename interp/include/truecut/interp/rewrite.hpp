@@ -22,8 +22,8 @@
 #include "truecut/interp/interpreter.hpp"
 #include "truecut/interp/rewrite_blend.hpp"
 #include "truecut/interp/rewrite_matrix.hpp"
-#include "truecut/rt/correction_field.hpp"
-#include "truecut/rt/kinematics_ac.hpp"
+#include "truecut/rt/core/correction_field.hpp"
+#include "truecut/rt/core/kinematics_ac.hpp"
 
 namespace truecut::interp {
 

@@ -58,7 +58,7 @@
 #include <span>
 #include <vector>
 
-#include "truecut/rt/correction_field.hpp"
+#include "truecut/rt/core/correction_field.hpp"
 
 namespace truecut::offline {
 

@@ -17,8 +17,19 @@
 #include <vector>
 
 #include "truecut/offline/field_pipeline.hpp"
+#include "truecut/rt/comp.hpp"
 
 namespace truecut::offline {
+
+// `truecut field` refuses (exits 1, writes nothing) a field whose correction
+// exceeds this, unless --max-correction says otherwise. It overrides the
+// compensation's bound (rt::comp::kDefaultMaxCorrectionMm) on purpose: it is
+// a plausibility check of the measurement, not a limit of the machine. A
+// correction this large on a finished part is taken as a sign of a failed
+// registration or a wrong input rather than an error to compensate, and a
+// field that passes is never clipped by a truecut_comp left at its default.
+inline constexpr double kFieldMaxCorrectionMm = 0.2;
+static_assert(kFieldMaxCorrectionMm <= rt::comp::kDefaultMaxCorrectionMm);
 
 // Lower-case hex SHA-256 of a file's bytes (OpenSSL EVP). Throws
 // std::runtime_error naming the file when it cannot be read.
@@ -38,7 +49,7 @@ struct AuditContext {
   std::vector<std::string> command_line;  // argv as given
   std::string created_utc;                // ISO 8601; empty: now
   std::vector<ToolShape> tools;           // the tool shapes the placement used
-  double max_correction_limit_mm = 0.2;
+  double max_correction_limit_mm = kFieldMaxCorrectionMm;
   bool forced = false;  // --force: written although max_correction_mm exceeds the limit
 };
 

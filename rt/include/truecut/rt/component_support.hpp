@@ -12,7 +12,7 @@
 
 #include "truecut/rt/hal_abi.h"
 
-namespace truecut::hal::component {
+namespace truecut::rt::hal::component {
 
 // Thrown by the helpers; caught by init_guard() and turned into set_error().
 struct InitError : std::runtime_error {
@@ -165,4 +165,4 @@ inline int new_component(const tc_hal_api_t* api, tc_hal_t* hal, const std::stri
   return id;
 }
 
-}  // namespace truecut::hal::component
+}  // namespace truecut::rt::hal::component

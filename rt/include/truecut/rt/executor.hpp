@@ -22,7 +22,7 @@
 #include "truecut/rt/duration_histogram.hpp"
 #include "truecut/rt/hal.hpp"
 
-namespace truecut::hal {
+namespace truecut::rt::hal {
 
 struct RunLimits {
   // Stop once simulated time reaches this (cycles with t < duration run);
@@ -99,4 +99,4 @@ class Executor {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace truecut::hal
+}  // namespace truecut::rt::hal

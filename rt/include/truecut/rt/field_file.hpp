@@ -9,7 +9,7 @@
 #include <string>
 #include <string_view>
 
-#include "truecut/rt/correction_field.hpp"
+#include "truecut/rt/core/correction_field.hpp"
 
 namespace truecut::rt {
 

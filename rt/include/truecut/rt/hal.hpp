@@ -1,6 +1,6 @@
 // The HAL: components, pins, parameters, signals, functions and threads with
 // LinuxCNC's semantics. Everything here is set-up (non-real-time) API; the
-// servo cycle itself runs in truecut::hal::Executor.
+// servo cycle itself runs in truecut::rt::hal::Executor.
 #pragma once
 
 #include <atomic>
@@ -15,7 +15,7 @@
 
 struct tc_hal;  // the HAL's state; also the opaque handle components see
 
-namespace truecut::hal {
+namespace truecut::rt::hal {
 
 enum class Type { Bit = TC_HAL_BIT, Float = TC_HAL_FLOAT, S32 = TC_HAL_S32, U32 = TC_HAL_U32 };
 enum class PinDir { In = TC_HAL_IN, Out = TC_HAL_OUT, IO = TC_HAL_IO };
@@ -168,4 +168,4 @@ struct BuiltinComponent {
 };
 const std::vector<BuiltinComponent>& builtin_components();
 
-}  // namespace truecut::hal
+}  // namespace truecut::rt::hal

@@ -19,7 +19,7 @@
 #include "truecut/rt/hal.hpp"
 #include "truecut/rt/ini.hpp"
 
-namespace truecut::hal {
+namespace truecut::rt::hal {
 
 // "file:line: message"
 class HalFileError : public std::runtime_error {
@@ -40,4 +40,4 @@ void load_hal_file(Hal& hal, const std::filesystem::path& file, const Ini* ini =
 void load_hal_text(Hal& hal, const std::string& text, const std::string& file_name,
                    const Ini* ini = nullptr, const std::filesystem::path& base_dir = ".");
 
-}  // namespace truecut::hal
+}  // namespace truecut::rt::hal

@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace truecut::hal {
+namespace truecut::rt::hal {
 
 class IniError : public std::runtime_error {
  public:
@@ -32,4 +32,4 @@ class Ini {
   std::map<std::pair<std::string, std::string>, std::string> values_;
 };
 
-}  // namespace truecut::hal
+}  // namespace truecut::rt::hal

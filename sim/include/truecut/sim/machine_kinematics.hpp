@@ -1,9 +1,11 @@
 // The nominal kinematics of the machine as the description states it: the
-// kinematics type, its pivots (the fields of rt::AcTrtParams, LinuxCNC's
-// xyzac-trt-kins pins) and the tool the program was written for. The
+// kinematics type, its pivots (rt::AcTrtParams, LinuxCNC's xyzac-trt-kins
+// pins) and the tool the program was written for. The
 // controller's inverse kinematics and the true machine both start from here;
 // the true machine adds its errors (rotary_location, tool_*_error, ...).
 #pragma once
+
+#include "truecut/rt/core/kinematics_ac.hpp"
 
 namespace truecut::sim {
 
@@ -22,16 +24,23 @@ inline bool is_ball_end_mill(const NominalTool& t) noexcept {
   return t.radius_mm > 0.0 && t.corner_radius_mm == t.radius_mm;
 }
 
-// Pivots as in docs/kinematics.md: joint readings of a zero-length tool
-// touching the pivot, machine frame, mm.
+// The description's nominal kinematics. The machine's geometry is the
+// struct the real-time side uses (rt::AcTrtParams: pivots as in
+// docs/kinematics.md, joint readings of a zero-length tool touching the
+// pivot, machine frame, mm; directions), so the controller and the simulator
+// read one set of parameters. What the simulator adds is its own: the
+// kinematics type of the file and the nominal tool.
+//
+// One place per parameter: the description holds the pivots and
+// conventional_directions in `ac`; the tool length in `tool.length_mm`; the
+// A travel in joint A (MachineParams::joints). ac.tool_length_mm,
+// ac.a_min_deg, ac.a_max_deg and ac.singular_tilt_deg are therefore not part
+// of the description: they stay at rt's defaults (the file has no key for
+// them), and nominal_ac_params() (true_tool_pose.hpp) fills in the tool
+// length and the A travel for the controller.
 struct KinematicsParams {
   KinematicsType type = KinematicsType::XyzacTrt;
-  double x_rot_point_mm = 0.0;  // C axis at A = 0, X
-  double y_rot_point_mm = 0.0;  // C axis at A = 0, Y
-  double z_rot_point_mm = 0.0;  // reference height of the pivots
-  double y_offset_mm = 0.0;     // A axis relative to the C axis, Y
-  double z_offset_mm = 0.0;     // A axis relative to z_rot_point, Z
-  bool conventional_directions = false;
+  rt::AcTrtParams ac;
   NominalTool tool;
   bool operator==(const KinematicsParams&) const = default;
 };

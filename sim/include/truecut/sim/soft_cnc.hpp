@@ -14,6 +14,8 @@
 #include <vector>
 
 #include "truecut/interp/planner.hpp"
+#include "truecut/offline/field_outputs.hpp"
+#include "truecut/rt/comp.hpp"
 #include "truecut/rt/executor.hpp"
 #include "truecut/sim/machine_description.hpp"
 
@@ -28,6 +30,15 @@ struct SoftCncFieldSwap {
   std::filesystem::path field;
 };
 
+// truecut_comp's magnitude limit in a simulated run, unless --max-correction
+// says otherwise. It overrides rt::comp::kDefaultMaxCorrectionMm: above the
+// largest correction `truecut field` writes (offline::kFieldMaxCorrectionMm),
+// so it never clips a field that passed that check, and below the
+// component's default, so that a wrong field moves the simulated tool less.
+inline constexpr double kSoftCncMaxCorrectionMm = 0.5;
+static_assert(kSoftCncMaxCorrectionMm >= offline::kFieldMaxCorrectionMm &&
+              kSoftCncMaxCorrectionMm <= rt::comp::kDefaultMaxCorrectionMm);
+
 struct SoftCncJob {
   std::filesystem::path machine;  // machine description (JSON)
   std::filesystem::path program;  // G-code
@@ -39,7 +50,7 @@ struct SoftCncJob {
   double period_us = 1000.0;
   double dexel_spacing_mm = 0.1;  // the cutting model's surface sampling (docs/cutting.md)
   long record_every = 1;
-  double max_correction_mm = 0.5;
+  double max_correction_mm = kSoftCncMaxCorrectionMm;  // truecut_comp's limit
   double max_rate_mm_per_s = 5.0;
   double fade_time_s = 0.2;
   std::vector<std::filesystem::path> component_path;  // where the components' .so are
@@ -51,7 +62,7 @@ struct SoftCncJob {
   // `wall_clock_options` (CPU pinning, SCHED_FIFO, spin); the outputs are the
   // same as in simulated time, only the timing statistics differ.
   bool wall_clock = false;
-  hal::WallClockOptions wall_clock_options;
+  rt::hal::WallClockOptions wall_clock_options;
   // RunLimits::cycle_probe, for tests that watch the servo cycles.
   void (*cycle_probe)(void* user, int phase) = nullptr;
   void* cycle_probe_user = nullptr;
@@ -69,7 +80,7 @@ struct SoftCncResult {
   // Errors the components reported while writing their files at the end
   // (machined.stl, trace.csv: a full disk, a folder gone); messages on stderr.
   int32_t output_errors = 0;
-  hal::RunReport report;  // cycles, overruns, compute time and latency, notes
+  rt::hal::RunReport report;  // cycles, overruns, compute time and latency, notes
 };
 
 // Bad input, found before the machine runs: the program or the tool table

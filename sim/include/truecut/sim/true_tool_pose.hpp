@@ -17,7 +17,7 @@
 
 #include <array>
 
-#include "truecut/rt/kinematics_ac.hpp"
+#include "truecut/rt/core/kinematics_ac.hpp"
 #include "truecut/sim/machine_description.hpp"
 
 namespace truecut::sim {

@@ -2,10 +2,12 @@
 // and the corrected TCP -> inverse kinematics -> joints. Pure functions.
 #pragma once
 
-#include "comp_math.hpp"
-#include "truecut/rt/kinematics_ac.hpp"
+// Part of the real-time core: include "truecut/rt/comp.hpp" (std and Eigen only).
 
-namespace truecut::comp {
+#include "truecut/rt/core/comp_math.hpp"
+#include "truecut/rt/core/kinematics_ac.hpp"
+
+namespace truecut::rt::comp {
 
 inline bool joints_finite(const rt::AcJoints& j) noexcept {
   return std::isfinite(j.x_mm) && std::isfinite(j.y_mm) && std::isfinite(j.z_mm) &&
@@ -54,4 +56,4 @@ inline rt::AcJoints correct_joints(const rt::AcTrtParams& params, const rt::AcJo
   return out;
 }
 
-}  // namespace truecut::comp
+}  // namespace truecut::rt::comp

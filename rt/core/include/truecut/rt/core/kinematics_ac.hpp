@@ -25,6 +25,8 @@
 //   length offset.
 #pragma once
 
+// Part of the real-time core: include "truecut/rt/comp.hpp" (std and Eigen only).
+
 #include <Eigen/Core>
 
 namespace truecut::rt {
@@ -43,6 +45,7 @@ struct AcTrtParams {
   // Below this tilt the C angle is taken from the hint instead of from the
   // tool axis (orientation error at most sin(singular_tilt_deg)).
   double singular_tilt_deg = 1e-8;
+  bool operator==(const AcTrtParams&) const = default;
 };
 
 struct AcJoints {

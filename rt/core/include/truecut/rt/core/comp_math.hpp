@@ -3,11 +3,13 @@
 // allocation; noexcept.
 #pragma once
 
+// Part of the real-time core: include "truecut/rt/comp.hpp" (std and Eigen only).
+
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 
-namespace truecut::comp {
+namespace truecut::rt::comp {
 
 using Vec3 = Eigen::Vector3d;
 
@@ -58,11 +60,17 @@ inline Limited limit_rate(const Vec3& target, const Vec3& previous, double max_s
   return {previous + d * (max_step_mm / n), true};  // n > max_step_mm >= 0
 }
 
+// The compensation's correction bound: the longest correction vector, mm,
+// unless the integrator sets another (the `max-correction` pin). Every other
+// default of a correction bound in truecut derives from this one or says why
+// it overrides it.
+inline constexpr double kDefaultMaxCorrectionMm = 1.0;
+
 // The three tunables, as the pins hold them.
 struct CompLimits {
-  double max_correction_mm = 1.0;   // length of the correction vector
-  double max_rate_mm_per_s = 10.0;  // speed of the correction vector
-  double fade_time_s = 1.0;         // duration of a full fade in or out
+  double max_correction_mm = kDefaultMaxCorrectionMm;  // length of the correction vector
+  double max_rate_mm_per_s = 10.0;                     // speed of the correction vector
+  double fade_time_s = 1.0;                            // duration of a full fade in or out
 };
 
 // Replaces each invalid tunable (not finite, or negative) by its safe value:
@@ -76,4 +84,4 @@ inline bool sanitize(const CompLimits& raw, CompLimits& safe) noexcept {
   return ok(raw.max_correction_mm) && ok(raw.max_rate_mm_per_s) && ok(raw.fade_time_s);
 }
 
-}  // namespace truecut::comp
+}  // namespace truecut::rt::comp

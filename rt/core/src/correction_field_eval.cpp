@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "truecut/rt/correction_field.hpp"
+#include "truecut/rt/core/correction_field.hpp"
 
 namespace truecut::rt {
 namespace {

@@ -17,6 +17,8 @@
 // 3-D error compensation tables) is available as a baseline.
 #pragma once
 
+// Part of the real-time core: include "truecut/rt/comp.hpp" (std and Eigen only).
+
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>

@@ -4,7 +4,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "truecut/rt/correction_field.hpp"
+#include "truecut/rt/core/correction_field.hpp"
 
 namespace truecut::rt {
 namespace {

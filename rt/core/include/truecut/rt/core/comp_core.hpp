@@ -10,12 +10,14 @@
 // Real-time safe: noexcept, no allocation, at most two field evaluations.
 #pragma once
 
+// Part of the real-time core: include "truecut/rt/comp.hpp" (std and Eigen only).
+
 #include <cstdint>
 
-#include "comp_math.hpp"
-#include "truecut/rt/correction_field.hpp"
+#include "truecut/rt/core/comp_math.hpp"
+#include "truecut/rt/core/correction_field.hpp"
 
-namespace truecut::comp {
+namespace truecut::rt::comp {
 
 // The `fault` pin. When several apply, the lowest-numbered wins except that
 // input and parameter faults are reported before field faults.
@@ -200,4 +202,4 @@ inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& ra
   return out;
 }
 
-}  // namespace truecut::comp
+}  // namespace truecut::rt::comp
