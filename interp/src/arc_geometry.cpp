@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <numbers>
 
+#include "truecut/interp/path_geometry.hpp"
+
 namespace truecut::interp {
 
 namespace {
@@ -74,15 +76,9 @@ ArcResult compute_arc(const ArcRequest& request) {
 }
 
 double arc_length(const ArcRequest& r, const ArcResult& arc, double axis_travel) {
-  const double radius = std::hypot(r.start[0] - arc.center[0], r.start[1] - arc.center[1]);
-  const double a0 = std::atan2(r.start[1] - arc.center[1], r.start[0] - arc.center[0]);
-  const double a1 = std::atan2(r.end[1] - arc.center[1], r.end[0] - arc.center[0]);
-  double sweep = r.clockwise ? a0 - a1 : a1 - a0;
-  const double full = 2 * std::numbers::pi;
-  while (sweep <= 1e-12)
-    sweep += full;  // equal points: a full turn
-  sweep += (std::abs(arc.rotation) - 1) * full;
-  return std::hypot(radius * sweep, axis_travel);
+  const path_geometry::PlaneArc a = path_geometry::plane_arc(
+      r.start[0], r.start[1], r.end[0], r.end[1], arc.center[0], arc.center[1], arc.rotation);
+  return path_geometry::helix_length_mm(a.start_radius_mm, a.sweep_rad, axis_travel);
 }
 
 }  // namespace truecut::interp

@@ -8,6 +8,7 @@
 #include "arc_geometry.hpp"
 #include "system_parameters.hpp"
 #include "truecut/interp/operations.hpp"
+#include "truecut/interp/path_geometry.hpp"
 
 namespace truecut::interp {
 
@@ -35,21 +36,6 @@ std::string trim_left(std::string_view s) {
   while (i < s.size() && (s[i] == ' ' || s[i] == '\t'))
     ++i;
   return std::string(s.substr(i));
-}
-
-// Plane coordinates in ARC_FEED order: first, second, axis.
-void plane_axes(Plane p, int& first, int& second, int& axis) {
-  switch (p) {
-    case Plane::kXY:
-      first = 0, second = 1, axis = 2;
-      break;
-    case Plane::kXZ:
-      first = 2, second = 0, axis = 1;
-      break;
-    case Plane::kYZ:
-      first = 1, second = 2, axis = 0;
-      break;
-  }
 }
 
 // Centre-offset letters for the plane coordinates (XY: I J; XZ: K I; YZ: J K).
@@ -665,8 +651,8 @@ void BlockExecutor::straight(bool rapid, const Axes6& target) {
 
 void BlockExecutor::arc(bool clockwise, const Axes6& target) {
   const int code_col = codes_.g[kMotion] >= 0 ? codes_.g_column[kMotion] : 0;
-  int first, second, axis;
-  plane_axes(s_.plane, first, second, axis);
+  const path_geometry::PlaneAxes axes = path_geometry::plane_axes(s_.plane);
+  const int first = axes.first, second = axes.second, axis = axes.normal;
   char off1, off2, off_other;
   plane_offset_letters(s_.plane, off1, off2, off_other);
   int col = code_col;

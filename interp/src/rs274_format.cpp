@@ -3,6 +3,8 @@
 #include <cstdio>
 #include <type_traits>
 
+#include "truecut/interp/path_geometry.hpp"
+
 namespace truecut::interp {
 
 namespace {
@@ -63,9 +65,8 @@ std::string format_rs274(const CanonOp& op, const FormatOptions& options) {
         if constexpr (std::is_same_v<T, StraightTraverse> || std::is_same_v<T, StraightFeed>) {
           args = p.axes(c.end);
         } else if constexpr (std::is_same_v<T, ArcFeed>) {
-          int first = 0, second = 1, axis = 2;
-          if (c.plane == Plane::kXZ) first = 2, second = 0, axis = 1;
-          if (c.plane == Plane::kYZ) first = 1, second = 2, axis = 0;
+          const path_geometry::PlaneAxes axes = path_geometry::plane_axes(c.plane);
+          const int first = axes.first, second = axes.second, axis = axes.normal;
           args = p.num(c.end[first]) + ", " + p.num(c.end[second]) + ", " + p.num(c.center[first]) +
                  ", " + p.num(c.center[second]) + ", " + std::to_string(c.rotation) + ", " +
                  p.num(c.end[axis]) + ", " + p.num(c.end.a) + ", " + p.num(c.end.b) + ", " +

@@ -1,13 +1,13 @@
 // Canonical calls -> moves in the planning space.
 #include <cmath>
 #include <limits>
-#include <numbers>
 #include <stdexcept>
 
 #include "output_map.hpp"
 #include "path.hpp"
 #include "spline_piece.hpp"
 #include "truecut/interp/error.hpp"
+#include "truecut/interp/path_geometry.hpp"
 
 namespace truecut::interp::plan {
 
@@ -159,31 +159,21 @@ struct Builder {
 
   void add_arc(const ArcFeed& arc, const CallContext& ctx) {
     rebase(ctx);
-    int first = 0, second = 1;
-    if (arc.plane == Plane::kXZ) first = 2, second = 0;
-    if (arc.plane == Plane::kYZ) first = 1, second = 2;
+    const path_geometry::PlaneAxes axes = path_geometry::plane_axes(arc.plane);
+    const int first = axes.first, second = axes.second;
     const Vec5 end = to_planning(arc.end, ctx);
     // The centre in the plane, through the same offsets as the end point.
     Axes6 cprog = arc.end;
     cprog[first] = arc.center[first];
     cprog[second] = arc.center[second];
     const Vec5 cplan = to_planning(cprog, ctx);
-    const double sx = cur[first] - cplan[first], sy = cur[second] - cplan[second];
-    const double ex = end[first] - cplan[first], ey = end[second] - cplan[second];
-    const double r0 = std::hypot(sx, sy), r1 = std::hypot(ex, ey);
+    const path_geometry::PlaneArc geo =
+        path_geometry::plane_arc(cur[first], cur[second], end[first], end[second], cplan[first],
+                                 cplan[second], arc.rotation);
+    const double r0 = geo.start_radius_mm, r1 = geo.end_radius_mm;
     if (r0 < kMinLength) fail(ctx, "arc with zero radius");
-    const double two_pi = 2 * std::numbers::pi;
-    double sweep = std::atan2(ey, ex) - std::atan2(sy, sx);
-    const int turns = std::abs(arc.rotation);
-    if (arc.rotation > 0) {
-      while (sweep <= 1e-12)
-        sweep += two_pi;
-      sweep += two_pi * (turns - 1);
-    } else {
-      while (sweep >= -1e-12)
-        sweep -= two_pi;
-      sweep -= two_pi * (turns - 1);
-    }
+    const double sweep = geo.sweep_rad;
+    const double sx = cur[first] - cplan[first], sy = cur[second] - cplan[second];
     Move m = base_move(ctx, false);
     PathPiece& p = m.piece;
     p.kind = PathPiece::kArc;
@@ -207,7 +197,7 @@ struct Builder {
       off2 += d * d;
       if (i < 3) off_xyz2 += d * d;
     }
-    const double arc_len = 0.5 * (r0 + r1) * std::abs(sweep);
+    const double arc_len = path_geometry::plane_length_mm(geo);
     p.length = std::sqrt(arc_len * arc_len + off2);
     set_feed(m, ctx, std::sqrt(arc_len * arc_len + off_xyz2));
     out.moves.push_back(m);

@@ -18,6 +18,7 @@
 #include "tool_path.hpp"
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/operations.hpp"
+#include "truecut/interp/path_geometry.hpp"
 #include "truecut/interp/rewrite.hpp"
 
 namespace truecut::interp {
@@ -136,10 +137,10 @@ int pieces_for_step(const ToolPath& path, const ToolPath::Move& m, const CallCon
 // Pieces of an arc so that no chord's sagitta r (1 - cos(sweep / 2n))
 // exceeds the tolerance (r: the larger of the start and end radii).
 int pieces_for_chord(const ToolPath::Move& m, const RewriteOptions& o) {
-  const double r = std::max(m.r0, m.r1);
-  if (!m.arc || !(r > o.chord_tolerance_mm)) return 1;
-  const double max_piece_rad = 2.0 * std::acos(1.0 - o.chord_tolerance_mm / r);
-  return std::max(1, static_cast<int>(std::ceil(std::fabs(m.sweep_rad) / max_piece_rad - 1e-9)));
+  if (!m.arc) return 1;
+  return path_geometry::arc_pieces_for_chord(
+      std::max(m.plane.start_radius_mm, m.plane.end_radius_mm), m.plane.sweep_rad,
+      o.chord_tolerance_mm);
 }
 
 struct PlannedLine {               // what replaces one program line

@@ -1,7 +1,6 @@
 #include "tool_path.hpp"
 
 #include <cmath>
-#include <numbers>
 
 namespace truecut::interp::rewrite {
 
@@ -117,48 +116,21 @@ ToolPath::Move ToolPath::arc_to(const ArcFeed& arc, const CallContext& ctx) cons
   m.arc = true;
   m.start = cur_;
   m.end = to_planning(arc.end, ctx);
-  if (arc.plane == Plane::kXZ) m.first = 2, m.second = 0;
-  if (arc.plane == Plane::kYZ) m.first = 1, m.second = 2;
+  m.axes = path_geometry::plane_axes(arc.plane);
+  const int first = m.axes.first, second = m.axes.second;
   Axes6 cprog = arc.end;
-  cprog[m.first] = arc.center[m.first];
-  cprog[m.second] = arc.center[m.second];
-  m.centre = to_planning(cprog, ctx);
-  const double sx = cur_[m.first] - m.centre[m.first], sy = cur_[m.second] - m.centre[m.second];
-  const double ex = m.end[m.first] - m.centre[m.first], ey = m.end[m.second] - m.centre[m.second];
-  m.r0 = std::hypot(sx, sy);
-  m.r1 = std::hypot(ex, ey);
-  m.start_angle = std::atan2(sy, sx);
-  const double two_pi = 2 * std::numbers::pi;
-  double sweep = std::atan2(ey, ex) - m.start_angle;
-  const int turns = std::abs(arc.rotation);
-  if (arc.rotation > 0) {
-    while (sweep <= 1e-12)
-      sweep += two_pi;
-    sweep += two_pi * (turns - 1);
-  } else {
-    while (sweep >= -1e-12)
-      sweep -= two_pi;
-    sweep -= two_pi * (turns - 1);
-  }
-  m.sweep_rad = sweep;
+  cprog[first] = arc.center[first];
+  cprog[second] = arc.center[second];
+  const Vec5 centre = to_planning(cprog, ctx);
+  m.plane = path_geometry::plane_arc(cur_[first], cur_[second], m.end[first], m.end[second],
+                                     centre[first], centre[second], arc.rotation);
   return m;
 }
 
 Vec5 ToolPath::at(const Move& m, double f) {
   if (f >= 1.0) return m.end;
-  Vec5 out{};
-  if (!m.arc) {
-    for (int i = 0; i < 5; ++i)
-      out[i] = m.start[i] + f * (m.end[i] - m.start[i]);
-    return out;
-  }
-  const double th = m.start_angle + m.sweep_rad * f;
-  const double r = m.r0 + (m.r1 - m.r0) * f;
-  for (int i = 0; i < 5; ++i)
-    out[i] = m.start[i] + f * (m.end[i] - m.start[i]);
-  out[m.first] = m.centre[m.first] + r * std::cos(th);
-  out[m.second] = m.centre[m.second] + r * std::sin(th);
-  return out;
+  if (!m.arc) return path_geometry::line_point_at(m.start, m.end, f, 5);
+  return path_geometry::arc_point_at(m.axes, m.plane, m.start, m.end, f, 5);
 }
 
 }  // namespace truecut::interp::rewrite

@@ -11,6 +11,7 @@
 
 #include "neighbours.hpp"
 #include "truecut/interp/canon.hpp"
+#include "truecut/interp/path_geometry.hpp"
 #include "truecut/rt/core/kinematics_ac.hpp"
 
 namespace truecut::interp::rewrite {
@@ -44,10 +45,9 @@ class ToolPath {
   struct Move {
     bool arc = false;
     Vec5 start{}, end{};
-    // arc: centre (in-plane), plane axes, radii, sweep
-    int first = 0, second = 1;
-    Vec5 centre{};
-    double r0 = 0, r1 = 0, sweep_rad = 0, start_angle = 0;
+    // arc: its plane axes, and the arc in their coordinates
+    path_geometry::PlaneAxes axes;
+    path_geometry::PlaneArc plane;
   };
   Move line_to(const Axes6& end, const CallContext& ctx) const;
   Move arc_to(const ArcFeed& arc, const CallContext& ctx) const;

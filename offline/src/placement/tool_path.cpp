@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <variant>
 
+#include "truecut/interp/path_geometry.hpp"
 #include "truecut/interp/spline.hpp"
 
 namespace truecut::offline {
@@ -56,7 +57,8 @@ class Sampler {
         spline_.push_back(vec5(end));
       } else {
         const Axes6 start = cur_;
-        emit_move(c.context, start, end, [&](double s) { return lerp(start, end, s); });
+        emit_move(c.context, start, end,
+                  [&](double s) { return interp::path_geometry::line_point_at(start, end, s, 6); });
       }
       cur_ = end;
     } else if (const auto* a = std::get_if<interp::ArcFeed>(&c.op)) {
@@ -82,12 +84,6 @@ class Sampler {
     p.y *= k;
     p.z *= k;
     return p;
-  }
-  static Axes6 lerp(const Axes6& a, const Axes6& b, double s) {
-    Axes6 r;
-    for (int i = 0; i < 6; ++i)
-      r[i] = a[i] + (b[i] - a[i]) * s;
-    return r;
   }
   static interp::Vec5 vec5(const Axes6& p) { return {p.x, p.y, p.z, p.a, p.c}; }
 
@@ -139,36 +135,17 @@ class Sampler {
   }
 
   void emit_arc(const interp::ArcFeed& arc, const interp::CallContext& ctx, double k) {
-    int first = 0, second = 1;
-    if (arc.plane == interp::Plane::kXZ) first = 2, second = 0;
-    if (arc.plane == interp::Plane::kYZ) first = 1, second = 2;
+    const interp::path_geometry::PlaneAxes axes = interp::path_geometry::plane_axes(arc.plane);
     const Axes6 start = cur_;
     const Axes6 end = to_mm(arc.end, k);
-    const double cu = arc.center[first] * k, cv = arc.center[second] * k;
-    const double sx = start[first] - cu, sy = start[second] - cv;
-    const double ex = end[first] - cu, ey = end[second] - cv;
-    const double r0 = std::hypot(sx, sy), r1 = std::hypot(ex, ey);
-    const double a0 = std::atan2(sy, sx);
-    double sweep = std::atan2(ey, ex) - a0;
-    const int turns = std::max(1, std::abs(arc.rotation));
-    const double two_pi = 2 * std::numbers::pi;
-    if (arc.rotation > 0) {
-      while (sweep <= 1e-12)
-        sweep += two_pi;
-      sweep += two_pi * (turns - 1);
-    } else {
-      while (sweep >= -1e-12)
-        sweep -= two_pi;
-      sweep -= two_pi * (turns - 1);
-    }
+    const interp::path_geometry::PlaneArc geo = interp::path_geometry::plane_arc(
+        start[axes.first], start[axes.second], end[axes.first], end[axes.second],
+        arc.center[axes.first] * k, arc.center[axes.second] * k, arc.rotation);
     cur_ = end;
-    if (r0 < 1e-9) return;  // the interpreter rejects these; nothing to cut
+    if (geo.start_radius_mm < 1e-9) return;  // the interpreter rejects these; nothing to cut
     emit_move(ctx, start, end, [&](double s) {
-      Axes6 p = lerp(start, end, s);  // off-plane axes and rotaries: linear
-      const double r = r0 + (r1 - r0) * s, ang = a0 + sweep * s;
-      p[first] = cu + r * std::cos(ang);
-      p[second] = cv + r * std::sin(ang);
-      return p;
+      // off-plane axes and rotaries: linear
+      return interp::path_geometry::arc_point_at(axes, geo, start, end, s, 6);
     });
   }
 
