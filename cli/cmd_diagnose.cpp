@@ -3,7 +3,6 @@
 // program that machined the part (surface mode); docs/diagnosis.md.
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <string>
 #include <vector>
 
@@ -16,6 +15,7 @@
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/tool_table.hpp"
 #include "truecut/offline/stl_io.hpp"
+#include "truecut/rt/atomic_write.hpp"
 #include "truecut/sim/machine_description.hpp"
 #include "truecut/sim/measure/part_surfaces.hpp"
 
@@ -85,39 +85,6 @@ const char* kDiagnoseHelp =
     "  --component-path DIR    also search DIR for components\n"
     "  --help                  this text\n";
 
-void write_all(const std::vector<std::pair<fs::path, std::string>>& files) {
-  std::vector<fs::path> temps;
-  auto cleanup = [&] {
-    std::error_code ec;
-    for (const auto& t : temps)
-      fs::remove(t, ec);
-  };
-  for (const auto& [path, text] : files) {
-    if (fs::exists(path) && !fs::is_regular_file(path)) {
-      cleanup();
-      throw std::runtime_error(path.string() + " exists and is not a regular file");
-    }
-    fs::path tmp = path;
-    tmp += ".tmp";
-    temps.push_back(tmp);
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out.write(text.data(), std::streamsize(text.size()));
-    out.close();
-    if (!out) {
-      cleanup();
-      throw std::runtime_error("cannot write " + tmp.string());
-    }
-  }
-  for (std::size_t i = 0; i < files.size(); ++i) {
-    std::error_code ec;
-    fs::rename(temps[i], files[i].first, ec);
-    if (ec) {
-      cleanup();
-      throw std::runtime_error("cannot rename " + temps[i].string() + ": " + ec.message());
-    }
-  }
-}
-
 // Input that cannot be diagnosed: the message, exit 2.
 int bad_input(const std::exception& e) {
   std::fprintf(stderr, "truecut diagnose: %s\n", e.what());
@@ -132,9 +99,10 @@ void write_outputs(const std::string& out_dir, const std::string& json,
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) throw std::runtime_error("cannot create " + dir.string() + ": " + ec.message());
-  write_all({{dir / "diagnosis.json", json},
-             {dir / "fitted_machine.json", sim::format_machine_description(fitted)},
-             {dir / "diagnosis.html", html}});
+  rt::write_files_atomically(
+      {{dir / "diagnosis.json", json},
+       {dir / "fitted_machine.json", sim::format_machine_description(fitted)},
+       {dir / "diagnosis.html", html}});
   std::fputs(summary.c_str(), stdout);
   std::printf("wrote %s, %s and %s\n", (dir / "diagnosis.json").c_str(),
               (dir / "fitted_machine.json").c_str(), (dir / "diagnosis.html").c_str());

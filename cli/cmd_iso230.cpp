@@ -2,7 +2,6 @@
 // ISO 230-4 circular-test evaluations of a recording (docs/iso230.md).
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <optional>
 #include <string>
 #include <vector>
@@ -11,6 +10,8 @@
 #include "commands.hpp"
 #include "truecut/analysis/iso230_report.hpp"
 #include "truecut/analysis/recording.hpp"
+#include "truecut/rt/atomic_write.hpp"
+#include "truecut/rt/number_format.hpp"
 
 namespace truecut::cli {
 namespace {
@@ -70,42 +71,9 @@ std::string columns_of(const analysis::Recording& rec) {
   return s;
 }
 
-// Writes every file as NAME.tmp first and renames only when all are
-// complete, so a failure leaves none of them half-written.
-void write_all(const std::vector<std::pair<fs::path, std::string>>& files) {
-  std::vector<fs::path> temps;
-  auto cleanup = [&] {
-    std::error_code ec;
-    for (const auto& t : temps)
-      fs::remove(t, ec);
-  };
-  for (const auto& [path, text] : files) {
-    fs::path tmp = path;
-    tmp += ".tmp";
-    temps.push_back(tmp);
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out.write(text.data(), std::streamsize(text.size()));
-    out.close();
-    if (!out) {
-      cleanup();
-      throw std::runtime_error("cannot write " + tmp.string());
-    }
-  }
-  for (std::size_t i = 0; i < files.size(); ++i) {
-    std::error_code ec;
-    fs::rename(temps[i], files[i].first, ec);
-    if (ec) {
-      cleanup();
-      throw std::runtime_error("cannot rename " + temps[i].string() + ": " + ec.message());
-    }
-  }
-}
-
 std::string mm(const std::optional<double>& v) {
   if (!v) return "-";
-  char b[32];
-  std::snprintf(b, sizeof b, "%.4f", *v);
-  return b;
+  return rt::format_printf("%.4f", *v);
 }
 
 }  // namespace
@@ -219,8 +187,8 @@ int cmd_iso230(const std::vector<std::string>& argv) {
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) throw std::runtime_error("cannot create " + dir.string() + ": " + ec.message());
-  write_all({{dir / "iso230.json", analysis::iso230_json(report)},
-             {dir / "iso230.html", analysis::iso230_html(report)}});
+  rt::write_files_atomically({{dir / "iso230.json", analysis::iso230_json(report)},
+                              {dir / "iso230.html", analysis::iso230_html(report)}});
 
   for (const auto& ax : report.axes) {
     const char* u = ax.rotary ? "deg" : "mm";

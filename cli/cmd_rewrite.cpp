@@ -1,7 +1,6 @@
 // truecut rewrite IN.ngc --matrix COMP.csv | --field FIELD.tcf --operation NAME ...:
 // the G-code rewriting fallback (docs/rewrite.md).
 #include <cstdio>
-#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -13,8 +12,10 @@
 #include "commands.hpp"
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/rewrite.hpp"
+#include "truecut/interp/sha256.hpp"
 #include "truecut/rt/atomic_write.hpp"
 #include "truecut/rt/field_file.hpp"
+#include "truecut/rt/number_format.hpp"
 #include "truecut/sim/machine_description.hpp"
 
 namespace truecut::cli {
@@ -113,21 +114,6 @@ std::string json_string(const std::string& s) {
     }
   }
   return o + "\"";
-}
-
-std::string number(double v) {
-  char b[40];
-  std::snprintf(b, sizeof b, "%.17g", v);
-  return b;
-}
-
-std::string utc_now() {
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char b[32];
-  std::strftime(b, sizeof b, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return b;
 }
 
 struct Input {
@@ -256,7 +242,7 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
 
   const interp::RewriteSummary& s = result.summary;
   std::string j = "{\n  \"truecut_rewrite_audit\": 1,\n";
-  j += "  \"created\": " + json_string(utc_now()) + ",\n";
+  j += "  \"created\": " + json_string(rt::utc_timestamp_now()) + ",\n";
   j += "  \"frame\": \"workpiece\",\n  \"units\": \"mm\",\n  \"inputs\": [\n";
   for (size_t i = 0; i < inputs.size(); ++i)
     j += "    {\"role\": " + json_string(inputs[i].role) +
@@ -266,11 +252,13 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
          (i + 1 < inputs.size() ? ",\n" : "\n");
   j += "  ],\n  \"options\": {\"operation\": " + json_string(o.operation) +
        ", \"type\": " + json_string(interp::to_string(o.type)) +
-       ", \"tool_radius_mm\": " + number(o.tool_radius_mm) + ", \"step_mm\": " + number(o.step_mm) +
-       ", \"reach_mm\": " + number(s.reach_mm) +
+       ", \"tool_radius_mm\": " + rt::format_printf("%.17g", o.tool_radius_mm) +
+       ", \"step_mm\": " + rt::format_printf("%.17g", o.step_mm) +
+       ", \"reach_mm\": " + rt::format_printf("%.17g", s.reach_mm) +
        ", \"placement\": " + json_string(interp::to_string(o.placement)) +
-       ", \"cutting_length_mm\": " + number(o.cutting_length_mm) +
-       ", \"smoothing_radius_mm\": " + number(o.smoothing_radius_mm) + ", \"surfaces\": [";
+       ", \"cutting_length_mm\": " + rt::format_printf("%.17g", o.cutting_length_mm) +
+       ", \"smoothing_radius_mm\": " + rt::format_printf("%.17g", o.smoothing_radius_mm) +
+       ", \"surfaces\": [";
   for (size_t i = 0; i < o.surfaces.size(); ++i)
     j += (i ? ", " : "") + std::to_string(o.surfaces[i]);
   j += "], \"decimals\": " + std::to_string(o.decimals) +
@@ -286,8 +274,8 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
        ", \"blend_points\": [" + std::to_string(s.blend_points[0]) + ", " +
        std::to_string(s.blend_points[1]) + ", " + std::to_string(s.blend_points[2]) + ", " +
        std::to_string(s.blend_points[3]) +
-       "], \"max_compensation_mm\": " + number(s.max_compensation_mm) +
-       ", \"mean_compensation_mm\": " + number(s.mean_compensation_mm) +
+       "], \"max_compensation_mm\": " + rt::format_printf("%.17g", s.max_compensation_mm) +
+       ", \"mean_compensation_mm\": " + rt::format_printf("%.17g", s.mean_compensation_mm) +
        ", \"lines_in\": " + std::to_string(s.lines_in) +
        ", \"lines_out\": " + std::to_string(s.lines_out) + "}\n}\n";
 

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "subprocess.hpp"
+#include "truecut/rt/number_format.hpp"
 #include "truecut/sim/part_file.hpp"
 
 namespace truecut::cli {
@@ -48,12 +49,6 @@ PartInfo read_part_info(const fs::path& file) {
 // the larger parts.
 double per_part(double value, const std::string& part, double implant, double larger) {
   return value > 0 ? value : part == "implant" ? implant : larger;
-}
-
-std::string num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", v);
-  return buf;
 }
 
 class Steps {
@@ -109,14 +104,16 @@ DemoPartResult run_demo_part(const std::string& part, const DemoOptions& o) {
   r.part = part;
   r.dir = fs::absolute(o.out_dir / part);
   Steps s(r.dir, part);
-  const std::string sigma = num(o.sigma_um), cmm_sigma = num(o.cmm_sigma_um),
-                    spacing = num(per_part(o.cmm_spacing_mm, part, 1.0, 2.0));
+  const std::string sigma = rt::format_printf("%g", o.sigma_um),
+                    cmm_sigma = rt::format_printf("%g", o.cmm_sigma_um),
+                    spacing = rt::format_printf("%g", per_part(o.cmm_spacing_mm, part, 1.0, 2.0));
   uint64_t seed = o.seed * 100;
   auto next_seed = [&] { return std::to_string(++seed); };
 
-  s.run("generate the part", {"part", part, "--out", "part", "--mesh-edge",
-                              num(per_part(o.mesh_edge_mm, part, 0.5, 1.0)), "--stepover",
-                              num(per_part(o.stepover_mm, part, 0.5, 1.0))});
+  s.run("generate the part",
+        {"part", part, "--out", "part", "--mesh-edge",
+         rt::format_printf("%g", per_part(o.mesh_edge_mm, part, 0.5, 1.0)), "--stepover",
+         rt::format_printf("%g", per_part(o.stepover_mm, part, 0.5, 1.0))});
   const PartInfo info = read_part_info(r.dir / "part" / "part.json");
   r.surfaces = info.surfaces;
   const std::vector<std::string> part_files{"--nominal",      "part/nominal.stl", "--part",
@@ -128,8 +125,13 @@ DemoPartResult run_demo_part(const std::string& part, const DemoOptions& o) {
     const double dexel = o.dexel_spacing_mm > 0 ? o.dexel_spacing_mm
                          : part == "implant"    ? 0.1
                                                 : 0.3;
-    std::vector<std::string> args{"run", machine_file,      program,   "--out",
-                                  key,   "--dexel-spacing", num(dexel)};
+    std::vector<std::string> args{"run",
+                                  machine_file,
+                                  program,
+                                  "--out",
+                                  key,
+                                  "--dexel-spacing",
+                                  rt::format_printf("%g", dexel)};
     args.insert(args.end(), part_files.begin(), part_files.end());
     if (!field.empty()) args.insert(args.end(), {"--field", field});
     s.run("machine (" + title + ")", args);
@@ -159,13 +161,13 @@ DemoPartResult run_demo_part(const std::string& part, const DemoOptions& o) {
                                   "--part",
                                   "part/part.json",
                                   "--resolution",
-                                  num(o.field_resolution_mm),
+                                  rt::format_printf("%g", o.field_resolution_mm),
                                   "--out",
                                   field_dir};
     const double spacing = o.point_spacing_mm > 0 ? o.point_spacing_mm
                            : part == "implant"    ? 0.1
                                                   : 0.0;
-    if (spacing > 0) args.insert(args.end(), {"--spacing", num(spacing)});
+    if (spacing > 0) args.insert(args.end(), {"--spacing", rt::format_printf("%g", spacing)});
     // Register on the surfaces the compensation does not touch, as a shop
     // registers on datums: on all surfaces, ICP takes part of the real error
     // for a motion of the scan (the implant shaft's oversize, larger at its
@@ -181,7 +183,7 @@ DemoPartResult run_demo_part(const std::string& part, const DemoOptions& o) {
       datum += (datum.empty() ? "" : ",") + std::to_string(sf.id);
     }
     if (!datum.empty()) args.insert(args.end(), {"--datum", datum});
-    args.insert(args.end(), {"--edge-exclusion", num(o.edge_exclusion_mm)});
+    args.insert(args.end(), {"--edge-exclusion", rt::format_printf("%g", o.edge_exclusion_mm)});
     if (!base.empty()) args.insert(args.end(), {"--base", base});
     // The error is the machine's: measured against what the program leaves
     // on the error-free machine (scallops, cusps), not against the nominal.
@@ -215,8 +217,9 @@ DemoPartResult run_demo_part(const std::string& part, const DemoOptions& o) {
       const double step_mm = std::max(0.5, 1.2 * info.point_spacing_mm);
       s.run("rewrite operation " + op.name,
             {"rewrite", program, "--field", "field_1/field.tcf", "--operation", op.name,
-             "--tool-radius", num(tool.radius_mm), "--type", rewrite_type(op, tool), "--step",
-             num(step_mm), "--tools", "part/tools.tbl", "--out", out});
+             "--tool-radius", rt::format_printf("%g", tool.radius_mm), "--type",
+             rewrite_type(op, tool), "--step", rt::format_printf("%g", step_mm), "--tools",
+             "part/tools.tbl", "--out", out});
       program = out;
     }
     machine("rewrite", "G-code rewrite", program, "");

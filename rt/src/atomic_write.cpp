@@ -138,4 +138,14 @@ void StagedFiles::commit() {
     sync_directory_of(t);
 }
 
+void write_files_atomically(const std::vector<std::pair<fs::path, std::string>>& files) {
+  std::vector<fs::path> targets;
+  for (const auto& f : files)
+    targets.push_back(f.first);
+  StagedFiles staged(std::move(targets), ".tmp");
+  for (std::size_t i = 0; i < files.size(); ++i)
+    staged.write(i, files[i].second);
+  staged.commit();
+}
+
 }  // namespace truecut::rt

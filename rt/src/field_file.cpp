@@ -3,6 +3,7 @@
 #include "truecut/rt/field_file.hpp"
 
 #include "truecut/rt/atomic_write.hpp"
+#include "truecut/rt/number_format.hpp"
 
 #include <algorithm>
 #include <bit>
@@ -10,7 +11,6 @@
 #include <charconv>
 #include <cmath>
 #include <cstring>
-#include <ctime>
 #include <fstream>
 #include <iterator>
 #include <map>
@@ -65,19 +65,6 @@ std::optional<T> parse_number(std::string_view word, int base = 10) {
   return value;
 }
 
-std::string format_double(double v) {
-  char buf[64];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);  // shortest exact round trip
-  return std::string(buf, r.ptr);
-}
-
-std::string hex64(uint64_t v) {
-  char buf[17];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v, 16);
-  std::string digits(buf, r.ptr);
-  return std::string(16 - digits.size(), '0') + digits;
-}
-
 // A short, printable rendering of untrusted text for error messages.
 std::string printable(std::string_view s) {
   std::string out = "'";
@@ -97,15 +84,6 @@ double get_le(const char* p) {
   for (int b = 7; b >= 0; --b)
     bits = (bits << 8) | static_cast<unsigned char>(p[b]);
   return std::bit_cast<double>(bits);
-}
-
-std::string utc_now_iso8601() {
-  const std::time_t now = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&now, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
 }
 
 // ----------------------------------------------------------------- header
@@ -296,7 +274,7 @@ class Decoder {
     crc.update(bytes_.substr(h.payload_offset));
     if (crc.value() != *stated)
       fail("checksum mismatch: header says crc64 " + std::string(text) +
-           ", header and payload give " + hex64(crc.value()) + "; the file is corrupted");
+           ", header and payload give " + format_hex64(crc.value()) + "; the file is corrupted");
   }
 
   CorrectionField make_field(const FieldGrid& grid, const std::vector<int32_t>& tools,
@@ -361,7 +339,7 @@ std::string encode_field_file(const CorrectionField& field, const FieldFileInfo&
   check_one_line("source", info.source);
   const FieldGrid& g = field.grid();
   auto triple = [](const Eigen::Vector3d& v) {
-    return format_double(v.x()) + " " + format_double(v.y()) + " " + format_double(v.z());
+    return format_shortest(v.x()) + " " + format_shortest(v.y()) + " " + format_shortest(v.z());
   };
   std::string tools;
   for (const int32_t t : field.tools())
@@ -388,13 +366,13 @@ std::string encode_field_file(const CorrectionField& field, const FieldFileInfo&
   header += "interpolation: " + std::string(to_string(field.interpolation())) + "\n";
   header += "channels: " + std::string(kChannels) + "\n";
   header += "encoding: " + std::string(kEncoding) + "\n";
-  header += "created: " + (info.created.empty() ? utc_now_iso8601() : info.created) + "\n";
+  header += "created: " + (info.created.empty() ? utc_timestamp_now() : info.created) + "\n";
   header += "source: " + info.source + "\n";
   header += "payload_bytes: " + std::to_string(payload.size()) + "\n";
   Crc64 crc;
   crc.update(header);
   crc.update(payload);
-  header += "crc64: " + hex64(crc.value()) + "\n";
+  header += "crc64: " + format_hex64(crc.value()) + "\n";
   header += std::string(kEndHeader) + "\n";
   return header + payload;
 }

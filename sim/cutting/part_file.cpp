@@ -14,7 +14,7 @@ namespace {
 
 [[noreturn]] void fail(const std::filesystem::path& file, const std::string& key,
                        const std::string& message) {
-  throw PartFileError(file.string() + ": " + key + ": " + message);
+  throw PartFileError(file.string(), key, message, PartFileError::Wording::kPlain);
 }
 
 }  // namespace
@@ -24,8 +24,8 @@ PartStock read_part_stock(const std::filesystem::path& part_json) {
   try {
     p = read_part_file(part_json,
                        kPartVersion | kPartStock | kPartSurfaces | kPartTriangleSurfaceIds);
-  } catch (const sim::PartFileError& e) {
-    if (e.key().empty()) throw PartFileError(e.what());
+  } catch (const PartFileError& e) {
+    if (e.key().empty()) throw;
     fail(part_json, e.key(), e.detail());  // this library's "FILE: key: message"
   }
   PartStock out;

@@ -1,17 +1,15 @@
 #include "json_node.hpp"
 
 #include <cmath>
-#include <cstdio>
 #include <set>
 
+#include "truecut/rt/number_format.hpp"
 #include "truecut/sim/machine_description.hpp"
 
 namespace truecut::sim::detail {
 
 std::string format_number(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", v);
-  return buf;
+  return rt::format_printf("%g", v);
 }
 
 void JsonNode::fail(const std::string& message) const {

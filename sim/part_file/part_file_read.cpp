@@ -14,8 +14,11 @@ namespace {
 
 using Json = nlohmann::json;
 
-std::string what_text(const std::string& file, const std::string& key, const std::string& detail) {
-  return key.empty() ? file + ": " + detail : file + ": key '" + key + "': " + detail;
+std::string what_text(const std::string& file, const std::string& key, const std::string& detail,
+                      PartFileError::Wording wording) {
+  if (key.empty()) return file + ": " + detail;
+  if (wording == PartFileError::Wording::kPlain) return file + ": " + key + ": " + detail;
+  return file + ": key '" + key + "': " + detail;
 }
 
 class Reader {
@@ -233,8 +236,8 @@ PartMeshSummary read_mesh(const Reader& r, const Json& j) {
 
 }  // namespace
 
-PartFileError::PartFileError(std::string file, std::string key, std::string detail)
-    : std::runtime_error(what_text(file, key, detail)),
+PartFileError::PartFileError(std::string file, std::string key, std::string detail, Wording wording)
+    : std::runtime_error(what_text(file, key, detail, wording)),
       file_(std::move(file)),
       key_(std::move(key)),
       detail_(std::move(detail)) {}

@@ -173,5 +173,46 @@ TEST(StagedFiles, RefusesADeviceAmongTheTargetsBeforeWritingAny) {
   EXPECT_TRUE(listing(dir).empty());
 }
 
+TEST(WriteFilesAtomically, WritesAllTogether) {
+  const fs::path dir = scratch_dir();
+  write_file_atomically(dir / "a.json", "old a");
+  write_files_atomically({{dir / "a.json", "new a"}, {dir / "b.html", "new b"}});
+  EXPECT_EQ("new a", read_file(dir / "a.json"));
+  EXPECT_EQ("new b", read_file(dir / "b.html"));
+  EXPECT_EQ((std::set<std::string>{"a.json", "b.html"}), listing(dir));
+}
+
+// One of several files fails (the second, past the file size limit): the
+// first target keeps its old bytes, the second does not appear, and no
+// temporary is left.
+TEST(WriteFilesAtomically, OneFailingFileLeavesNoPartialOutput) {
+  const fs::path dir = scratch_dir();
+  write_file_atomically(dir / "a.json", "old a");
+  try {
+    const FileSizeLimit limit(8);
+    write_files_atomically({{dir / "a.json", "new"}, {dir / "b.html", std::string(4096, 'x')}});
+    FAIL() << "a write past the file size limit succeeded";
+  } catch (const FileWriteError& e) {
+    EXPECT_NE(std::string::npos, std::string(e.what()).find("b.html.tmp: cannot write"))
+        << e.what();
+  }
+  EXPECT_EQ("old a", read_file(dir / "a.json"));
+  EXPECT_EQ(std::set<std::string>{"a.json"}, listing(dir));
+}
+
+TEST(WriteFilesAtomically, RefusesANonRegularTargetBeforeWritingAny) {
+  const fs::path dir = scratch_dir();
+  fs::create_directory(dir / "b.html");
+  try {
+    write_files_atomically({{dir / "a.json", "a"}, {dir / "b.html", "b"}});
+    FAIL() << "replaced a folder";
+  } catch (const FileWriteError& e) {
+    EXPECT_EQ((dir / "b.html").string() + ": exists and is not a regular file; not replaced",
+              std::string(e.what()));
+  }
+  EXPECT_TRUE(fs::is_directory(dir / "b.html"));
+  EXPECT_EQ(std::set<std::string>{"b.html"}, listing(dir));
+}
+
 }  // namespace
 }  // namespace truecut::rt

@@ -167,5 +167,19 @@ TEST(PartFile, KeysACallerDoesNotNeedMayBeAbsent) {
   EXPECT_EQ(0, t.tool(3)->flute_length_mm);
 }
 
+// The one error type in both wordings: the reader's, and the cutting
+// model's checks ("FILE: KEY: DETAIL", truecut/sim/cutting/part_file.hpp).
+TEST(PartFile, OneErrorTypeTwoWordings) {
+  const PartFileError quoted("p.json", "stock", "missing");
+  EXPECT_EQ("p.json: key 'stock': missing", std::string(quoted.what()));
+  const PartFileError plain("p.json", "stock", "missing", PartFileError::Wording::kPlain);
+  EXPECT_EQ("p.json: stock: missing", std::string(plain.what()));
+  EXPECT_EQ("stock", plain.key());
+  EXPECT_EQ("missing", plain.detail());
+  EXPECT_EQ("p.json: cannot open",
+            std::string(
+                PartFileError("p.json", "", "cannot open", PartFileError::Wording::kPlain).what()));
+}
+
 }  // namespace
 }  // namespace truecut::sim

@@ -10,16 +10,11 @@
 #include "tcp_stage.hpp"
 #include "trace.hpp"
 #include "truecut/analysis/diagnosis/diagnosis.hpp"
+#include "truecut/rt/number_format.hpp"
 
 namespace truecut::analysis::diagnosis {
 
 namespace {
-
-std::string fmt(const char* f, double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, f, v);
-  return b;
-}
 
 struct Masks {
   std::vector<char> train, heldout, valid;  // valid: inside the delay margins, no glitch
@@ -408,11 +403,11 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
   // Align: a logging delay and the effects are fitted as competing
   // hypotheses, so that neither masquerades as the other.
   const double step = std::max(dt / 4, dmax / 400);
-  say("searching a logging delay within ±" + fmt("%.4g", dmax) + " s");
+  say("searching a logging delay within ±" + rt::format_printf("%.4g", dmax) + " s");
   const double d_a = best_delay(tr, sim0, masks.train, w, sw, -dmax, dmax, step);
   std::vector<Hypothesis> hyps;
   auto fit_at = [&](double d) {
-    say("fitting with delay " + fmt("%.5g", d) + " s");
+    say("fitting with delay " + rt::format_printf("%.5g", d) + " s");
     Hypothesis h;
     h.delay_s = d;
     FitContext ctx = context(tr, masks.train, w, sw, d, o);
@@ -454,9 +449,9 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
            (h.fit.k + (h.delay_s != 0.0 ? 1 : 0)) * std::log(n_eff);
   };
   for (const auto& h : hyps)
-    say("hypothesis delay " + fmt("%.5g", h.delay_s) +
+    say("hypothesis delay " + rt::format_printf("%.5g", h.delay_s) +
         " s: " + std::to_string(h.fit.selected.size()) + " effects, weighted RSS " +
-        fmt("%.6g", h.fit.rss) + ", BIC " + fmt("%.6g", bic(h)));
+        rt::format_printf("%.6g", h.fit.rss) + ", BIC " + rt::format_printf("%.6g", bic(h)));
   std::size_t chosen = 0;
   for (std::size_t i = 1; i < hyps.size(); ++i)
     if (bic(hyps[i]) < bic(hyps[chosen])) chosen = i;
@@ -498,12 +493,12 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
     for (std::size_t e = 0; e < hyps[i].fit.selected.size(); ++e) {
       alt += (alt.empty() ? "" : "; ") + hyps[i].fit.selected[e].group;
       for (const auto& p : hyps[i].fit.per_effect[e])
-        alt += " " + p.name + "=" + fmt("%.4g", p.value);
+        alt += " " + p.name + "=" + rt::format_printf("%.4g", p.value);
     }
-    res.delay_note = "a delay of " + fmt("%.5g", hyps[i].delay_s) + " s" +
+    res.delay_note = "a delay of " + rt::format_printf("%.5g", hyps[i].delay_s) + " s" +
                      (alt.empty() ? std::string() : " with " + alt) +
-                     " explains the data almost as well (ΔBIC " + fmt("%.3g", d) + ", RSS ratio " +
-                     fmt("%.4g", hyps[i].fit.rss / H.fit.rss) + ")";
+                     " explains the data almost as well (ΔBIC " + rt::format_printf("%.3g", d) +
+                     ", RSS ratio " + rt::format_printf("%.4g", hyps[i].fit.rss / H.fit.rss) + ")";
     break;
   }
   const ModelFit& fit = H.fit;
@@ -692,13 +687,13 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
       if (!tr.meas[j]) encoder_only += (encoder_only.empty() ? "" : ", ") + ax;
       if (const auto* sl = base.effects.servo_lag.active(j); sl && dt > 1.0 / sl->kv_per_s)
         res.notes.push_back(
-            ax + ": sampled every " + fmt("%.4g", dt * 1e3) +
+            ax + ": sampled every " + rt::format_printf("%.4g", dt * 1e3) +
             " ms, slower than the believed servo loop's time constant 1/Kv = " +
-            fmt("%.3g", 1e3 / sl->kv_per_s) +
+            rt::format_printf("%.3g", 1e3 / sl->kv_per_s) +
             " ms: its transients and a friction spike fall between the samples, so an "
             "adjustment of servo_lag or reversal_spike is claimed only when it moves the residual "
             "by at least the noise floor; record at least every " +
-            fmt("%.3g", 1e3 / sl->kv_per_s) + " ms to see them");
+            rt::format_printf("%.3g", 1e3 / sl->kv_per_s) + " ms to see them");
     }
     if (!never_moves.empty())
       res.notes.push_back(never_moves + ": the command never moves, nothing to test there");
@@ -741,7 +736,8 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
       res.verdict += " " + e.effect + (e.axis.empty() ? "" : "(" + e.axis + ")");
   }
   if (std::abs(res.delay_s) > 0)
-    res.verdict += "; logging delay " + fmt("%.4g", res.delay_s * 1e3) + " ms removed";
+    res.verdict +=
+        "; logging delay " + rt::format_printf("%.4g", res.delay_s * 1e3) + " ms removed";
   return res;
 }
 

@@ -7,6 +7,8 @@
 #include <map>
 #include <set>
 
+#include "truecut/rt/number_format.hpp"
+
 namespace truecut::analysis::diagnosis {
 
 namespace {
@@ -15,12 +17,6 @@ double median(std::vector<double> v) {
   if (v.empty()) return 0.0;
   std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
   return v[v.size() / 2];
-}
-
-std::string fmt(const char* f, double a, double b = 0) {
-  char buf[96];
-  std::snprintf(buf, sizeof buf, f, a, b);
-  return buf;
 }
 
 struct Acc {
@@ -226,9 +222,10 @@ void locate_axis(const Trace& tr, int j, const std::vector<double>& r, const std
     int e = w;
     for (; e < W && significant(win[e], floor, step); ++e)
       merged.merge(win[e]);
-    out.push_back(make(ax, "time",
-                       fmt("t %.3f–%.3f s", t0 + (t1 - t0) * w / W, t0 + (t1 - t0) * e / W), merged,
-                       floor));
+    out.push_back(
+        make(ax, "time",
+             rt::format_printf("t %.3f–%.3f s", t0 + (t1 - t0) * w / W, t0 + (t1 - t0) * e / W),
+             merged, floor));
     w = e;
   }
   if (!tr.line.empty()) {
@@ -238,7 +235,7 @@ void locate_axis(const Trace& tr, int j, const std::vector<double>& r, const std
     std::vector<Mismatch> ms;
     for (const auto& [l, a] : lines)
       if (significant(a, floor, step))
-        ms.push_back(make(ax, "line", fmt("line %.0f", l), a, floor));
+        ms.push_back(make(ax, "line", rt::format_printf("line %.0f", l), a, floor));
     std::sort(ms.begin(), ms.end(),
               [](const Mismatch& a, const Mismatch& b) { return a.rms_mm > b.rms_mm; });
     if (ms.size() > 10) ms.resize(10);
@@ -255,10 +252,10 @@ void locate_axis(const Trace& tr, int j, const std::vector<double>& r, const std
     }
     for (int b = 0; b < 12; ++b)
       if (significant(bins[b], floor, step))
-        out.push_back(
-            make(ax, "rotary_angle",
-                 std::string(sim::kJointNames[rj]) + fmt(" %.0f–%.0f deg", b * 30.0, b * 30.0 + 30),
-                 bins[b], floor));
+        out.push_back(make(ax, "rotary_angle",
+                           std::string(sim::kJointNames[rj]) +
+                               rt::format_printf(" %.0f–%.0f deg", b * 30.0, b * 30.0 + 30),
+                           bins[b], floor));
   }
 }
 

@@ -8,6 +8,7 @@
 #include <set>
 
 #include "effect_params.hpp"
+#include "truecut/rt/number_format.hpp"
 
 namespace truecut::analysis::diagnosis {
 
@@ -15,12 +16,6 @@ namespace {
 
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
-
-std::string fmt(double v) {
-  char b[40];
-  std::snprintf(b, sizeof b, "%.4g", v);
-  return b;
-}
 
 // The residual sum of squares of `r` after least squares on the columns of X.
 double rss_after(const MatrixXd& X, const VectorXd& r, VectorXd* coef = nullptr) {
@@ -377,7 +372,7 @@ std::vector<Candidate> build_candidates(const FitContext& ctx, const sim::Machin
         c.joint = j;
         c.axis = ax;
         c.group = "pitch_error:" + ax + ":periodic";
-        c.variant = "periodic_period_mm=" + fmt(P);
+        c.variant = "periodic_period_mm=" + rt::format_printf("%.4g", P);
         c.keys = {"periodic_amplitude_um", "periodic_phase_deg", "periodic_period_mm"};
         std::vector<double> sn(motor.size()), cs(motor.size());
         for (std::size_t k = 0; k < motor.size(); ++k) {
@@ -411,7 +406,7 @@ std::vector<Candidate> build_candidates(const FitContext& ctx, const sim::Machin
         c.joint = j;
         c.axis = ax;
         c.group = "thermal_drift:" + ax;
-        c.variant = "tau_s=" + fmt(tau);
+        c.variant = "tau_s=" + rt::format_printf("%.4g", tau);
         c.keys = {"gain_mm", "tau_s"};
         std::vector<double> col(tr.rows());
         for (std::size_t k = 0; k < col.size(); ++k)
@@ -441,7 +436,7 @@ std::vector<Candidate> build_candidates(const FitContext& ctx, const sim::Machin
         c.joint = j;
         c.axis = ax;
         c.group = "thermal_drift:" + ax;
-        c.variant = "driver=spindle_power tau_s=" + fmt(tau);
+        c.variant = "driver=spindle_power tau_s=" + rt::format_printf("%.4g", tau);
         c.keys = {"gain_mm", "tau_s"};
         std::vector<double> col(tr.rows(), 0.0);
         for (std::size_t k = 1; k < col.size(); ++k)
@@ -801,7 +796,7 @@ ModelFit fit_model(const FitContext& ctx, const sim::MachineParams& base) {
           {c->effect, c->joint, c->axis, c->group, c->variant, c->keys, sel.delta_bic[i],
            c->min_effect_ratio > 0 ? c->min_effect_ratio : ctx.min_effect_ratio});
       have.insert(c->group);
-      say("selected " + c->label() + " (ΔBIC " + fmt(sel.delta_bic[i]) + ")");
+      say("selected " + c->label() + " (ΔBIC " + rt::format_printf("%.4g", sel.delta_bic[i]) + ")");
     }
     normalise_periodic(fit.params);
     // A servo loop new to the model: the linear signature gives only the
@@ -833,7 +828,7 @@ ModelFit fit_model(const FitContext& ctx, const sim::MachineParams& base) {
     const double gain =
         n_eff * std::log(std::max(fit.rss, 1e-300) / rss_before_round) + added * std::log(n_eff);
     say("fitted " + std::to_string(m) + " parameters by re-simulation, round " +
-        std::to_string(round + 1) + " (ΔBIC " + fmt(gain) + ")");
+        std::to_string(round + 1) + " (ΔBIC " + rt::format_printf("%.4g", gain) + ")");
     // Backward elimination: an effect selected on the linearisation that the
     // re-simulated model does not need any more (it stood in for a
     // linearisation error of another one) is dropped.
@@ -848,8 +843,8 @@ ModelFit fit_model(const FitContext& ctx, const sim::MachineParams& base) {
         if (cost < weakest_cost) weakest_cost = cost, weakest = i;
       }
       if (weakest == fit.selected.size() || weakest_cost >= ctx.bic_threshold) break;
-      say("dropped " + fit.selected[weakest].group + " (re-simulated ΔBIC " + fmt(-weakest_cost) +
-          ")");
+      say("dropped " + fit.selected[weakest].group + " (re-simulated ΔBIC " +
+          rt::format_printf("%.4g", -weakest_cost) + ")");
       fit.params = without_effect(fit.params, base, fit.selected[weakest]);
       have.erase(fit.selected[weakest].group);
       fit.selected.erase(fit.selected.begin() + std::ptrdiff_t(weakest));
@@ -914,8 +909,8 @@ ModelFit fit_model(const FitContext& ctx, const sim::MachineParams& base) {
       if (share < smallest_share) smallest_share = share, smallest_rms = rms, smallest = e;
     }
     if (smallest_share >= 1.0) break;
-    say("dropped " + fit.selected[smallest].group + ": its contribution is " + fmt(smallest_rms) +
-        " of the noise floor");
+    say("dropped " + fit.selected[smallest].group + ": its contribution is " +
+        rt::format_printf("%.4g", smallest_rms) + " of the noise floor");
     fit.params = without_effect(fit.params, base, fit.selected[smallest]);
     fit.selected.erase(fit.selected.begin() + std::ptrdiff_t(smallest));
     refine(ctx, fit);

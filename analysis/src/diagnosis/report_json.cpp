@@ -5,6 +5,7 @@
 
 #include "report_text.hpp"
 #include "truecut/analysis/diagnosis/diagnosis.hpp"
+#include "truecut/rt/number_format.hpp"
 
 namespace truecut::analysis::diagnosis {
 
@@ -30,12 +31,6 @@ json fit_json(const FitFigures& f) {
     axes[a] = {{"rms_before_mm", num(v.first)}, {"rms_after_mm", num(v.second)}};
   j["per_axis"] = axes;
   return j;
-}
-
-std::string g(double v, const char* f = "%.4g") {
-  char b[48];
-  std::snprintf(b, sizeof b, f, v);
-  return b;
 }
 
 }  // namespace
@@ -142,58 +137,67 @@ std::string diagnosis_json(const DiagnosisResult& r) {
 
 std::string diagnosis_summary(const DiagnosisResult& r) {
   std::string s = "recording " + r.recording + ": " + std::to_string(r.rows) + " samples every " +
-                  g(r.sample_period_s * 1e3) + " ms\n";
-  s += "logging delay: " + g(r.delay_s * 1e3) + " ms";
+                  rt::format_printf("%.4g", r.sample_period_s * 1e3) + " ms\n";
+  s += "logging delay: " + rt::format_printf("%.4g", r.delay_s * 1e3) + " ms";
   if (r.delay_ci95_s)
-    s += " (95 % " + g(r.delay_ci95_s->first * 1e3) + " .. " + g(r.delay_ci95_s->second * 1e3) +
-         " ms)";
+    s += " (95 % " + rt::format_printf("%.4g", r.delay_ci95_s->first * 1e3) + " .. " +
+         rt::format_printf("%.4g", r.delay_ci95_s->second * 1e3) + " ms)";
   s += "\n";
   if (!r.delay_note.empty()) s += "  " + r.delay_note + "\n";
   for (const auto& a : r.axes)
-    s += "  " + a.target + ": rms " + g(a.rms_mm * 1e3) + " µm, max " + g(a.max_mm * 1e3) +
-         " µm, noise floor " + g(a.noise_floor_mm * 1e3) + " µm" +
-         (a.resolution_mm > 0 ? ", recorded in steps of " + g(a.resolution_mm * 1e3) + " µm" : "") +
+    s += "  " + a.target + ": rms " + rt::format_printf("%.4g", a.rms_mm * 1e3) + " µm, max " +
+         rt::format_printf("%.4g", a.max_mm * 1e3) + " µm, noise floor " +
+         rt::format_printf("%.4g", a.noise_floor_mm * 1e3) + " µm" +
+         (a.resolution_mm > 0
+              ? ", recorded in steps of " + rt::format_printf("%.4g", a.resolution_mm * 1e3) + " µm"
+              : "") +
          (a.interpolation_mm > 0 ? ", re-simulation between samples uncertain by " +
-                                       g(a.interpolation_mm * 1e3) + " µm"
+                                       rt::format_printf("%.4g", a.interpolation_mm * 1e3) + " µm"
                                  : "") +
          "\n";
   if (!r.mismatch.empty()) {
     s += "above the noise floor:\n";
     for (std::size_t i = 0; i < r.mismatch.size() && i < 8; ++i) {
       const auto& m = r.mismatch[i];
-      s += "  " + m.axis + " " + m.what + ": rms " + g(m.rms_mm * 1e3) + " µm (" +
-           g(m.ratio_to_floor, "%.3g") + "× floor)\n";
+      s += "  " + m.axis + " " + m.what + ": rms " + rt::format_printf("%.4g", m.rms_mm * 1e3) +
+           " µm (" + rt::format_printf("%.3g", m.ratio_to_floor) + "× floor)\n";
     }
   }
   for (const auto& e : r.explanations) {
     s += "explained: " + e.effect + (e.axis.empty() ? "" : " " + e.axis) + ":";
     for (const auto& p : e.parameters)
-      s += " " + p.name + "=" + g(p.value) +
-           (p.fixed ? "" : " [" + g(p.ci95_lo) + ", " + g(p.ci95_hi) + "]");
-    s += " (ΔBIC " + g(e.delta_bic, "%.1f") + ")\n";
+      s += " " + p.name + "=" + rt::format_printf("%.4g", p.value) +
+           (p.fixed ? ""
+                    : " [" + rt::format_printf("%.4g", p.ci95_lo) + ", " +
+                          rt::format_printf("%.4g", p.ci95_hi) + "]");
+    s += " (ΔBIC " + rt::format_printf("%.1f", e.delta_bic) + ")\n";
   }
   for (const auto& n : r.not_identifiable)
     s += "not identifiable: " + n.first + " vs " + n.second + " — " + n.separate_by + "\n";
   for (const auto& n : r.not_confirmed)
     s += "not confirmed on the held-out data (left out): " + n.effect +
-         (n.axis.empty() ? "" : " " + n.axis) + ", held-out rms " + g(n.heldout_rms_with_mm * 1e3) +
-         " µm with it, " + g(n.heldout_rms_without_mm * 1e3) + " µm without\n";
-  s += "fit: rms " + g(r.train.rms_unaligned_mm * 1e3) + " (delay not removed) → " +
-       g(r.train.rms_before_mm * 1e3) + " → " + g(r.train.rms_after_mm * 1e3) + " µm (fitted data)";
+         (n.axis.empty() ? "" : " " + n.axis) + ", held-out rms " +
+         rt::format_printf("%.4g", n.heldout_rms_with_mm * 1e3) + " µm with it, " +
+         rt::format_printf("%.4g", n.heldout_rms_without_mm * 1e3) + " µm without\n";
+  s += "fit: rms " + rt::format_printf("%.4g", r.train.rms_unaligned_mm * 1e3) +
+       " (delay not removed) → " + rt::format_printf("%.4g", r.train.rms_before_mm * 1e3) + " → " +
+       rt::format_printf("%.4g", r.train.rms_after_mm * 1e3) + " µm (fitted data)";
   if (r.has_heldout)
-    s += ", " + g(r.heldout.rms_unaligned_mm * 1e3) + " → " + g(r.heldout.rms_before_mm * 1e3) +
-         " → " + g(r.heldout.rms_after_mm * 1e3) + " µm (held out, " + r.heldout_kind + ")";
+    s += ", " + rt::format_printf("%.4g", r.heldout.rms_unaligned_mm * 1e3) + " → " +
+         rt::format_printf("%.4g", r.heldout.rms_before_mm * 1e3) + " → " +
+         rt::format_printf("%.4g", r.heldout.rms_after_mm * 1e3) + " µm (held out, " +
+         r.heldout_kind + ")";
   if (r.tcp.present) {
     s += "\ntcp (" + std::string(r.tcp.datum_known ? "known datum" : "offset profiled out") +
-         "): rms " + g(r.tcp.train.rms_before_mm * 1e3) + " → " +
-         g(r.tcp.train.rms_after_mm * 1e3) + " µm (fitted data)";
+         "): rms " + rt::format_printf("%.4g", r.tcp.train.rms_before_mm * 1e3) + " → " +
+         rt::format_printf("%.4g", r.tcp.train.rms_after_mm * 1e3) + " µm (fitted data)";
     if (r.tcp.heldout.samples)
-      s += ", " + g(r.tcp.heldout.rms_before_mm * 1e3) + " → " +
-           g(r.tcp.heldout.rms_after_mm * 1e3) + " µm (held out)";
+      s += ", " + rt::format_printf("%.4g", r.tcp.heldout.rms_before_mm * 1e3) + " → " +
+           rt::format_printf("%.4g", r.tcp.heldout.rms_after_mm * 1e3) + " µm (held out)";
   }
-  s += "\nwhiteness: Ljung–Box Q=" + g(r.whiteness.ljung_box_q, "%.1f") +
-       " p=" + g(r.whiteness.p_value, "%.3g") + (r.whiteness.white ? " (white)" : " (not white)") +
-       "\n";
+  s += "\nwhiteness: Ljung–Box Q=" + rt::format_printf("%.1f", r.whiteness.ljung_box_q) +
+       " p=" + rt::format_printf("%.3g", r.whiteness.p_value) +
+       (r.whiteness.white ? " (white)" : " (not white)") + "\n";
   for (const auto& n : r.notes)
     s += "note: " + n + "\n";
   s += "verdict: " + r.verdict + "\n";

@@ -3,9 +3,10 @@
 #pragma once
 
 #include <cmath>
-#include <cstdio>
 #include <nlohmann/json.hpp>
 #include <string>
+
+#include "truecut/rt/number_format.hpp"
 
 namespace truecut::analysis::report_text {
 
@@ -30,9 +31,7 @@ inline std::string html_escape(const std::string& s) {
 // printf-formatted; "–" when not finite.
 inline std::string number(double v, const char* fmt) {
   if (!std::isfinite(v)) return "–";
-  char b[48];
-  std::snprintf(b, sizeof b, fmt, v);
-  return b;
+  return rt::format_printf(fmt, v);
 }
 
 // A JSON number, null when not finite (JSON has no NaN or infinity).

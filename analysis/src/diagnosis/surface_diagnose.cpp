@@ -8,7 +8,6 @@
 #include <fstream>
 #include <limits>
 #include <map>
-#include <nlohmann/json.hpp>
 #include <numeric>
 #include <set>
 #include <sstream>
@@ -17,7 +16,9 @@
 #include "surface_params.hpp"
 #include "truecut/analysis/diagnosis/surface.hpp"
 #include "truecut/offline/stl_io.hpp"
+#include "truecut/rt/number_format.hpp"
 #include "truecut/sim/measure/part_surfaces.hpp"
+#include "truecut/sim/part_file.hpp"
 #include "truecut/sim/soft_cnc.hpp"
 
 namespace truecut::analysis::diagnosis {
@@ -26,12 +27,6 @@ namespace {
 
 namespace fs = std::filesystem;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-std::string hex64(std::uint64_t v) {
-  char buf[17];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(v));
-  return buf;
-}
 
 std::uint64_t fnv1a(const std::string& s) {
   std::uint64_t h = 1469598103934665603ULL;
@@ -92,7 +87,7 @@ class Machinist {
       ss << in.rdbuf();
       text += "\n" + f.string() + "\n" + ss.str();
     }
-    const fs::path dir = job_.work_dir / "runs" / hex64(fnv1a(text));
+    const fs::path dir = job_.work_dir / "runs" / rt::format_hex64(fnv1a(text));
     const fs::path done = dir / "done";
     if (!fs::exists(done)) {
       if (options_.progress) options_.progress("re-machining (" + why + ") in " + dir.string());
@@ -201,16 +196,14 @@ struct OperationMap {
 OperationMap read_operations(const fs::path& part_json) {
   OperationMap m;
   try {
-    std::ifstream in(part_json);
-    const auto j = nlohmann::json::parse(in);
-    for (const auto& s : j.at("surfaces"))
-      m.surface_name[s.at("id").get<int>()] = s.at("name").get<std::string>();
-    for (const auto& o : j.at("operations")) {
-      std::set<int> ids;
-      for (const auto& id : o.at("surface_ids"))
-        ids.insert(id.get<int>());
-      m.operations.emplace_back(o.at("name").get<std::string>(), ids);
-      m.tool_surfaces[o.at("tool").get<int>()].insert(ids.begin(), ids.end());
+    const sim::PartFile p =
+        sim::read_part_file(part_json, sim::kPartSurfaces | sim::kPartOperations);
+    for (const sim::PartSurface& s : p.metadata.surfaces)
+      m.surface_name[s.id] = s.name;
+    for (const sim::PartOperation& o : p.metadata.operations) {
+      const std::set<int> ids(o.surface_ids.begin(), o.surface_ids.end());
+      m.operations.emplace_back(o.name, ids);
+      m.tool_surfaces[o.tool].insert(ids.begin(), ids.end());
     }
   } catch (const std::exception&) {
     return {};

@@ -7,6 +7,7 @@
 
 #include "report_text.hpp"
 #include "truecut/analysis/diagnosis/surface.hpp"
+#include "truecut/rt/number_format.hpp"
 
 namespace truecut::analysis::diagnosis {
 
@@ -26,12 +27,6 @@ json fit_json(const SurfaceFit& f) {
           {"max_after_mm", num(f.max_after_mm)},
           {"improvement",
            f.rms_before_mm > 0 ? num(1 - f.rms_after_mm / f.rms_before_mm) : json(nullptr)}};
-}
-
-std::string fmt(const char* f, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, v);
-  return buf;
 }
 
 std::string esc(const std::string& s) {
@@ -120,27 +115,29 @@ std::string surface_diagnosis_summary(const SurfaceDiagnosisResult& r) {
   o << "measurement " << r.measurement << " (" << r.kind << "): " << r.valid_points << " of "
     << r.points << " points compared\n";
   if (r.scan_to_nominal)
-    o << "scan registered by ICP: rms " << fmt("%.4g", r.icp_rms_before_mm * 1e3) << " -> "
-      << fmt("%.4g", r.icp_rms_after_mm * 1e3) << " µm\n";
+    o << "scan registered by ICP: rms " << rt::format_printf("%.4g", r.icp_rms_before_mm * 1e3)
+      << " -> " << rt::format_printf("%.4g", r.icp_rms_after_mm * 1e3) << " µm\n";
   o << "registration profiled out: translation ("
-    << fmt("%.3g", r.registration_translation_mm.x() * 1e3) << ", "
-    << fmt("%.3g", r.registration_translation_mm.y() * 1e3) << ", "
-    << fmt("%.3g", r.registration_translation_mm.z() * 1e3) << ") µm, rotation ("
-    << fmt("%.3g", r.registration_rotation_urad.x()) << ", "
-    << fmt("%.3g", r.registration_rotation_urad.y()) << ", "
-    << fmt("%.3g", r.registration_rotation_urad.z()) << ") µrad\n";
-  o << "noise floor " << fmt("%.4g", r.noise_floor_mm * 1e3) << " µm; " << r.resimulations
-    << " re-machinings\n";
+    << rt::format_printf("%.3g", r.registration_translation_mm.x() * 1e3) << ", "
+    << rt::format_printf("%.3g", r.registration_translation_mm.y() * 1e3) << ", "
+    << rt::format_printf("%.3g", r.registration_translation_mm.z() * 1e3) << ") µm, rotation ("
+    << rt::format_printf("%.3g", r.registration_rotation_urad.x()) << ", "
+    << rt::format_printf("%.3g", r.registration_rotation_urad.y()) << ", "
+    << rt::format_printf("%.3g", r.registration_rotation_urad.z()) << ") µrad\n";
+  o << "noise floor " << rt::format_printf("%.4g", r.noise_floor_mm * 1e3) << " µm; "
+    << r.resimulations << " re-machinings\n";
   if (!r.mismatch.empty()) o << "above the noise floor:\n";
   for (const auto& g : r.mismatch)
-    o << "  " << g.where << " " << g.what << ": rms " << fmt("%.4g", g.rms_mm * 1e3) << " µm, mean "
-      << fmt("%.4g", g.mean_mm * 1e3) << " µm (" << fmt("%.3g", g.ratio_to_floor) << "× floor)\n";
+    o << "  " << g.where << " " << g.what << ": rms " << rt::format_printf("%.4g", g.rms_mm * 1e3)
+      << " µm, mean " << rt::format_printf("%.4g", g.mean_mm * 1e3) << " µm ("
+      << rt::format_printf("%.3g", g.ratio_to_floor) << "× floor)\n";
   for (const auto& e : r.explanations) {
     o << "found " << e.effect << (e.axis.empty() ? "" : ":" + e.axis) << ":";
     for (const auto& p : e.parameters)
-      o << " " << p.name << "=" << fmt("%.5g", p.value) << " [" << fmt("%.5g", p.ci95_lo) << ", "
-        << fmt("%.5g", p.ci95_hi) << "]";
-    o << " (ΔBIC " << fmt("%.1f", e.delta_bic) << ")";
+      o << " " << p.name << "=" << rt::format_printf("%.5g", p.value) << " ["
+        << rt::format_printf("%.5g", p.ci95_lo) << ", " << rt::format_printf("%.5g", p.ci95_hi)
+        << "]";
+    o << " (ΔBIC " << rt::format_printf("%.1f", e.delta_bic) << ")";
     if (!e.note.empty()) o << "; " << e.note;
     o << "\n";
   }
@@ -151,12 +148,13 @@ std::string surface_diagnosis_summary(const SurfaceDiagnosisResult& r) {
       << "\n";
   for (const auto& n : r.not_identifiable)
     o << "not identifiable: " << n.first << " vs " << n.second << " (correlation "
-      << fmt("%.3f", n.correlation) << ") — " << n.separate_by << "\n";
-  o << "fit: rms " << fmt("%.4g", r.train.rms_before_mm * 1e3) << " -> "
-    << fmt("%.4g", r.train.rms_after_mm * 1e3) << " µm (fitted region)";
+      << rt::format_printf("%.3f", n.correlation) << ") — " << n.separate_by << "\n";
+  o << "fit: rms " << rt::format_printf("%.4g", r.train.rms_before_mm * 1e3) << " -> "
+    << rt::format_printf("%.4g", r.train.rms_after_mm * 1e3) << " µm (fitted region)";
   if (r.has_heldout)
-    o << ", " << fmt("%.4g", r.heldout.rms_before_mm * 1e3) << " -> "
-      << fmt("%.4g", r.heldout.rms_after_mm * 1e3) << " µm (held out, " << r.heldout_kind << ")";
+    o << ", " << rt::format_printf("%.4g", r.heldout.rms_before_mm * 1e3) << " -> "
+      << rt::format_printf("%.4g", r.heldout.rms_after_mm * 1e3) << " µm (held out, "
+      << r.heldout_kind << ")";
   o << "\nverdict: " << r.verdict << "\n";
   return o.str();
 }
@@ -188,7 +186,7 @@ std::string surface_diagnosis_html(const SurfaceDiagnosisResult& r) {
   for (int panel = 0; panel < 2; ++panel) {
     const auto& v = panel == 0 ? r.before_mm : r.after_mm;
     h << "<h2>Residual " << (panel == 0 ? "before" : "after") << " the fit against "
-      << "xyz"[axis] << " (held-out points red; ±" << fmt("%.3g", ymax * 1e3)
+      << "xyz"[axis] << " (held-out points red; ±" << rt::format_printf("%.3g", ymax * 1e3)
       << " µm full scale)</h2><svg width=\"" << w << "\" height=\"" << hgt
       << "\" xmlns=\"http://www.w3.org/2000/svg\"><rect width=\"" << w << "\" height=\"" << hgt
       << "\" fill=\"white\" stroke=\"#999\"/><line x1=\"0\" y1=\"" << hgt / 2 << "\" x2=\"" << w
@@ -196,8 +194,9 @@ std::string surface_diagnosis_html(const SurfaceDiagnosisResult& r) {
     for (std::size_t i = 0; i < v.size(); ++i) {
       const double x = (r.position_mm[i][axis] - xmin) / (xmax - xmin) * (w - 10) + 5;
       const double y = hgt / 2.0 - v[i] / ymax * (hgt / 2.0 - 5);
-      h << "<circle cx=\"" << fmt("%.1f", x) << "\" cy=\"" << fmt("%.1f", y)
-        << "\" r=\"1.2\" fill=\"" << (r.is_heldout[i] ? "#c33" : "#36c") << "\"/>";
+      h << "<circle cx=\"" << rt::format_printf("%.1f", x) << "\" cy=\""
+        << rt::format_printf("%.1f", y) << "\" r=\"1.2\" fill=\""
+        << (r.is_heldout[i] ? "#c33" : "#36c") << "\"/>";
     }
     h << "</svg>";
   }
@@ -205,8 +204,9 @@ std::string surface_diagnosis_html(const SurfaceDiagnosisResult& r) {
        "<th>rms µm</th><th>mean µm</th><th>× floor</th></tr>";
   for (const auto& g : r.mismatch)
     h << "<tr><td>" << esc(g.where) << "</td><td>" << esc(g.what) << "</td><td>" << g.points
-      << "</td><td>" << fmt("%.3g", g.rms_mm * 1e3) << "</td><td>" << fmt("%.3g", g.mean_mm * 1e3)
-      << "</td><td>" << fmt("%.3g", g.ratio_to_floor) << "</td></tr>";
+      << "</td><td>" << rt::format_printf("%.3g", g.rms_mm * 1e3) << "</td><td>"
+      << rt::format_printf("%.3g", g.mean_mm * 1e3) << "</td><td>"
+      << rt::format_printf("%.3g", g.ratio_to_floor) << "</td></tr>";
   h << "</table></body></html>\n";
   return h.str();
 }

@@ -5,20 +5,10 @@
 #include <cstdio>
 #include <map>
 
+#include "truecut/rt/number_format.hpp"
+
 namespace truecut::analysis {
 namespace {
-
-std::string um(double mm) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.1f µm", mm * 1e3);
-  return b;
-}
-
-std::string num(double v, const char* fmt = "%.1f") {
-  char b[32];
-  std::snprintf(b, sizeof b, fmt, v);
-  return b;
-}
 
 // The smallest 2θ or 0θ coefficient worth naming: well above what noise
 // gives a Fourier coefficient (σ·√(2/N)), and not a sliver of G.
@@ -42,15 +32,18 @@ std::vector<CircleHint> circle_hints(const CircularTest& t) {
   const double a0 = t.harmonics[0].cos_mm;
   if (std::abs(a0) > thr)
     hints.push_back({"radius_offset", "", a0 * 1e3, "um",
-                     "mean radius " + um(std::abs(a0)) + (a0 > 0 ? " larger" : " smaller") +
+                     "mean radius " + rt::format_printf("%.1f µm", std::abs(a0) * 1e3) +
+                         (a0 > 0 ? " larger" : " smaller") +
                          " than nominal: ballbar length calibration, or a scale error common to " +
-                         p + " and " + q + " of about " + num(a0 / R * 1e6) + " µm/m"});
+                         p + " and " + q + " of about " + rt::format_printf("%.1f", a0 / R * 1e6) +
+                         " µm/m"});
 
   const double a2 = t.harmonics[2].cos_mm, b2 = t.harmonics[2].sin_mm;
   if (std::abs(a2) > thr)
     hints.push_back({"scale_mismatch", a2 > 0 ? p : q, 2 * a2 / R * 1e6, "um/m",
                      "ellipse along " + p + "/" + q + " (2θ term at " + (a2 > 0 ? "0°" : "90°") +
-                         "): " + (a2 > 0 ? p : q) + " travels " + num(std::abs(2 * a2 / R) * 1e6) +
+                         "): " + (a2 > 0 ? p : q) + " travels " +
+                         rt::format_printf("%.1f", std::abs(2 * a2 / R) * 1e6) +
                          " µm/m more than " + (a2 > 0 ? q : p) +
                          " (relative scale or pitch error)"});
 
@@ -66,8 +59,9 @@ std::vector<CircleHint> circle_hints(const CircularTest& t) {
                      "ellipse along 45°/135° (2θ term at " + std::string(b2 > 0 ? "45°" : "135°") +
                          ") in " + (both ? "both directions" : "the one direction measured") +
                          ": " + p + " and " + q + " out of square by " +
-                         num(std::abs(2 * b2 / R) * 1e6) + " µrad (angle between +" + p + " and +" +
-                         q + (b2 > 0 ? " below" : " above") + " 90°)" +
+                         rt::format_printf("%.1f", std::abs(2 * b2 / R) * 1e6) +
+                         " µrad (angle between +" + p + " and +" + q +
+                         (b2 > 0 ? " below" : " above") + " 90°)" +
                          (both ? ""
                                : "; servo mismatch looks the same in one direction, a run in "
                                  "the other direction separates them")});
@@ -80,7 +74,7 @@ std::vector<CircleHint> circle_hints(const CircularTest& t) {
       hints.push_back({"servo_mismatch", lag_s > 0 ? p : q, std::abs(lag_s) * 1e3, "ms",
                        "45° ellipse that turns over between CW and CCW: " + (lag_s > 0 ? p : q) +
                            " lags " + (lag_s > 0 ? q : p) + " by about " +
-                           num(std::abs(lag_s) * 1e3, "%.2f") +
+                           rt::format_printf("%.2f", std::abs(lag_s) * 1e3) +
                            " ms (servo gain or feed-forward mismatch)"});
     }
   }
@@ -93,7 +87,7 @@ std::vector<CircleHint> circle_hints(const CircularTest& t) {
   std::map<std::string, Worst> spikes, steps;
   for (const auto& r : t.runs) {
     for (const auto& f : r.reversals) {
-      const std::string at = r.direction + " " + num(f.angle_deg, "%.0f") + "°";
+      const std::string at = r.direction + " " + rt::format_printf("%.0f", f.angle_deg) + "°";
       // Largest of ~100 noise samples stays below 6σ; an intercept from n
       // samples has a standard error of about 2σ/√n.
       const double spike_floor = std::max(1e-4, 6 * r.residual_sigma_mm);
@@ -113,12 +107,13 @@ std::vector<CircleHint> circle_hints(const CircularTest& t) {
   }
   for (const auto& [axis, w] : spikes)
     hints.push_back({"reversal_spike", axis, w.value * 1e3, "um",
-                     "spikes of up to " + um(w.value) + " where " + axis + " reverses (" + w.where +
+                     "spikes of up to " + rt::format_printf("%.1f µm", w.value * 1e3) + " where " +
+                         axis + " reverses (" + w.where +
                          "): friction / stick-slip at reversal, tune the reversal compensation"});
   for (const auto& [axis, w] : steps)
     hints.push_back({"backlash", axis, w.value * 1e3, "um",
-                     "steps of up to " + um(w.value) + " where " + axis + " reverses (" + w.where +
-                         "): lost motion (backlash) on " + axis});
+                     "steps of up to " + rt::format_printf("%.1f µm", w.value * 1e3) + " where " +
+                         axis + " reverses (" + w.where + "): lost motion (backlash) on " + axis});
   return hints;
 }
 

@@ -3,12 +3,12 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
-#include <cstdio>
 #include <map>
 #include <string_view>
 
 #include "line_reader.hpp"
 #include "truecut/analysis/recording.hpp"
+#include "truecut/rt/number_format.hpp"
 
 namespace truecut::analysis {
 namespace {
@@ -24,12 +24,6 @@ std::string available(const std::vector<std::string>& columns) {
   for (const auto& c : columns)
     s += (s.empty() ? "" : ", ") + c;
   return s.empty() ? "(none)" : s;
-}
-
-std::string shortest(double v) {
-  char buf[32];
-  auto r = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, r.ptr);
 }
 
 bool parse_number(std::string_view s, double& v) {
@@ -272,12 +266,13 @@ RecordingHeader stream_recording(const std::filesystem::path& path, const Record
     }
     const double t = row[0];
     if (index > 0 && !(t > last_t))
-      throw RecordingError(
-          file + ":" + std::to_string(n) + ": column " +
-          (bindings[0].source.from_index ? std::string("@index")
-                                         : std::to_string(bindings[0].column + 1)) +
-          " 't': time " + shortest(t) + " s is not after " + shortest(last_t) + " s on line " +
-          std::to_string(last_t_line) + " (time must increase strictly)");
+      throw RecordingError(file + ":" + std::to_string(n) + ": column " +
+                           (bindings[0].source.from_index
+                                ? std::string("@index")
+                                : std::to_string(bindings[0].column + 1)) +
+                           " 't': time " + rt::format_shortest(t) + " s is not after " +
+                           rt::format_shortest(last_t) + " s on line " +
+                           std::to_string(last_t_line) + " (time must increase strictly)");
     last_t = t;
     last_t_line = n;
     sink(header, row);

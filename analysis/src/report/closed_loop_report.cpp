@@ -13,17 +13,12 @@
 #include "truecut/analysis/report/svg_plots.hpp"
 #include "truecut/offline/mesh_io.hpp"
 #include "truecut/rt/field_file.hpp"
+#include "truecut/rt/number_format.hpp"
 
 namespace truecut::analysis::report {
 namespace {
 
 const char* kStageColours[] = {"#c0392b", "#2471a3", "#7d3c98", "#1e8449", "#b9770e"};
-
-std::string fmt(const char* f, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, v);
-  return buf;
-}
 
 std::string png_img(const RgbImage& image, const std::string& alt) {
   return "<img class='view' alt='" + html_escape(alt) + "' src='data:image/png;base64," +
@@ -68,9 +63,10 @@ VertexProbe judged_vertices(const offline::TriangleMesh& mesh, const std::vector
 
 std::string stats_cell(const sim::measure::SurfaceDeviationStats& s, double tolerance_um) {
   const bool pass = s.max_abs_um <= tolerance_um;
-  return "<td>" + fmt("%.1f", s.rms_um) + "</td><td class='" + (pass ? "ok" : "bad") + "'>" +
-         fmt("%.1f", s.max_abs_um) + "</td><td>" + fmt("%.1f", s.p95_abs_um) + "</td><td>" +
-         fmt("%.1f", s.std_um) + "</td>";
+  return "<td>" + rt::format_printf("%.1f", s.rms_um) + "</td><td class='" + (pass ? "ok" : "bad") +
+         "'>" + rt::format_printf("%.1f", s.max_abs_um) + "</td><td>" +
+         rt::format_printf("%.1f", s.p95_abs_um) + "</td><td>" +
+         rt::format_printf("%.1f", s.std_um) + "</td>";
 }
 
 std::string field_picture(const std::filesystem::path& tcf) {
@@ -104,8 +100,9 @@ std::string field_picture(const std::filesystem::path& tcf) {
       }
     html += "<figure>" + png_img(img, "field of tool " + std::to_string(tool)) +
             "<figcaption>tool " + std::to_string(tool) +
-            ": largest |correction| over Z, top view (" + fmt("%.0f", g.spacing_mm.x()) +
-            " mm grid), 0 … " + fmt("%.1f", limit) + " µm</figcaption></figure>";
+            ": largest |correction| over Z, top view (" +
+            rt::format_printf("%.0f", g.spacing_mm.x()) + " mm grid), 0 … " +
+            rt::format_printf("%.1f", limit) + " µm</figcaption></figure>";
   }
   return html;
 }
@@ -181,10 +178,10 @@ std::string closed_loop_html(const std::vector<ReportPart>& parts, const ReportO
       html_escape(o.title) + "</h1>";
   h += "<p>Every figure is measured by the virtual CMM (σ ≈ 2 µm) on the machined surface — "
        "never by the scan (σ = " +
-       fmt("%.0f", o.scanner_sigma_um) +
+       rt::format_printf("%.0f", o.scanner_sigma_um) +
        " µm) the correction was built from. Deviation is along the nominal normal: positive = "
        "material left (oversize). Tolerance drawn: ±" +
-       fmt("%.0f", o.tolerance_um) + " µm.</p>";
+       rt::format_printf("%.0f", o.tolerance_um) + " µm.</p>";
   for (const ReportPart& part : parts) {
     h += "<h2>" + html_escape(part.name) + "</h2>";
     const offline::TriangleMesh nominal = offline::read_mesh(part.nominal_stl);
@@ -203,7 +200,7 @@ std::string closed_loop_html(const std::vector<ReportPart>& parts, const ReportO
            stats_cell(all, o.tolerance_um) + "<td>" +
            (part.stages[k].key == "ideal" ? std::string("floor")
             : k == 0 || ref <= 0          ? std::string("—")
-                                          : fmt("%.0f %%", 100.0 * (1.0 - all.rms_um / ref))) +
+                                 : rt::format_printf("%.0f %%", 100.0 * (1.0 - all.rms_um / ref))) +
            "</td></tr>";
     }
     h += "</table>";

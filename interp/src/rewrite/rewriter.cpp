@@ -20,6 +20,7 @@
 #include "truecut/interp/operations.hpp"
 #include "truecut/interp/path_geometry.hpp"
 #include "truecut/interp/rewrite.hpp"
+#include "truecut/rt/number_format.hpp"
 
 namespace truecut::interp {
 
@@ -50,14 +51,6 @@ struct Correction {
 
 using CorrectionFn = std::function<Correction(const ToolPoint&, const CallContext&)>;
 
-std::string fixed(double v, int decimals) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  std::string s = buf;
-  if (s[0] == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);
-  return s;
-}
-
 // The shortest decimal that reads back to the same double (written ends of
 // rapids reproduce the original position exactly).
 std::string exact(double v) {
@@ -77,7 +70,7 @@ std::string exact(double v) {
 
 // A feed with up to 4 decimals and no trailing zeros ("F500", "F1234.5").
 std::string feed_text(double v) {
-  std::string s = fixed(v, 4);
+  std::string s = rt::format_fixed(v, 4);
   if (s.find('.') != std::string::npos) {
     while (s.back() == '0')
       s.pop_back();
@@ -320,7 +313,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       auto word = [&](char letter, int axis, bool write) {
         if (!write) return;
         const int decimals = o.decimals > 0 ? o.decimals : ctx.units == LengthUnits::kInch ? 5 : 4;
-        const std::string v = fixed(q[axis], decimals);
+        const std::string v = rt::format_fixed(q[axis], decimals);
         if (!line.empty() && line.back() != ' ' && line.back() != '/') line += ' ';
         line += letter + v;
         expect[axis] = std::strtod(v.c_str(), nullptr);

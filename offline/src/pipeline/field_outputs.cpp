@@ -2,13 +2,14 @@
 
 #include <nlohmann/json.hpp>
 
-#include <ctime>
 #include <stdexcept>
 
+#include "truecut/interp/sha256.hpp"
 #include "truecut/offline/compensation_matrix.hpp"
 #include "truecut/offline/stl_io.hpp"
 #include "truecut/rt/atomic_write.hpp"
 #include "truecut/rt/field_file.hpp"
+#include "truecut/rt/number_format.hpp"
 
 namespace truecut::offline {
 
@@ -19,15 +20,6 @@ namespace fs = std::filesystem;
 
 json vec(const Eigen::Vector3d& v) {
   return json::array({v.x(), v.y(), v.z()});
-}
-
-std::string now_utc() {
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
 }
 
 json stats_json(const VectorStatistics& s) {
@@ -130,7 +122,7 @@ std::string audit_json(const FieldPipelineResult& r, const FieldPipelineOptions&
                        const AuditContext& c, std::span<const FileDigest> outputs) {
   json j;
   j["truecut_audit"] = 1;
-  j["created_utc"] = c.created_utc.empty() ? now_utc() : c.created_utc;
+  j["created_utc"] = c.created_utc.empty() ? rt::utc_timestamp_now() : c.created_utc;
   j["command_line"] = c.command_line;
   j["frame"] = "workpiece";
   j["units"] = "mm";
@@ -273,7 +265,7 @@ std::vector<FileDigest> write_field_outputs(const fs::path& dir, const FieldPipe
   const std::string audit = audit_json(r, o, c, out);
   files.write(3, audit);
   files.commit();
-  out.push_back({"audit", files.target(3), audit.size(), sha256_bytes(audit)});
+  out.push_back({"audit", files.target(3), audit.size(), interp::sha256_hex(audit)});
   return out;
 }
 

@@ -16,6 +16,7 @@
 #include "truecut/offline/ray_scene.hpp"
 #include "truecut/offline/rigid_transform.hpp"
 #include "truecut/offline/surfaces.hpp"
+#include "truecut/rt/number_format.hpp"
 
 namespace truecut::offline {
 
@@ -67,12 +68,6 @@ enum StageOrder : int {
   kPlacementStage,
   kFitStage,
 };
-
-std::string text(const char* fmt, auto... args) {
-  char buf[256];
-  std::snprintf(buf, sizeof buf, fmt, args...);
-  return buf;
-}
 
 bool selected(const std::vector<std::int32_t>& surfaces, std::int32_t id) {
   return surfaces.empty() || std::find(surfaces.begin(), surfaces.end(), id) != surfaces.end();
@@ -230,8 +225,8 @@ void smooth_and_adapt(const TriangleMesh& nominal, const FieldPipelineOptions& o
       r.field_vectors_mm[i].setZero();
   }
   timer.done(kTrussStage, started, "truss smoothing and adapted mesh",
-             text("kb/kc %.3g, %lld bars", opt.truss.kb_over_kc,
-                  static_cast<long long>(r.truss.edge_count)));
+             rt::format_printf("kb/kc %.3g, %lld bars", opt.truss.kb_over_kc,
+                               static_cast<long long>(r.truss.edge_count)));
 }
 
 }  // namespace
@@ -287,17 +282,20 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
   r.triangle_surface_ids =
       in.triangle_surface_ids.empty() ? segment_surfaces(nominal) : in.triangle_surface_ids;
   if (r.triangle_surface_ids.size() != nominal.triangles.size())
-    throw std::invalid_argument(text("%zu surface ids for %zu nominal triangles",
-                                     r.triangle_surface_ids.size(), nominal.triangles.size()));
+    throw std::invalid_argument(rt::format_printf("%zu surface ids for %zu nominal triangles",
+                                                  r.triangle_surface_ids.size(),
+                                                  nominal.triangles.size()));
   for (std::int32_t id : opt.surfaces) {
     if (std::find(r.triangle_surface_ids.begin(), r.triangle_surface_ids.end(), id) ==
         r.triangle_surface_ids.end())
-      throw std::invalid_argument(text("surface %d does not exist in the nominal model", id));
+      throw std::invalid_argument(
+          rt::format_printf("surface %d does not exist in the nominal model", id));
   }
   for (std::int32_t id : opt.datum_surfaces) {
     if (std::find(r.triangle_surface_ids.begin(), r.triangle_surface_ids.end(), id) ==
         r.triangle_surface_ids.end())
-      throw std::invalid_argument(text("datum surface %d does not exist in the nominal model", id));
+      throw std::invalid_argument(
+          rt::format_printf("datum surface %d does not exist in the nominal model", id));
   }
   IcpOptions icp = opt.icp;
   if (opt.register_scan && !opt.datum_surfaces.empty()) {
@@ -314,7 +312,8 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
                  : sample_compensation_points(nominal, r.triangle_surface_ids, opt.spacing_mm,
                                               opt.surfaces);
   if (r.points.size() == 0) throw std::invalid_argument("no compensation points");
-  timer.done(kPointsStage, started, "compensation points", text("%zu points", r.points.size()));
+  timer.done(kPointsStage, started, "compensation points",
+             rt::format_printf("%zu points", r.points.size()));
 
   // Two chains that share nothing until the field fit run concurrently (their
   // parallel loops share the threads): the scan chain (registration and the
@@ -330,11 +329,12 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
     r.registration = register_scan(nominal, in.scan->vertices_mm, icp);
     const IcpResult& g = *r.registration;
     timer.done(kRegistrationStage, t0, "registration",
-               g.applied ? text("%d iterations, RMS %.4f -> %.4f mm", g.iterations, g.rms_before_mm,
-                                g.rms_after_mm)
-                         : text("%d iterations; the motion found is within the scan's noise "
-                                "(chi2 %.1f <= %.1f): scan left in place, RMS %.4f mm",
-                                g.iterations, g.motion_chi2, g.motion_threshold, g.rms_after_mm));
+               g.applied ? rt::format_printf("%d iterations, RMS %.4f -> %.4f mm", g.iterations,
+                                             g.rms_before_mm, g.rms_after_mm)
+                         : rt::format_printf(
+                               "%d iterations; the motion found is within the scan's noise "
+                               "(chi2 %.1f <= %.1f): scan left in place, RMS %.4f mm",
+                               g.iterations, g.motion_chi2, g.motion_threshold, g.rms_after_mm));
   };
   // The scene is built on the scan as it is and placed by the registration
   // (RayScene::set_world_from_mesh): the scan is neither copied nor moved.
@@ -344,10 +344,11 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
     if (opt.method == ErrorMethod::ray) scene.emplace(*in.scan);
     if (!scene && !expected_scene) return;
     timer.done(kSceneStage, t0, "scan ray scene",
-               in.expected ? text("%zu + %zu faces (scan + expected cut)",
-                                  opt.method == ErrorMethod::ray ? in.scan->triangles.size() : 0,
-                                  in.expected->triangles.size())
-                           : text("%zu faces", in.scan->triangles.size()));
+               in.expected ? rt::format_printf(
+                                 "%zu + %zu faces (scan + expected cut)",
+                                 opt.method == ErrorMethod::ray ? in.scan->triangles.size() : 0,
+                                 in.expected->triangles.size())
+                           : rt::format_printf("%zu faces", in.scan->triangles.size()));
   };
   auto scan_chain = [&] {
     if (opt.concurrent_stages) {
@@ -392,9 +393,10 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
     }
     r.error_summary = summarize(r.errors, opt.sphere.radius_mm);
     r.matrix = mirror(r.points, r.errors);
-    timer.done(kErrorStage, t0,
-               opt.method == ErrorMethod::ray ? "error vectors (rays)" : "error vectors (spheres)",
-               text("%zu of %zu valid", r.error_summary.valid, r.error_summary.points));
+    timer.done(
+        kErrorStage, t0,
+        opt.method == ErrorMethod::ray ? "error vectors (rays)" : "error vectors (spheres)",
+        rt::format_printf("%zu of %zu valid", r.error_summary.valid, r.error_summary.points));
     const auto t_test = timer.now();
     r.significance = test_compensation_significance(
         r.points, r.errors, *in.scan,
@@ -403,9 +405,10 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
     std::size_t kept = 0;
     for (const SurfaceSignificance& s : r.significance.surfaces)
       kept += s.compensated ? 1 : 0;
-    timer.done(kSignificanceStage, t_test, "significance test",
-               text("noise %.4f mm; %zu of %zu surfaces compensated",
-                    r.significance.pooled_noise_mm, kept, r.significance.surfaces.size()));
+    timer.done(
+        kSignificanceStage, t_test, "significance test",
+        rt::format_printf("noise %.4f mm; %zu of %zu surfaces compensated",
+                          r.significance.pooled_noise_mm, kept, r.significance.surfaces.size()));
 
     // Vertex compensation for the truss: the same points in vertex mode, a
     // second pass at the vertices of the compensated surfaces otherwise.
@@ -425,7 +428,8 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
       }
       vertex_matrix = mirror(vp, ve);
       vertex_matrix.surface_ids = vp.surface_ids;
-      timer.done(kVertexErrorStage, t1, "vertex error vectors", text("%zu vertices", vp.size()));
+      timer.done(kVertexErrorStage, t1, "vertex error vectors",
+                 rt::format_printf("%zu vertices", vp.size()));
     }
     // A surface whose measured error the scan's noise explains gets no
     // compensation: its vectors become zero, and stay in the truss and the
@@ -446,13 +450,15 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
   auto program_chain = [&] {
     auto t0 = timer.now();
     r.path = sample_tool_path(*in.program, opt.path);
-    timer.done(kPathStage, t0, "tool path", text("%zu samples", r.path.samples.size()));
+    timer.done(kPathStage, t0, "tool path",
+               rt::format_printf("%zu samples", r.path.samples.size()));
     t0 = timer.now();
     r.placement = place_at_tool_centre(r.points.positions_mm, r.points.normals, r.path, in.tools,
                                        opt.placement);
-    timer.done(kPlacementStage, t0, "tool-centre placement",
-               text("%lld of %zu points cut by no tool",
-                    static_cast<long long>(r.placement.uncut_points), r.points.size()));
+    timer.done(
+        kPlacementStage, t0, "tool-centre placement",
+        rt::format_printf("%lld of %zu points cut by no tool",
+                          static_cast<long long>(r.placement.uncut_points), r.points.size()));
   };
   if (opt.concurrent_stages) {
     tbb::task_group chains;
@@ -496,10 +502,10 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
     throw std::invalid_argument(
         "no valid compensation point is cut by any tool of the program: nothing to fit");
   r.fit = fit_correction_field(r.tool_samples, opt.fit);
-  timer.done(
-      kFitStage, started, "field fit",
-      text("%zu samples, %zu layers, %d x %d x %d nodes", fit_samples, r.fit->layers.size(),
-           r.fit->field.grid().dims[0], r.fit->field.grid().dims[1], r.fit->field.grid().dims[2]));
+  timer.done(kFitStage, started, "field fit",
+             rt::format_printf("%zu samples, %zu layers, %d x %d x %d nodes", fit_samples,
+                               r.fit->layers.size(), r.fit->field.grid().dims[0],
+                               r.fit->field.grid().dims[1], r.fit->field.grid().dims[2]));
 
   const std::vector<std::uint8_t> valid = r.errors.valid_mask();
   r.error_statistics = vector_statistics(r.errors.vectors_mm, valid, r.points.normals);

@@ -3,13 +3,13 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <numbers>
 #include <stdexcept>
 
 #include "truecut/interp/plan_segment.hpp"
 #include "truecut/rt/core/kinematics_ac.hpp"
+#include "truecut/rt/number_format.hpp"
 #include "truecut/sim/true_tool_pose.hpp"
 
 namespace truecut::sim {
@@ -17,14 +17,12 @@ namespace {
 
 constexpr double kEpsilon = 1e-9;  // rounding slack at the travel ends
 
+// Three decimals at most, trailing zeros dropped: "12.5", "-0.001", "0".
 std::string format_number(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.3f", v);
-  std::string s(buf);
+  std::string s = rt::format_fixed(v, 3);
   while (!s.empty() && s.back() == '0')
     s.pop_back();
   if (!s.empty() && s.back() == '.') s.pop_back();
-  if (s == "-0") s = "0";
   return s;
 }
 

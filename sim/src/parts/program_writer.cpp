@@ -1,15 +1,11 @@
 #include "parts/program_writer.hpp"
 
-#include <cstdio>
+#include "truecut/rt/number_format.hpp"
 
 namespace truecut::sim::parts {
 
 std::string number(double v, int decimals) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  std::string s(buf);
-  if (s.front() == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);
-  return s;
+  return rt::format_fixed(v, decimals);
 }
 
 void ProgramWriter::line(std::string_view text) {

@@ -120,7 +120,4 @@ RewriteResult rewrite_program(std::string_view program_text, const std::string& 
 RewriteResult rewrite_program(std::string_view program_text, const std::string& program_name,
                               const rt::CorrectionField& field, const RewriteOptions& options);
 
-// SHA-256 of bytes as 64 lower-case hex digits (for audit records).
-std::string sha256_hex(std::string_view bytes);
-
 }  // namespace truecut::interp

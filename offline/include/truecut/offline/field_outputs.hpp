@@ -31,17 +31,14 @@ namespace truecut::offline {
 inline constexpr double kFieldMaxCorrectionMm = 0.2;
 static_assert(kFieldMaxCorrectionMm <= rt::comp::kDefaultMaxCorrectionMm);
 
-// Lower-case hex SHA-256 of a file's bytes (OpenSSL EVP). Throws
-// std::runtime_error naming the file when it cannot be read.
-std::string sha256_file(const std::filesystem::path& file);
-std::string sha256_bytes(std::string_view bytes);
-
 struct FileDigest {
   std::string role;  // "nominal", "scan", "program", "tools", "part", "field", ...
   std::filesystem::path path;
   std::uintmax_t bytes = 0;
   std::string sha256;
 };
+// The file's size and SHA-256 (truecut/interp/sha256.hpp). Throws
+// std::runtime_error naming the file when it cannot be read.
 FileDigest digest_file(const std::string& role, const std::filesystem::path& file);
 
 struct AuditContext {

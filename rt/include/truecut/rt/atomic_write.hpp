@@ -11,6 +11,8 @@
 //   files.write(1, csv_text);          // or bytes
 //   files.commit();                    // renamed only now; not committed: removed
 //
+//   write_files_atomically({{dir / "a.json", json}, {dir / "a.html", html}});
+//
 // Not for servo-cycle code (allocates, does I/O, throws).
 #pragma once
 
@@ -19,6 +21,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace truecut::rt {
@@ -70,5 +73,11 @@ class StagedFiles {
   std::string suffix_;
   bool committed_ = false;
 };
+
+// Several files from bytes, all or nothing: StagedFiles with ".tmp", each
+// written, then committed. Throws FileWriteError; on failure no target has
+// changed and no .tmp file is left.
+void write_files_atomically(
+    const std::vector<std::pair<std::filesystem::path, std::string>>& files);
 
 }  // namespace truecut::rt

@@ -25,10 +25,14 @@
 namespace truecut::sim {
 
 // what(): "FILE: key 'KEY': DETAIL", or "FILE: DETAIL" when the file cannot
-// be read or is not JSON (key empty).
+// be read or is not JSON (key empty). The one error type for part.json, also
+// of the cutting model's checks (truecut/sim/cutting/part_file.hpp), which
+// word it "FILE: KEY: DETAIL" (Wording::kPlain).
 class PartFileError : public std::runtime_error {
  public:
-  PartFileError(std::string file, std::string key, std::string detail);
+  enum class Wording { kQuotedKey, kPlain };
+  PartFileError(std::string file, std::string key, std::string detail,
+                Wording wording = Wording::kQuotedKey);
   const std::string& file() const { return file_; }
   const std::string& key() const { return key_; }  // e.g. "tools[1].radius_mm"
   const std::string& detail() const { return detail_; }

@@ -4,18 +4,17 @@
 #pragma once
 
 #include <filesystem>
-#include <stdexcept>
 #include <vector>
 
 #include "truecut/sim/benchmark_parts.hpp"
 #include "truecut/sim/cutting/dexel_model.hpp"
+#include "truecut/sim/part_file.hpp"
 
 namespace truecut::sim::cutting {
 
-// "FILE: key: message".
-struct PartFileError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+// part.json's one error type; here worded "FILE: key: message"
+// (PartFileError::Wording::kPlain).
+using sim::PartFileError;
 
 struct PartStock {
   std::vector<StockBox> stock;
