@@ -212,7 +212,9 @@ TEST(PathGeometry, SamplingHonoursTheChordTolerance) {
         ASSERT_GE(n, 1);
         // The sagitta of n equal pieces, and of n - 1.
         EXPECT_LE(12.0 * (1 - std::cos(std::abs(sigma) / (2 * n))), tol);
-        if (n > 1) EXPECT_GT(12.0 * (1 - std::cos(std::abs(sigma) / (2 * (n - 1)))), tol);
+        if (n > 1) {
+          EXPECT_GT(12.0 * (1 - std::cos(std::abs(sigma) / (2 * (n - 1)))), tol);
+        }
         double worst = 0;
         for (int k = 0; k < n; ++k) {
           EXPECT_LT(dist(s[k], w.at(static_cast<double>(k) / n)), 1e-11);
