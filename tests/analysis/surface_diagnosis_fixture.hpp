@@ -11,9 +11,11 @@
 // publishing its new ones when done: no two processes write the same folder.
 // The ctest fixture `surface_diagnosis` (surface_diagnosis_fixture.cpp)
 // empties the folder and writes the parts before the cases run, so a
-// rebuilt simulator never meets runs of the previous one.
+// rebuilt simulator never meets runs of the previous one; a case run on its
+// own empties it when it is older than the executable or a component.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -95,10 +97,25 @@ inline void write_parts(const sim::BenchmarkPart& part, const fs::path& dir) {
   sim::write_part(short_flute, dir / "part_short_flute");
 }
 
+// Whether `dir` was written after the running executable and the
+// components were built (runs of an older simulator are not reused).
+inline bool newer_than_the_build(const fs::path& dir) {
+  std::error_code ec;
+  const auto written = fs::last_write_time(dir, ec);
+  if (ec) return false;
+  auto built = fs::last_write_time(fs::read_symlink("/proc/self/exe"), ec);
+  if (ec) return false;
+  for (const auto& f : fs::directory_iterator(truecut::test::component_dir(), ec))
+    built = std::max(built, fs::last_write_time(f.path()));
+  return written >= built;
+}
+
 // root()/parts, written if not there yet (the ctest fixture writes it first;
-// a test executable run on its own writes it itself).
+// a test executable run on its own writes it itself, and starts afresh when
+// the folder is older than the build).
 inline fs::path parts(const sim::BenchmarkPart& part) {
   const fs::path dir = root() / "parts";
+  if (fs::exists(dir) && !newer_than_the_build(dir)) fs::remove_all(root());
   if (!fs::exists(dir)) {
     fs::create_directories(root());
     const fs::path tmp = private_sibling(dir);
