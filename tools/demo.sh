@@ -7,8 +7,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 tools/install-deps.sh
-# Same folder and flags as tools/test.sh, so switching between the two rebuilds nothing.
-cmake -S . -B build -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTRUECUT_SANITIZE=OFF >/dev/null
+# Same folder and options as tools/test.sh (tools/configure.sh), so switching
+# between the two rebuilds nothing: the tests then add only their own targets.
+tools/configure.sh >/dev/null
 cmake --build build -j"$(nproc)" --target truecut interp_planner truecut_comp tool_geometry \
       machine_joints cutting
 # All three parts unless the caller names one (`tools/demo.sh --part implant`).

@@ -1,19 +1,19 @@
 // Surface-mode diagnosis on parts machined by the simulator: the coarse
 // implant machined on a "true" machine (the believed ideal machine plus one
 // planted effect), probed by the virtual CMM (σ = 1 µm), diagnosed against
-// the believed model. The re-machinings of the believed model and its
-// nudged signatures are shared by all cases (one work folder: the same
-// description gives the same run). Every case checks the effect named, its
+// the believed model. The parts and the re-machinings (the same
+// description gives the same run) are shared by all cases, also across
+// processes (surface_diagnosis_fixture.hpp). Every case checks the effect named, its
 // interval covering the truth and the held-out region's residual.
 #include <gtest/gtest.h>
 
-#include <string>
-
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
 #include <system_error>
 
+#include "surface_diagnosis_fixture.hpp"
 #include "test_paths.hpp"
 #include "truecut/analysis/diagnosis/surface.hpp"
 #include "truecut/offline/stl_io.hpp"
@@ -51,42 +51,15 @@ class SurfaceDiagnosis : public ::testing::Test {
       GTEST_SKIP() << "too slow under AddressSanitizer; runs in the normal build";
   }
   static void SetUpTestSuite() {
-    // The process's own folder (parts and re-machining cache), removed at the end.
+    // The process's own folder (the truth's machinings, the diagnosis's
+    // work folder), removed at the end; the parts and the re-machinings
+    // already done by other cases come from the shared fixture.
     dir_ = new fs::path(scratch_dir() / "surface_diagnosis");
-    PartOptions o;
-    o.mesh_edge_mm = 0.25;
-    o.stepover_mm = 0.8;
-    o.point_spacing_mm = 1.0;
-    o.step_down_mm = 2.0;
-    part_ = new BenchmarkPart(make_part(PartId::kImplant, o));
-    write_part(*part_, *dir_ / "part");
+    part_ = new BenchmarkPart(make_part(PartId::kImplant, surface_fixture::part_options()));
+    parts_ = new fs::path(surface_fixture::parts(*part_));
     const std::vector<int32_t> faces = {kXPos, kXNeg, kYPos, kYNeg, kTop};
     points_ = new std::vector<measure::CmmPoint>(
         measure::cmm_points_on_surfaces(part_->mesh, part_->triangle_surface, 0.25, faces));
-    // The same part with a 5-axis finish of the +Y face: A = 90°, the tool's
-    // flat end on the face (TRAORI), after the 3-axis operations.
-    BenchmarkPart five = *part_;
-    const auto end = five.program.rfind("M5\n");
-    five.program.insert(end,
-                        "(OPERATION: SHAFT_Y_FACE_A90)\nT2 M6\nG43 H2\nS12000 M3\nTRAORI\n"
-                        "G0 X0 Y30 Z17 A90 C0\nG0 X0 Y2 Z17\nG1 X0 Y0.8 Z17 F200\n"
-                        "G1 X0 Y0.8 Z2.5 F400\nG0 X0 Y30 Z2.5\nG0 X0 Y30 Z25 A0 C0\nTRAFOOF\n");
-    write_part(five, *dir_ / "part5");
-    // The same part cut by a Ø2 end mill with 2 mm of flute (= the step-down):
-    // each level of the shaft is cut once, by the flank at its own height.
-    // With the long-reach tool's 20 mm flute every lower level sweeps the
-    // whole wall above it again, and the last level (contact 0.5 mm above
-    // the clamp, where the shaft hardly bends) leaves the wall: a workpiece
-    // deflection then never reaches the machined surface.
-    BenchmarkPart short_flute = *part_;
-    for (auto& t : short_flute.metadata.tools)
-      if (t.number == 1) t.flute_length_mm = o.step_down_mm;
-    write_part(short_flute, *dir_ / "part_short_flute");
-    // At A = 90° the spindle comes 60 mm closer to the table than the
-    // 3-axis program needs: the 5-axis job's machine has 100 mm more Z travel.
-    auto m5 = read_machine_description(*dir_ / "part5" / "machine_ideal.json");
-    m5.machine.joints[kZ].min -= 100.0;
-    write_machine_description(*dir_ / "part5" / "machine_ideal.json", m5);
     // Away from the corners and ends, shaped by the tool's ends and corners.
     std::erase_if(*points_, [](const measure::CmmPoint& p) {
       const Eigen::Vector3d& x = p.position_mm;
@@ -102,12 +75,13 @@ class SurfaceDiagnosis : public ::testing::Test {
     std::error_code ignored;
     fs::remove_all(*dir_, ignored);
     delete points_;
+    delete parts_;
     delete part_;
     delete dir_;
   }
 
   static MachineDescription believed(const std::string& part = "part") {
-    return read_machine_description(*dir_ / part / "machine_ideal.json");
+    return read_machine_description(*parts_ / part / "machine_ideal.json");
   }
 
   // Machines the part on `truth` and probes it (σ = 1 µm).
@@ -118,13 +92,15 @@ class SurfaceDiagnosis : public ::testing::Test {
     write_machine_description(out / "machine.json", truth);
     SoftCncJob job;
     job.machine = out / "machine.json";
-    job.program = *dir_ / part / "program.ngc";
-    job.nominal = *dir_ / part / "nominal.stl";
-    job.part = *dir_ / part / "part.json";
-    job.tools = *dir_ / part / "tools.tbl";
+    job.program = *parts_ / part / "program.ngc";
+    job.nominal = *parts_ / part / "nominal.stl";
+    job.part = *parts_ / part / "part.json";
+    job.tools = *parts_ / part / "tools.tbl";
     job.out_dir = out;
     job.component_path = {component_dir()};
     job.record_every = 100;
+    if (std::getenv("TRUECUT_DIAGNOSIS_VERBOSE"))
+      std::printf("machining the part (%s)\n", name.c_str());
     const auto r = run_soft_cnc(job);
     EXPECT_TRUE(r.finished);
     measure::CmmOptions o;
@@ -143,26 +119,35 @@ class SurfaceDiagnosis : public ::testing::Test {
                                              const std::string& part = "part",
                                              const MachineDescription* model = nullptr) {
     dg::SurfaceJob job;
-    job.program = *dir_ / part / "program.ngc";
-    job.nominal = *dir_ / part / "nominal.stl";
-    job.part = *dir_ / part / "part.json";
-    job.tools = *dir_ / part / "tools.tbl";
+    job.program = *parts_ / part / "program.ngc";
+    job.nominal = *parts_ / part / "nominal.stl";
+    job.part = *parts_ / part / "part.json";
+    job.tools = *parts_ / part / "tools.tbl";
     job.component_path = {component_dir()};
     job.work_dir = *dir_ / "work";
+    surface_fixture::seed(job.work_dir);
     dg::SurfaceOptions o;
     o.candidates = std::move(candidates);
+    if (std::getenv("TRUECUT_DIAGNOSIS_VERBOSE"))
+      o.progress = [start = std::chrono::steady_clock::now()](const std::string& line) {
+        const std::chrono::duration<double> t = std::chrono::steady_clock::now() - start;
+        std::printf("%7.1f s  %s\n", t.count(), line.c_str());
+      };
     auto r = dg::diagnose_surface(m, job, model ? *model : believed(part), o);
+    surface_fixture::share(job.work_dir);
     if (std::getenv("TRUECUT_DIAGNOSIS_VERBOSE"))
       std::printf("%s\n", dg::surface_diagnosis_summary(r).c_str());
     return r;
   }
 
   static fs::path* dir_;
+  static fs::path* parts_;  // part, part5, part_short_flute (surface_diagnosis_fixture.hpp)
   static BenchmarkPart* part_;
   static std::vector<measure::CmmPoint>* points_;
 };
 
 fs::path* SurfaceDiagnosis::dir_ = nullptr;
+fs::path* SurfaceDiagnosis::parts_ = nullptr;
 BenchmarkPart* SurfaceDiagnosis::part_ = nullptr;
 std::vector<measure::CmmPoint>* SurfaceDiagnosis::points_ = nullptr;
 

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "interp_test_util.hpp"
+#include "test_names.hpp"
 
 namespace truecut::interp::testing {
 namespace {
@@ -14,6 +15,11 @@ struct Case {
 };
 
 class BadInput : public ::testing::TestWithParam<Case> {};
+
+// The expected message and the case's index (messages repeat), e.g. "unknown_word_W_0".
+std::string case_name(const ::testing::TestParamInfo<Case>& info) {
+  return truecut::test::test_name(info.param.message_part) + "_" + std::to_string(info.index);
+}
 
 TEST_P(BadInput, IsLocated) {
   const Case& c = GetParam();
@@ -40,7 +46,8 @@ INSTANTIATE_TEST_SUITE_P(Words, BadInput,
                                            Case{"G0 X\nM2\n", 1, 4, "has no value"},
                                            Case{"X1\nM2\n", 1, 1, "no motion mode"},
                                            Case{"G0 I1 X2\nM2\n", 1, 4, "I word with no G2 or G3"},
-                                           Case{"G0 X1 Y2 % \nM2\n", 1, 10, "unknown character"}));
+                                           Case{"G0 X1 Y2 % \nM2\n", 1, 10, "unknown character"}),
+                         case_name);
 
 INSTANTIATE_TEST_SUITE_P(
     ModalConflicts, BadInput,
@@ -49,7 +56,8 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{"G20 G21\nM2\n", 1, 5, "same modal group"},
                       Case{"G90 G91\nM2\n", 1, 5, "same modal group"},
                       Case{"M3 M5\nM2\n", 1, 4, "same modal group on one line: M3 and M5"},
-                      Case{"G4 P1 G92 X0\nM2\n", 1, 7, "two non-modal"}));
+                      Case{"G4 P1 G92 X0\nM2\n", 1, 7, "two non-modal"}),
+    case_name);
 
 INSTANTIATE_TEST_SUITE_P(
     Arcs, BadInput,
@@ -59,14 +67,16 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{"F100\nG2 X30 Y0 R5\nM2\n", 2, 11, "too small"},
                       Case{"F100\nG2 X0 Y0 R5\nM2\n", 2, 10, "cannot end where it starts"},
                       Case{"F100\nG2 X10 I5 K1\nM2\n", 2, 11, "K word given for an arc in the XY"},
-                      Case{"F100\nG2 X10 I5 P0\nM2\n", 2, 11, "turns P"}));
+                      Case{"F100\nG2 X10 I5 P0\nM2\n", 2, 11, "turns P"}),
+    case_name);
 
 INSTANTIATE_TEST_SUITE_P(
     Feed, BadInput,
     ::testing::Values(Case{"G1 X10\nM2\n", 1, 1, "zero feed rate"},
                       Case{"G0 X1\nG3 X0 Y1 I-1\nM2\n", 2, 1, "zero feed rate"},
                       Case{"G93 G1 X1 F10\nG1 X2\nM2\n", 2, 1, "needs an F word"},
-                      Case{"G1 X1 F-5\nM2\n", 1, 7, "negative feed"}));
+                      Case{"G1 X1 F-5\nM2\n", 1, 7, "negative feed"}),
+    case_name);
 
 INSTANTIATE_TEST_SUITE_P(
     Expressions, BadInput,
@@ -76,14 +86,16 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{"G0 X[4 MOD 0]\nM2\n", 2 - 1, 8, "division by zero"},
                       Case{"#1 5\nM2\n", 1, 5, "expected '='"},
                       Case{"G0 X1 (unclosed\nM2\n", 1, 7, "unclosed comment"},
-                      Case{"G0 X1 (a (b) c)\nM2\n", 1, 10, "nested comment"}));
+                      Case{"G0 X1 (a (b) c)\nM2\n", 1, 10, "nested comment"}),
+    case_name);
 
 INSTANTIATE_TEST_SUITE_P(Program, BadInput,
                          ::testing::Values(Case{"G0 X1\nG0 X2\n", 2, 1, "no program end"},
                                            Case{"G0 X1\n%\nM2\n", 2, 1, "'%'"},
                                            Case{"G0 X1\nT9 M6\nM2\n", 2, 1,
                                                 "not in the tool table"},
-                                           Case{"G43 H8\nM2\n", 1, 5, "not in the tool table"}));
+                                           Case{"G43 H8\nM2\n", 1, 5, "not in the tool table"}),
+                         case_name);
 
 TEST(BadInput, NotTextIsRejectedBeforeAnything) {
   const std::string binary("\x89PNG\r\n\x1a\n\0\0\0\rIHDR", 16);

@@ -3,6 +3,7 @@
 // measured surface is displaced by 0.05–1 mm, scanned at 5–40 pt/mm² with
 // σ = 0.03 mm noise.
 #include "offline_geometry_util.hpp"
+#include "test_names.hpp"
 #include "truecut/offline/error_vectors.hpp"
 
 #include <gtest/gtest.h>
@@ -119,7 +120,13 @@ TEST_P(SphereMethod, SurfaceEdgeAndCornerDisplacementsAreRecovered) {
 
 INSTANTIATE_TEST_SUITE_P(DisplacementAndDensity, SphereMethod,
                          ::testing::Combine(::testing::Values(0.05, 0.2, 1.0),
-                                            ::testing::Values(5.0, 20.0, 40.0)));
+                                            ::testing::Values(5.0, 20.0, 40.0)),
+                         // e.g. "Displacement0p05mm_Density20PerMm2"
+                         [](const ::testing::TestParamInfo<std::tuple<double, double>>& info) {
+                           return "Displacement" +
+                                  truecut::test::test_name(std::get<0>(info.param)) + "mm_Density" +
+                                  truecut::test::test_name(std::get<1>(info.param)) + "PerMm2";
+                         });
 
 CompensationPoints one_point(const Eigen::Vector3d& p) {
   CompensationPoints c;

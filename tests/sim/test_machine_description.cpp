@@ -7,6 +7,7 @@
 #include <random>
 #include <string>
 
+#include "test_names.hpp"
 #include "test_paths.hpp"
 #include "truecut/sim/machine_description.hpp"
 
@@ -344,7 +345,11 @@ INSTANTIATE_TEST_SUITE_P(
                 "effects.tool_radius_error.corner_radius_mm: must be 0: the nominal tool is a "
                 "ball end mill"},
         BadCase{"/effects/tool_radius_error/enabled", "on", false,
-                "effects.tool_radius_error.enabled: must be true or false"}));
+                "effects.tool_radius_error.enabled: must be true or false"}),
+    // The JSON pointer changed, e.g. "effects_backlash_x_play_mm" or "joints_z_removed".
+    [](const ::testing::TestParamInfo<BadCase>& info) {
+      return truecut::test::test_name(info.param.pointer) + (info.param.remove ? "_removed" : "");
+    });
 
 TEST(BadInputJson, RealCornerRadiusMustFitTheRealRadius) {
   json j = json::parse(kBase);

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "machine_fixtures.hpp"
+#include "test_names.hpp"
 
 using namespace truecut::sim;
 using namespace truecut::sim::test;
@@ -32,7 +33,10 @@ TEST_P(ServoPeriods, SteadyStateFollowingErrorIsVelocityOverKv) {
   EXPECT_EQ(0.0, last.f_error[kZ]) << "joints without servo_lag stay ideal";
 }
 
-INSTANTIATE_TEST_SUITE_P(Periods, ServoPeriods, ::testing::Values(125e-6, 250e-6, 500e-6, 1e-3));
+INSTANTIATE_TEST_SUITE_P(Periods, ServoPeriods, ::testing::Values(125e-6, 250e-6, 500e-6, 1e-3),
+                         [](const ::testing::TestParamInfo<double>& info) {  // e.g. "125us"
+                           return std::to_string(std::lround(info.param * 1e6)) + "us";
+                         });
 
 TEST(Servo, StepResponseIsStableAndTheSameForEveryPeriod) {
   MachineParams m = ideal_params();
