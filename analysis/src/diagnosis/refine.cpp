@@ -1,0 +1,72 @@
+// The nonlinear fit: the selected effects' parameters by re-simulation.
+#include <algorithm>
+#include <cmath>
+
+#include "effect_params.hpp"
+#include "fit_steps.hpp"
+
+namespace truecut::analysis::diagnosis {
+
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+// Levenberg–Marquardt on every parameter of fit.selected by re-simulation
+// (numeric Jacobian, at most 12 iterations); updates fit.params and fit.rss.
+void refine(const FitContext& ctx, ModelFit& fit) {
+  const auto keys = keys_of(fit.selected);
+  VectorXd th = get_theta(fit.params, keys);
+  VectorXd r0 = weighted_residual(ctx, fit.params);
+  double rss0 = r0.squaredNorm(), lambda = 1e-3;
+  for (int it = 0; it < 12 && th.size() > 0; ++it) {
+    const MatrixXd J = jacobian(ctx, fit.params, keys, th, r0);
+    const MatrixXd A = J.transpose() * J;
+    const VectorXd g = J.transpose() * r0;
+    bool improved = false;
+    for (int tries = 0; tries < 6 && !improved; ++tries) {
+      MatrixXd Ad = A;
+      Ad.diagonal().array() *= (1.0 + lambda);
+      Ad.diagonal().array() += 1e-12;
+      const VectorXd step = Ad.ldlt().solve(-g);
+      sim::MachineParams p = fit.params;
+      VectorXd t2 = th + step;
+      set_theta(p, keys, t2);
+      t2 = get_theta(p, keys);
+      const VectorXd r1 = weighted_residual(ctx, p);
+      const double rss1 = r1.squaredNorm();
+      if (rss1 < rss0) {
+        const double gain = (rss0 - rss1) / rss0;
+        th = t2, r0 = r1, rss0 = rss1, fit.params = p;
+        lambda = std::max(lambda / 4, 1e-7);
+        improved = true;
+        if (gain < 1e-7) it = 99;
+      } else {
+        lambda *= 8;
+      }
+    }
+    if (!improved) break;
+  }
+  normalise_periodic(fit.params);
+  fit.rss = weighted_residual(ctx, fit.params).squaredNorm();
+}
+
+void start_new_servo_loops(const FitContext& ctx, const std::vector<const Candidate*>& chosen,
+                           const sim::MachineParams& before, sim::MachineParams& params) {
+  for (const auto* c : chosen) {
+    if (c->effect != "servo_lag" || before.effects.servo_lag.active(c->joint)) continue;
+    auto& a = *params.effects.servo_lag.axes[c->joint];
+    const double lag_s = (1.0 - a.ff1) / a.kv_per_s;
+    sim::ServoLagAxis best = a;
+    double best_rss = weighted_residual(ctx, params).squaredNorm();
+    for (double ff1 : {0.0, 0.5, 0.8, 0.9, 0.95, 0.98, 0.99}) {
+      sim::MachineParams p = params;
+      auto& b = *p.effects.servo_lag.axes[c->joint];
+      b.ff1 = ff1;
+      b.kv_per_s = clamp_param("kv_per_s", (1.0 - ff1) / lag_s);
+      const double rr = weighted_residual(ctx, p).squaredNorm();
+      if (rr < best_rss) best_rss = rr, best = b;
+    }
+    a = best;
+  }
+}
+
+}  // namespace truecut::analysis::diagnosis
