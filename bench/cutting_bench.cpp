@@ -1,6 +1,7 @@
 // Speed of the dexel cutting model on the benchmark parts: cut() calls per
 // second for servo-cycle-sized moves (1 ms at the programs' feeds), and the
-// time to build the model.
+// time to build the model; each path replayed with a cut per cycle and
+// sampled by swept distance (SweptCut, as the cutting component does).
 //
 //   cutting_bench [--spacing MM] [--cell MM] [--cycles N]
 //
@@ -20,6 +21,7 @@
 
 #include "truecut/sim/benchmark_parts.hpp"
 #include "truecut/sim/cutting/dexel_model.hpp"
+#include "truecut/sim/cutting/swept_cut.hpp"
 
 using namespace truecut::sim;
 using namespace truecut::sim::cutting;
@@ -98,25 +100,32 @@ void run(const char* name, PartId id, const Path& path, double spacing, double c
   const double build_s = seconds_since(t0);
   std::printf("%-9s %zu triangles, %zu dexels (spacing %.3g mm), built in %.2f s\n", name,
               part.mesh.triangles.size(), model.size(), spacing, build_s);
-  std::uint64_t touched = 0, substeps = 0;
-  double removed = 0;
-  t0 = Clock::now();
-  const double cpu0 = thread_cpu_s();
-  for (std::size_t k = 1; k < path.poses.size(); ++k) {
-    const Engagement e = model.cut(path.shape, path.poses[k - 1], path.poses[k], false);
-    touched += e.dexels_touched;
-    substeps += e.substeps;
-    removed += e.removed_mm3;
+  const DexelModel fresh = model;
+  for (const bool swept : {false, true}) {
+    model = fresh;
+    std::uint64_t touched = 0, substeps = 0;
+    double removed = 0;
+    t0 = Clock::now();
+    const double cpu0 = thread_cpu_s();
+    SweptCut sampler;
+    auto add = [&](const Engagement& e) {
+      touched += e.dexels_touched;
+      substeps += e.substeps;
+      removed += e.removed_mm3;
+    };
+    for (std::size_t k = 1; k < path.poses.size(); ++k)
+      add(swept ? sampler.step(model, path.shape, path.poses[k])
+                : model.cut(path.shape, path.poses[k - 1], path.poses[k], false));
+    if (swept) add(sampler.finish(model));
+    const double wall = seconds_since(t0);
+    const double s = thread_cpu_s() - cpu0;
+    const double cycles = double(path.poses.size() - 1);
+    std::printf(
+        "%-9s %s %.0f cycles in %.3f s CPU (%.3f s wall): %.2f us per cycle (%.1f %% of a 1 ms "
+        "servo period); %.2f instances and %.0f dexels lowered per cycle, %.2f mm3 removed\n",
+        name, swept ? "swept:    " : "per cycle:", cycles, s, wall, s / cycles * 1e6,
+        s / cycles * 1e3 * 100, substeps / cycles, touched / cycles, removed);
   }
-  const double wall = seconds_since(t0);
-  const double s = thread_cpu_s() - cpu0;
-  const double cycles = double(path.poses.size() - 1);
-  std::printf(
-      "%-9s %.0f cut() calls in %.3f s CPU (%.3f s wall): %.0f calls/s, %.2f us per call (%.1f "
-      "%% of a 1 ms servo period); %.2f instances and %.0f dexels lowered per call, %.2f mm3 "
-      "removed\n",
-      name, cycles, s, wall, cycles / s, s / cycles * 1e6, s / cycles * 1e3 * 100,
-      substeps / cycles, touched / cycles, removed);
 }
 
 }  // namespace

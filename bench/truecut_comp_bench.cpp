@@ -160,8 +160,8 @@ void bench_component(std::size_t calls) {
   const std::array<int32_t, 3> dims{161, 161, 81};
   std::printf("building two %d x %d x %d fields (tricubic, trilinear) ...\n", dims[0], dims[1],
               dims[2]);
-  const auto cubic = make_field(dims, 1.0, rt::FieldInterpolation::tricubic_bspline);
-  const auto linear = make_field(dims, 1.0, rt::FieldInterpolation::trilinear);
+  const auto cubic = make_field(dims, 1.0, rt::FieldInterpolation::kTricubicBspline);
+  const auto linear = make_field(dims, 1.0, rt::FieldInterpolation::kTrilinear);
   const Vec3 extent(dims[0] - 1, dims[1] - 1, dims[2] - 1);
 
   ComponentVariant comp_cubic(&cubic), comp_linear(&linear);
@@ -307,8 +307,8 @@ void bench_cycle(uint64_t cycles, double wall_seconds, bool load) {
   const auto dir = std::filesystem::temp_directory_path();
   const auto cubic_file = dir / "truecut_comp_bench_cubic.tcf";
   const auto linear_file = dir / "truecut_comp_bench_linear.tcf";
-  for (auto [file, interp] : {std::pair{cubic_file, rt::FieldInterpolation::tricubic_bspline},
-                              std::pair{linear_file, rt::FieldInterpolation::trilinear}}) {
+  for (auto [file, interp] : {std::pair{cubic_file, rt::FieldInterpolation::kTricubicBspline},
+                              std::pair{linear_file, rt::FieldInterpolation::kTrilinear}}) {
     rt::CorrectionField f = make_field({121, 121, 61}, 1.0, interp);
     // Centred on the workpiece origin, where the path runs.
     rt::FieldGrid shifted = f.grid();

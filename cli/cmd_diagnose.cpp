@@ -225,8 +225,8 @@ int cmd_diagnose(const std::vector<std::string>& argv) {
     if (*ci != "cubic" && *ci != "linear")
       throw UsageError("--command-interpolation " + *ci + ": expected cubic or linear");
     options.command_interpolation = *ci == "linear"
-                                        ? dg::DiagnosisOptions::CommandInterpolation::Linear
-                                        : dg::DiagnosisOptions::CommandInterpolation::Cubic;
+                                        ? dg::DiagnosisOptions::CommandInterpolation::kLinear
+                                        : dg::DiagnosisOptions::CommandInterpolation::kCubic;
   }
   options.bic_threshold = a.number("bic-threshold", 10.0, 0.0, 1e6);
   options.min_effect_ratio = a.number("min-effect", 0.1, 0.0, 100.0);

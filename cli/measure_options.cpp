@@ -72,7 +72,7 @@ ScanSettings scan_settings(const ParsedArgs& a, const std::string& p) {
   opt.seed = static_cast<std::uint64_t>(a.integer(p + "seed", 1, 0, 0x7fffffffffffffffL));
   s.mode = a.value(p + "mode").value_or("fringe");
   if (s.mode == "laser")
-    opt.mode = sim::measure::ScanMode::laser;
+    opt.mode = sim::measure::ScanMode::kLaser;
   else if (s.mode != "fringe")
     throw UsageError("--" + p + "mode '" + s.mode + "': expected fringe or laser");
   const std::string normals = a.value(p + "normals").value_or("estimate");

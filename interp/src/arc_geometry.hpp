@@ -4,6 +4,7 @@
 // YZ: y,z), in program units.
 #pragma once
 
+#include <stdexcept>
 #include <string>
 
 namespace truecut::interp {
@@ -26,8 +27,9 @@ struct ArcResult {
 };
 
 // What went wrong and which word to point at ('r', 'i', or 0 for the code).
-struct ArcDataError {
-  std::string message;
+struct ArcDataError : std::runtime_error {
+  ArcDataError(const std::string& message, char word_to_point_at)
+      : std::runtime_error(message), word(word_to_point_at) {}
   char word = 0;
 };
 

@@ -697,7 +697,7 @@ void BlockExecutor::arc(bool clockwise, const Axes6& target) {
     int c = col;
     if (e.word == 'r') c = column_of('r');
     if (e.word == 'i') c = b_->has(off1) ? column_of(off1) : column_of(off2);
-    fail(c ? c : col, e.message);
+    fail(c ? c : col, e.what());
   }
   ArcFeed a;
   a.end = end;

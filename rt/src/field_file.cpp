@@ -259,7 +259,7 @@ class Decoder {
 
   FieldInterpolation interpolation_of(const Header& h) const {
     const std::string_view value = required(h, "interpolation");
-    for (const auto mode : {FieldInterpolation::tricubic_bspline, FieldInterpolation::trilinear})
+    for (const auto mode : {FieldInterpolation::kTricubicBspline, FieldInterpolation::kTrilinear})
       if (value == to_string(mode)) return mode;
     fail("interpolation " + printable(value) +
          " unknown; expected 'tricubic-bspline' or 'trilinear'");

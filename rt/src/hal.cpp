@@ -15,13 +15,13 @@ namespace {
 
 Value read_data(Type type, const void* data) {
   switch (type) {
-    case Type::Bit:
+    case Type::kBit:
       return Value::of_bit(*static_cast<const bool*>(data));
-    case Type::Float:
+    case Type::kFloat:
       return Value::of_float(*static_cast<const double*>(data));
-    case Type::S32:
+    case Type::kS32:
       return Value::of_s32(*static_cast<const int32_t*>(data));
-    case Type::U32:
+    case Type::kU32:
       return Value::of_u32(*static_cast<const uint32_t*>(data));
   }
   return {};
@@ -29,16 +29,16 @@ Value read_data(Type type, const void* data) {
 
 void write_data(const Value& v, void* data) {
   switch (v.type) {
-    case Type::Bit:
+    case Type::kBit:
       *static_cast<bool*>(data) = v.b;
       break;
-    case Type::Float:
+    case Type::kFloat:
       *static_cast<double*>(data) = v.f;
       break;
-    case Type::S32:
+    case Type::kS32:
       *static_cast<int32_t*>(data) = v.s;
       break;
-    case Type::U32:
+    case Type::kU32:
       *static_cast<uint32_t*>(data) = v.u;
       break;
   }
@@ -57,7 +57,7 @@ void remove_component(tc_hal& st, int comp_id) {
     }
     if (pin.signal) {
       Signal& sig = *pin.signal;
-      (pin.dir == PinDir::Out ? sig.writers : pin.dir == PinDir::IO ? sig.bidirs : sig.readers)--;
+      (pin.dir == PinDir::kOut ? sig.writers : pin.dir == PinDir::kIo ? sig.bidirs : sig.readers)--;
     }
     it = st.pins.erase(it);
   }
@@ -170,13 +170,13 @@ void Hal::load(const std::string& module, const std::vector<std::string>& args) 
         std::string k = a.substr(0, eq), v = a.substr(eq + 1);
         if (k == "name" + std::to_string(i)) name = v;
         if (k == "period" + std::to_string(i)) period = v;
-        if (k == "fp" + std::to_string(i)) fp = parse_value(Type::Bit, v).b;
+        if (k == "fp" + std::to_string(i)) fp = parse_value(Type::kBit, v).b;
       }
       if (name.empty() && period.empty()) continue;
       if (name.empty() || period.empty())
         throw HalError("threads: thread " + std::to_string(i) + " needs both name" +
                        std::to_string(i) + "= and period" + std::to_string(i) + "=");
-      new_thread(name, parse_value(Type::S32, period).s, fp);
+      new_thread(name, parse_value(Type::kS32, period).s, fp);
     }
     return;
   }
@@ -250,10 +250,10 @@ void Hal::new_thread(const std::string& name, int64_t period_ns, bool uses_fp) {
   th->name = name;
   th->period_ns = period_ns;
   th->uses_fp = uses_fp;
-  st.add_pin(comp_id, name + ".time", Type::S32, PinDir::Out, &th->time_pin);
-  st.add_pin(comp_id, name + ".overruns", Type::U32, PinDir::Out, &th->overruns_pin);
-  st.add_pin(comp_id, name + ".cycles", Type::U32, PinDir::Out, &th->cycles_pin);
-  st.add_param(comp_id, name + ".tmax", Type::S32, ParamDir::RW, &th->tmax_ns);
+  st.add_pin(comp_id, name + ".time", Type::kS32, PinDir::kOut, &th->time_pin);
+  st.add_pin(comp_id, name + ".overruns", Type::kU32, PinDir::kOut, &th->overruns_pin);
+  st.add_pin(comp_id, name + ".cycles", Type::kU32, PinDir::kOut, &th->cycles_pin);
+  st.add_param(comp_id, name + ".tmax", Type::kS32, ParamDir::kRw, &th->tmax_ns);
   st.threads.push_back(std::move(th));
 }
 
@@ -308,19 +308,19 @@ void Hal::link(const std::string& pin_name, const std::string& signal_name) {
   if (pin.type != sig.type)
     throw HalError("type mismatch: pin " + q(pin_name) + " is " + to_string(pin.type) +
                    ", signal " + q(signal_name) + " is " + to_string(sig.type));
-  if (pin.dir == PinDir::Out && (sig.writers > 0 || sig.bidirs > 0)) {
+  if (pin.dir == PinDir::kOut && (sig.writers > 0 || sig.bidirs > 0)) {
     std::string other;
     for (const auto& [n, p] : st.pins)
-      if (p->signal == &sig && p->dir != PinDir::In) other = n;
+      if (p->signal == &sig && p->dir != PinDir::kIn) other = n;
     throw HalError("signal " + q(signal_name) + " already has a writer (" + other + "); pin " +
                    q(pin_name) + " cannot be a second one");
   }
-  if (pin.dir == PinDir::IO && sig.writers > 0)
+  if (pin.dir == PinDir::kIo && sig.writers > 0)
     throw HalError("signal " + q(signal_name) + " has an output pin; I/O pin " + q(pin_name) +
                    " cannot join it");
   // The first pin on a signal gives it its value, as in LinuxCNC.
   if (sig.writers + sig.bidirs + sig.readers == 0) sig.data = pin.dummy;
-  (pin.dir == PinDir::Out ? sig.writers : pin.dir == PinDir::IO ? sig.bidirs : sig.readers)++;
+  (pin.dir == PinDir::kOut ? sig.writers : pin.dir == PinDir::kIo ? sig.bidirs : sig.readers)++;
   pin.signal = &sig;
   *pin.data_ptr_addr = &sig.data;
 }
@@ -332,7 +332,7 @@ void Hal::unlink(const std::string& pin_name) {
   Pin& pin = *pit->second;
   if (!pin.signal) return;
   Signal& sig = *pin.signal;
-  (pin.dir == PinDir::Out ? sig.writers : pin.dir == PinDir::IO ? sig.bidirs : sig.readers)--;
+  (pin.dir == PinDir::kOut ? sig.writers : pin.dir == PinDir::kIo ? sig.bidirs : sig.readers)--;
   pin.dummy = sig.data;  // the pin keeps the value it last saw
   pin.signal = nullptr;
   *pin.data_ptr_addr = &pin.dummy;
@@ -342,14 +342,14 @@ void Hal::set_pin_or_param(const std::string& name, const std::string& value_tex
   auto& st = *state_;
   if (auto it = st.params.find(name); it != st.params.end()) {
     Param& p = *it->second;
-    if (p.dir == ParamDir::RO) throw HalError("parameter " + q(name) + " is read-only");
+    if (p.dir == ParamDir::kRo) throw HalError("parameter " + q(name) + " is read-only");
     write_data(parse_value(p.type, value_text), p.data);
     return;
   }
   auto it = st.pins.find(name);
   if (it == st.pins.end()) throw HalError("no pin or parameter named " + q(name));
   Pin& pin = *it->second;
-  if (pin.dir == PinDir::Out)
+  if (pin.dir == PinDir::kOut)
     throw HalError("pin " + q(name) + " is an output and cannot be set with setp");
   if (pin.signal)
     throw HalError("pin " + q(name) + " is linked to signal " + q(pin.signal->name) +

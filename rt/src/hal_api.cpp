@@ -111,10 +111,10 @@ int api_funct_new(tc_hal* hal, int comp_id, const char* name, tc_hal_funct_t fn,
     Funct* raw = f.get();
     hal->functs.emplace(n, std::move(f));
     try {
-      hal->add_pin(comp_id, n + ".time", Type::S32, PinDir::Out, &raw->time_pin);
-      hal->add_pin(comp_id, n + ".tmax-increased", Type::Bit, PinDir::Out,
+      hal->add_pin(comp_id, n + ".time", Type::kS32, PinDir::kOut, &raw->time_pin);
+      hal->add_pin(comp_id, n + ".tmax-increased", Type::kBit, PinDir::kOut,
                    &raw->tmax_increased_pin);
-      hal->add_param(comp_id, n + ".tmax", Type::S32, ParamDir::RW, &raw->tmax_ns);
+      hal->add_param(comp_id, n + ".tmax", Type::kS32, ParamDir::kRw, &raw->tmax_ns);
     } catch (...) {
       hal->pins.erase(n + ".time");
       hal->pins.erase(n + ".tmax-increased");

@@ -85,7 +85,7 @@ std::string substitute_ini(const Context& ctx, const std::string& word,
 int parse_int(const std::string& text, const std::string& what,
               const std::function<void(std::string)>& fail) {
   try {
-    return parse_value(Type::S32, text).s;
+    return parse_value(Type::kS32, text).s;
   } catch (const HalError&) {
     fail(what + " '" + text + "' is not an integer");
   }
@@ -136,7 +136,7 @@ void run_command(Context& ctx, std::vector<std::string> w,
   } else if (cmd == "newsig") {
     need(3, 3, "newsig SIGNAL bit|float|s32|u32");
     static const std::pair<const char*, Type> types[] = {
-        {"bit", Type::Bit}, {"float", Type::Float}, {"s32", Type::S32}, {"u32", Type::U32}};
+        {"bit", Type::kBit}, {"float", Type::kFloat}, {"s32", Type::kS32}, {"u32", Type::kU32}};
     for (auto [name, t] : types)
       if (w[2] == name) return hal.new_signal(w[1], t);
     fail("newsig: unknown type '" + w[2] + "' (bit, float, s32, u32)");

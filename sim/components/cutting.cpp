@@ -3,6 +3,7 @@
 //
 //   loadrt cutting nominal=FILE.stl part=PART.json [out=FOLDER] [spacing=MM]
 //                  [surfaces=ID,ID,...] [max-stock=MM] [max-depth=MM] [names=NAME]
+//                  [sampling=swept|cycle]
 //
 // FILE and PART are read at load time (relative to the working folder); a bad
 // file fails the load naming the file and key. OUT (default ".") is relative
@@ -21,8 +22,12 @@
 //   out  <i>.fault                  (bit) tool or pose invalid this cycle (nothing cut)
 // Parameters <i>.kc (N/mm², default 1800), <i>.kr (default 0.4), <i>.filter-time
 // (s, default 0.01; first-order filter of the removal per cycle, 0 = none).
-// Function <i>.update cuts from the previous cycle's pose to this one. On exit
-// the machined surface is written to OUT/machined.stl and OUT/machined.ply.
+// Function <i>.update cuts the motion of the tool: with sampling=swept (the
+// default) a tool instance is placed only where the swept solid needs one
+// (swept_cut.hpp), with sampling=cycle at every cycle's pose. On exit the
+// pending motion is cut and the machined surface is written to
+// OUT/machined.stl and OUT/machined.ply.
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -33,6 +38,7 @@
 #include "truecut/rt/component_support.hpp"
 #include "truecut/sim/cutting/cutting_force.hpp"
 #include "truecut/sim/cutting/part_file.hpp"
+#include "truecut/sim/cutting/swept_cut.hpp"
 
 namespace {
 
@@ -48,9 +54,27 @@ struct State {
   std::string name;
   std::filesystem::path out_dir;
   DexelModel model;
-  CutterPose previous;
-  bool has_previous = false;
+  bool per_cycle = false;
+  SweptCut swept;
+  CycleCut cycle;
   double removed_total_mm3 = 0;
+  // A swept sampling cuts every few cycles what those cycles removed; it is
+  // fed to the filter spread over as many cycles (Σ ΔV, Σ ΔV·n̂, Σ ΔV·x), so
+  // the force a later instance sees does not ripple in step with the
+  // instances. (Fed at once, the filtered force would be lowest just before
+  // each instance, and the flank cut by it deflect less than it does.)
+  struct Removal {
+    double mm3 = 0;
+    Eigen::Vector3d normal_mm3 = Eigen::Vector3d::Zero();
+    Eigen::Vector3d contact_mm4 = Eigen::Vector3d::Zero();
+    Removal& operator+=(const Removal& o) {
+      mm3 += o.mm3, normal_mm3 += o.normal_mm3, contact_mm4 += o.contact_mm4;
+      return *this;
+    }
+    Removal scaled(double f) const { return {f * mm3, f * normal_mm3, f * contact_mm4}; }
+  };
+  Removal held;
+  int held_cycles = 0;
   // First-order filtered removal per cycle: Σ ΔV, Σ ΔV·n̂, Σ ΔV·x.
   double filtered_mm3 = 0;
   Eigen::Vector3d filtered_normal_mm3 = Eigen::Vector3d::Zero();
@@ -82,6 +106,10 @@ void idle(State& s, const CutterPose& pose) {
   }
 }
 
+Engagement finish(State& s) {
+  return s.per_cycle ? s.cycle.finish(s.model) : s.swept.finish(s.model);
+}
+
 void update(void* arg, long period_ns) {
   auto& s = *static_cast<State*>(arg);
   CutterPose pose;
@@ -91,32 +119,41 @@ void update(void* arg, long period_ns) {
   }
   const CutterShape shape{*s.radius, *s.corner, *s.flute};
   if (!*s.enable) {
-    s.has_previous = false;
+    s.removed_total_mm3 += finish(s).removed_mm3;
+    *s.removed = s.removed_total_mm3;
     *s.fault = false;
     idle(s, pose);
     return;
   }
   const Engagement e =
-      s.model.cut(shape, s.has_previous ? s.previous : pose, pose, !s.has_previous);
+      s.per_cycle ? s.cycle.step(s.model, shape, pose) : s.swept.step(s.model, shape, pose);
+  s.removed_total_mm3 += e.removed_mm3;
+  *s.removed = s.removed_total_mm3;
   *s.fault = e.invalid_input;
   if (e.invalid_input) {
-    s.has_previous = false;
     idle(s, pose);
     return;
   }
-  s.previous = pose;
-  s.has_previous = true;
-  s.removed_total_mm3 += e.removed_mm3;
-  *s.removed = s.removed_total_mm3;
+  // The removal this cycle for the filter (State::held).
+  using Removal = State::Removal;
+  if (e.substeps > 0) {
+    s.held += {e.removed_mm3, e.removed_mm3 * e.normal, e.removed_mm3 * e.contact_mm};
+    s.held_cycles = s.per_cycle ? 1 : s.swept.cycles_covered();
+  }
+  Removal now;
+  if (s.held_cycles > 0) {
+    now = s.held.scaled(1.0 / s.held_cycles--);
+    s.held += now.scaled(-1);
+  }
   // A dexel loses its whole height in the cycle the tool reaches it, so the
   // raw removal per cycle comes in bursts when the feed per cycle is below
   // the dexel spacing; the filter spreads them like a measured power would.
   const double dt_s = double(period_ns) * 1e-9;
   const double tau_s = s.params->filter_time_s;
   const double alpha = tau_s > 0 ? 1 - std::exp(-dt_s / tau_s) : 1.0;
-  s.filtered_mm3 += alpha * (e.removed_mm3 - s.filtered_mm3);
-  s.filtered_normal_mm3 += alpha * (e.removed_mm3 * e.normal - s.filtered_normal_mm3);
-  s.filtered_contact_mm4 += alpha * (e.removed_mm3 * e.contact_mm - s.filtered_contact_mm4);
+  s.filtered_mm3 += alpha * (now.mm3 - s.filtered_mm3);
+  s.filtered_normal_mm3 += alpha * (now.normal_mm3 - s.filtered_normal_mm3);
+  s.filtered_contact_mm4 += alpha * (now.contact_mm4 - s.filtered_contact_mm4);
   Engagement f;
   const bool engaged = s.filtered_mm3 > 1e-9;
   if (engaged) {
@@ -171,6 +208,9 @@ extern "C" TC_COMPONENT_EXPORT int truecut_component_init(const tc_hal_api_t* ap
     options.max_stock_mm = args.take_double("max-stock", options.max_stock_mm);
     options.max_depth_mm = args.take_double("max-depth", options.max_depth_mm);
     if (auto ids = args.take("surfaces")) options.surfaces = parse_ids(*ids);
+    const std::string sampling = args.take_or("sampling", "swept");
+    if (sampling != "swept" && sampling != "cycle")
+      throw InitError("sampling='" + sampling + "' must be swept or cycle");
     auto names = instance_names(args, "cutting", 1);
     args.expect_consumed("cutting");
     if (!nominal) throw InitError("cutting needs nominal=FILE.stl (the nominal part)");
@@ -183,6 +223,7 @@ extern "C" TC_COMPONENT_EXPORT int truecut_component_init(const tc_hal_api_t* ap
     s->name = names.at(0);
     s->out_dir = std::filesystem::path(api->output_dir(hal)) / out;
     s->model = load_dexel_model(*nominal, *part, options);
+    s->per_cycle = sampling == "cycle";
 
     const std::string& n = s->name;
     const int id = new_component(api, hal, n);
@@ -227,6 +268,7 @@ extern "C" TC_COMPONENT_EXPORT void truecut_component_exit(const tc_hal_api_t* a
   std::unique_ptr<State> s(static_cast<State*>(module_state));
   if (!s) return;
   try {
+    s->removed_total_mm3 += finish(*s).removed_mm3;
     std::filesystem::create_directories(s->out_dir);
     s->model.write_machined(s->out_dir);
     api->message(hal, TC_HAL_MSG_INFO,

@@ -6,7 +6,6 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
-#include <unordered_map>
 
 #include <Eigen/Geometry>
 
@@ -39,8 +38,49 @@ struct WeldHash {
     std::uint64_t h = std::uint64_t(k.surface) * 0x9E3779B97F4A7C15ull;
     for (auto b : k.bits)
       h = (h ^ b) * 0x100000001B3ull + (h >> 29);
-    return h;
+    h ^= h >> 31;  // the low bits index the table: fold the high bits in
+    h *= 0xBF58476D1CE4E5B9ull;
+    return h ^ (h >> 27);
   }
+};
+
+// WeldKey -> uint32 with open addressing (linear probing, power-of-two
+// size, at most half full): one probe touches one cache line, where a node
+// map costs a bucket and a node per lookup and a lookup per sub-vertex of
+// every triangle is most of building a model.
+class WeldTable {
+ public:
+  explicit WeldTable(std::size_t expected) {
+    resize(std::bit_ceil(std::max<std::size_t>(16, 2 * expected)));
+  }
+  // The value at `key`, inserted as `fresh` when absent.
+  std::uint32_t& at(const WeldKey& key, std::uint32_t fresh) {
+    if (2 * (size_ + 1) > slots_.size()) resize(2 * slots_.size());
+    std::size_t i = WeldHash{}(key) & (slots_.size() - 1);
+    while (slots_[i].used && !(slots_[i].key == key))
+      i = (i + 1) & (slots_.size() - 1);
+    if (!slots_[i].used) {
+      slots_[i] = {key, fresh, true};
+      ++size_;
+    }
+    return slots_[i].value;
+  }
+
+ private:
+  struct Slot {
+    WeldKey key;
+    std::uint32_t value;
+    bool used = false;
+  };
+  void resize(std::size_t n) {
+    std::vector<Slot> old(n);
+    old.swap(slots_);
+    size_ = 0;
+    for (const Slot& s : old)
+      if (s.used) at(s.key, s.value);
+  }
+  std::vector<Slot> slots_;
+  std::size_t size_ = 0;
 };
 
 WeldKey weld_key(int surface, const Eigen::Vector3d& p) {
@@ -161,16 +201,19 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
     return !smooth;
   };
 
-  std::unordered_map<WeldKey, std::vector<std::uint32_t>, WeldHash> welded;
+  // The dexels at one weld key, newest first: the head in `welded`, the rest
+  // through `next_welded` (one map entry per position, no list per entry).
+  WeldTable welded(2 * nt);
+  std::vector<std::uint32_t> next_welded;
   // Inset directions gathered from every triangle that shares a dexel (a
   // block corner is on the sharp edges of two triangles); applied at the end.
-  std::unordered_map<std::uint32_t, EdgeInsets> insets;
+  std::vector<EdgeInsets> insets;
   auto dexel = [&](int surface, const Eigen::Vector3d& p, const Eigen::Vector3d& n,
                    const EdgeInsets& in) {
-    auto& list = welded[weld_key(surface, p)];
+    std::uint32_t& head = welded.at(weld_key(surface, p), kNone);
     std::uint32_t index = kNone;
-    for (std::uint32_t i : list)
-      if (m.normal_[i].dot(n) > kWeldCos) index = i;
+    for (std::uint32_t i = head; i != kNone && index == kNone; i = next_welded[i])
+      if (m.normal_[i].dot(n) > kWeldCos) index = i;  // the newest that matches
     if (index == kNone) {
       if (m.position_.size() >= kMaxDexels)
         throw std::length_error("cutting: more than 50 million dexels; raise spacing_mm");
@@ -179,7 +222,9 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
       m.normal_.push_back(n);
       m.area_.push_back(0);
       m.surface_.push_back(surface);
-      list.push_back(index);
+      next_welded.push_back(head);
+      head = index;
+      insets.emplace_back();
     }
     if (in.count > 0) {
       EdgeInsets& acc = insets[index];
@@ -288,9 +333,9 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
 
   const std::size_t nd = m.position_.size();
   m.line_origin_ = m.position_;
-  for (const auto& [i, in] : insets)
-    for (int k = 0; k < in.count; ++k)
-      m.line_origin_[i] += in.inset_mm * in.dir[k];
+  for (std::size_t i = 0; i < nd; ++i)
+    for (int k = 0; k < insets[i].count; ++k)
+      m.line_origin_[i] += insets[i].inset_mm * insets[i].dir[k];
   m.height_.resize(nd);
   m.floor_.assign(nd, -options.max_depth_mm);
   for (std::size_t i = 0; i < nd; ++i)
@@ -300,15 +345,14 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
   // sides of a sharp edge or corner), linked in a cycle.
   m.partner_.resize(nd);
   {
-    std::unordered_map<WeldKey, std::uint32_t, WeldHash> first;
+    WeldTable first(nd);
     std::vector<std::uint32_t> last(nd);
     for (std::size_t i = 0; i < nd; ++i) {
       m.partner_[i] = last[i] = static_cast<std::uint32_t>(i);
-      const auto [it, inserted] =
-          first.try_emplace(weld_key(0, m.position_[i]), static_cast<std::uint32_t>(i));
-      if (inserted) continue;
-      // Append i to the cycle that starts at it->second.
-      const std::uint32_t head = it->second;
+      const std::uint32_t head =
+          first.at(weld_key(0, m.position_[i]), static_cast<std::uint32_t>(i));
+      if (head == i) continue;
+      // Append i to the cycle that starts at head.
       m.partner_[last[head]] = static_cast<std::uint32_t>(i);
       m.partner_[i] = head;
       last[head] = static_cast<std::uint32_t>(i);

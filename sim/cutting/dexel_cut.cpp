@@ -54,6 +54,16 @@ bool valid(const CutterPose& p) noexcept {
   return len >= 0.5 && len <= 2.0;
 }
 
+double DexelModel::substeps_needed(const CutterShape& shape, const CutterPose& from,
+                                   const CutterPose& to) const noexcept {
+  const Eigen::Vector3d a0 = from.axis.normalized(), a1 = to.axis.normalized();
+  const double angle = std::atan2(a0.cross(a1).norm(), a0.dot(a1));
+  Eigen::Vector3d mean_axis = a0 + a1;
+  mean_axis = mean_axis.norm() > 1e-6 ? mean_axis.normalized() : a0;
+  return cutting::substeps_needed(shape, to.tip_mm - from.tip_mm, mean_axis, angle,
+                                  options_.tolerance_mm);
+}
+
 Engagement DexelModel::cut(const CutterShape& shape, const CutterPose& from, const CutterPose& to,
                            bool include_start) noexcept {
   Engagement e;
@@ -68,11 +78,9 @@ Engagement DexelModel::cut(const CutterShape& shape, const CutterPose& from, con
   const Eigen::Vector3d a0 = from.axis.normalized(), a1 = to.axis.normalized();
   const double angle = std::atan2(a0.cross(a1).norm(), a0.dot(a1));
   const double sin_angle = std::sin(angle);
-  Eigen::Vector3d mean_axis = a0 + a1;
-  mean_axis = mean_axis.norm() > 1e-6 ? mean_axis.normalized() : a0;
   const Eigen::Vector3d d = to.tip_mm - from.tip_mm;
 
-  const double need = substeps_needed(shape, d, mean_axis, angle, options_.tolerance_mm);
+  const double need = substeps_needed(shape, from, to);
   int steps = 1;
   if (need > options_.max_substeps) {
     steps = options_.max_substeps;

@@ -132,13 +132,13 @@ ThermalDriftAxis read_thermal_drift(const JsonNode& n, int) {
     const JsonNode d = n.child("driver");
     const std::string s = d.string();
     if (s == "time")
-      a.driver = ThermalDriver::Time;
+      a.driver = ThermalDriver::kTime;
     else if (s == "spindle_power")
-      a.driver = ThermalDriver::SpindlePower;
+      a.driver = ThermalDriver::kSpindlePower;
     else
       d.fail("unknown driver '" + s + "'; known: time, spindle_power");
   }
-  if (a.driver == ThermalDriver::SpindlePower || n.has("reference_power_kw"))
+  if (a.driver == ThermalDriver::kSpindlePower || n.has("reference_power_kw"))
     a.reference_power_kw = positive(n.child("reference_power_kw"));
   return a;
 }
@@ -250,7 +250,7 @@ KinematicsParams read_kinematics(const JsonNode& n) {
   const JsonNode type = n.child("type");
   if (const std::string t = type.string(); t != "xyzac-trt")
     type.fail("unknown kinematics type '" + t + "'; known: xyzac-trt");
-  k.type = KinematicsType::XyzacTrt;
+  k.type = KinematicsType::kXyzacTrt;
   k.ac.x_rot_point_mm = optional(n, "x_rot_point_mm", 0.0, any);
   k.ac.y_rot_point_mm = optional(n, "y_rot_point_mm", 0.0, any);
   k.ac.z_rot_point_mm = optional(n, "z_rot_point_mm", 0.0, any);
@@ -371,7 +371,7 @@ void check_consistency(const JsonNode& root, const MachineParams& m) {
 
 DriveParams default_drive(int joint) {
   DriveParams d;
-  if (joint_kind(joint) == JointKind::Rotary) {
+  if (joint_kind(joint) == JointKind::kRotary) {
     d.inertia = 2.0;
     d.max_accel = 20000.0;
   }
@@ -394,7 +394,7 @@ MachineDescription parse_machine_description(const std::string& json_text,
   joints.allow_only({kJointNames.begin(), kJointNames.end()}, "joint");
   for (int j = 0; j < kJointCount; ++j) {
     const std::string name(kJointNames[j]);
-    if (joints.has(name) || joint_kind(j) == JointKind::Linear)
+    if (joints.has(name) || joint_kind(j) == JointKind::kLinear)
       d.machine.joints[j] = read_joint(joints.child(name), j);
     else
       d.machine.joints[j].drive = default_drive(j);

@@ -50,7 +50,7 @@ Json effects_json(const Effects& fx) {
   write_per_axis(e, "thermal_drift", fx.thermal_drift, [](const ThermalDriftAxis& a, int) {
     return Json{{"gain_mm", a.gain_mm},
                 {"tau_s", a.tau_s},
-                {"driver", a.driver == ThermalDriver::Time ? "time" : "spindle_power"},
+                {"driver", a.driver == ThermalDriver::kTime ? "time" : "spindle_power"},
                 {"reference_power_kw", a.reference_power_kw}};
   });
   if (fx.squareness.enabled || fx.squareness.params != SquarenessParams{}) {

@@ -27,7 +27,7 @@ bool take_finite(std::array<double, 3>& held, const std::array<double, 3>& in) n
 
 // Force (N) per kg → mm/s²; torque (N·m) per kg·m² → deg/s².
 double accel_per_force_over_inertia(int joint) {
-  return joint_kind(joint) == JointKind::Linear ? 1000.0 : 180.0 / std::numbers::pi;
+  return joint_kind(joint) == JointKind::kLinear ? 1000.0 : 180.0 / std::numbers::pi;
 }
 
 }  // namespace

@@ -91,7 +91,7 @@ TEST(DiagnosisTraceEffects, ThermalDriftDrivenBySpindlePower) {
   ThermalDriftAxis th;
   th.gain_mm = 0.008;
   th.tau_s = 3.0;
-  th.driver = ThermalDriver::SpindlePower;
+  th.driver = ThermalDriver::kSpindlePower;
   th.reference_power_kw = 10.0;
   truth.machine.effects.thermal_drift.axes[kX] = th;
   const auto r = run(believed_with_servo(), powered_recording(truth.machine, 0.001, 3));
@@ -101,7 +101,7 @@ TEST(DiagnosisTraceEffects, ThermalDriftDrivenBySpindlePower) {
   expect_covers(*e, "tau_s", 3.0, r);
   expect_only(r, "thermal_drift");
   ASSERT_TRUE(r.fitted.machine.effects.thermal_drift.axes[kX]);
-  EXPECT_EQ(r.fitted.machine.effects.thermal_drift.axes[kX]->driver, ThermalDriver::SpindlePower);
+  EXPECT_EQ(r.fitted.machine.effects.thermal_drift.axes[kX]->driver, ThermalDriver::kSpindlePower);
   ASSERT_TRUE(r.has_heldout);
   EXPECT_LT(r.heldout.rms_after_mm, 1.5 * 0.001) << dg::diagnosis_summary(r);
 }

@@ -51,7 +51,7 @@ double max_error(const rt::CorrectionField& field, int32_t tool,
   double e = 0.0;
   for (const auto& p : at) {
     const rt::FieldSample s = field.evaluate(tool, p);
-    EXPECT_EQ(s.status, rt::FieldStatus::ok);
+    EXPECT_EQ(s.status, rt::FieldStatus::kOk);
     e = std::max(e, (s.correction_mm - f(p)).norm());
   }
   return e;
@@ -159,7 +159,7 @@ TEST(FieldFit, OneLayerPerToolAndWeights) {
   EXPECT_GT(fading, 0.05);
   EXPECT_LT(fading, 0.95);
   const rt::FieldSample outside = r.field.evaluate(1, {30.0, 10.0, 40.0});
-  EXPECT_EQ(outside.status, rt::FieldStatus::outside_grid);
+  EXPECT_EQ(outside.status, rt::FieldStatus::kOutsideGrid);
   EXPECT_EQ(outside.weight, 0.0);
 }
 

@@ -239,7 +239,7 @@ FieldError field_error(const FieldPipelineResult& r, const Displacement& w) {
     const Eigen::Vector3d& p = s.tip_mm;
     if (p.x() < 6 || p.x() > 34 || p.y() < 5 || p.y() > 15 || p.z() > 1e-9) continue;
     const rt::FieldSample f = r.fit->field.evaluate(1, p);
-    EXPECT_EQ(f.status, rt::FieldStatus::ok);
+    EXPECT_EQ(f.status, rt::FieldStatus::kOk);
     const double dz = f.correction_mm.z() + w(p.x(), p.y());
     sum2 += dz * dz;
     e.max_mm = std::max(e.max_mm, std::abs(dz));

@@ -63,7 +63,7 @@ TEST(CorrectionField, GridNodesReproduceTheStoredVectors) {
       for (int32_t i = 0; i < g.dims[0]; ++i) {
         const FieldNode& n = nodes[g.index(i, j, k)];
         const FieldSample s = field.evaluate(3, g.node_position_mm(i, j, k));
-        ASSERT_EQ(s.status, FieldStatus::ok) << i << " " << j << " " << k;
+        ASSERT_EQ(s.status, FieldStatus::kOk) << i << " " << j << " " << k;
         EXPECT_NEAR(s.correction_mm.x(), n.dx_mm, 1e-12) << i << " " << j << " " << k;
         EXPECT_NEAR(s.correction_mm.y(), n.dy_mm, 1e-12) << i << " " << j << " " << k;
         EXPECT_NEAR(s.correction_mm.z(), n.dz_mm, 1e-12) << i << " " << j << " " << k;
@@ -100,7 +100,7 @@ TEST(CorrectionField, LinearFieldsAreReproducedExactlyWithTheirJacobian) {
   for (int n = 0; n < 2000; ++n) {
     const Eigen::Vector3d p = random_inside(g, rng);
     for (const FieldSample& s : {field.evaluate_tricubic(1, p), field.evaluate_trilinear(1, p)}) {
-      ASSERT_EQ(s.status, FieldStatus::ok);
+      ASSERT_EQ(s.status, FieldStatus::kOk);
       EXPECT_LE((s.correction_mm - (m * p + b)).cwiseAbs().maxCoeff(), 1e-13);
       EXPECT_LE((s.jacobian - m).cwiseAbs().maxCoeff(), 1e-13);
     }
@@ -153,8 +153,8 @@ std::pair<double, double> largest_jumps_across_faces(
     lo[a] -= 1e-9 * g.spacing_mm[a];
     hi[a] += 1e-9 * g.spacing_mm[a];
     const FieldSample sl = (field.*eval)(0, lo), sh = (field.*eval)(0, hi);
-    EXPECT_EQ(sl.status, FieldStatus::ok);
-    EXPECT_EQ(sh.status, FieldStatus::ok);
+    EXPECT_EQ(sl.status, FieldStatus::kOk);
+    EXPECT_EQ(sh.status, FieldStatus::kOk);
     value_jump = std::max(value_jump, (sl.correction_mm - sh.correction_mm).cwiseAbs().maxCoeff());
     jacobian_jump = std::max(jacobian_jump, (sl.jacobian - sh.jacobian).cwiseAbs().maxCoeff());
   }
@@ -236,7 +236,7 @@ TEST(CorrectionField, ZeroWeightRimFadesSmoothlyToZeroAtTheGridFaces) {
     const double face = (n / 3) % 2 == 0 ? 0.0 : (g.dims[a] - 1) * g.spacing_mm[a];
     p[a] = face + (face == 0.0 ? 1e-9 : -1e-9);
     const FieldSample inside = field.evaluate(0, p);
-    ASSERT_EQ(inside.status, FieldStatus::ok);
+    ASSERT_EQ(inside.status, FieldStatus::kOk);
     EXPECT_LT(inside.correction_mm.cwiseAbs().maxCoeff(), 1e-12);
     EXPECT_LT(inside.jacobian.cwiseAbs().maxCoeff(), 1e-9);
   }
@@ -254,14 +254,14 @@ TEST(CorrectionField, OutsideTheGridGivesZeroAndAStatus) {
       g.spacing_mm.cwiseProduct(Eigen::Vector3d(g.dims[0] - 1, g.dims[1] - 1, g.dims[2] - 1));
   EXPECT_TRUE(field.inside(g.origin_mm));
   EXPECT_TRUE(field.inside(far_corner));
-  EXPECT_EQ(field.evaluate(0, far_corner).status, FieldStatus::ok);
+  EXPECT_EQ(field.evaluate(0, far_corner).status, FieldStatus::kOk);
   for (int a = 0; a < 3; ++a) {
     for (const double step : {-1e-6, 1e-6}) {
       Eigen::Vector3d p = step < 0 ? g.origin_mm : far_corner;
       p[a] += step;
       EXPECT_FALSE(field.inside(p));
       for (const FieldSample& s : {field.evaluate_tricubic(0, p), field.evaluate_trilinear(0, p)}) {
-        EXPECT_EQ(s.status, FieldStatus::outside_grid);
+        EXPECT_EQ(s.status, FieldStatus::kOutsideGrid);
         EXPECT_EQ(s.correction_mm, Eigen::Vector3d::Zero());
         EXPECT_EQ(s.weight, 0.0);
         EXPECT_EQ(s.jacobian, Eigen::Matrix3d::Zero());
@@ -284,7 +284,7 @@ TEST(CorrectionField, OneLayerPerTool) {
   EXPECT_NEAR(field.evaluate(7, p).correction_mm.z(), 0.02, 1e-15);
   EXPECT_NEAR(field.evaluate(12, p).correction_mm.z(), 0.03, 1e-15);
   const FieldSample missing = field.evaluate(5, p);
-  EXPECT_EQ(missing.status, FieldStatus::no_layer_for_tool);
+  EXPECT_EQ(missing.status, FieldStatus::kNoLayerForTool);
   EXPECT_EQ(missing.correction_mm, Eigen::Vector3d::Zero());
   EXPECT_EQ(missing.weight, 0.0);
   EXPECT_TRUE(field.nodes(5).empty());
@@ -296,7 +296,7 @@ TEST(CorrectionField, NonFinitePositionIsRejected) {
   const CorrectionField field(g, {random_layer(g, 0, rng, false)});
   for (const double bad : {std::nan(""), HUGE_VAL, -HUGE_VAL}) {
     const FieldSample s = field.evaluate(0, Eigen::Vector3d(0, bad, -38));
-    EXPECT_EQ(s.status, FieldStatus::non_finite);
+    EXPECT_EQ(s.status, FieldStatus::kNonFinite);
     EXPECT_EQ(s.correction_mm, Eigen::Vector3d::Zero());
   }
 }
@@ -306,7 +306,7 @@ TEST(CorrectionField, EvaluateFollowsTheDeclaredInterpolation) {
   const FieldGrid g = test_grid();
   const FieldLayer layer = random_layer(g, 0, rng, true);
   const CorrectionField cubic(g, {layer});
-  const CorrectionField linear(g, {layer}, FieldInterpolation::trilinear);
+  const CorrectionField linear(g, {layer}, FieldInterpolation::kTrilinear);
   const Eigen::Vector3d p = random_inside(g, rng);
   EXPECT_EQ(cubic.evaluate(0, p).correction_mm, cubic.evaluate_tricubic(0, p).correction_mm);
   EXPECT_EQ(linear.evaluate(0, p).correction_mm, linear.evaluate_trilinear(0, p).correction_mm);

@@ -16,7 +16,7 @@ namespace {
 namespace fs = std::filesystem;
 
 CorrectionField sample_field(
-    FieldInterpolation interpolation = FieldInterpolation::tricubic_bspline) {
+    FieldInterpolation interpolation = FieldInterpolation::kTricubicBspline) {
   FieldGrid g;
   g.origin_mm = {-10.1, 0.3, -42.000000000000007};  // not exactly representable: must round-trip
   g.spacing_mm = {2.5, 1.0 / 3.0, 1.25};
@@ -106,7 +106,7 @@ TEST(Crc64, CheckValue) {
 
 TEST(FieldFile, RoundTripThroughAFile) {
   const fs::path path = test::scratch_dir() / "field.tcf";
-  for (const auto mode : {FieldInterpolation::tricubic_bspline, FieldInterpolation::trilinear}) {
+  for (const auto mode : {FieldInterpolation::kTricubicBspline, FieldInterpolation::kTrilinear}) {
     const CorrectionField field = sample_field(mode);
     write_field_file(path, field, kInfo);
     EXPECT_FALSE(fs::exists(path.string() + ".tmp"));

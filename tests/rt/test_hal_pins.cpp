@@ -166,9 +166,9 @@ TEST_F(HalPins, ValuesAreParsedPerType) {
 }
 
 TEST_F(HalPins, SignalNamesMustNotShadowPins) {
-  EXPECT_THROW(hal.new_signal("fx.f-in", Type::Float), HalError);
-  hal.new_signal("bits", Type::Bit);
-  EXPECT_THROW(hal.new_signal("bits", Type::Bit), HalError);
+  EXPECT_THROW(hal.new_signal("fx.f-in", Type::kFloat), HalError);
+  hal.new_signal("bits", Type::kBit);
+  EXPECT_THROW(hal.new_signal("bits", Type::kBit), HalError);
   EXPECT_THROW(hal.link("fx.f-in", "bits"), HalError);
 }
 
@@ -180,7 +180,7 @@ TEST_F(HalPins, IntrospectionListsPinsWithOwnerAndSignal) {
     seen = true;
     EXPECT_EQ("fx", p.owner);
     EXPECT_EQ("sig", p.signal);
-    EXPECT_EQ(PinDir::Out, p.dir);
+    EXPECT_EQ(PinDir::kOut, p.dir);
   }
   EXPECT_TRUE(seen);
   auto sigs = hal.signals();

@@ -98,11 +98,11 @@ TEST(KinematicsAc, MatchesLinuxCncWorldMinusToolLength) {
 TEST(KinematicsAc, InverseOfHandPose) {
   const ToolPose pose{{100, 0, 0}, {1, 0, 0}};
   const AcIkResult r = inverse_ac({}, pose, {0, 0, 0, 80, 80});
-  EXPECT_EQ(r.status, AcIkStatus::ok);
+  EXPECT_EQ(r.status, AcIkStatus::kOk);
   EXPECT_LE(max_joint_error(r.joints, {0, 0, 100, 90, 90}), 1e-12);
   // The other solution, when the hint is on that side.
   const AcIkResult other = inverse_ac({}, pose, {0, 0, 0, -80, -80});
-  EXPECT_EQ(other.status, AcIkStatus::ok);
+  EXPECT_EQ(other.status, AcIkStatus::kOk);
   EXPECT_LE(max_joint_error(other.joints, {0, 0, 100, -90, -90}), 1e-12);
 }
 
@@ -140,7 +140,7 @@ TEST_P(KinematicsAcRoundTrip, InverseOfForwardReturnsTheJointsNearTheHint) {
     hint.a_deg += jitter(rng);
     hint.c_deg += jitter(rng);
     const AcIkResult r = inverse_ac(p, pose, hint);
-    ASSERT_EQ(r.status, AcIkStatus::ok) << "trial " << trial;
+    ASSERT_EQ(r.status, AcIkStatus::kOk) << "trial " << trial;
     ASSERT_LE(max_joint_error(r.joints, j), kTol) << "trial " << trial << " A " << j.a_deg;
   }
 }
@@ -156,7 +156,7 @@ TEST_P(KinematicsAcRoundTrip, ForwardOfInverseIsIdentityForAnyHint) {
     if (pose.axis.norm() < 1e-3) continue;
     pose.axis.normalize();
     const AcIkResult r = inverse_ac(p, pose, random_joints(rng));
-    ASSERT_NE(r.status, AcIkStatus::invalid_input);
+    ASSERT_NE(r.status, AcIkStatus::kInvalidInput);
     const ToolPose back = forward_ac(p, r.joints);
     ASSERT_LE((back.tcp_mm - pose.tcp_mm).cwiseAbs().maxCoeff(), kTol) << "trial " << trial;
     ASSERT_LE((back.axis - pose.axis).cwiseAbs().maxCoeff(), kTol) << "trial " << trial;
@@ -172,7 +172,7 @@ TEST_P(KinematicsAcRoundTrip, RoundTripNearTheSingularity) {
     j.a_deg = std::copysign(std::pow(10.0, log_tilt(rng)), sign(rng));  // 1e-6 .. 1 deg
     const ToolPose pose = forward_ac(p, j);
     const AcIkResult r = inverse_ac(p, pose, j);
-    ASSERT_EQ(r.status, AcIkStatus::ok) << "trial " << trial;
+    ASSERT_EQ(r.status, AcIkStatus::kOk) << "trial " << trial;
     ASSERT_LE(max_joint_error(r.joints, j), kTol) << "trial " << trial << " A " << j.a_deg;
     const ToolPose back = forward_ac(p, inverse_ac(p, pose, random_joints(rng)).joints);
     ASSERT_LE((back.tcp_mm - pose.tcp_mm).cwiseAbs().maxCoeff(), kTol) << "trial " << trial;
@@ -196,7 +196,7 @@ TEST(KinematicsAc, VerticalToolKeepsTheHintC) {
   for (const double hint_c : {0.0, 123.4, -3599.5}) {
     const ToolPose pose{{5, -7, 12}, {0, 0, 1}};
     const AcIkResult r = inverse_ac(p, pose, {0, 0, 0, 3, hint_c});
-    EXPECT_EQ(r.status, AcIkStatus::singular);
+    EXPECT_EQ(r.status, AcIkStatus::kSingular);
     EXPECT_EQ(r.joints.c_deg, hint_c);
     EXPECT_EQ(r.joints.a_deg, 0.0);
     expect_pose_near(forward_ac(p, r.joints), pose.tcp_mm, pose.axis, kTol);
@@ -207,7 +207,7 @@ TEST(KinematicsAc, AntiParallelToolIsTheSameSingularity) {
   const AcTrtParams p;
   const ToolPose pose{{4, 5, 6}, {0, 0, -1}};
   const AcIkResult r = inverse_ac(p, pose, {0, 0, 0, 170, 25});
-  EXPECT_EQ(r.status, AcIkStatus::singular);
+  EXPECT_EQ(r.status, AcIkStatus::kSingular);
   EXPECT_EQ(r.joints.c_deg, 25.0);
   EXPECT_NEAR(std::abs(r.joints.a_deg), 180.0, 1e-12);
   expect_pose_near(forward_ac(p, r.joints), pose.tcp_mm, pose.axis, kTol);
@@ -220,7 +220,7 @@ TEST(KinematicsAc, TiltInsideTheSingularBandDoesNotSpinC) {
   const double t = 1e-7 * M_PI / 180;
   const ToolPose pose{{1, 2, 3}, {std::sin(t), 0, std::cos(t)}};
   const AcIkResult r = inverse_ac(p, pose, {0, 0, 0, 0, 10});
-  EXPECT_EQ(r.status, AcIkStatus::singular);
+  EXPECT_EQ(r.status, AcIkStatus::kSingular);
   EXPECT_EQ(r.joints.c_deg, 10.0);
   const ToolPose back = forward_ac(p, r.joints);
   EXPECT_LE((back.tcp_mm - pose.tcp_mm).norm(), kTol);
@@ -228,7 +228,7 @@ TEST(KinematicsAc, TiltInsideTheSingularBandDoesNotSpinC) {
   // Outside the band the same hint gives the exact solution at C = 90.
   p.singular_tilt_deg = 1e-8;
   const AcIkResult exact = inverse_ac(p, pose, {0, 0, 0, 0, 10});
-  EXPECT_EQ(exact.status, AcIkStatus::ok);
+  EXPECT_EQ(exact.status, AcIkStatus::kOk);
   EXPECT_NEAR(exact.joints.c_deg, 90.0, 1e-9);
 }
 
@@ -248,8 +248,8 @@ TEST(KinematicsAc, InverseIsContinuousAlongAPathThroughAZero) {
         {10.0 + 0.01 * i, -5.0, 40.0},
         {std::sin(t) * std::sin(plane_c), std::sin(t) * std::cos(plane_c), std::cos(t)}};
     const AcIkResult r = inverse_ac(p, pose, prev);
-    ASSERT_TRUE(r.status == AcIkStatus::ok || r.status == AcIkStatus::singular) << i;
-    crossed_singular |= r.status == AcIkStatus::singular;
+    ASSERT_TRUE(r.status == AcIkStatus::kOk || r.status == AcIkStatus::kSingular) << i;
+    crossed_singular |= r.status == AcIkStatus::kSingular;
     ASSERT_NEAR(r.joints.a_deg, tilt_deg, 1e-9) << i;
     ASSERT_NEAR(r.joints.c_deg, 30.0, 1e-9) << i;
     if (i > 0) {
@@ -267,7 +267,7 @@ TEST(KinematicsAc, CUnwindsAcrossTurns) {
     const double c_deg = 0.5 * i;  // four turns and more
     const AcJoints target{0, 0, 100, 30, c_deg};
     const AcIkResult r = inverse_ac(p, forward_ac(p, target), prev);
-    ASSERT_EQ(r.status, AcIkStatus::ok);
+    ASSERT_EQ(r.status, AcIkStatus::kOk);
     ASSERT_NEAR(r.joints.c_deg, c_deg, 1e-9) << i;
     prev = r.joints;
   }
@@ -280,12 +280,12 @@ TEST(KinematicsAc, ATravelSelectsTheReachableSolution) {
   const ToolPose pose = forward_ac(p, {0, 0, 100, 60, 10});
   // The hint favours the (-60, 190) solution, which is outside the travel.
   const AcIkResult r = inverse_ac(p, pose, {0, 0, 100, -50, 180});
-  EXPECT_EQ(r.status, AcIkStatus::ok);
+  EXPECT_EQ(r.status, AcIkStatus::kOk);
   EXPECT_NEAR(r.joints.a_deg, 60.0, 1e-9);
   EXPECT_NEAR(r.joints.c_deg, 10.0, 1e-9);
 
   const ToolPose unreachable = forward_ac(AcTrtParams{}, {0, 0, 100, 150, 0});
-  EXPECT_EQ(inverse_ac(p, unreachable, {}).status, AcIkStatus::out_of_limits);
+  EXPECT_EQ(inverse_ac(p, unreachable, {}).status, AcIkStatus::kOutOfLimits);
 }
 
 TEST(KinematicsAc, InvalidInputReturnsTheHint) {
@@ -296,10 +296,10 @@ TEST(KinematicsAc, InvalidInputReturnsTheHint) {
   const ToolPose inf_axis{{0, 0, 0}, {0, HUGE_VAL, 1}};
   for (const ToolPose& pose : {bad_tcp, zero_axis, inf_axis}) {
     const AcIkResult r = inverse_ac({}, pose, hint);
-    EXPECT_EQ(r.status, AcIkStatus::invalid_input);
+    EXPECT_EQ(r.status, AcIkStatus::kInvalidInput);
     EXPECT_EQ(max_joint_error(r.joints, hint), 0.0);
   }
-  EXPECT_EQ(inverse_ac({}, ToolPose{}, {0, 0, 0, nan, 0}).status, AcIkStatus::invalid_input);
+  EXPECT_EQ(inverse_ac({}, ToolPose{}, {0, 0, 0, nan, 0}).status, AcIkStatus::kInvalidInput);
 }
 
 TEST(KinematicsAc, AxisIsNormalised) {

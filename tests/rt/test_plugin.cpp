@@ -85,7 +85,7 @@ TEST(Plugin, AbiTableDescribesItself) {
   const tc_hal_api_t* api = Hal::api();
   EXPECT_EQ(TC_HAL_ABI_VERSION, api->abi_version);
   EXPECT_EQ(sizeof(tc_hal_api_t), api->struct_size);
-  EXPECT_EQ(TC_HAL_FLOAT, static_cast<int>(Type::Float));
+  EXPECT_EQ(TC_HAL_FLOAT, static_cast<int>(Type::kFloat));
   EXPECT_EQ(32, TC_HAL_OUT) << "LinuxCNC's HAL_OUT value";
 }
 

@@ -76,7 +76,7 @@ std::string field_path(const char* name = "field.tcf") {
 
 bool all_outputs_finite(const Hal& h) {
   for (const auto& p : h.pins())
-    if (p.owner == "c" && p.dir == rt::hal::PinDir::Out && p.type == rt::hal::Type::Float &&
+    if (p.owner == "c" && p.dir == rt::hal::PinDir::kOut && p.type == rt::hal::Type::kFloat &&
         !std::isfinite(getf(h, p.name)))
       return false;
   return true;

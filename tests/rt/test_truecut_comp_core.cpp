@@ -326,7 +326,7 @@ TEST(CompCore, ContinuityAlongRandomPaths) {
       if (r > 0.998) in.tool = static_cast<int32_t>(u(rng) * 4);  // 0 and 3 have no layer
       if (r > 0.4995 && r < 0.5) in.candidate = u(rng) < 0.5 ? &a : &b;
       if (r > 0.3 && r < 0.3005) nan_left = 1 + static_cast<int>(u(rng) * 20);
-      in.input_fault = nan_left-- > 0 ? Fault::input_not_finite : Fault::none;
+      in.input_fault = nan_left-- > 0 ? Fault::kInputNotFinite : Fault::kNone;
       const CycleOutput o = d.cycle(in);
       if (o.adopted) in.candidate = nullptr;
       ASSERT_LE(o.correction_mm.norm(), d.limits.max_correction_mm * (1 + kSlack));
@@ -364,7 +364,7 @@ PathRoughness run_smooth_path(rt::FieldInterpolation interpolation) {
     in.tcp_mm = Vec3(30.0 * std::sin(0.9 * t), 12.0 * std::cos(0.7 * t), 3.0 * std::sin(t));
     const CycleOutput o = d.cycle(in);
     in.candidate = nullptr;
-    r.outside_cycles += o.fault == Fault::outside_grid;
+    r.outside_cycles += o.fault == Fault::kOutsideGrid;
     if (i > 100) {
       r.max_step_mm = std::max(r.max_step_mm, (o.correction_mm - c_1).norm());
       r.max_second_difference_mm =
@@ -380,7 +380,7 @@ PathRoughness run_smooth_path(rt::FieldInterpolation interpolation) {
 }  // namespace
 
 TEST(CompCore, SmoothPathWithFadingBorderHasNoKinkAndNeedsNoRateLimit) {
-  const PathRoughness r = run_smooth_path(rt::FieldInterpolation::tricubic_bspline);
+  const PathRoughness r = run_smooth_path(rt::FieldInterpolation::kTricubicBspline);
   EXPECT_GT(r.outside_cycles, 1000) << "the path leaves the grid";
   EXPECT_FALSE(r.limited);
   // Path speed <= 27 mm/s: 0.027 mm per cycle times a gradient below 0.05.
@@ -390,7 +390,7 @@ TEST(CompCore, SmoothPathWithFadingBorderHasNoKinkAndNeedsNoRateLimit) {
   EXPECT_LT(r.max_second_difference_mm, 0.02 * r.max_step_mm);
   // The criterion does see kinks: the C0 trilinear baseline has them at
   // every cell face.
-  const PathRoughness lin = run_smooth_path(rt::FieldInterpolation::trilinear);
+  const PathRoughness lin = run_smooth_path(rt::FieldInterpolation::kTrilinear);
   EXPECT_GT(lin.max_second_difference_mm, 0.02 * lin.max_step_mm);
 }
 
@@ -403,14 +403,14 @@ TEST(CompCore, FaultsFadeTheHeldCorrectionToZero) {
     void (*apply)(CycleInput&, Driver&);
   };
   const Case cases[] = {
-      {"no layer", Fault::no_layer, [](CycleInput& in, Driver&) { in.tool = 9; }},
-      {"outside grid", Fault::outside_grid,
+      {"no layer", Fault::kNoLayer, [](CycleInput& in, Driver&) { in.tool = 9; }},
+      {"outside grid", Fault::kOutsideGrid,
        [](CycleInput& in, Driver&) { in.tcp_mm = Vec3(100.0, 0.0, 0.0); }},
-      {"input not finite", Fault::input_not_finite,
-       [](CycleInput& in, Driver&) { in.input_fault = Fault::input_not_finite; }},
-      {"kinematics", Fault::kinematics,
-       [](CycleInput& in, Driver&) { in.input_fault = Fault::kinematics; }},
-      {"bad parameter", Fault::bad_parameter,
+      {"input not finite", Fault::kInputNotFinite,
+       [](CycleInput& in, Driver&) { in.input_fault = Fault::kInputNotFinite; }},
+      {"kinematics", Fault::kKinematics,
+       [](CycleInput& in, Driver&) { in.input_fault = Fault::kKinematics; }},
+      {"bad parameter", Fault::kBadParameter,
        [](CycleInput&, Driver& d) { d.limits.max_correction_mm = kNaN; }},
   };
   for (const Case& c : cases) {
@@ -437,7 +437,7 @@ TEST(CompCore, FaultsFadeTheHeldCorrectionToZero) {
     }
     EXPECT_EQ(Vec3::Zero(), o.correction_mm);
     EXPECT_LE(d.max_step_mm, 50.0 * kDt * (1 + kSlack));
-    if (c.expected != Fault::bad_parameter) {  // bad max-correction: the rate limit does it
+    if (c.expected != Fault::kBadParameter) {  // bad max-correction: the rate limit does it
       EXPECT_LE(d.max_step_mm, kFadeGainMaxSlope * full.norm() * kDt / 0.05 * (1 + 1e-9));
     }
   }
@@ -449,13 +449,13 @@ TEST(CompCore, NoFieldIsAFaultAndAFieldArrivingLaterFadesIn) {
   in.enable = true;
   in.tool = 1;
   CycleOutput o = d.cycle(in);
-  EXPECT_EQ(Fault::no_field, o.fault);
+  EXPECT_EQ(Fault::kNoField, o.fault);
   EXPECT_EQ(Vec3::Zero(), o.correction_mm);
   const auto field = make_field({});
   in.candidate = &field;
   o = d.cycle(in);
   EXPECT_TRUE(o.adopted);
-  EXPECT_EQ(Fault::none, o.fault);
+  EXPECT_EQ(Fault::kNone, o.fault);
   EXPECT_GT(o.fade, 0.0);
   EXPECT_LT(o.fade, 1e-4);
 }
@@ -469,7 +469,7 @@ TEST(CompCore, OverflowingFieldIsAFieldFault) {
   layer.nodes.assign(8, {1e308, 0.0, 0.0, 1.0});
   layer.nodes[3].dx_mm = -1e308;
   const rt::CorrectionField field(g, {layer});
-  ASSERT_EQ(rt::FieldStatus::non_finite, field.evaluate(1, Vec3(0.5, 0.5, 0.5)).status);
+  ASSERT_EQ(rt::FieldStatus::kNonFinite, field.evaluate(1, Vec3(0.5, 0.5, 0.5)).status);
   Driver d;
   CycleInput in;
   in.enable = true;
@@ -477,7 +477,7 @@ TEST(CompCore, OverflowingFieldIsAFieldFault) {
   in.tcp_mm = Vec3(0.5, 0.5, 0.5);
   in.candidate = &field;
   const CycleOutput o = d.cycle(in);
-  EXPECT_EQ(Fault::field_not_finite, o.fault);
+  EXPECT_EQ(Fault::kFieldNotFinite, o.fault);
   EXPECT_EQ(Vec3::Zero(), o.correction_mm);
 }
 
@@ -494,13 +494,13 @@ TEST(CompCore, RecoveryFromAFaultCrossFadesFromTheHeldValue) {
   in.candidate = nullptr;
   for (int i = 0; i < 100; ++i)
     d.cycle(in);
-  in.input_fault = Fault::input_not_finite;
+  in.input_fault = Fault::kInputNotFinite;
   for (int i = 0; i < 30; ++i)
     d.cycle(in);
-  in.input_fault = Fault::none;
+  in.input_fault = Fault::kNone;
   in.tcp_mm = Vec3(10.0, -12.0, 4.0);  // the input comes back somewhere else
   for (int i = 0; i < 200; ++i)
-    EXPECT_EQ(Fault::none, d.cycle(in).fault);
+    EXPECT_EQ(Fault::kNone, d.cycle(in).fault);
   EXPECT_EQ(field.evaluate(1, in.tcp_mm).correction_mm, d.state.output);
   EXPECT_FALSE(d.ever_limited);
 }

@@ -33,7 +33,7 @@ struct FieldSpec {
   Eigen::Vector3d origin_mm{-20.0, -20.0, -10.0};
   std::array<int32_t, 3> dims{9, 9, 5};
   double spacing_mm = 5.0;
-  rt::FieldInterpolation interpolation = rt::FieldInterpolation::tricubic_bspline;
+  rt::FieldInterpolation interpolation = rt::FieldInterpolation::kTricubicBspline;
 };
 
 inline rt::CorrectionField make_field(const FieldSpec& spec) {

@@ -78,14 +78,14 @@ TEST(MachineDescription, ReadsValuesAndDefaults) {
   EXPECT_EQ(0.002, m.effects.backlash.active(kC)->play);
   EXPECT_EQ(nullptr, m.effects.reversal_spike.active(kY)) << "listed but switched off";
   ASSERT_TRUE(m.effects.reversal_spike.axes[kY].has_value());
-  EXPECT_EQ(ThermalDriver::SpindlePower, m.effects.thermal_drift.active(kZ)->driver);
+  EXPECT_EQ(ThermalDriver::kSpindlePower, m.effects.thermal_drift.active(kZ)->driver);
   EXPECT_EQ(30.0, m.effects.squareness.active()->xy_urad);
   EXPECT_EQ(20.0, m.effects.straightness.active()->components[kEYX]->quadratic_um_per_m2);
 }
 
 TEST(MachineDescription, ReadsKinematicsAndPoseEffects) {
   const auto m = parse_machine_description(kBase, "m.json").machine;
-  EXPECT_EQ(KinematicsType::XyzacTrt, m.kinematics.type);
+  EXPECT_EQ(KinematicsType::kXyzacTrt, m.kinematics.type);
   EXPECT_EQ(120.0, m.kinematics.ac.x_rot_point_mm);
   EXPECT_EQ(-40.0, m.kinematics.ac.y_rot_point_mm);
   EXPECT_EQ(-250.0, m.kinematics.ac.z_rot_point_mm);
@@ -169,7 +169,7 @@ TEST(MachineDescription, RandomParametersRoundTripExactly) {
       if (j < 3 && coin(rng))
         m.effects.thermal_drift.axes[j] = ThermalDriftAxis{
             u(rng) * 0.1 - 0.05, 1 + u(rng) * 3600,
-            coin(rng) ? ThermalDriver::Time : ThermalDriver::SpindlePower, 1 + u(rng) * 20};
+            coin(rng) ? ThermalDriver::kTime : ThermalDriver::kSpindlePower, 1 + u(rng) * 20};
     }
     m.effects.servo_lag.enabled = m.effects.reversal_spike.enabled = coin(rng);
     m.effects.backlash.enabled = coin(rng);

@@ -44,7 +44,7 @@ MachineParams everything_on() {
   }
   for (int j = 0; j < 3; ++j) {
     fx.pitch_error.axes[j] = PitchErrorAxis{10.0, 0.0, 2.0, 5.0, 30.0};
-    fx.thermal_drift.axes[j] = ThermalDriftAxis{0.01, 5.0, ThermalDriver::SpindlePower, 10.0};
+    fx.thermal_drift.axes[j] = ThermalDriftAxis{0.01, 5.0, ThermalDriver::kSpindlePower, 10.0};
   }
   fx.squareness.params = {20.0, -10.0, 5.0};
   fx.straightness.params.components[kEYX] = StraightnessComponent{30.0, 5.0, 0.0};
@@ -272,7 +272,7 @@ std::pair<double, double> fit_first_order(const std::vector<double>& t,
 TEST(ThermalDrift, TimeDrivenStepResponseHasTheSetTimeConstant) {
   MachineParams m = ideal_params();
   m.effects.thermal_drift.enabled = true;
-  m.effects.thermal_drift.axes[kZ] = ThermalDriftAxis{0.03, 20.0, ThermalDriver::Time, 10.0};
+  m.effects.thermal_drift.axes[kZ] = ThermalDriftAxis{0.03, 20.0, ThermalDriver::kTime, 10.0};
   auto tr = run(m, 1e-3, 80000, [](double) { return MachineInputs{}; });
   std::vector<double> t, d;
   for (size_t k = 0; k < tr.out.size(); k += 100) {
@@ -291,7 +291,7 @@ TEST(ThermalDrift, SpindlePowerDrivesTheGrowthAndItCoolsDown) {
   MachineParams m = ideal_params();
   m.effects.thermal_drift.enabled = true;
   m.effects.thermal_drift.axes[kZ] =
-      ThermalDriftAxis{-0.04, 10.0, ThermalDriver::SpindlePower, 8.0};
+      ThermalDriftAxis{-0.04, 10.0, ThermalDriver::kSpindlePower, 8.0};
   auto tr = run(m, 1e-3, 200000, [](double t) {
     MachineInputs in;
     in.spindle_power_kw = t < 100.0 ? 6.0 : 0.0;

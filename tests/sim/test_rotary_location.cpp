@@ -57,7 +57,7 @@ Harmonics harmonics(const std::vector<double>& s) {
 AcJoints joints_for(const MachineParams& m, const Eigen::Vector3d& point,
                     const Eigen::Vector3d& axis, const AcJoints& hint) {
   const auto r = inverse_ac(nominal_ac_params(m), ToolPose{point, axis}, hint);
-  EXPECT_TRUE(r.status == AcIkStatus::ok || r.status == AcIkStatus::singular);
+  EXPECT_TRUE(r.status == AcIkStatus::kOk || r.status == AcIkStatus::kSingular);
   return r.joints;
 }
 

@@ -80,8 +80,8 @@ TEST(Scanner, NoiseAtNormalIncidenceIsSigma0) {
     ScanMode mode;
     double sigma_mm;
   };
-  for (const Case c : {Case{ScanMode::fringe, 0.005}, Case{ScanMode::fringe, 0.020},
-                       Case{ScanMode::fringe, 0.050}, Case{ScanMode::laser, 0.020}}) {
+  for (const Case c : {Case{ScanMode::kFringe, 0.005}, Case{ScanMode::kFringe, 0.020},
+                       Case{ScanMode::kFringe, 0.050}, Case{ScanMode::kLaser, 0.020}}) {
     ScannerOptions o = one_pose(c.sigma_mm, 25);
     o.mode = c.mode;
     const ScanResult r = scan(plane_mesh({0, 0, 0}, Eigen::Vector3d::UnitZ(), 20), o);
@@ -89,7 +89,7 @@ TEST(Scanner, NoiseAtNormalIncidenceIsSigma0) {
     std::vector<double> z;
     for (const auto& p : r.cloud.points_mm)
       z.push_back(p.z());
-    expect_std(moments(z), c.sigma_mm, c.mode == ScanMode::fringe ? "fringe" : "laser");
+    expect_std(moments(z), c.sigma_mm, c.mode == ScanMode::kFringe ? "fringe" : "laser");
   }
 }
 
@@ -125,7 +125,7 @@ TEST(Scanner, BeyondTheIncidenceLimitNothingIsMeasured) {
 }
 
 TEST(Scanner, DensityMatchesTheSetting) {
-  for (ScanMode mode : {ScanMode::fringe, ScanMode::laser}) {
+  for (ScanMode mode : {ScanMode::kFringe, ScanMode::kLaser}) {
     for (double density : {4.0, 25.0, 60.0}) {
       ScannerOptions o = one_pose(0.005, density);
       o.mode = mode;
@@ -160,7 +160,7 @@ TEST(Scanner, SlotBottomInTheProjectorsShadowGetsNoPoints) {
   EXPECT_GT(slot_bottom(scan(u, along)), 500u);
   // Laser line: the camera rides beside the laser along the sweep (up).
   ScannerOptions laser = one_pose(0.005, 25);
-  laser.mode = ScanMode::laser;
+  laser.mode = ScanMode::kLaser;
   laser.poses[0].up = Eigen::Vector3d::UnitX();  // sweep and camera across the slot
   EXPECT_EQ(0u, slot_bottom(scan(u, laser)));
   laser.poses[0].up = Eigen::Vector3d::UnitY();  // along it

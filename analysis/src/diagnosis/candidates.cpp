@@ -144,7 +144,7 @@ Candidate reversal_spike_candidate(const SignatureBasis& S, const JointMotion& m
   const int j = m.j;
   Candidate c = single_positive("reversal_spike", j, m.ax, coulomb_key(j));
   const double inertia = S.base.joints[j].drive.inertia;
-  const double h = sim::joint_kind(j) == sim::JointKind::Linear
+  const double h = sim::joint_kind(j) == sim::JointKind::kLinear
                        ? 0.05 * inertia
                        : 50.0 * inertia * std::numbers::pi / 180;
   c.X = S.fd_column(S.base, "reversal_spike", j, coulomb_key(j), std::max(h, 0.5));
@@ -250,7 +250,7 @@ void add_thermal_time_candidates(const SignatureBasis& S, const JointMotion& m, 
       auto& e = *p.effects.thermal_drift.axes[j];
       e.gain_mm = coef[0];
       e.tau_s = tau;
-      e.driver = sim::ThermalDriver::Time;
+      e.driver = sim::ThermalDriver::kTime;
       return true;
     };
     out.push_back(std::move(c));
@@ -287,7 +287,7 @@ void add_thermal_power_candidates(const SignatureBasis& S, const JointMotion& m,
       auto& e = *p.effects.thermal_drift.axes[j];
       e.gain_mm = coef[0];
       e.tau_s = tau;
-      e.driver = sim::ThermalDriver::SpindlePower;
+      e.driver = sim::ThermalDriver::kSpindlePower;
       e.reference_power_kw = kRefKw;
       return true;
     };

@@ -7,10 +7,10 @@
 namespace truecut::analysis::diagnosis {
 
 std::string play_key(int joint) {
-  return sim::joint_kind(joint) == sim::JointKind::Linear ? "play_mm" : "play_deg";
+  return sim::joint_kind(joint) == sim::JointKind::kLinear ? "play_mm" : "play_deg";
 }
 std::string coulomb_key(int joint) {
-  return sim::joint_kind(joint) == sim::JointKind::Linear ? "coulomb_n" : "coulomb_nm";
+  return sim::joint_kind(joint) == sim::JointKind::kLinear ? "coulomb_n" : "coulomb_nm";
 }
 
 void enable_effect(sim::MachineParams& p, const std::string& effect, int j) {

@@ -142,11 +142,11 @@ std::optional<double> standstill_noise(const std::vector<double>& r, const std::
 
 const char* motion_name(Motion m) {
   switch (m) {
-    case Motion::Standstill:
+    case Motion::kStandstill:
       return "standstill";
-    case Motion::Reversal:
+    case Motion::kReversal:
       return "reversal";
-    case Motion::Acceleration:
+    case Motion::kAcceleration:
       return "acceleration";
     default:
       return "constant_velocity";
@@ -161,12 +161,12 @@ std::vector<Motion> classify_motion(const std::vector<double>& t, const std::vec
   for (std::size_t k = 0; k < n; ++k)
     vmax = std::max(vmax, std::abs(v[k])), amax = std::max(amax, std::abs(a[k]));
   const double v_thr = std::max(1e-3 * vmax, 1e-9), a_thr = 0.05 * amax;
-  std::vector<Motion> m(n, Motion::ConstantVelocity);
+  std::vector<Motion> m(n, Motion::kConstantVelocity);
   for (std::size_t k = 0; k < n; ++k) {
     if (std::abs(v[k]) < v_thr)
-      m[k] = Motion::Standstill;
+      m[k] = Motion::kStandstill;
     else if (std::abs(a[k]) > a_thr)
-      m[k] = Motion::Acceleration;
+      m[k] = Motion::kAcceleration;
   }
   // Reversal: from 50 ms (at least 2 samples) before to 100 ms after the
   // velocity changes sign (a standstill in between counts when it is short).
@@ -181,7 +181,7 @@ std::vector<Motion> classify_motion(const std::vector<double>& t, const std::vec
     if (last_sign != 0 && s != last_sign && k - last_moving <= 2 * after) {
       const std::size_t lo = last_moving >= before ? last_moving - before : 0;
       for (std::size_t i = lo; i < std::min(n, k + after); ++i)
-        m[i] = Motion::Reversal;
+        m[i] = Motion::kReversal;
     }
     last_sign = s;
     last_moving = k;

@@ -30,7 +30,7 @@ std::optional<double> standstill_noise(const std::vector<double>& r, const std::
                                        const std::vector<char>& use, double v_threshold,
                                        std::size_t min_samples);
 
-enum class Motion { Standstill, Reversal, Acceleration, ConstantVelocity };
+enum class Motion { kStandstill, kReversal, kAcceleration, kConstantVelocity };
 const char* motion_name(Motion m);
 std::vector<Motion> classify_motion(const std::vector<double>& t, const std::vector<double>& cmd);
 

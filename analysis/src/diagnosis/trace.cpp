@@ -51,7 +51,7 @@ Trace make_trace(const Recording& rec, DiagnosisOptions::CommandInterpolation in
     const std::string name(sim::kJointNames[j]);
     if (rec.has(name + "_cmd")) {
       tr.cmd[j] = rec.channel(name + "_cmd");
-      if (interpolation == DiagnosisOptions::CommandInterpolation::Cubic)
+      if (interpolation == DiagnosisOptions::CommandInterpolation::kCubic)
         tr.cmd_slope[j] = command_slopes(tr.t_s, tr.cmd[j]);
     }
     if (rec.has(name + "_meas")) {

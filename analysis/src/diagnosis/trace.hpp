@@ -37,7 +37,7 @@ struct Trace {
 };
 
 Trace make_trace(const Recording& rec, DiagnosisOptions::CommandInterpolation interpolation =
-                                           DiagnosisOptions::CommandInterpolation::Cubic);
+                                           DiagnosisOptions::CommandInterpolation::kCubic);
 
 // Slopes for a cubic Hermite command through (t, y): the three-point
 // derivative (the parabola through three samples: exact for a constant

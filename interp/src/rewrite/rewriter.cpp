@@ -420,13 +420,13 @@ RewriteResult rewrite_program(std::string_view text, const std::string& name,
   rewrite::check_options(o);
   auto fn = [&](const rewrite::ToolPoint& tp, const CallContext& ctx) {
     const rt::FieldSample s = field.evaluate(ctx.tool, tp.tip_mm);
-    if (s.status == rt::FieldStatus::no_layer_for_tool)
+    if (s.status == rt::FieldStatus::kNoLayerForTool)
       throw RewriteError("the correction field has no layer for tool " + std::to_string(ctx.tool) +
                          " (operation '" + o.operation + "')");
-    if (s.status == rt::FieldStatus::non_finite)
+    if (s.status == rt::FieldStatus::kNonFinite)
       throw RewriteError("the correction field gave a non-finite correction");
     rewrite::Correction c;
-    if (s.status == rt::FieldStatus::ok && s.weight > 0) {
+    if (s.status == rt::FieldStatus::kOk && s.weight > 0) {
       c.shift_mm = s.correction_mm;
       c.compensated = true;
     }

@@ -161,7 +161,7 @@ Eigen::MatrixX3d coarse_guess(const rt::FieldGrid& g, const Unknowns& u, const T
         const int64_t c = u.of_node[static_cast<std::size_t>(g.index(i, j, k))];
         if (c < 0) continue;
         const rt::FieldSample e = field.evaluate_tricubic(tool.tool, g.node_position_mm(i, j, k));
-        if (e.status == rt::FieldStatus::ok) x0.row(c) = e.vector_mm.transpose();
+        if (e.status == rt::FieldStatus::kOk) x0.row(c) = e.vector_mm.transpose();
       }
   return x0;
 }

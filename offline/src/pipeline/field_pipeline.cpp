@@ -485,7 +485,7 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
       s.vector_mm = r.field_vectors_mm[pp.point];
       if (in.base_field) {
         const rt::FieldSample b = in.base_field->evaluate(tp.tool, pp.tcp_mm);
-        if (b.status == rt::FieldStatus::ok) s.vector_mm += b.correction_mm;
+        if (b.status == rt::FieldStatus::kOk) s.vector_mm += b.correction_mm;
       }
       s.surface_id = r.points.surface_ids[pp.point];
       // What the scan measured: along the normal (rays; spheres on one

@@ -23,7 +23,7 @@ using namespace truecut;
 using rt::comp::Fault;
 using rt::comp::Vec3;
 
-enum class Mode { tcp, joint };
+enum class Mode { kTcp, kJoint };
 
 struct Pins {
   bool* enable;
@@ -150,22 +150,21 @@ void update(void* arg, long period_ns) {
   rt::AcTrtParams kins;
   rt::AcJoints joints;
   rt::ToolPose pose;
-  if (s.mode == Mode::tcp) {
+  if (s.mode == Mode::kTcp) {
     pose.tcp_mm = read3(p.tcp_in);
     pose.axis = read3(p.axis_in);
-    if (!pose.tcp_mm.allFinite() || !pose.axis.allFinite())
-      in.input_fault = Fault::input_not_finite;
+    if (!pose.tcp_mm.allFinite() || !pose.axis.allFinite()) in.input_fault = Fault::kInputNotFinite;
   } else {
     kins = kinematics(p);
     joints = {*p.joint_in[0], *p.joint_in[1], *p.joint_in[2], *p.joint_in[3], *p.joint_in[4]};
     if (!rt::comp::joints_finite(joints) || !rt::comp::params_finite(kins)) {
-      in.input_fault = Fault::input_not_finite;
+      in.input_fault = Fault::kInputNotFinite;
     } else {
       pose = rt::forward_ac(kins, joints);
       // Outside the A travel the inverse kinematics refuses; correct_joints()
       // still maps the correction while it fades out.
       if (!(joints.a_deg >= kins.a_min_deg && joints.a_deg <= kins.a_max_deg))
-        in.input_fault = Fault::kinematics;
+        in.input_fault = Fault::kKinematics;
     }
   }
   in.tcp_mm = pose.tcp_mm;
@@ -186,10 +185,10 @@ void update(void* arg, long period_ns) {
   *p.fade = out.fade;
   *p.load_errors = s.source.load_errors();
   // Position outputs hold their last value while the inputs are unusable.
-  if (in.input_fault == Fault::input_not_finite) return;
+  if (in.input_fault == Fault::kInputNotFinite) return;
   write3(p.tcp_out, pose.tcp_mm + out.correction_mm);
   write3(p.axis_out, pose.axis);
-  if (s.mode == Mode::joint) {
+  if (s.mode == Mode::kJoint) {
     const rt::AcJoints j = rt::comp::correct_joints(kins, joints, pose, out.correction_mm);
     const double v[5] = {j.x_mm, j.y_mm, j.z_mm, j.a_deg, j.c_deg};
     for (int i = 0; i < 5; ++i)
@@ -245,7 +244,7 @@ void make_pins(rt::hal::component::Builder& b, const std::string& n, Mode mode, 
   static const char* const kXyz[] = {"x", "y", "z"};
   static const char* const kIjk[] = {"i", "j", "k"};
   static const char* const kJoints[] = {"x", "y", "z", "a", "c"};
-  if (mode == Mode::tcp) {
+  if (mode == Mode::kTcp) {
     for (int i = 0; i < 3; ++i) {
       in_f((std::string("tcp-") + kXyz[i]).c_str(), &p.tcp_in[i]);
       in_f((std::string("axis-") + kIjk[i]).c_str(), &p.axis_in[i]);
@@ -282,7 +281,7 @@ void make_pins(rt::hal::component::Builder& b, const std::string& n, Mode mode, 
   *p.max_correction = defaults.max_correction_mm;
   *p.max_rate = defaults.max_rate_mm_per_s;
   *p.fade_time = defaults.fade_time_s;
-  if (mode == Mode::tcp) {
+  if (mode == Mode::kTcp) {
     *p.axis_in[2] = 1.0;
   } else {
     *p.a_min = -180.0;
@@ -306,7 +305,7 @@ extern "C" TC_COMPONENT_EXPORT int truecut_component_init(const tc_hal_api_t* ap
     args.expect_consumed("truecut_comp");
     if (mode_text != "tcp" && mode_text != "joint")
       throw InitError("mode='" + mode_text + "' must be tcp or joint");
-    const Mode mode = mode_text == "tcp" ? Mode::tcp : Mode::joint;
+    const Mode mode = mode_text == "tcp" ? Mode::kTcp : Mode::kJoint;
     const std::vector<int32_t> tools =
         tools_text.empty() ? std::vector<int32_t>{} : parse_tools(tools_text);
     if (!tools.empty() && path.empty()) throw InitError("tools= needs field=");

@@ -117,13 +117,13 @@ std::vector<Eigen::Vector4d> make_coefficients(const FieldGrid& grid,
 
 const char* to_string(FieldStatus status) noexcept {
   switch (status) {
-    case FieldStatus::ok:
+    case FieldStatus::kOk:
       return "ok";
-    case FieldStatus::outside_grid:
+    case FieldStatus::kOutsideGrid:
       return "outside_grid";
-    case FieldStatus::no_layer_for_tool:
+    case FieldStatus::kNoLayerForTool:
       return "no_layer_for_tool";
-    case FieldStatus::non_finite:
+    case FieldStatus::kNonFinite:
       return "non_finite";
   }
   return "unknown";
@@ -131,9 +131,9 @@ const char* to_string(FieldStatus status) noexcept {
 
 const char* to_string(FieldInterpolation interpolation) noexcept {
   switch (interpolation) {
-    case FieldInterpolation::tricubic_bspline:
+    case FieldInterpolation::kTricubicBspline:
       return "tricubic-bspline";
-    case FieldInterpolation::trilinear:
+    case FieldInterpolation::kTrilinear:
       return "trilinear";
   }
   return "unknown";

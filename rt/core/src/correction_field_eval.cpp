@@ -55,7 +55,7 @@ FieldSample finish(const FieldGrid& grid, const Eigen::Vector4d& value,
   for (int a = 0; a < 3; ++a)
     d.col(a) = d_cell[a] / grid.spacing_mm[a];
   if (!value.allFinite() || !d.allFinite()) {
-    s.status = FieldStatus::non_finite;
+    s.status = FieldStatus::kNonFinite;
     return s;
   }
   s.vector_mm = value.head<3>();
@@ -86,17 +86,17 @@ bool CorrectionField::inside(const Eigen::Vector3d& position_mm) const noexcept 
 
 FieldSample CorrectionField::evaluate(int32_t tool,
                                       const Eigen::Vector3d& position_mm) const noexcept {
-  return interpolation_ == FieldInterpolation::trilinear ? evaluate_trilinear(tool, position_mm)
-                                                         : evaluate_tricubic(tool, position_mm);
+  return interpolation_ == FieldInterpolation::kTrilinear ? evaluate_trilinear(tool, position_mm)
+                                                          : evaluate_tricubic(tool, position_mm);
 }
 
 FieldSample CorrectionField::evaluate_tricubic(int32_t tool,
                                                const Eigen::Vector3d& position_mm) const noexcept {
-  if (!position_mm.allFinite()) return rejected(FieldStatus::non_finite);
+  if (!position_mm.allFinite()) return rejected(FieldStatus::kNonFinite);
   const Layer* layer = find(tool);
-  if (layer == nullptr) return rejected(FieldStatus::no_layer_for_tool);
+  if (layer == nullptr) return rejected(FieldStatus::kNoLayerForTool);
   Cell cell;
-  if (!locate(grid_, position_mm, cell)) return rejected(FieldStatus::outside_grid);
+  if (!locate(grid_, position_mm, cell)) return rejected(FieldStatus::kOutsideGrid);
 
   double bx[4], dbx[4], by[4], dby[4], bz[4], dbz[4];
   cubic_basis(cell.u.x(), bx, dbx);
@@ -129,11 +129,11 @@ FieldSample CorrectionField::evaluate_tricubic(int32_t tool,
 
 FieldSample CorrectionField::evaluate_trilinear(int32_t tool,
                                                 const Eigen::Vector3d& position_mm) const noexcept {
-  if (!position_mm.allFinite()) return rejected(FieldStatus::non_finite);
+  if (!position_mm.allFinite()) return rejected(FieldStatus::kNonFinite);
   const Layer* layer = find(tool);
-  if (layer == nullptr) return rejected(FieldStatus::no_layer_for_tool);
+  if (layer == nullptr) return rejected(FieldStatus::kNoLayerForTool);
   Cell cell;
-  if (!locate(grid_, position_mm, cell)) return rejected(FieldStatus::outside_grid);
+  if (!locate(grid_, position_mm, cell)) return rejected(FieldStatus::kOutsideGrid);
 
   const double b[3][2] = {{1.0 - cell.u.x(), cell.u.x()},
                           {1.0 - cell.u.y(), cell.u.y()},

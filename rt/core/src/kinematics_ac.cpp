@@ -67,13 +67,13 @@ Candidate make_candidate(const AcTrtParams& p, const AcJoints& hint, double a_de
 
 const char* to_string(AcIkStatus status) noexcept {
   switch (status) {
-    case AcIkStatus::ok:
+    case AcIkStatus::kOk:
       return "ok";
-    case AcIkStatus::singular:
+    case AcIkStatus::kSingular:
       return "singular";
-    case AcIkStatus::out_of_limits:
+    case AcIkStatus::kOutOfLimits:
       return "out_of_limits";
-    case AcIkStatus::invalid_input:
+    case AcIkStatus::kInvalidInput:
       return "invalid_input";
   }
   return "unknown";
@@ -93,7 +93,7 @@ ToolPose forward_ac(const AcTrtParams& p, const AcJoints& j) noexcept {
 }
 
 AcIkResult inverse_ac(const AcTrtParams& p, const ToolPose& pose, const AcJoints& hint) noexcept {
-  AcIkResult result{hint, AcIkStatus::invalid_input};
+  AcIkResult result{hint, AcIkStatus::kInvalidInput};
   const double axis_norm = pose.axis.norm();
   if (!pose.tcp_mm.allFinite() || !std::isfinite(axis_norm) || axis_norm == 0.0 || !finite(hint))
     return result;
@@ -108,7 +108,7 @@ AcIkResult inverse_ac(const AcTrtParams& p, const ToolPose& pose, const AcJoints
     const double gamma = sigma * to_rad(hint.c_deg);
     const double alpha = std::atan2(n.x() * std::sin(gamma) + n.y() * std::cos(gamma), n.z());
     chosen = make_candidate(p, hint, sigma * alpha * kDegPerRad, hint.c_deg);
-    result.status = chosen.in_travel ? AcIkStatus::singular : AcIkStatus::out_of_limits;
+    result.status = chosen.in_travel ? AcIkStatus::kSingular : AcIkStatus::kOutOfLimits;
   } else {
     const double alpha = std::atan2(tilt_sin, n.z());  // in [0, pi]
     const double gamma = std::atan2(n.x(), n.y());
@@ -120,7 +120,7 @@ AcIkResult inverse_ac(const AcTrtParams& p, const ToolPose& pose, const AcJoints
       chosen = k1.in_travel ? k1 : k2;
     else
       chosen = k1.distance2 <= k2.distance2 ? k1 : k2;
-    result.status = chosen.in_travel ? AcIkStatus::ok : AcIkStatus::out_of_limits;
+    result.status = chosen.in_travel ? AcIkStatus::kOk : AcIkStatus::kOutOfLimits;
   }
 
   const double alpha = sigma * to_rad(chosen.a_deg);

@@ -35,7 +35,7 @@ PoseGrid::PoseGrid(const ScanPose& pose, std::size_t pose_index, ScanMode mode, 
       throw std::invalid_argument(where + ": part of the mesh is behind the scanner (vertex at " +
                                   std::to_string(depth) + " mm along the view direction)");
     const double row_coord =
-        mode_ == ScanMode::fringe ? q.dot(up_) / depth / tan_step_ : q.dot(up_) / spacing_mm_;
+        mode_ == ScanMode::kFringe ? q.dot(up_) / depth / tan_step_ : q.dot(up_) / spacing_mm_;
     const double col_coord = q.dot(right_) / depth / tan_step_;
     row_min = std::min(row_min, row_coord);
     row_max = std::max(row_max, row_coord);
@@ -59,7 +59,7 @@ offline::Ray PoseGrid::ray(std::size_t row, std::size_t col) const {
   offline::Ray r;
   const double b = static_cast<double>(col0_ + static_cast<long>(col)) * tan_step_;
   const double a_index = static_cast<double>(row0_ + static_cast<long>(row));
-  if (mode_ == ScanMode::fringe) {
+  if (mode_ == ScanMode::kFringe) {
     r.origin_mm = origin_;
     r.direction = (dir_ + b * right_ + a_index * tan_step_ * up_).normalized();
   } else {
@@ -70,7 +70,7 @@ offline::Ray PoseGrid::ray(std::size_t row, std::size_t col) const {
 }
 
 Eigen::Vector3d PoseGrid::partner_mm(std::size_t row) const {
-  if (mode_ == ScanMode::fringe) return origin_ + baseline_mm_ * right_;
+  if (mode_ == ScanMode::kFringe) return origin_ + baseline_mm_ * right_;
   const double a_index = static_cast<double>(row0_ + static_cast<long>(row));
   return origin_ + (a_index * spacing_mm_ + baseline_mm_) * up_;
 }

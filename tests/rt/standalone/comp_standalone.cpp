@@ -53,7 +53,7 @@ int main() {
   check(out.adopted, "the candidate field is adopted");
   check(state.current.field == &field, "the state holds the field");
   check(out.released == nullptr, "nothing to release");
-  check(out.fault == comp::Fault::none, "no fault");
+  check(out.fault == comp::Fault::kNone, "no fault");
   check(out.active, "active");
   check(out.fade == 1.0, "fully faded in");
   check(!out.limited, "not limited");
@@ -73,7 +73,7 @@ int main() {
   // at once with a fade time of 0.
   in.tcp_mm = {50.0, 0.0, 0.0};
   const comp::CycleOutput outside = comp::step(state, in, tight, 1e-3);
-  check(outside.fault == comp::Fault::outside_grid, "outside-grid fault");
+  check(outside.fault == comp::Fault::kOutsideGrid, "outside-grid fault");
   check(state.current.frozen, "the failing source is frozen");
   check(outside.correction_mm.isZero(0.0), "and faded out");
 

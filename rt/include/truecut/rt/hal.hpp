@@ -17,9 +17,9 @@ struct tc_hal;  // the HAL's state; also the opaque handle components see
 
 namespace truecut::rt::hal {
 
-enum class Type { Bit = TC_HAL_BIT, Float = TC_HAL_FLOAT, S32 = TC_HAL_S32, U32 = TC_HAL_U32 };
-enum class PinDir { In = TC_HAL_IN, Out = TC_HAL_OUT, IO = TC_HAL_IO };
-enum class ParamDir { RO = TC_HAL_RO, RW = TC_HAL_RW };
+enum class Type { kBit = TC_HAL_BIT, kFloat = TC_HAL_FLOAT, kS32 = TC_HAL_S32, kU32 = TC_HAL_U32 };
+enum class PinDir { kIn = TC_HAL_IN, kOut = TC_HAL_OUT, kIo = TC_HAL_IO };
+enum class ParamDir { kRo = TC_HAL_RO, kRw = TC_HAL_RW };
 
 const char* to_string(Type type);
 const char* to_string(PinDir dir);
@@ -27,7 +27,7 @@ const char* to_string(ParamDir dir);
 
 // A typed value as it sits in a pin, parameter or signal.
 struct Value {
-  Type type = Type::Float;
+  Type type = Type::kFloat;
   union {
     bool b;
     double f;

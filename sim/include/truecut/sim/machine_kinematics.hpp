@@ -9,7 +9,7 @@
 
 namespace truecut::sim {
 
-enum class KinematicsType { XyzacTrt };
+enum class KinematicsType { kXyzacTrt };
 
 // The tool the program assumes. The TCP is the tool tip on the tool axis,
 // length_mm below the spindle gauge point (LinuxCNC's tool length offset).
@@ -39,7 +39,7 @@ inline bool is_ball_end_mill(const NominalTool& t) noexcept {
 // them), and nominal_ac_params() (true_tool_pose.hpp) fills in the tool
 // length and the A travel for the controller.
 struct KinematicsParams {
-  KinematicsType type = KinematicsType::XyzacTrt;
+  KinematicsType type = KinematicsType::kXyzacTrt;
   rt::AcTrtParams ac;
   NominalTool tool;
   bool operator==(const KinematicsParams&) const = default;

@@ -34,8 +34,8 @@ struct DiagnosisOptions {
   // samples), zero slope next to a standstill and no overshoot on monotone
   // stretches (so a start from standstill is no reversal). Linear: straight
   // lines (a controller that interpolates its own coarse command linearly).
-  enum class CommandInterpolation { Cubic, Linear };
-  CommandInterpolation command_interpolation = CommandInterpolation::Cubic;
+  enum class CommandInterpolation { kCubic, kLinear };
+  CommandInterpolation command_interpolation = CommandInterpolation::kCubic;
   // Largest logging delay searched, s (0: automatic, 10 samples or 50 ms).
   double max_delay_s = 0.0;
   // Minimum BIC improvement for an effect to be selected.

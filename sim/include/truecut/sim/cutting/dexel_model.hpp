@@ -68,6 +68,12 @@ class DexelModel {
   Engagement cut(const CutterShape& shape, const CutterPose& from, const CutterPose& to,
                  bool include_start = true) noexcept;
 
+  // How many tool instances cut() places between `from` and `to` to sample
+  // the swept solid to options.tolerance_mm (before rounding up; ≤ 1 means
+  // the instance at `to` alone is within the tolerance of the sweep).
+  double substeps_needed(const CutterShape& shape, const CutterPose& from,
+                         const CutterPose& to) const noexcept;
+
   // Nominal topology subdivided at the dexels, vertices at p + h·n; triangles
   // of surfaces that are not modelled are copied unchanged. A dexel on a
   // sharp edge whose line holds no surface point (cut through to its floor,

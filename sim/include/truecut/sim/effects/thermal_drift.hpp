@@ -12,18 +12,18 @@
 
 namespace truecut::sim {
 
-enum class ThermalDriver { Time, SpindlePower };
+enum class ThermalDriver { kTime, kSpindlePower };
 
 struct ThermalDriftAxis {
   double gain_mm = 0.0;  // g: steady-state growth at u = 1
   double tau_s = 600.0;  // τ > 0
-  ThermalDriver driver = ThermalDriver::Time;
+  ThermalDriver driver = ThermalDriver::kTime;
   double reference_power_kw = 10.0;  // P_ref > 0, used with the spindle-power driver
   bool operator==(const ThermalDriftAxis&) const = default;
 };
 
 inline double thermal_drive(const ThermalDriftAxis& e, double spindle_power_kw) noexcept {
-  return e.driver == ThermalDriver::Time ? 1.0 : spindle_power_kw / e.reference_power_kw;
+  return e.driver == ThermalDriver::kTime ? 1.0 : spindle_power_kw / e.reference_power_kw;
 }
 
 inline double thermal_drift_step(const ThermalDriftAxis& e, double delta_mm, double drive,

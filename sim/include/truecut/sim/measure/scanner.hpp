@@ -16,8 +16,8 @@
 namespace truecut::sim::measure {
 
 enum class ScanMode {
-  fringe,  // camera + projector: a grid of camera rays; a point needs both to see it
-  laser,   // laser line: a fan of rays swept along a direction; the camera must see it
+  kFringe,  // camera + projector: a grid of camera rays; a point needs both to see it
+  kLaser,   // kLaser line: a fan of rays swept along a direction; the camera must see it
 };
 
 // One placement of the scanner head. The rays leave `position_mm` (fringe:
@@ -37,7 +37,7 @@ struct ScanPose {
 };
 
 struct ScannerOptions {
-  ScanMode mode = ScanMode::fringe;
+  ScanMode mode = ScanMode::kFringe;
   double sigma0_mm = 0.020;          // noise σ at normal incidence; 0.005–0.050 mm
   double max_incidence_deg = 75.0;   // steeper rays give no point
   double max_sigma_factor = 3.0;     // σ(θ) = σ0·min(1/cos θ, this)

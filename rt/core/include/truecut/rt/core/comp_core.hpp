@@ -22,33 +22,33 @@ namespace truecut::rt::comp {
 // The `fault` pin. When several apply, the lowest-numbered wins except that
 // input and parameter faults are reported before field faults.
 enum class Fault : int32_t {
-  none = 0,
-  no_field = 1,          // no field loaded
-  no_layer = 2,          // the field has no layer for the tool
-  outside_grid = 3,      // the TCP is outside the field's grid
-  input_not_finite = 4,  // NaN/Inf on a position or axis input
-  field_not_finite = 5,  // the field evaluated to NaN/Inf
-  bad_parameter = 6,     // max-correction, max-rate or fade-time NaN/Inf or < 0
-  kinematics = 7,        // joint mode: joint A outside [a-min, a-max]
+  kNone = 0,
+  kNoField = 1,         // no field loaded
+  kNoLayer = 2,         // the field has no layer for the tool
+  kOutsideGrid = 3,     // the TCP is outside the field's grid
+  kInputNotFinite = 4,  // NaN/Inf on a position or axis input
+  kFieldNotFinite = 5,  // the field evaluated to NaN/Inf
+  kBadParameter = 6,    // max-correction, max-rate or fade-time NaN/Inf or < 0
+  kKinematics = 7,      // joint mode: joint A outside [a-min, a-max]
 };
 
 inline const char* to_string(Fault f) noexcept {
   switch (f) {
-    case Fault::none:
+    case Fault::kNone:
       return "none";
-    case Fault::no_field:
+    case Fault::kNoField:
       return "no-field";
-    case Fault::no_layer:
+    case Fault::kNoLayer:
       return "no-layer";
-    case Fault::outside_grid:
+    case Fault::kOutsideGrid:
       return "outside-grid";
-    case Fault::input_not_finite:
+    case Fault::kInputNotFinite:
       return "input-not-finite";
-    case Fault::field_not_finite:
+    case Fault::kFieldNotFinite:
       return "field-not-finite";
-    case Fault::bad_parameter:
+    case Fault::kBadParameter:
       return "bad-parameter";
-    case Fault::kinematics:
+    case Fault::kKinematics:
       return "kinematics";
   }
   return "unknown";
@@ -74,7 +74,7 @@ struct CycleInput {
   int32_t tool = 0;
   Vec3 tcp_mm = Vec3::Zero();  // workpiece frame
   // A fault of the inputs (input_not_finite, kinematics) or none.
-  Fault input_fault = Fault::none;
+  Fault input_fault = Fault::kNone;
   // A validated field waiting to be adopted (nullptr: none). Adopted, and
   // then owned by the state, when out.adopted is set.
   const rt::CorrectionField* candidate = nullptr;
@@ -83,7 +83,7 @@ struct CycleInput {
 
 struct CycleOutput {
   Vec3 correction_mm = Vec3::Zero();
-  Fault fault = Fault::none;
+  Fault fault = Fault::kNone;
   bool limited = false;  // the magnitude clamp or the rate limit acted
   bool active = false;   // a correction is applied or fading
   double fade = 0.0;     // gain of the current source, 0..1
@@ -97,35 +97,35 @@ namespace detail {
 
 struct Evaluated {
   Vec3 value = Vec3::Zero();
-  Fault fault = Fault::none;
+  Fault fault = Fault::kNone;
 };
 
 inline Fault fault_of(rt::FieldStatus status) noexcept {
   switch (status) {
-    case rt::FieldStatus::ok:
-      return Fault::none;
-    case rt::FieldStatus::outside_grid:
-      return Fault::outside_grid;
-    case rt::FieldStatus::no_layer_for_tool:
-      return Fault::no_layer;
-    case rt::FieldStatus::non_finite:
-      return Fault::field_not_finite;
+    case rt::FieldStatus::kOk:
+      return Fault::kNone;
+    case rt::FieldStatus::kOutsideGrid:
+      return Fault::kOutsideGrid;
+    case rt::FieldStatus::kNoLayerForTool:
+      return Fault::kNoLayer;
+    case rt::FieldStatus::kNonFinite:
+      return Fault::kFieldNotFinite;
   }
-  return Fault::field_not_finite;
+  return Fault::kFieldNotFinite;
 }
 
 inline Evaluated evaluate(const Channel& ch, const Vec3& tcp_mm, Fault input_fault) noexcept {
-  if (input_fault != Fault::none) return {ch.held, input_fault};
-  if (ch.field == nullptr) return {ch.held, Fault::no_field};
+  if (input_fault != Fault::kNone) return {ch.held, input_fault};
+  if (ch.field == nullptr) return {ch.held, Fault::kNoField};
   const rt::FieldSample s = ch.field->evaluate(ch.tool, tcp_mm);
   const Fault f = fault_of(s.status);
-  if (f != Fault::none) return {ch.held, f};
-  return {s.correction_mm, Fault::none};
+  if (f != Fault::kNone) return {ch.held, f};
+  return {s.correction_mm, Fault::kNone};
 }
 
 // The value a channel contributes this cycle; a failure freezes it.
 inline Vec3 channel_value(Channel& ch, const Evaluated& e) noexcept {
-  if (e.fault != Fault::none) ch.frozen = true;
+  if (e.fault != Fault::kNone) ch.frozen = true;
   if (ch.frozen) return ch.held;
   ch.held = e.value;
   return e.value;
@@ -160,7 +160,7 @@ inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& ra
   // 3./4. Evaluate. A current source that recovers from a failure while still
   // partly faded in cross-fades from its held value to its live value.
   const detail::Evaluated cur = detail::evaluate(s.current, in.tcp_mm, in.input_fault);
-  if (s.current.frozen && cur.fault == Fault::none) {
+  if (s.current.frozen && cur.fault == Fault::kNone) {
     if (s.current.u <= 0.0) {
       s.current.frozen = false;
     } else if (s.outgoing.u <= 0.0) {
@@ -196,9 +196,9 @@ inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& ra
   out.limited = m.limited || r.limited;
   out.fade = fade_gain(s.current.u);
   out.active = s.current.u > 0.0 || s.outgoing.u > 0.0 || !s.output.isZero(0.0);
-  out.fault = in.input_fault != Fault::none ? in.input_fault
-              : !limits_ok                  ? Fault::bad_parameter
-                                            : cur.fault;
+  out.fault = in.input_fault != Fault::kNone ? in.input_fault
+              : !limits_ok                   ? Fault::kBadParameter
+                                             : cur.fault;
   return out;
 }
 

@@ -54,20 +54,20 @@ struct FieldLayer {
   std::vector<FieldNode> nodes;  // grid.node_count() entries, x fastest
 };
 
-enum class FieldInterpolation { tricubic_bspline, trilinear };
+enum class FieldInterpolation { kTricubicBspline, kTrilinear };
 
 enum class FieldStatus {
-  ok,
-  outside_grid,       // zero correction, weight 0
-  no_layer_for_tool,  // zero correction, weight 0
-  non_finite,         // the position (or, never expected, the result) was not finite
+  kOk,
+  kOutsideGrid,     // zero correction, weight 0
+  kNoLayerForTool,  // zero correction, weight 0
+  kNonFinite,       // the position (or, never expected, the result) was not finite
 };
 
 const char* to_string(FieldStatus status) noexcept;
 const char* to_string(FieldInterpolation interpolation) noexcept;
 
 struct FieldSample {
-  FieldStatus status = FieldStatus::ok;
+  FieldStatus status = FieldStatus::kOk;
   Eigen::Vector3d correction_mm = Eigen::Vector3d::Zero();  // weight * vector_mm
   Eigen::Vector3d vector_mm = Eigen::Vector3d::Zero();      // unweighted interpolant
   double weight = 0.0;
@@ -84,7 +84,7 @@ class CorrectionField {
   // finite vectors, weights in [0, 1]) and prefilters. Throws
   // std::invalid_argument saying what is wrong. Layers are kept sorted by tool.
   CorrectionField(const FieldGrid& grid, std::vector<FieldLayer> layers,
-                  FieldInterpolation interpolation = FieldInterpolation::tricubic_bspline);
+                  FieldInterpolation interpolation = FieldInterpolation::kTricubicBspline);
 
   static constexpr int64_t kMaxNodes = int64_t{1} << 26;  // per layer
   static constexpr std::size_t kMaxLayers = 1024;

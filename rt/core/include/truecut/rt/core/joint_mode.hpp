@@ -35,7 +35,7 @@ inline rt::AcJoints correct_joints(const rt::AcTrtParams& params, const rt::AcJo
   target.tcp_mm += correction_mm;
   const rt::AcIkResult ik = rt::inverse_ac(params, target, joints);
   rt::AcJoints out = joints;
-  if (ik.status == rt::AcIkStatus::ok || ik.status == rt::AcIkStatus::singular) {
+  if (ik.status == rt::AcIkStatus::kOk || ik.status == rt::AcIkStatus::kSingular) {
     out.x_mm = ik.joints.x_mm;
     out.y_mm = ik.joints.y_mm;
     out.z_mm = ik.joints.z_mm;

@@ -63,15 +63,15 @@ struct ToolPose {
 };
 
 enum class AcIkStatus {
-  ok,
-  singular,       // tilt below singular_tilt_deg: C kept from the hint
-  out_of_limits,  // neither A solution lies within [a_min_deg, a_max_deg]
-  invalid_input,  // non-finite pose or hint, or a zero tool axis
+  kOk,
+  kSingular,      // tilt below singular_tilt_deg: C kept from the hint
+  kOutOfLimits,   // neither A solution lies within [a_min_deg, a_max_deg]
+  kInvalidInput,  // non-finite pose or hint, or a zero tool axis
 };
 
 struct AcIkResult {
   AcJoints joints;  // for invalid_input: the hint, unchanged
-  AcIkStatus status = AcIkStatus::ok;
+  AcIkStatus status = AcIkStatus::kOk;
 };
 
 const char* to_string(AcIkStatus status) noexcept;
