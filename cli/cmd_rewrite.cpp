@@ -25,7 +25,7 @@ namespace fs = std::filesystem;
 
 const char* kRewriteHelp =
     "usage: truecut rewrite IN.ngc (--matrix COMP.csv | --field FIELD.tcf) --operation NAME\n"
-    "                       --type peripheral|face|ball --tool-radius R --out OUT.ngc [options]\n"
+    "                       --type peripheral|face|ball --tools TOOLS.tbl --out OUT.ngc [options]\n"
     "\n"
     "Writes the compensation into the program, for controllers that cannot run the\n"
     "real-time module: the moves of operation NAME are densified to --step, each\n"
@@ -33,6 +33,8 @@ const char* kRewriteHelp =
     "of the matrix blended by eqs. 2-5 of the optical-compensation source, or the\n"
     "correction field's layer of the operation's tool) and written as G1 moves with\n"
     "the original feed (G93 F recomputed). Every other line is copied byte for byte.\n"
+    "The cutter radius is that of the tool in the spindle (T.. M6): D / 2 in the\n"
+    "tool table, as for every other command.\n"
     "OUT and OUT.audit.json (inputs, options, SHA-256 digests, the summary) are\n"
     "written together or not at all. Method, measured results and when to use it\n"
     "rather than the real-time mode: docs/rewrite.md.\n"
@@ -43,7 +45,10 @@ const char* kRewriteHelp =
     "  --operation NAME     the CAM operation, as in (OPERATION: NAME)\n"
     "  --type T             peripheral (flat end mill, side), face (flat end mill,\n"
     "                       bottom) or ball (ball end mill)\n"
-    "  --tool-radius MM     cutter radius R\n"
+    "  --tools FILE         tool table (LinuxCNC format, mm); the radius of each\n"
+    "                       move's cutter is D / 2 of its tool\n"
+    "  --tool-radius MM     optional check: the radius you expect; refused (exit 2)\n"
+    "                       when it differs from the tool table's\n"
     "  --step MM            densification distance (default 0.5)\n"
     "  --reach MM           farthest compensation point from the cutting edge that\n"
     "                       is used (default: 2 x median point spacing)\n"
@@ -57,7 +62,6 @@ const char* kRewriteHelp =
     "                       mean of its surface's vectors within MM (default 0: as\n"
     "                       read); a matrix of raw scan points carries the noise\n"
     "  --surfaces ID,ID     use only compensation points of these surface ids\n"
-    "  --tools FILE         tool table (LinuxCNC format, mm)\n"
     "  --machine FILE       machine description JSON: kinematics pivots for moves\n"
     "                       outside TRAORI (default: all pivots 0)\n"
     "  --decimals N         digits after the point in X Y Z A C (default 4 in mm,\n"
@@ -153,7 +157,9 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
   if (!operation) throw UsageError("--operation NAME is required");
   const auto type = a.value("type");
   if (!type) throw UsageError("--type peripheral|face|ball is required");
-  if (!a.value("tool-radius")) throw UsageError("--tool-radius MM is required");
+  const auto tools_path = a.value("tools");
+  if (!tools_path)
+    throw UsageError("--tools FILE is required (the tool radius is D / 2 of the tool in it)");
   const auto out_path = a.value("out");
   if (!out_path) throw UsageError("--out OUT.ngc is required");
 
@@ -170,7 +176,7 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
   interp::RewriteOptions o;
   o.operation = *operation;
   o.type = cut_type(*type);
-  o.tool_radius_mm = a.number("tool-radius", 0, 0, 1000);
+  if (a.value("tool-radius")) o.tool_radius_mm = a.number("tool-radius", 0, 0, 1000);
   if (auto s = a.value("step")) {
     char* end = nullptr;
     const double v = std::strtod(s->c_str(), &end);
@@ -202,10 +208,8 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
 
   interp::RewriteResult result;
   try {
-    if (auto t = a.value("tools")) {
-      add_input("tools", *t, read_bytes(*t, "tool table"));
-      o.interpreter.tools = interp::ToolTable::load(*t);
-    }
+    add_input("tools", *tools_path, read_bytes(*tools_path, "tool table"));
+    o.interpreter.tools = interp::ToolTable::load(*tools_path);
     if (auto m = a.value("machine")) {
       add_input("machine", *m, read_bytes(*m, "machine description"));
       const auto k = sim::read_machine_description(*m).machine.kinematics;
@@ -241,6 +245,20 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
   }
 
   const interp::RewriteSummary& s = result.summary;
+  // The radius of the operation's tool(s), from the tool table.
+  std::optional<double> radius_mm;
+  bool one_radius = true;
+  std::string tools_json, radius_text;
+  for (const auto& [tool, r] : s.tool_radii_mm) {
+    if (radius_mm && *radius_mm != r) one_radius = false;
+    radius_mm = r;
+    tools_json += std::string(tools_json.empty() ? "" : ", ") +
+                  "{\"tool\": " + std::to_string(tool) +
+                  ", \"radius_mm\": " + rt::format_printf("%.17g", r) + "}";
+    radius_text += rt::format_printf("%s%g mm (T%d)", radius_text.empty() ? "" : ", ", r, tool);
+  }
+  if (one_radius && radius_mm) radius_text = rt::format_printf("%g mm", *radius_mm);
+  if (!radius_mm) radius_text = "- (no feed move)";
   std::string j = "{\n  \"truecut_rewrite_audit\": 1,\n";
   j += "  \"created\": " + json_string(rt::utc_timestamp_now()) + ",\n";
   j += "  \"frame\": \"workpiece\",\n  \"units\": \"mm\",\n  \"inputs\": [\n";
@@ -251,8 +269,8 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
          ", \"sha256\": " + json_string(inputs[i].sha256) + "}" +
          (i + 1 < inputs.size() ? ",\n" : "\n");
   j += "  ],\n  \"options\": {\"operation\": " + json_string(o.operation) +
-       ", \"type\": " + json_string(interp::to_string(o.type)) +
-       ", \"tool_radius_mm\": " + rt::format_printf("%.17g", o.tool_radius_mm) +
+       ", \"type\": " + json_string(interp::to_string(o.type)) + ", \"tool_radius_mm\": " +
+       (one_radius && radius_mm ? rt::format_printf("%.17g", *radius_mm) : std::string("null")) +
        ", \"step_mm\": " + rt::format_printf("%.17g", o.step_mm) +
        ", \"reach_mm\": " + rt::format_printf("%.17g", s.reach_mm) +
        ", \"placement\": " + json_string(interp::to_string(o.placement)) +
@@ -277,7 +295,8 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
        "], \"max_compensation_mm\": " + rt::format_printf("%.17g", s.max_compensation_mm) +
        ", \"mean_compensation_mm\": " + rt::format_printf("%.17g", s.mean_compensation_mm) +
        ", \"lines_in\": " + std::to_string(s.lines_in) +
-       ", \"lines_out\": " + std::to_string(s.lines_out) + "}\n}\n";
+       ", \"lines_out\": " + std::to_string(s.lines_out) + ", \"tools\": [" + tools_json +
+       "]}\n}\n";
 
   files->write(0, result.text);
   files->write(1, j);
@@ -285,13 +304,13 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
 
   if (matrix_path)
     std::printf(
-        "operation %s (%s, R %g mm, step %g mm, matrix %s, reach %.4g mm, placement %s, "
+        "operation %s (%s, R %s, step %g mm, matrix %s, reach %.4g mm, placement %s, "
         "smooth %g mm)\n",
-        o.operation.c_str(), interp::to_string(o.type), o.tool_radius_mm, o.step_mm,
+        o.operation.c_str(), interp::to_string(o.type), radius_text.c_str(), o.step_mm,
         matrix_path->c_str(), s.reach_mm, interp::to_string(o.placement), o.smoothing_radius_mm);
   else
-    std::printf("operation %s (%s, R %g mm, step %g mm, field %s)\n", o.operation.c_str(),
-                interp::to_string(o.type), o.tool_radius_mm, o.step_mm, field_path->c_str());
+    std::printf("operation %s (%s, R %s, step %g mm, field %s)\n", o.operation.c_str(),
+                interp::to_string(o.type), radius_text.c_str(), o.step_mm, field_path->c_str());
   std::printf("  moves read            %d\n", s.moves_read);
   std::printf("  moves rewritten       %d\n", s.moves_rewritten);
   std::printf("  moves kept            %d\n", s.moves_kept);

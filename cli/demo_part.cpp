@@ -216,8 +216,7 @@ DemoPartResult run_demo_part(const std::string& part, const DemoOptions& o) {
       // changes the part (docs/rewrite.md, "Measured", freeform).
       const double step_mm = std::max(0.5, 1.2 * info.point_spacing_mm);
       s.run("rewrite operation " + op.name,
-            {"rewrite", program, "--field", "field_1/field.tcf", "--operation", op.name,
-             "--tool-radius", rt::format_printf("%g", tool.radius_mm), "--type",
+            {"rewrite", program, "--field", "field_1/field.tcf", "--operation", op.name, "--type",
              rewrite_type(op, tool), "--step", rt::format_printf("%g", step_mm), "--tools",
              "part/tools.tbl", "--out", out});
       program = out;

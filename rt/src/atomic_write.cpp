@@ -29,10 +29,10 @@ void write_all(int fd, std::string_view bytes, const fs::path& file) {
   }
 }
 
-// Creates (or truncates) the regular file `file` with `bytes`, synced. Never
-// follows a symbolic link and never writes into a FIFO or device that happens
-// to carry the name; removes the file again on failure.
-void write_new_file(const fs::path& file, std::string_view bytes) {
+// Creates (or truncates) the regular file `file` for writing. Never follows
+// a symbolic link and never opens a FIFO or device that happens to carry the
+// name.
+int open_new_file(const fs::path& file) {
   const int fd = ::open(file.c_str(),
                         O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK, 0644);
   if (fd < 0) fail(file, "cannot create", errno);
@@ -41,19 +41,35 @@ void write_new_file(const fs::path& file, std::string_view bytes) {
     ::close(fd);
     throw FileWriteError(file, "exists and is not a regular file; not used");
   }
-  try {
-    write_all(fd, bytes, file);
-    if (::fsync(fd) != 0) fail(file, "cannot sync", errno);
-  } catch (...) {
+  return fd;
+}
+
+// Syncs and closes `fd` (the file `file`); on failure removes the file.
+void sync_and_close(int fd, const fs::path& file) {
+  if (::fsync(fd) != 0) {
+    const int err = errno;
     ::close(fd);
     ::unlink(file.c_str());
-    throw;
+    fail(file, "cannot sync", err);
   }
   if (::close(fd) != 0) {
     const int err = errno;
     ::unlink(file.c_str());
     fail(file, "cannot close", err);
   }
+}
+
+// The regular file `file` with `bytes`, synced; removed again on failure.
+void write_new_file(const fs::path& file, std::string_view bytes) {
+  const int fd = open_new_file(file);
+  try {
+    write_all(fd, bytes, file);
+  } catch (...) {
+    ::close(fd);
+    ::unlink(file.c_str());
+    throw;
+  }
+  sync_and_close(fd, file);
 }
 
 // Makes a rename durable. Best effort: the file is complete and in place
@@ -77,7 +93,7 @@ void rename_over(const fs::path& from, const fs::path& to) {
 }  // namespace
 
 FileWriteError::FileWriteError(const fs::path& path, const std::string& why)
-    : std::runtime_error(path.string() + ": " + why), path_(path) {}
+    : std::runtime_error(path.string() + ": " + why), path_(path), why_(why) {}
 
 void require_replaceable(const fs::path& path) {
   struct stat st {};
@@ -86,11 +102,36 @@ void require_replaceable(const fs::path& path) {
 }
 
 void write_file_atomically(const fs::path& path, std::string_view bytes) {
-  require_replaceable(path);
-  const fs::path tmp = path.string() + ".tmp";
-  write_new_file(tmp, bytes);
-  rename_over(tmp, path);
-  sync_directory_of(path);
+  AtomicFileWriter out(path);
+  out.write(bytes);
+  out.commit();
+}
+
+AtomicFileWriter::AtomicFileWriter(fs::path path)
+    : path_(std::move(path)), tmp_path_(path_.string() + ".tmp") {
+  require_replaceable(path_);
+  fd_ = open_new_file(tmp_path_);
+}
+
+AtomicFileWriter::~AtomicFileWriter() {
+  if (committed_) return;
+  if (fd_ >= 0) ::close(fd_);
+  ::unlink(tmp_path_.c_str());
+}
+
+void AtomicFileWriter::write(std::string_view bytes) {
+  if (fd_ < 0) throw FileWriteError(tmp_path_, "cannot write: already committed or failed");
+  write_all(fd_, bytes, tmp_path_);
+}
+
+void AtomicFileWriter::commit() {
+  if (fd_ < 0) throw FileWriteError(tmp_path_, "cannot commit: already committed or failed");
+  const int fd = fd_;
+  fd_ = -1;
+  sync_and_close(fd, tmp_path_);  // removes the file on failure
+  rename_over(tmp_path_, path_);  // likewise
+  committed_ = true;
+  sync_directory_of(path_);
 }
 
 void copy_file_atomically(const fs::path& from, const fs::path& to) {

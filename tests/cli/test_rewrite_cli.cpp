@@ -49,9 +49,10 @@ Case setup() {
   return c;
 }
 
-const std::vector<std::string> kArgs = {
-    "p.ngc", "--matrix", "m.csv",     "--operation", "FACE", "--type", "face",   "--tool-radius",
-    "2",     "--tools",  "tools.tbl", "--reach",     "0.6",  "--out",  "out.ngc"};
+// The tool radius is T2's in tools.tbl (D4: 2 mm).
+const std::vector<std::string> kArgs = {"p.ngc",  "--matrix", "m.csv",   "--operation", "FACE",
+                                        "--type", "face",     "--tools", "tools.tbl",   "--reach",
+                                        "0.6",    "--out",    "out.ngc"};
 
 std::vector<std::string> with(std::vector<std::string> args, const std::string& key,
                               const std::string& value) {
@@ -73,6 +74,11 @@ void expect_refused(const Case& c, const ProcessResult& r, const std::string& me
   EXPECT_FALSE(fs::exists(c.dir / "out.ngc.tmp"));
   EXPECT_FALSE(fs::exists(c.dir / "out.ngc.audit.json"));
 }
+
+// sha256 of out.ngc as `truecut rewrite` wrote it for kArgs plus
+// `--tool-radius 2` when that option was required.
+const char* kExplicitRadiusSha256 =
+    "5ffb5ed66f709ce7aa57a3c986b92b14fc4e72313e22191548c36d503e3cf8dd";
 
 }  // namespace
 
@@ -180,6 +186,48 @@ TEST(CliRewrite, UsageErrors) {
   expect_refused(c, c.run(with(kArgs, "--placement", "nearest")), "expected every-pass or tip");
   expect_refused(c, c.run(with(kArgs, "--smooth", "-1")), "--smooth -1 is outside");
   expect_refused(c, c.run(with(kArgs, "--cutting-length", "0")), "--cutting-length 0 is outside");
+}
+
+TEST(CliRewrite, ToolRadiusFromTheTableGivesTheOutputOfTheExplicitRadius) {
+  const Case c = setup();
+  ASSERT_EQ(c.run(kArgs).exit_code, 0);
+  const std::string from_table = read_file(c.dir / "out.ngc");
+  const std::string audit = read_file(c.dir / "out.ngc.audit.json");
+  EXPECT_NE(audit.find("\"tool_radius_mm\": 2,"), std::string::npos) << audit;
+  EXPECT_NE(audit.find("\"tools\": [{\"tool\": 2, \"radius_mm\": 2}]"), std::string::npos) << audit;
+  // The digest of what `--tool-radius 2` wrote before the radius came from
+  // the tool table.
+  auto sum = run_process({"/usr/bin/sha256sum", "out.ngc"}, c.dir);
+  ASSERT_EQ(sum.exit_code, 0);
+  EXPECT_EQ(sum.out.substr(0, 64), kExplicitRadiusSha256);
+  // The same radius given by hand: a check, the same bytes.
+  const auto r = c.run(with(kArgs, "--tool-radius", "2"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("operation FACE (face, R 2 mm, step 0.5 mm"), std::string::npos) << r.out;
+  EXPECT_EQ(read_file(c.dir / "out.ngc"), from_table);
+}
+
+TEST(CliRewrite, ToolRadiusThatDiffersFromTheTableIsRefused) {
+  const Case c = setup();
+  expect_refused(c, c.run(with(kArgs, "--tool-radius", "1.5")),
+                 "truecut rewrite: the tool radius given (1.5 mm) differs from the tool table's "
+                 "for tool T2 (D 4 mm, radius 2 mm; first used on p.ngc:7)");
+}
+
+TEST(CliRewrite, ToolTableIsRequiredAndMustHoldTheTool) {
+  const Case c = setup();
+  std::vector<std::string> no_tools = kArgs;
+  no_tools.erase(no_tools.begin() + 7, no_tools.begin() + 9);
+  expect_refused(c, c.run(no_tools), "--tools FILE is required");
+  write(c.dir / "t1.tbl", "T1 P1 D2 Z30\n");
+  expect_refused(c, c.run(with(kArgs, "--tools", "t1.tbl")),
+                 "p.ngc:4:1: tool T2 is not in the tool table");
+  // No tool in the spindle for the operation's moves.
+  std::string prog = kProgram;
+  prog.replace(prog.find("T2 M6\nG43 H2\n"), 13, "");
+  write(c.dir / "p.ngc", prog);
+  expect_refused(c, c.run(kArgs),
+                 "p.ngc:5: feed move of operation 'FACE' with no tool in the spindle");
 }
 
 TEST(CliRewrite, Help) {

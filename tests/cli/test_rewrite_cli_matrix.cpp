@@ -64,7 +64,7 @@ TEST(CliRewriteMatrix, RewriteAcceptsTheOfflineMatrix) {
   std::ofstream(dir / "t.tbl") << "T1 P1 D2 Z30\n";
   const auto r = test::run_process(
       {test::cli_path().string(), "rewrite", "p.ngc", "--matrix", "comp.csv", "--operation", "FACE",
-       "--type", "face", "--tool-radius", "1", "--tools", "t.tbl", "--out", "o.ngc"},
+       "--type", "face", "--tools", "t.tbl", "--out", "o.ngc"},
       dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("  max compensation      0.0100 mm"), std::string::npos) << r.out;
@@ -88,7 +88,7 @@ TEST(CliRewriteMatrix, FieldWithoutALayerForTheOperationsToolIsRefused) {
   std::ofstream(dir / "t.tbl") << "T1 P1 D2 Z30\nT2 P2 D4 Z40\n";
   const auto r = test::run_process(
       {test::cli_path().string(), "rewrite", "p.ngc", "--field", "f.tcf", "--operation", "FACE",
-       "--type", "face", "--tool-radius", "2", "--tools", "t.tbl", "--out", "o.ngc"},
+       "--type", "face", "--tools", "t.tbl", "--out", "o.ngc"},
       dir);
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("the correction field has no layer for tool 2 (operation 'FACE')"),

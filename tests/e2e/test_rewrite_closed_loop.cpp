@@ -196,9 +196,9 @@ class Loop {
   // The strip's 5-axis operation rewritten with `source` options, machined;
   // returns the machining time.
   double rewrite(const std::string& key, std::vector<std::string> source) {
-    std::vector<std::string> args{"rewrite", "strip.ngc",      "--operation",   "FREEFORM_5AXIS",
-                                  "--type",  "ball",           "--tool-radius", "3",
-                                  "--tools", "part/tools.tbl", "--out",         key + ".ngc"};
+    std::vector<std::string> args{"rewrite", "strip.ngc", "--operation", "FREEFORM_5AXIS",
+                                  "--type",  "ball",      "--tools",     "part/tools.tbl",
+                                  "--out",   key + ".ngc"};
     args.insert(args.end(), source.begin(), source.end());
     truecut("rewrite " + key, args);
     return machine(key, key + ".ngc");
@@ -341,16 +341,15 @@ TEST(RewriteClosedLoop, ImplantMatrixRewriteWithEveryPassCompensatesAsWellAsTheR
   loop.machine("realtime", "part/program.ngc", "part/machine.json", "field/field.tcf");
   for (const std::string placement : {"every-pass", "tip"}) {
     // Both operations, each from the matrix points of the surfaces it cuts.
+    loop.truecut("rewrite top", {"rewrite", "part/program.ngc", "--matrix",
+                                 "field/compensation_matrix.csv", "--operation", "SHAFT_TOP_FACE",
+                                 "--type", "face", "--surfaces", "5", "--placement", placement,
+                                 "--tools", "part/tools.tbl", "--out", placement + "_1.ngc"});
     loop.truecut(
-        "rewrite top",
-        {"rewrite", "part/program.ngc", "--matrix", "field/compensation_matrix.csv", "--operation",
-         "SHAFT_TOP_FACE", "--type", "face", "--tool-radius", "2", "--surfaces", "5", "--placement",
-         placement, "--tools", "part/tools.tbl", "--out", placement + "_1.ngc"});
-    loop.truecut("rewrite shaft",
-                 {"rewrite", placement + "_1.ngc", "--matrix", "field/compensation_matrix.csv",
-                  "--operation", "SHAFT_PERIPHERAL", "--type", "peripheral", "--tool-radius", "1",
-                  "--surfaces", "1,2,3,4", "--placement", placement, "--tools", "part/tools.tbl",
-                  "--out", placement + ".ngc"});
+        "rewrite shaft",
+        {"rewrite", placement + "_1.ngc", "--matrix", "field/compensation_matrix.csv",
+         "--operation", "SHAFT_PERIPHERAL", "--type", "peripheral", "--surfaces", "1,2,3,4",
+         "--placement", placement, "--tools", "part/tools.tbl", "--out", placement + ".ngc"});
     loop.machine(placement, placement + ".ngc");
   }
   if (HasFailure()) return;

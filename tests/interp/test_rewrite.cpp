@@ -18,11 +18,11 @@ using V = Eigen::Vector3d;
 
 const char* kTools = "T1 P1 D2 Z35\nT2 P2 D4 Z40\n";
 
-RewriteOptions options(const std::string& op, CutType type, double radius) {
+// The tool radius is D / 2 of the tool in the spindle: T1 1 mm, T2 2 mm.
+RewriteOptions options(const std::string& op, CutType type) {
   RewriteOptions o;
   o.operation = op;
   o.type = type;
-  o.tool_radius_mm = radius;
   o.interpreter.tools = ToolTable::parse(kTools, "tools.tbl");
   return o;
 }
@@ -90,7 +90,7 @@ const char* kThreeOps =
 TEST(Rewrite, LinesOutsideTheRewrittenMovesStayByteForByte) {
   // Points on the face z = 0 over x, y in [-4, 4], shifting by (0, 0, 0.05).
   const auto m = plane_matrix(-4, 4, -4, 4, 0, 0.5, V(0, 0, 0.05));
-  RewriteOptions o = options("FACE", CutType::kFace, 2.0);
+  RewriteOptions o = options("FACE", CutType::kFace);
   o.reach_mm = 0.6;
   const RewriteResult r = rewrite_program(kThreeOps, "p.ngc", m, o);
   const std::string in = kThreeOps;
@@ -116,7 +116,7 @@ TEST(Rewrite, LinesOutsideTheRewrittenMovesStayByteForByte) {
 TEST(Rewrite, ConstantOffsetShiftsEveryDensifiedPointByExactlyThatOffset) {
   const V offset(0.01, -0.02, 0.03);
   const auto m = plane_matrix(-10, 10, -4, 4, 0, 0.5, offset);
-  RewriteOptions o = options("FACE", CutType::kFace, 2.0);
+  RewriteOptions o = options("FACE", CutType::kFace);
   o.reach_mm = 100;  // every point compensated
   o.decimals = 6;
   const RewriteResult r = rewrite_program(kThreeOps, "p.ngc", m, o);
@@ -140,7 +140,7 @@ TEST(Rewrite, ConstantOffsetShiftsEveryDensifiedPointByExactlyThatOffset) {
 
 TEST(Rewrite, ZeroMatrixLeavesTheProgramIdenticalOrOnItsPath) {
   const auto m = plane_matrix(-10, 10, -4, 4, 0, 0.5, V::Zero());
-  RewriteOptions o = options("FACE", CutType::kFace, 2.0);
+  RewriteOptions o = options("FACE", CutType::kFace);
   o.reach_mm = 100;
   const RewriteResult same = rewrite_program(kThreeOps, "p.ngc", m, o);
   EXPECT_EQ(same.text, kThreeOps);
@@ -170,7 +170,7 @@ TEST(Rewrite, ArcsAreDensifiedOnTheirCircle) {
   m.vectors_mm = {V::Zero()};
   m.valid = {1};
   m.surface_ids = {0};
-  RewriteOptions o = options("RING", CutType::kPeripheral, 1.0);
+  RewriteOptions o = options("RING", CutType::kPeripheral);
   o.keep_unchanged_moves = false;
   o.reach_mm = 0.1;
   o.decimals = 7;
@@ -203,7 +203,7 @@ TEST(Rewrite, ArcChordsStayWithinTheChordToleranceOfTheArc) {
   m.vectors_mm = {V::Zero()};
   m.valid = {1};
   m.surface_ids = {0};
-  RewriteOptions o = options("CORNER", CutType::kPeripheral, 1.0);
+  RewriteOptions o = options("CORNER", CutType::kPeripheral);
   o.keep_unchanged_moves = false;
   o.reach_mm = 0.1;
   o.decimals = 7;
@@ -242,7 +242,7 @@ TEST(Rewrite, TraoriMovesShiftTheTipAndInterpolateTheAxis) {
   m.vectors_mm = {offset, offset};
   m.valid = {1, 1};
   m.surface_ids = {1, 1};
-  RewriteOptions o = options("FIVE", CutType::kBall, 1.0);
+  RewriteOptions o = options("FIVE", CutType::kBall);
   o.reach_mm = 100;
   o.decimals = 7;
   const RewriteResult r = rewrite_program(kTraori, "five.ngc", m, o);
@@ -284,7 +284,7 @@ TEST(Rewrite, JointSpaceMovesAreShiftedInTheWorkpieceFrame) {
   }
   // The tip at joints (x, 0, 0 + 35 - 35) with A = 90: workpiece tip
   // (x, 0, 0); the compensation points lie there.
-  RewriteOptions o = options("SIDE", CutType::kFace, 1.0);
+  RewriteOptions o = options("SIDE", CutType::kFace);
   o.reach_mm = 0.2;
   o.decimals = 7;
   const RewriteResult r = rewrite_program(prog, "side.ngc", m, o);
@@ -309,7 +309,7 @@ TEST(Rewrite, InverseTimeFeedIsRecomputedPerPiece) {
       "G21 G17 G90\n(OPERATION: G93OP)\nT1 M6\nG43 H1\nG0 X0 Y0 Z0\n"
       "G93 G1 X2 F10\nG94 G0 Z5\nM30\n";
   const auto m = plane_matrix(-1, 3, -1, 1, 0, 0.5, V(0, 0, 0.01));
-  RewriteOptions o = options("G93OP", CutType::kFace, 1.0);
+  RewriteOptions o = options("G93OP", CutType::kFace);
   o.reach_mm = 0.5;
   const RewriteResult r = rewrite_program(prog, "g93.ngc", m, o);
   // 2 mm in 4 pieces of 0.5 mm: each F = 4 x 10, total time 4 / 40 = 1/10 min.
@@ -336,7 +336,7 @@ TEST(Rewrite, FieldAndMatrixAgreeOnAConstantOffset) {
   }
   const rt::CorrectionField field(g, layers);
   const auto m = plane_matrix(-10, 10, -4, 4, 0, 0.5, offset);
-  RewriteOptions o = options("FACE", CutType::kFace, 2.0);
+  RewriteOptions o = options("FACE", CutType::kFace);
   o.reach_mm = 100;
   o.decimals = 6;
   const auto a = feeds_of(rewrite_program(kThreeOps, "p.ngc", m, o).text, "FACE");
@@ -386,7 +386,7 @@ std::map<double, std::vector<double>> x_by_level(const std::string& text) {
 }
 
 TEST(Rewrite, EveryPassLevelTakesTheMeanOfTheWallItsFlankSweeps) {
-  RewriteOptions o = options("WALL", CutType::kPeripheral, 1.0);
+  RewriteOptions o = options("WALL", CutType::kPeripheral);
   o.reach_mm = 0.2;         // query bands every 0.1 mm, on the rows
   o.cutting_length_mm = 2;  // the flank sweeps the wall from the tip up 2 mm
   o.decimals = 7;
@@ -427,7 +427,7 @@ TEST(Rewrite, EveryPassFaceMillingAveragesOverTheDisc) {
   const char* prog =
       "G21 G17 G90 G94\n(OPERATION: TOP)\nT2 M6\nG43 H2\nG0 X-0.5 Y-2 Z5\nG1 Z0 F300\n"
       "G1 Y2\nG0 Z5\nM30\n";
-  RewriteOptions o = options("TOP", CutType::kFace, 2.0);
+  RewriteOptions o = options("TOP", CutType::kFace);
   o.reach_mm = 0.2;
   o.decimals = 7;
   std::vector<double> z_every, z_tip;
@@ -461,7 +461,7 @@ TEST(Rewrite, SmoothingAveragesNeighboursOfTheSameSurfaceOnly) {
         m.valid.push_back(1);
         m.surface_ids.push_back(s);
       }
-  RewriteOptions o = options("FACE", CutType::kFace, 2.0);
+  RewriteOptions o = options("FACE", CutType::kFace);
   o.placement = MatrixPlacement::kTip;
   o.reach_mm = 0.3;
   o.surfaces = {1};
@@ -488,7 +488,7 @@ TEST(Rewrite, InchProgramsGetTheShiftInInchesWithFiveDecimals) {
   const char* prog =
       "G20 G17 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X-0.2 Y0 Z0.2\nG1 Z0 F10\n"
       "G1 X0.2 F20\nG0 Z0.2\nM30\n";
-  RewriteOptions o = options("FACE", CutType::kFace, 2.0);
+  RewriteOptions o = options("FACE", CutType::kFace);
   o.reach_mm = 100;
   const RewriteResult r = rewrite_program(prog, "inch.ngc", m, o);
   EXPECT_NE(r.text.find("\nX0.20000 Y0.00000 Z0.00100\n"), std::string::npos) << r.text;
@@ -514,9 +514,9 @@ std::string error_of(const std::string& program, const RewriteOptions& o) {
 }
 
 TEST(Rewrite, BadInputIsRefusedWithAClearMessage) {
-  RewriteOptions o = options("FACE", CutType::kFace, 2.0);
+  RewriteOptions o = options("FACE", CutType::kFace);
   o.reach_mm = 100;
-  EXPECT_EQ(error_of<RewriteError>(kThreeOps, options("ROUGH", CutType::kFace, 2)),
+  EXPECT_EQ(error_of<RewriteError>(kThreeOps, options("ROUGH", CutType::kFace)),
             "bad.ngc: operation 'ROUGH' is not in the program (operations: FIRST, FACE, LAST)");
   RewriteOptions s = o;
   s.step_mm = 0;
@@ -540,6 +540,61 @@ TEST(Rewrite, BadInputIsRefusedWithAClearMessage) {
   const std::string g91 = error_of<GcodeError>(
       "G21 G91 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 Z40\nG1 X1 F100\nM30\n", o);
   EXPECT_NE(g91.find("G91"), std::string::npos) << g91;
+}
+
+// The cutter radius is D / 2 of the tool in the spindle: giving the same
+// radius by hand changes nothing, a tool of another diameter changes the
+// densification of the ball's turn (R per radian of the axis).
+TEST(Rewrite, ToolRadiusComesFromTheToolTable) {
+  CompensationMatrixData m;
+  m.positions_mm = {V(0, 0, 0), V(6, 0, 0)};
+  m.vectors_mm = {V(0.02, 0.01, -0.04), V(0.02, 0.01, -0.04)};
+  m.valid = {1, 1};
+  m.surface_ids = {1, 1};
+  RewriteOptions o = options("FIVE", CutType::kBall);
+  o.reach_mm = 100;
+  const RewriteResult from_table = rewrite_program(kTraori, "five.ngc", m, o);
+  ASSERT_EQ(from_table.summary.tool_radii_mm.size(), 1u);
+  EXPECT_EQ(from_table.summary.tool_radii_mm[0], (std::pair<int, double>(1, 1.0)));
+  RewriteOptions given = o;
+  given.tool_radius_mm = 1.0;
+  EXPECT_EQ(rewrite_program(kTraori, "five.ngc", m, given).text, from_table.text);
+  RewriteOptions larger = o;
+  larger.interpreter.tools = ToolTable::parse("T1 P1 D8 Z35\n", "tools.tbl");
+  const RewriteResult r4 = rewrite_program(kTraori, "five.ngc", m, larger);
+  EXPECT_EQ(r4.summary.tool_radii_mm[0], (std::pair<int, double>(1, 4.0)));
+  EXPECT_GT(r4.summary.points_written, from_table.summary.points_written);
+}
+
+TEST(Rewrite, ToolMissingFromTheTableOrNotSelectedIsRefusedWithItsLine) {
+  RewriteOptions o = options("FACE", CutType::kFace);
+  o.reach_mm = 100;
+  // The interpreter refuses a tool the table does not hold, at its line.
+  EXPECT_EQ(error_of<GcodeError>("G21 G90 G94\n(OPERATION: FACE)\nT3 M6\nG0 X0 Y0 Z1\n"
+                                 "G1 Z0 F100\nG1 X1\nM30\n",
+                                 o),
+            "bad.ngc:3:1: tool T3 is not in the tool table");
+  EXPECT_EQ(error_of<GcodeError>("G21 G90 G94\n(OPERATION: FACE)\nG0 X0 Y0 Z1\nG1 Z0 F100\n"
+                                 "G1 X1\nM30\n",
+                                 o),
+            "bad.ngc:4: feed move of operation 'FACE' with no tool in the spindle: the tool radius "
+            "comes from the tool table (select the tool with T.. M6 before the move)");
+  // A ball end mill whose table row has no diameter.
+  RewriteOptions ball = options("FACE", CutType::kBall);
+  ball.interpreter.tools = ToolTable::parse("T1 P1 D2 Z35\nT2 P2 Z40\n", "tools.tbl");
+  EXPECT_EQ(error_of<GcodeError>(kThreeOps, ball).substr(0, 60),
+            "bad.ngc:15: tool T2 has diameter 0 in the tool table: a ball");
+}
+
+TEST(Rewrite, GivenToolRadiusThatDiffersFromTheTableIsRefused) {
+  RewriteOptions o = options("FACE", CutType::kFace);
+  o.reach_mm = 100;
+  o.tool_radius_mm = 1.5;
+  EXPECT_EQ(error_of<RewriteError>(kThreeOps, o),
+            "the tool radius given (1.5 mm) differs from the tool table's for tool T2 (D 4 mm, "
+            "radius 2 mm; first used on bad.ngc:15)");
+  o.tool_radius_mm = -1;
+  EXPECT_EQ(error_of<std::invalid_argument>(kThreeOps, o), "tool radius must be >= 0 mm");
 }
 
 }  // namespace

@@ -363,6 +363,8 @@ void check_part(const std::string& part) {
     const std::string out = op.name + ".ngc";
     char reach[32];
     std::snprintf(reach, sizeof reach, "%g", 2 * op.radius_mm + 1);
+    // The radius comes from tools.tbl; --tool-radius (part.json's) is the
+    // check that both agree.
     auto r = run_process(
         {cli_path().string(), "rewrite", "program.ngc", "--matrix", op.name + ".csv", "--operation",
          op.name, "--type", op.type, "--tool-radius", std::to_string(op.radius_mm), "--reach",

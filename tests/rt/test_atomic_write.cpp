@@ -114,6 +114,37 @@ TEST(AtomicWrite, FailedWriteLeavesTheOldFileAndNoTemporary) {
   EXPECT_EQ(std::set<std::string>{"out.txt"}, listing(dir));
 }
 
+TEST(AtomicFileWriter, WritesInPiecesAndAppearsOnlyOnCommit) {
+  const fs::path dir = scratch_dir();
+  const fs::path file = dir / "mesh.ply";
+  write_file_atomically(file, "old");
+  {
+    AtomicFileWriter out(file);
+    EXPECT_EQ(file.string() + ".tmp", out.tmp_path().string());
+    out.write("ply\n");
+    out.write(std::string(3 << 20, 'v'));
+    EXPECT_EQ("old", read_file(file));
+    out.commit();
+    EXPECT_THROW(out.write("late"), FileWriteError);
+  }
+  EXPECT_EQ("ply\n" + std::string(3 << 20, 'v'), read_file(file));
+  {
+    AtomicFileWriter out(file);  // an exception on the way: no commit
+    out.write("partial");
+  }
+  EXPECT_EQ("ply\n" + std::string(3 << 20, 'v'), read_file(file));
+  EXPECT_EQ(std::set<std::string>{"mesh.ply"}, listing(dir));
+  EXPECT_THROW(AtomicFileWriter("/dev/null"), FileWriteError);
+  EXPECT_TRUE(is_char_device("/dev/null"));
+  try {
+    AtomicFileWriter out(dir / "missing" / "m.stl");
+    FAIL() << "created a file in a missing folder";
+  } catch (const FileWriteError& e) {
+    EXPECT_EQ(dir / "missing" / "m.stl.tmp", e.path());
+    EXPECT_EQ(0u, e.why().find("cannot create: ")) << e.why();
+  }
+}
+
 TEST(AtomicWrite, CopiesAFile) {
   const fs::path dir = scratch_dir();
   write_file_atomically(dir / "a", "payload");

@@ -5,6 +5,9 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include "effect_params.hpp"
 #include "fit_steps.hpp"
@@ -226,34 +229,45 @@ void add_pitch_periodic_candidates(const SignatureBasis& S, const JointMotion& m
   }
 }
 
+// A thermal-drift candidate of joint m.j: time constant tau, the driver
+// (with its reference power when driven by the spindle power) and `col`, the
+// first-order response to the driver at each row.
+Candidate thermal_candidate(const SignatureBasis& S, const JointMotion& m, double tau,
+                            sim::ThermalDriver driver, std::optional<double> reference_power_kw,
+                            std::string variant, const std::vector<double>& col) {
+  const int j = m.j;
+  Candidate c;
+  c.effect = "thermal_drift";
+  c.joint = j;
+  c.axis = m.ax;
+  c.group = "thermal_drift:" + m.ax;
+  c.variant = std::move(variant);
+  c.keys = {"gain_mm", "tau_s"};
+  c.X = S.column(j, col);
+  c.apply = [j, tau, driver, reference_power_kw](sim::MachineParams& p, const VectorXd& coef) {
+    enable_effect(p, "thermal_drift", j);
+    auto& e = *p.effects.thermal_drift.axes[j];
+    e.gain_mm = coef[0];
+    e.tau_s = tau;
+    e.driver = driver;
+    if (reference_power_kw) e.reference_power_kw = *reference_power_kw;
+    return true;
+  };
+  return c;
+}
+
 // Thermal drift driven by time: a first-order rise with a scan of time constants.
 void add_thermal_time_candidates(const SignatureBasis& S, const JointMotion& m, double span_t,
                                  std::vector<Candidate>& out) {
-  const int j = m.j;
   const double t0 = S.tr.t_s.front();
   for (double f : {0.03, 0.1, 0.3, 1.0, 3.0}) {
     const double tau = std::round(span_t * f * 1000) / 1000;
     if (!(tau > 0)) continue;
-    Candidate c;
-    c.effect = "thermal_drift";
-    c.joint = j;
-    c.axis = m.ax;
-    c.group = "thermal_drift:" + m.ax;
-    c.variant = "tau_s=" + fmt4g(tau);
-    c.keys = {"gain_mm", "tau_s"};
     std::vector<double> col(S.tr.rows());
     for (std::size_t k = 0; k < col.size(); ++k)
       col[k] = -std::expm1(-(S.tr.t_s[k] - t0) / tau);
-    c.X = S.column(j, col);
-    c.apply = [j, tau](sim::MachineParams& p, const VectorXd& coef) {
-      enable_effect(p, "thermal_drift", j);
-      auto& e = *p.effects.thermal_drift.axes[j];
-      e.gain_mm = coef[0];
-      e.tau_s = tau;
-      e.driver = sim::ThermalDriver::kTime;
-      return true;
-    };
-    out.push_back(std::move(c));
+    out.push_back(thermal_candidate(S, m, tau, sim::ThermalDriver::kTime, std::nullopt,
+                                    "tau_s=" + fmt4g(tau), col));
   }
 }
 
@@ -261,7 +275,6 @@ void add_thermal_time_candidates(const SignatureBasis& S, const JointMotion& m, 
 // first-order response to the recorded power, integrated exactly.
 void add_thermal_power_candidates(const SignatureBasis& S, const JointMotion& m, double span_t,
                                   std::vector<Candidate>& out) {
-  const int j = m.j;
   const Trace& tr = S.tr;
   const auto& pw = tr.spindle_power_kw;
   const bool powered =
@@ -270,28 +283,12 @@ void add_thermal_power_candidates(const SignatureBasis& S, const JointMotion& m,
     const double tau = std::round(span_t * f * 1000) / 1000;
     if (!powered || !(tau > 0)) continue;
     constexpr double kRefKw = 10.0;
-    Candidate c;
-    c.effect = "thermal_drift";
-    c.joint = j;
-    c.axis = m.ax;
-    c.group = "thermal_drift:" + m.ax;
-    c.variant = "driver=spindle_power tau_s=" + fmt4g(tau);
-    c.keys = {"gain_mm", "tau_s"};
     std::vector<double> col(tr.rows(), 0.0);
     for (std::size_t k = 1; k < col.size(); ++k)
       col[k] = col[k - 1] +
                (pw[k - 1] / kRefKw - col[k - 1]) * -std::expm1(-(tr.t_s[k] - tr.t_s[k - 1]) / tau);
-    c.X = S.column(j, col);
-    c.apply = [j, tau](sim::MachineParams& p, const VectorXd& coef) {
-      enable_effect(p, "thermal_drift", j);
-      auto& e = *p.effects.thermal_drift.axes[j];
-      e.gain_mm = coef[0];
-      e.tau_s = tau;
-      e.driver = sim::ThermalDriver::kSpindlePower;
-      e.reference_power_kw = kRefKw;
-      return true;
-    };
-    out.push_back(std::move(c));
+    out.push_back(thermal_candidate(S, m, tau, sim::ThermalDriver::kSpindlePower, kRefKw,
+                                    "driver=spindle_power tau_s=" + fmt4g(tau), col));
   }
 }
 

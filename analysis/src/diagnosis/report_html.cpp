@@ -43,8 +43,7 @@ std::string plot(const std::vector<Series>& series, const std::string& xlabel,
   ylo -= pad, yhi += pad;
   auto X = [&](double v) { return l + (v - xlo) / (xhi - xlo) * (w - l - r); };
   auto Y = [&](double v) { return t + (yhi - v) / (yhi - ylo) * (h - t - b); };
-  std::string s = "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + f(w, "%.0f") +
-                  "\" height=\"" + f(h, "%.0f") + "\" font-size=\"11\">";
+  std::string s = report_text::svg_open(w, h);
   if (shade && shade_x) {
     // The held-out block.
     for (std::size_t i = 0; i < shade->size(); ++i)
@@ -56,18 +55,8 @@ std::string plot(const std::vector<Series>& series, const std::string& xlabel,
         break;
       }
   }
-  s += "<rect x=\"" + f(l) + "\" y=\"" + f(t) + "\" width=\"" + f(w - l - r) + "\" height=\"" +
-       f(h - t - b) + "\" fill=\"none\" stroke=\"#888\"/>";
-  for (int i = 0; i <= 4; ++i) {
-    const double yv = ylo + (yhi - ylo) * i / 4, xv = xlo + (xhi - xlo) * i / 4;
-    s += "<text x=\"" + f(l - 4) + "\" y=\"" + f(Y(yv) + 4) + "\" text-anchor=\"end\">" +
-         f(yv, "%.3g") + "</text>";
-    s += "<text x=\"" + f(X(xv)) + "\" y=\"" + f(h - b + 14) + "\" text-anchor=\"middle\">" +
-         f(xv, "%.4g") + "</text>";
-  }
-  if (ylo < 0 && yhi > 0)
-    s += "<line x1=\"" + f(l) + "\" x2=\"" + f(w - r) + "\" y1=\"" + f(Y(0)) + "\" y2=\"" +
-         f(Y(0)) + "\" stroke=\"#ccc\"/>";
+  s += report_text::svg_plot_frame(
+      {w, h, l, r, t, b, xlo, xhi, ylo, yhi, X, Y, "%.1f", "%.1f", "%.4g", "%.3g"});
   s += "<text x=\"" + f((l + w - r) / 2) + "\" y=\"" + f(h - 4) + "\" text-anchor=\"middle\">" +
        esc(xlabel) + "</text><text x=\"12\" y=\"" + f((t + h - b) / 2) +
        "\" transform=\"rotate(-90 12 " + f((t + h - b) / 2) +
@@ -94,13 +83,10 @@ std::string plot(const std::vector<Series>& series, const std::string& xlabel,
 }  // namespace
 
 std::string diagnosis_html(const DiagnosisResult& r) {
-  std::string s =
-      "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>Diagnosis — " +
-      esc(r.recording) +
-      "</title><style>body{font-family:sans-serif;max-width:62em;margin:1em auto;color:#222}"
-      "table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #bbb;padding:2px 6px;"
-      "text-align:right}th{background:#f4f4f4}td.l{text-align:left}section{margin-bottom:2em}"
-      ".legend span{margin-right:1.5em}svg{display:block;margin:.3em 0}</style></head><body>\n";
+  std::string s = report_text::html_page_head(
+      "Diagnosis — " + r.recording, "62em",
+      "th{background:#f4f4f4}td.l{text-align:left}section{margin-bottom:2em}"
+      ".legend span{margin-right:1.5em}svg{display:block;margin:.3em 0}");
   s += "<h1>Diagnosis (trace mode)</h1><p>recording <code>" + esc(r.recording) + "</code>, " +
        std::to_string(r.rows) + " samples every " + f(r.sample_period_s * 1e3, "%.4g") + " ms" +
        (r.map.empty() ? "" : ", map <code>" + esc(r.map) + "</code>") +

@@ -55,21 +55,9 @@ std::string positioning_plot(const AxisPositioning& ax) {
   const double pad = std::max(0.1 * (yhi - ylo), 0.5);
   ylo -= pad, yhi += pad;
   const Scale sx{xlo, xhi, l, w - r}, sy{ylo, yhi, h - btm, t};
-  std::string s = "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + f(w, "%.0f") +
-                  "\" height=\"" + f(h, "%.0f") + "\" font-size=\"11\">";
-  s += "<rect x=\"" + f(l, "%.0f") + "\" y=\"" + f(t, "%.0f") + "\" width=\"" +
-       f(w - l - r, "%.0f") + "\" height=\"" + f(h - t - btm, "%.0f") +
-       "\" fill=\"none\" stroke=\"#888\"/>";
-  for (int i = 0; i <= 4; ++i) {
-    const double yv = ylo + (yhi - ylo) * i / 4, xv = xlo + (xhi - xlo) * i / 4;
-    s += "<text x=\"" + f(l - 4) + "\" y=\"" + f(sy(yv) + 4) + "\" text-anchor=\"end\">" +
-         f(yv, "%.1f") + "</text>";
-    s += "<text x=\"" + f(sx(xv)) + "\" y=\"" + f(h - btm + 14) + "\" text-anchor=\"middle\">" +
-         f(xv, "%.3g") + "</text>";
-  }
-  if (ylo < 0 && yhi > 0)
-    s += "<line x1=\"" + f(l) + "\" x2=\"" + f(w - r) + "\" y1=\"" + f(sy(0)) + "\" y2=\"" +
-         f(sy(0)) + "\" stroke=\"#ccc\"/>";
+  std::string s = report_text::svg_open(w, h);
+  s += report_text::svg_plot_frame(
+      {w, h, l, r, t, btm, xlo, xhi, ylo, yhi, sx, sy, "%.2f", "%.0f", "%.3g", "%.1f"});
   s += "<text x=\"" + f((l + w - r) / 2) + "\" y=\"" + f(h - 6) +
        "\" text-anchor=\"middle\">target " + ax.joint + " (" + (ax.rotary ? "deg" : "mm") +
        ")</text>";
@@ -109,8 +97,7 @@ std::string polar_plot(const CircularTest& c) {
       peak = std::max(peak, std::abs(d));
   if (peak <= 0) peak = 1e-3;
   const double k = band / peak;  // px per mm of deviation
-  std::string s = "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + f(size, "%.0f") +
-                  "\" height=\"" + f(size, "%.0f") + "\" font-size=\"11\">";
+  std::string s = report_text::svg_open(size, size);
   for (double ring : {-peak, 0.0, peak}) {
     s += "<circle cx=\"" + f(mid) + "\" cy=\"" + f(mid) + "\" r=\"" + f(base + k * ring) +
          "\" fill=\"none\" stroke=\"" + (ring == 0 ? "#888" : "#ddd") + "\"/>";
@@ -218,14 +205,10 @@ std::string circle_section(const CircularTest& c) {
 }  // namespace
 
 std::string iso230_html(const Iso230Report& r) {
-  std::string s =
-      "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>ISO 230 evaluation "
-      "— " +
-      esc(r.recording) +
-      "</title><style>body{font-family:sans-serif;max-width:60em;margin:1em auto;color:#222}"
-      "table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #bbb;padding:2px 6px;"
-      "text-align:right}section{page-break-inside:avoid;margin-bottom:2em}.note{color:#845}"
-      "svg{display:block;margin:.5em 0}@media print{body{max-width:none}}</style></head><body>\n";
+  std::string s = report_text::html_page_head(
+      "ISO 230 evaluation — " + r.recording, "60em",
+      "section{page-break-inside:avoid;margin-bottom:2em}.note{color:#845}"
+      "svg{display:block;margin:.5em 0}@media print{body{max-width:none}}");
   s += "<h1>ISO 230 evaluation</h1><p>recording <code>" + esc(r.recording) + "</code>, " +
        std::to_string(r.rows) + " rows" +
        (r.map.empty() ? "" : ", map <code>" + esc(r.map) + "</code>") + "</p>\n";

@@ -49,7 +49,13 @@ struct Correction {
   std::array<int, 4> blends{};  // matrix mode: blends by points used; [0] none at all
 };
 
-using CorrectionFn = std::function<Correction(const ToolPoint&, const CallContext&)>;
+// The correction at a tool point of a move whose cutter has radius `radius_mm`.
+using CorrectionFn =
+    std::function<Correction(const ToolPoint&, const CallContext&, double radius_mm)>;
+// Called once the radii of the operation's tools are known (distinct values,
+// ascending; empty when the operation has no feed move): prepares the
+// corrections and returns the reach used (0: none).
+using PrepareFn = std::function<double(const std::vector<double>& radii_mm)>;
 
 // The shortest decimal that reads back to the same double (written ends of
 // rapids reproduce the original position exactly).
@@ -89,10 +95,8 @@ void check_options(const RewriteOptions& o) {
   if (o.operation.empty()) throw std::invalid_argument("no operation name given");
   if (!(o.step_mm > 0) || !std::isfinite(o.step_mm))
     throw std::invalid_argument("step must be > 0 mm (got " + std::to_string(o.step_mm) + ")");
-  if (!(o.tool_radius_mm >= 0) || !std::isfinite(o.tool_radius_mm))
+  if (o.tool_radius_mm && (!(*o.tool_radius_mm >= 0) || !std::isfinite(*o.tool_radius_mm)))
     throw std::invalid_argument("tool radius must be >= 0 mm");
-  if (o.type == CutType::kBall && !(o.tool_radius_mm > 0))
-    throw std::invalid_argument("a ball end mill needs a tool radius > 0");
   if (!(o.chord_tolerance_mm > 0) || !std::isfinite(o.chord_tolerance_mm))
     throw std::invalid_argument("chord tolerance must be > 0 mm");
   if (!(o.reach_mm >= 0) || !std::isfinite(o.reach_mm))
@@ -109,13 +113,12 @@ void check_options(const RewriteOptions& o) {
 // or ball centre) nor the cutting edge turning about it (R per radian of
 // the tool axis) moves more than one step per piece.
 int pieces_for_step(const ToolPath& path, const ToolPath::Move& m, const CallContext& ctx,
-                    const RewriteOptions& o) {
+                    const RewriteOptions& o, double radius_mm) {
   constexpr int kSamples = 64;
   double length_mm = 0, turn_rad = 0;
   ToolPoint prev = path.tool_point(m.start, ctx);
   auto ref = [&](const ToolPoint& t) -> Eigen::Vector3d {
-    return o.type == CutType::kBall ? Eigen::Vector3d(t.tip_mm + o.tool_radius_mm * t.axis)
-                                    : t.tip_mm;
+    return o.type == CutType::kBall ? Eigen::Vector3d(t.tip_mm + radius_mm * t.axis) : t.tip_mm;
   };
   for (int k = 1; k <= kSamples; ++k) {
     const ToolPoint t = path.tool_point(ToolPath::at(m, static_cast<double>(k) / kSamples), ctx);
@@ -123,7 +126,7 @@ int pieces_for_step(const ToolPath& path, const ToolPath::Move& m, const CallCon
     turn_rad += std::acos(std::clamp(t.axis.dot(prev.axis), -1.0, 1.0));
     prev = t;
   }
-  const double longest = std::max(length_mm, o.tool_radius_mm * turn_rad);
+  const double longest = std::max(length_mm, radius_mm * turn_rad);
   return std::max(1, static_cast<int>(std::ceil(longest / o.step_mm - 1e-9)));
 }
 
@@ -147,8 +150,52 @@ Axes6 end_of(const CanonOp& op) {
   return std::get<StraightTraverse>(op).end;
 }
 
+std::string file_of(const CanonProgram& program, const CallContext& ctx, const std::string& name) {
+  return ctx.file < static_cast<int>(program.files.size()) ? program.files[ctx.file] : name;
+}
+
+// The cutter radius of every tool that makes a feed move of the operation:
+// D / 2 from the tool table, as everywhere else in truecut.
+std::map<int, double> tool_radii(const CanonProgram& program, const std::string& name,
+                                 const RewriteOptions& o) {
+  std::map<int, double> radii;
+  for (const CanonCall& c : program.calls) {
+    const CallContext& ctx = c.context;
+    if (ctx.operation != o.operation || !is_motion(c.op) ||
+        std::holds_alternative<StraightTraverse>(c.op) || radii.count(ctx.tool))
+      continue;
+    const SourceLocation at{file_of(program, ctx, name), ctx.line, 0};
+    if (ctx.tool == 0)
+      throw GcodeError(at, "feed move of operation '" + o.operation +
+                               "' with no tool in the spindle: the tool radius comes from the "
+                               "tool table (select the tool with T.. M6 before the move)");
+    const ToolEntry* entry = o.interpreter.tools.find(ctx.tool);
+    if (!entry)
+      throw GcodeError(at, "tool T" + std::to_string(ctx.tool) + " of operation '" + o.operation +
+                               "' is not in the tool table: its radius (D / 2) comes from there");
+    const double radius = entry->diameter_mm / 2;
+    if (!(radius >= 0) || !std::isfinite(radius))
+      throw GcodeError(at, "tool T" + std::to_string(ctx.tool) +
+                               " has no valid diameter in the tool table (D " +
+                               rt::format_shortest(entry->diameter_mm) + " mm)");
+    if (o.type == CutType::kBall && !(radius > 0))
+      throw GcodeError(at, "tool T" + std::to_string(ctx.tool) +
+                               " has diameter 0 in the tool table: a ball end mill needs a "
+                               "radius > 0 (its D word)");
+    // 1 nm: the digits a person or printf("%f") writes, not a different tool.
+    if (o.tool_radius_mm && std::fabs(*o.tool_radius_mm - radius) > 1e-6)
+      throw RewriteError(
+          "the tool radius given (" + rt::format_shortest(*o.tool_radius_mm) +
+          " mm) differs from the tool table's for tool T" + std::to_string(ctx.tool) + " (D " +
+          rt::format_shortest(entry->diameter_mm) + " mm, radius " + rt::format_shortest(radius) +
+          " mm; first used on " + at.file + ":" + std::to_string(at.line) + ")");
+    radii[ctx.tool] = radius;
+  }
+  return radii;
+}
+
 RewriteResult run(std::string_view text, const std::string& name, const RewriteOptions& o,
-                  const CorrectionFn& correction, double reach_mm) {
+                  const PrepareFn& prepare, const CorrectionFn& correction) {
   const Interpreter interpreter(o.interpreter);
   const CanonProgram program = interpreter.run_text(text, name);
   const auto names = operation_names(program);
@@ -161,6 +208,13 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
         (list.empty() ? std::string("no (OPERATION: NAME) comments") : "operations: " + list) +
         ")");
   }
+  const std::map<int, double> radius_by_tool = tool_radii(program, name, o);
+  std::vector<double> radii;
+  for (const auto& [tool, radius] : radius_by_tool)
+    radii.push_back(radius);
+  std::sort(radii.begin(), radii.end());
+  radii.erase(std::unique(radii.begin(), radii.end()), radii.end());
+  const double reach_mm = prepare(radii);
   const std::vector<RawLine> raw = split_raw_lines(text);
 
   // Motion calls per line of the main file: a rewritten line must make one.
@@ -170,6 +224,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
 
   RewriteSummary s;
   s.reach_mm = reach_mm;
+  s.tool_radii_mm.assign(radius_by_tool.begin(), radius_by_tool.end());
   s.lines_in = static_cast<int>(raw.size());
   double sum_mm = 0;
   std::map<int, PlannedLine> plan;  // by 1-based line
@@ -202,8 +257,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     const bool in_op = ctx.operation == o.operation;
     const bool feed = !std::holds_alternative<StraightTraverse>(c.op);
     if (in_op) ++s.moves_read;
-    const std::string file =
-        ctx.file < static_cast<int>(program.files.size()) ? program.files[ctx.file] : name;
+    const std::string file = file_of(program, ctx, name);
     if (in_op && !feed && displaced) {
       // A rapid after a compensated point: written with all of X Y Z, so
       // the axes it does not name come back to the original position.
@@ -258,13 +312,15 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
                        "rewritten");
 
     // Densify and compensate.
-    const int n = std::max(pieces_for_step(path, move, ctx, o), pieces_for_chord(move, o));
+    const double radius_mm = radius_by_tool.at(ctx.tool);
+    const int n =
+        std::max(pieces_for_step(path, move, ctx, o, radius_mm), pieces_for_chord(move, o));
     std::vector<Vec5> points(n);
     std::vector<Correction> corrections(n);
     bool all_zero = true;
     for (int k = 1; k <= n; ++k) {
       const Vec5 p = ToolPath::at(move, static_cast<double>(k) / n);
-      const Correction corr = correction(path.tool_point(p, ctx), ctx);
+      const Correction corr = correction(path.tool_point(p, ctx), ctx, radius_mm);
       corrections[k - 1] = corr;
       if (corr.shift_mm != Eigen::Vector3d::Zero()) all_zero = false;
       points[k - 1] =
@@ -378,20 +434,29 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
 RewriteResult rewrite_program(std::string_view text, const std::string& name,
                               const CompensationMatrixData& matrix, const RewriteOptions& o) {
   rewrite::check_options(o);
-  const rewrite::NeighbourSearch search(rewrite::smooth_matrix(matrix, o.smoothing_radius_mm),
-                                        o.surfaces, o.type, o.tool_radius_mm, o.reach_mm);
+  // One search per radius of the operation's tools (nearly always one).
+  std::map<double, rewrite::NeighbourSearch> searches;
+  auto prepare = [&](const std::vector<double>& radii) {
+    const CompensationMatrixData smoothed = rewrite::smooth_matrix(matrix, o.smoothing_radius_mm);
+    // Without a feed move the points are still checked (and the reach found).
+    const std::vector<double> built = radii.empty() ? std::vector<double>{0.0} : radii;
+    for (double r : built)
+      searches.try_emplace(r, smoothed, o.surfaces, o.type, r, o.reach_mm);
+    return searches.begin()->second.reach_mm();
+  };
   const bool swept = o.placement == MatrixPlacement::kEveryPass && o.type != CutType::kBall;
-  // Query points every half reach (with the default reach: the median point
-  // spacing); on a disc at most 20 across its radius.
-  const double band_mm = o.type == CutType::kFace
-                             ? std::max(search.reach_mm() / 2, o.tool_radius_mm / 20)
-                             : search.reach_mm() / 2;
-  auto fn = [&, swept, band_mm](const rewrite::ToolPoint& tp, const CallContext& ctx) {
+  auto fn = [&, swept](const rewrite::ToolPoint& tp, const CallContext& ctx, double radius_mm) {
+    const rewrite::NeighbourSearch& search = searches.at(radius_mm);
     rewrite::Correction c;
     if (swept) {
       const double length = o.cutting_length_mm > 0    ? o.cutting_length_mm
                             : ctx.tool_offset_mm.z > 0 ? ctx.tool_offset_mm.z
                                                        : std::numeric_limits<double>::infinity();
+      // Query points every half reach (with the default reach: the median
+      // point spacing); on a disc at most 20 across its radius.
+      const double band_mm = o.type == CutType::kFace
+                                 ? std::max(search.reach_mm() / 2, radius_mm / 20)
+                                 : search.reach_mm() / 2;
       const rewrite::SweptCorrection sc = rewrite::swept_correction(search, tp, length, band_mm);
       c.shift_mm = sc.correction_mm;
       c.compensated = sc.blends > 0;
@@ -412,13 +477,14 @@ RewriteResult rewrite_program(std::string_view text, const std::string& name,
     c.blends[b.points_used] = 1;
     return c;
   };
-  return rewrite::run(text, name, o, fn, search.reach_mm());
+  return rewrite::run(text, name, o, prepare, fn);
 }
 
 RewriteResult rewrite_program(std::string_view text, const std::string& name,
                               const rt::CorrectionField& field, const RewriteOptions& o) {
   rewrite::check_options(o);
-  auto fn = [&](const rewrite::ToolPoint& tp, const CallContext& ctx) {
+  auto prepare = [](const std::vector<double>&) { return 0.0; };
+  auto fn = [&](const rewrite::ToolPoint& tp, const CallContext& ctx, double) {
     const rt::FieldSample s = field.evaluate(ctx.tool, tp.tip_mm);
     if (s.status == rt::FieldStatus::kNoLayerForTool)
       throw RewriteError("the correction field has no layer for tool " + std::to_string(ctx.tool) +
@@ -432,7 +498,7 @@ RewriteResult rewrite_program(std::string_view text, const std::string& name,
     }
     return c;
   };
-  return rewrite::run(text, name, o, fn, 0.0);
+  return rewrite::run(text, name, o, prepare, fn);
 }
 
 }  // namespace truecut::interp

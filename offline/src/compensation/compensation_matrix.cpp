@@ -1,7 +1,7 @@
 #include "truecut/offline/compensation_matrix.hpp"
 
-#include "mesh_io/atomic_file.hpp"
 #include "mesh_io/number_text.hpp"
+#include "mesh_io/output_file.hpp"
 #include "truecut/offline/mesh_io_error.hpp"
 
 #include <cmath>
@@ -41,7 +41,7 @@ void write_compensation_matrix(const std::filesystem::path& file, const Compensa
       throw MeshIoError(file, "row " + std::to_string(i) + " has a non-finite value");
     }
   }
-  AtomicFile out(file);
+  OutputFile out(file);
   std::string s =
       "# truecut compensation matrix v1\n"
       "# frame: workpiece\n"

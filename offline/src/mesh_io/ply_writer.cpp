@@ -1,7 +1,7 @@
-#include "mesh_io/atomic_file.hpp"
 #include "mesh_io/byte_order.hpp"
 #include "mesh_io/mesh_checks.hpp"
 #include "mesh_io/number_text.hpp"
+#include "mesh_io/output_file.hpp"
 #include "truecut/offline/mesh_io_error.hpp"
 #include "truecut/offline/ply_io.hpp"
 
@@ -39,7 +39,7 @@ std::string header(PlyEncoding encoding, std::size_t vertices, bool normals,
   return h + "end_header\n";
 }
 
-void write_binary(AtomicFile& out, const std::vector<Eigen::Vector3d>& points,
+void write_binary(OutputFile& out, const std::vector<Eigen::Vector3d>& points,
                   const std::vector<Eigen::Vector3d>& normals,
                   const std::vector<Triangle>* triangles, ByteOrder order, std::string_view word) {
   const bool with_normals = !normals.empty();
@@ -82,7 +82,7 @@ void write_binary(AtomicFile& out, const std::vector<Eigen::Vector3d>& points,
   out.write(buf.data(), used);
 }
 
-void write_ascii(AtomicFile& out, const std::vector<Eigen::Vector3d>& points,
+void write_ascii(OutputFile& out, const std::vector<Eigen::Vector3d>& points,
                  const std::vector<Eigen::Vector3d>& normals,
                  const std::vector<Triangle>* triangles, std::string_view word) {
   std::string s;
@@ -123,7 +123,7 @@ void write(const std::filesystem::path& file, const std::vector<Eigen::Vector3d>
     throw MeshIoError(file, std::to_string(normals.size()) + " normals for " +
                                 std::to_string(points.size()) + " points");
   }
-  AtomicFile out(file);
+  OutputFile out(file);
   out.write(header(encoding, points.size(), !normals.empty(), triangles, comment));
   if (encoding == PlyEncoding::ascii) {
     write_ascii(out, points, normals, triangles, word);

@@ -1,6 +1,6 @@
-#include "mesh_io/atomic_file.hpp"
 #include "mesh_io/mesh_checks.hpp"
 #include "mesh_io/number_text.hpp"
+#include "mesh_io/output_file.hpp"
 #include "truecut/offline/mesh_io_error.hpp"
 #include "truecut/offline/point_text_io.hpp"
 
@@ -18,7 +18,7 @@ void write_point_text(const std::filesystem::path& file, const PointCloud& cloud
     throw MeshIoError(file, std::to_string(cloud.normals.size()) + " normals for " +
                                 std::to_string(cloud.points_mm.size()) + " points");
   }
-  AtomicFile out(file);
+  OutputFile out(file);
   std::string s;
   if (format.header) {
     for (const char* name : {"x", "y", "z", "nx", "ny", "nz"}) {

@@ -1,7 +1,7 @@
-#include "mesh_io/atomic_file.hpp"
 #include "mesh_io/byte_order.hpp"
 #include "mesh_io/mesh_checks.hpp"
 #include "mesh_io/number_text.hpp"
+#include "mesh_io/output_file.hpp"
 #include "mesh_io/stl_detect.hpp"
 #include "truecut/offline/mesh_io_error.hpp"
 #include "truecut/offline/stl_io.hpp"
@@ -16,7 +16,7 @@ namespace truecut::offline {
 
 namespace {
 
-using mesh_io::AtomicFile;
+using mesh_io::OutputFile;
 
 Eigen::Vector3d facet_normal(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                              const Eigen::Vector3d& c) {
@@ -26,7 +26,7 @@ Eigen::Vector3d facet_normal(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
 }
 
 // Checks each corner as it is written: an invalid mesh stops the writer midway
-// and AtomicFile removes the partial FILE.tmp.
+// and OutputFile removes the partial FILE.tmp.
 const Eigen::Vector3d& checked_corner(const TriangleMesh& mesh, std::uint32_t v,
                                       const std::filesystem::path& file, bool float32) {
   const Eigen::Vector3d& p = mesh.vertices_mm[v];
@@ -38,7 +38,7 @@ const Eigen::Vector3d& checked_corner(const TriangleMesh& mesh, std::uint32_t v,
   return p;
 }
 
-void write_binary(AtomicFile& out, const TriangleMesh& mesh, std::string_view header) {
+void write_binary(OutputFile& out, const TriangleMesh& mesh, std::string_view header) {
   using namespace mesh_io;
   char pre[kStlPreambleBytes] = {};
   std::string h = header.empty() ? std::string("truecut binary STL, mm") : std::string(header);
@@ -82,7 +82,7 @@ void append_xyz(std::string& s, const Eigen::Vector3d& p) {
   }
 }
 
-void write_ascii(AtomicFile& out, const TriangleMesh& mesh, std::string_view header) {
+void write_ascii(OutputFile& out, const TriangleMesh& mesh, std::string_view header) {
   std::string name = header.empty() ? std::string("truecut") : std::string(header);
   for (char& c : name) {
     if (c == '\n' || c == '\r') c = ' ';
@@ -121,7 +121,7 @@ void write_stl(const std::filesystem::path& file, const TriangleMesh& mesh, StlE
     throw MeshIoError(file, "too many triangles for STL");
   }
   mesh_io::check_writable(mesh, file);
-  AtomicFile out(file);
+  OutputFile out(file);
   if (encoding == StlEncoding::binary) {
     write_binary(out, mesh, header);
   } else {

@@ -8,15 +8,17 @@
 //
 //   RewriteOptions o;
 //   o.operation = "SHAFT_PERIPHERAL"; o.type = CutType::kPeripheral;
-//   o.tool_radius_mm = 1.0; o.interpreter.tools = ToolTable::load("tools.tbl");
+//   o.interpreter.tools = ToolTable::load("tools.tbl");  // the radius: D / 2 of the tool
 //   RewriteResult r = rewrite_program(text, "program.ngc", matrix, o);
 //   // r.text: the new program; r.summary: counts and compensation figures
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "truecut/interp/interpreter.hpp"
@@ -51,8 +53,12 @@ const char* to_string(MatrixPlacement placement);
 struct RewriteOptions {
   std::string operation;  // CAM operation name, as in (OPERATION: NAME)
   CutType type = CutType::kPeripheral;
-  double tool_radius_mm = 0;  // >= 0 (> 0 for ball)
-  double step_mm = 0.5;       // densification distance, > 0
+  // The cutter radius of each move is that of the tool in the spindle (T..
+  // M6), D / 2 in `interpreter.tools`, as everywhere else in truecut. When
+  // set, the radius the caller believes: it must equal the table's for every
+  // tool of the operation (RewriteError naming the tool and both values).
+  std::optional<double> tool_radius_mm;
+  double step_mm = 0.5;  // densification distance, > 0
   // Arcs: the most a written chord may leave the programmed arc (its sagitta),
   // > 0. Pieces of `step_mm` alone leave R (1 - cos(step / 2R)) inside the
   // arc: 19 um on a 1 mm tool-centre radius, the size of the compensation.
@@ -97,6 +103,9 @@ struct RewriteSummary {
   double max_compensation_mm = 0;
   double mean_compensation_mm = 0;  // over compensated points
   double reach_mm = 0;              // the reach used
+  // The tools of the operation's feed moves and their radii (tool table
+  // D / 2), by tool number.
+  std::vector<std::pair<int, double>> tool_radii_mm;
   int lines_in = 0, lines_out = 0;
 };
 
@@ -105,9 +114,11 @@ struct RewriteResult {
   RewriteSummary summary;
 };
 
-// Throws GcodeError (file:line:column) for a program error or a move that
-// cannot be rewritten, RewriteError for an unknown operation, an empty
-// matrix selection or a field without the operation's tool, and
+// Throws GcodeError (file:line:column) for a program error, a move that
+// cannot be rewritten or a feed move of the operation without a tool in the
+// spindle (or one the tool table does not hold), RewriteError for an
+// unknown operation, a given tool radius that differs from the tool table's,
+// an empty matrix selection or a field without the operation's tool, and
 // std::invalid_argument for bad options. Before returning, the new text is
 // interpreted again and checked: outside the rewritten lines it must give
 // the same calls as the original, and the written points must come out as

@@ -13,6 +13,10 @@
 //
 //   write_files_atomically({{dir / "a.json", json}, {dir / "a.html", html}});
 //
+//   AtomicFileWriter out("scan.ply");  // one file written in pieces (a large mesh)
+//   out.write(header); out.write(chunk); ...
+//   out.commit();                      // not committed: scan.ply.tmp removed
+//
 // Not for servo-cycle code (allocates, does I/O, throws).
 #pragma once
 
@@ -31,9 +35,11 @@ class FileWriteError : public std::runtime_error {
  public:
   FileWriteError(const std::filesystem::path& path, const std::string& why);
   const std::filesystem::path& path() const { return path_; }
+  const std::string& why() const { return why_; }
 
  private:
   std::filesystem::path path_;
+  std::string why_;
 };
 
 // Throws FileWriteError "PATH exists and is not a regular file; not replaced"
@@ -42,6 +48,30 @@ void require_replaceable(const std::filesystem::path& path);
 
 // PATH.tmp written, synced and renamed over PATH. Throws FileWriteError.
 void write_file_atomically(const std::filesystem::path& path, std::string_view bytes);
+
+// One file written in pieces, for outputs too large to hold as one string:
+// the constructor refuses a PATH that is not replaceable and creates PATH.tmp
+// (a regular file, never through a symbolic link); write() appends;
+// commit() syncs it and renames it over PATH. Destroyed without commit (an
+// exception on the way), PATH.tmp is removed and PATH is as it was. Each
+// write() is one system call or more: callers batch small pieces.
+class AtomicFileWriter {
+ public:
+  explicit AtomicFileWriter(std::filesystem::path path);  // throws FileWriteError
+  ~AtomicFileWriter();
+  AtomicFileWriter(const AtomicFileWriter&) = delete;
+  AtomicFileWriter& operator=(const AtomicFileWriter&) = delete;
+
+  const std::filesystem::path& path() const { return path_; }
+  const std::filesystem::path& tmp_path() const { return tmp_path_; }
+  void write(std::string_view bytes);  // throws FileWriteError
+  void commit();                       // throws FileWriteError
+
+ private:
+  std::filesystem::path path_, tmp_path_;
+  int fd_ = -1;
+  bool committed_ = false;
+};
 
 // The bytes of `from` written atomically to `to`.
 void copy_file_atomically(const std::filesystem::path& from, const std::filesystem::path& to);
