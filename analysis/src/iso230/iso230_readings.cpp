@@ -15,45 +15,35 @@
 namespace truecut::analysis {
 namespace {
 
-// Noise of the measured position at rest: the smallest RMS of eight
-// consecutive sample-to-sample changes in [first, last], over √2. Changes of
-// exactly zero (a value held between two log entries) are left out.
-double rest_noise(const std::vector<double>& m, std::size_t first, std::size_t last) {
-  std::vector<double> d;
-  for (std::size_t k = first + 1; k <= last; ++k)
-    if (m[k] != m[k - 1]) d.push_back(m[k] - m[k - 1]);
-  if (d.empty()) return 0.0;
-  const std::size_t chunk = std::min<std::size_t>(8, d.size());
-  double best = INFINITY;
-  for (std::size_t b = 0; b + chunk <= d.size(); ++b) {
-    double ss = 0;
-    for (std::size_t k = b; k < b + chunk; ++k)
-      ss += d[k] * d[k];
-    best = std::min(best, std::sqrt(ss / double(chunk) / 2));
-  }
-  return best;
-}
-
 struct Rest {
   std::size_t from, to;  // samples at rest
-  double band;           // noise band of the measured position at rest
 };
 
 // The longest run of samples in [first, last] over which the measured
-// position is at rest: no step between neighbours larger than V·Δt plus the
-// noise band (8 × the rest noise, at least half the target tolerance). Of
-// equally long runs, the last.
-Rest at_rest(const std::vector<double>& t, const std::vector<double>& m, std::size_t first,
-             std::size_t last, const StandstillOptions& o) {
-  const double band = std::max(8 * rest_noise(m, first, last), 0.5 * o.target_tolerance);
-  Rest best{first, first, band};
-  std::size_t from = first;
+// position is at rest: each sample moved by no more than V·Δt + T/2 since
+// the latest sample of the run at least τ = min_dwell/2 earlier (the run's
+// first sample while the run is shorter), and the command changed by no more
+// than T/2 from the sample before (a logged trajectory may show a departure
+// before the measured position does). Over a span of τ the noise of a
+// reading hardly looks like speed, while travel does at once. A sample that
+// moved starts a new run. Of equally long runs, the last.
+Rest at_rest(const std::vector<double>& t, const std::vector<double>& c,
+             const std::vector<double>& m, std::size_t first, std::size_t last,
+             const StandstillOptions& o) {
+  const double tau = 0.5 * o.min_dwell_s, floor = 0.5 * o.target_tolerance;
+  Rest best{first, first};
+  std::size_t from = first, j = first;
   for (std::size_t k = first + 1; k <= last + 1; ++k) {
-    const bool moved =
-        k > last || std::abs(m[k] - m[k - 1]) > o.velocity_threshold * (t[k] - t[k - 1]) + band;
-    if (!moved) continue;
-    if (t[k - 1] - t[from] >= t[best.to] - t[best.from]) best = {from, k - 1, band};
-    from = k;
+    bool moving = true;
+    if (k <= last) {
+      while (j + 1 < k && t[j + 1] <= t[k] - tau)
+        ++j;
+      moving = std::abs(m[k] - m[j]) > o.velocity_threshold * (t[k] - t[j]) + floor ||
+               std::abs(c[k] - c[k - 1]) > floor;
+    }
+    if (!moving) continue;
+    if (t[k - 1] - t[from] >= t[best.to] - t[best.from]) best = {from, k - 1};
+    from = j = k;
   }
   return best;
 }
@@ -70,7 +60,8 @@ std::vector<PositionReading> find_position_readings(const std::vector<double>& t
   auto still = [&](std::size_t i) {  // sample i-1 → i without a command change
     return std::abs(cmd[i] - cmd[i - 1]) <= o.velocity_threshold * (t_s[i] - t_s[i - 1]);
   };
-  std::size_t previous_settled = 0;  // first settled sample of the previous window
+  std::size_t previous_first = 0;    // first sample of the previous window
+  std::size_t previous_settled = 0;  // first sample at rest of the previous window
   std::size_t i = 1;
   while (i < n) {
     if (!still(i)) {
@@ -84,7 +75,7 @@ std::vector<PositionReading> find_position_readings(const std::vector<double>& t
     // The axis may still travel after the command stopped changing (a target
     // setpoint, servo lag) or leave before a logged command shows it: the
     // reading window is where the measured position is at rest.
-    const Rest rest_run = at_rest(t_s, measured, first, last, o);
+    const Rest rest_run = at_rest(t_s, cmd, measured, first, last, o);
     const std::size_t settled = rest_run.from, end = rest_run.to;
     if (t_s[end] - t_s[settled] < o.min_dwell_s) continue;
 
@@ -99,18 +90,24 @@ std::vector<PositionReading> find_position_readings(const std::vector<double>& t
     }
     const double target = sum_cmd / count;
     const double rest = sum_meas / count;
+    double spread = 0;  // RMS of the measured position about its rest
+    for (std::size_t k = settled; k <= end; ++k)
+      if (t_s[k] >= settle_t) spread += (measured[k] - rest) * (measured[k] - rest) / count;
+    spread = std::sqrt(spread);
     // The approach side is where the measured position last was outside the
-    // tolerance band (or noise band) about its rest position; if it never left the band
-    // since the previous window came to rest, this window continues that
-    // one and is no new approach.
-    const double band = std::max(o.target_tolerance, rest_run.band);
+    // tolerance band (or 6 × its spread at rest) about its rest position
+    // before the command began to hold this target (settling inside the
+    // window is no approach); if it never left the band since the previous
+    // window began, this window continues that one and is no new approach.
+    const double band = std::max(o.target_tolerance, 6 * spread);
     int direction = 0;
-    for (std::size_t k = settled; k-- > previous_settled;) {
+    for (std::size_t k = first; k-- > previous_first;) {
       if (std::abs(measured[k] - rest) > band) {
         direction = measured[k] < rest ? +1 : -1;
         break;
       }
     }
+    previous_first = first;
     const double travel = std::abs(rest - measured[previous_settled]);
     previous_settled = settled;
     if (direction == 0) continue;
