@@ -27,9 +27,13 @@ const char* kIso230Help =
     "windows) and ISO 230-4 (circular test: G, H, F, harmonics and interpretation\n"
     "hints). Deviation = <j>_meas (else <j>_act) - <j>_cmd. Writes DIR/iso230.json and\n"
     "DIR/iso230.html, each atomically; on bad input (exit 2) nothing is written.\n"
+    "An EPICS camonitor log (PV DATE TIME VALUE lines) is read as well; map its PVs,\n"
+    "e.g. --map x_cmd=IOC:M1-PosSet,x_act=IOC:M1-PosAct. The command may be a target\n"
+    "setpoint (jumping to the next target) or a trajectory setpoint: readings start\n"
+    "where the measured position comes to rest.\n"
     "\n"
     "options:\n"
-    "  --recording FILE          the recording CSV (required)\n"
+    "  --recording FILE          the recording CSV or camonitor log (required)\n"
     "  --out DIR                 output folder (created; required)\n"
     "  --map NAME=SOURCE,...     column map for foreign files (repeatable), e.g.\n"
     "                            x_cmd=X1_CommandPosition,x_act=X1_ActualPosition,t=@index*0.1\n"
@@ -141,7 +145,9 @@ int cmd_iso230(const std::vector<std::string>& argv) {
     for (const auto& c : circles)
       for (const auto& j : {c.axis_p, c.axis_q})
         options.required.push_back(j + "_cmd");
-    const auto rec = analysis::read_recording(*recording, options);
+    const auto rec = analysis::is_camonitor_log(*recording)
+                         ? analysis::read_camonitor(*recording, options)
+                         : analysis::read_recording(*recording, options);
     report.rows = rec.rows();
     auto need_measured = [&](const std::string& j) {
       if (!rec.measured(j))

@@ -133,6 +133,12 @@ std::optional<AxisPositioning> evaluate_positioning(const std::string& joint,
         " times; A, E, M, R, B are "
         "given per direction only");
   }
+  const auto jumps = std::count_if(readings.begin(), readings.end(),
+                                   [](const PositionReading& r) { return r.target_setpoint; });
+  if (2 * jumps > std::ptrdiff_t(readings.size()))
+    axis.notes.push_back(
+        "the command is a target setpoint (it jumps to the next target and the axis then "
+        "travels there): each reading starts where the measured position comes to rest");
   if (dropped > 0)
     axis.notes.push_back(std::to_string(dropped) + " standstill position(s) with fewer than " +
                          std::to_string(need) +

@@ -20,12 +20,18 @@ struct StandstillOptions {
   int min_runs = 2;                  // approaches per direction for a target to count
 };
 
-// One reading: a standstill after an approach.
+// One reading: a standstill after an approach. Standstill, approach
+// direction and the start of the reading come from the measured position;
+// the command only bounds the window (it holds one value), so target and
+// trajectory setpoints both work (docs/iso230.md).
 struct PositionReading {
   double t_start_s = 0, t_end_s = 0;
   double target = 0;    // mean <j>_cmd over the averaged part of the window
   double measured = 0;  // mean <j>_meas (else <j>_act) over the same samples
   int direction = 0;    // +1 approached moving positive (↑), -1 negative (↓)
+  // The command jumped to the target in one step and the axis travelled
+  // there afterwards (a target setpoint, not a trajectory setpoint).
+  bool target_setpoint = false;
   double deviation() const { return measured - target; }
 };
 

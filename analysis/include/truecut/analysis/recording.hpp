@@ -89,4 +89,17 @@ struct Recording {
 
 Recording read_recording(const std::filesystem::path& file, const RecordingOptions& options = {});
 
+// EPICS camonitor logs (docs/formats.md, "camonitor logs"): one line
+// `PV YYYY-MM-DD HH:MM:SS.ffffff VALUE [STATUS SEVERITY]` per change of one
+// process variable, each PV at its own irregular times. True when the
+// first line that is not blank or '#' has that form.
+bool is_camonitor_log(const std::filesystem::path& file);
+// Channels come from `options.map` (NAME=PV or NAME=PV*FACTOR; `t` and
+// `@index` are refused). The events are put in time order (the first lines
+// of a log may carry older time stamps) and every channel is held at its
+// last value; one row per time stamp once every mapped PV has a value, t in
+// seconds from the first row. Lines of other PVs are not parsed. Throws
+// RecordingError ("FILE:LINE: PV 'NAME': what").
+Recording read_camonitor(const std::filesystem::path& file, const RecordingOptions& options);
+
 }  // namespace truecut::analysis
