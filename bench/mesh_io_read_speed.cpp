@@ -83,7 +83,7 @@ int main(int argc, char** argv) {
   write_stl(dir / "nominal.stl", nominal);
   print("binary STL, 113,896 faces, welded", dir / "nominal.stl",
         best_seconds([&] { mesh = read_mesh(dir / "nominal.stl"); }, 3));
-  write_stl(dir / "nominal_ascii.stl", nominal, StlEncoding::ascii);
+  write_stl(dir / "nominal_ascii.stl", nominal, StlEncoding::kAscii);
   print("ASCII STL, 113,896 faces, welded", dir / "nominal_ascii.stl",
         best_seconds([&] { mesh = read_mesh(dir / "nominal_ascii.stl"); }, 1));
   write_ply(dir / "nominal.ply", nominal);

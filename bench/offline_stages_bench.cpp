@@ -370,15 +370,15 @@ int main(int argc, char** argv) {
     const std::vector<std::int32_t> ids(nominal.triangles.size(), 0);
     const CompensationPoints points = compensation_points_at_vertices(nominal, ids);
     ErrorVectors e;
-    for (RayBatch batch : {RayBatch::single, RayBatch::packet16, RayBatch::stream}) {
+    for (RayBatch batch : {RayBatch::kSingle, RayBatch::kPacket16, RayBatch::kStream}) {
       RayMethodOptions o;
       o.batch = batch;
       const double t_rays =
           best_of(repeat, [&] { e = error_vectors_by_rays(nominal, points, *scene, o); });
       const ErrorVectorSummary s = summarize(e);
-      const char* name = batch == RayBatch::single     ? "rtcIntersect1"
-                         : batch == RayBatch::packet16 ? "rtcIntersect16"
-                                                       : "rtcIntersect1M";
+      const char* name = batch == RayBatch::kSingle     ? "rtcIntersect1"
+                         : batch == RayBatch::kPacket16 ? "rtcIntersect16"
+                                                        : "rtcIntersect1M";
       std::printf(
           "ray error vectors (%s, %zu points): %.3f s (cpu %.3f s); %zu valid, mean %.4f mm\n",
           name, points.size(), t_rays, g_cpu_s, s.valid, s.mean_normal_mm);
@@ -388,18 +388,18 @@ int main(int argc, char** argv) {
     // edges, raw (no double refinement).
     std::vector<Ray> rays;
     for (std::size_t i = 0; i < points.size(); ++i) {
-      if (e.status[i] == ErrorStatus::nominal_edge) continue;
+      if (e.status[i] == ErrorStatus::kNominalEdge) continue;
       const Eigen::Vector3d& p = points.positions_mm[i];
       const Eigen::Vector3d& n = points.normals[i];
       rays.push_back({p - 1e-3 * n, n, 0.0, 1.001});
       rays.push_back({p + 1e-3 * n, -n, 0.0, 1.001});
     }
     std::vector<RayHit> hits(rays.size());
-    for (RayBatch batch : {RayBatch::single, RayBatch::packet16, RayBatch::stream}) {
+    for (RayBatch batch : {RayBatch::kSingle, RayBatch::kPacket16, RayBatch::kStream}) {
       const double t_raw = best_of(repeat, [&] { scene->intersect(rays, hits, {batch, false}); });
-      const char* name = batch == RayBatch::single     ? "rtcIntersect1"
-                         : batch == RayBatch::packet16 ? "rtcIntersect16"
-                                                       : "rtcIntersect1M";
+      const char* name = batch == RayBatch::kSingle     ? "rtcIntersect1"
+                         : batch == RayBatch::kPacket16 ? "rtcIntersect16"
+                                                        : "rtcIntersect1M";
       std::printf("raw Embree, same %zu rays (%s): %.4f s (cpu %.4f s) = %.2f Mrays/s\n",
                   rays.size(), name, t_raw, g_cpu_s, rays.size() / t_raw / 1e6);
     }

@@ -246,13 +246,13 @@ offline::FieldPipelineOptions pipeline_options(const ParsedArgs& a, const Inputs
   const std::string method =
       a.value("method").value_or(in.scan.triangles.empty() ? "sphere" : "ray");
   if (method == "ray") {
-    o.method = offline::ErrorMethod::ray;
+    o.method = offline::ErrorMethod::kRay;
   } else if (method == "sphere") {
-    o.method = offline::ErrorMethod::sphere;
+    o.method = offline::ErrorMethod::kSphere;
   } else {
     throw UsageError("--method must be ray or sphere, not '" + method + "'");
   }
-  if (o.method == offline::ErrorMethod::ray && in.scan.triangles.empty())
+  if (o.method == offline::ErrorMethod::kRay && in.scan.triangles.empty())
     throw InputError(a.positionals()[1] +
                      ": the scan has no faces; the ray method needs a mesh (use --method sphere)");
   o.spacing_mm = a.number("spacing", 0.0, 0.0, 100.0);

@@ -299,8 +299,8 @@ void DexelModel::write_machined(const std::filesystem::path& dir,
   const offline::TriangleMesh mesh = machined_mesh();
   const std::string text =
       comment.empty() ? std::string("truecut machined surface, workpiece frame, mm") : comment;
-  offline::write_stl(dir / "machined.stl", mesh, offline::StlEncoding::binary, text.substr(0, 80));
-  offline::write_ply(dir / "machined.ply", mesh, offline::PlyEncoding::binary_little_endian, text);
+  offline::write_stl(dir / "machined.stl", mesh, offline::StlEncoding::kBinary, text.substr(0, 80));
+  offline::write_ply(dir / "machined.ply", mesh, offline::PlyEncoding::kBinaryLittleEndian, text);
 }
 
 double DexelModel::removed_total_mm3() const {

@@ -29,7 +29,7 @@ CompensationPoints three_points() {
 ErrorVectors errors_for_three() {
   ErrorVectors e;
   e.vectors_mm = {{0, 0, 0.125}, {-0.03, 0, 0}, {0, 0, 0}};
-  e.status = {ErrorStatus::valid, ErrorStatus::valid, ErrorStatus::no_hit};
+  e.status = {ErrorStatus::kValid, ErrorStatus::kValid, ErrorStatus::kNoHit};
   e.normal_mm = {0.125, -0.03, 0};
   return e;
 }

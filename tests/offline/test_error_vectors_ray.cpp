@@ -53,10 +53,10 @@ TEST(RayErrorVectors, ConstantOffsetIsRecoveredExactly) {
   for (std::size_t i = 0; i < c.size(); ++i) {
     const double to_edge = distance_to_box_edge(c.positions_mm[i], lo, size);
     if (to_edge <= 0.5) {
-      EXPECT_EQ(e.status[i], ErrorStatus::nominal_edge) << i;
+      EXPECT_EQ(e.status[i], ErrorStatus::kNominalEdge) << i;
       continue;
     }
-    ASSERT_EQ(e.status[i], ErrorStatus::valid) << i;
+    ASSERT_EQ(e.status[i], ErrorStatus::kValid) << i;
     ++valid;
     EXPECT_NEAR(e.normal_mm[i], 0.1, 1e-9);
     EXPECT_NEAR((e.vectors_mm[i] - 0.1 * c.normals[i]).norm(), 0.0, 1e-9);
@@ -77,10 +77,10 @@ TEST(RayErrorVectors, LinearErrorIsRecoveredExactly) {
     const Eigen::Vector3d& p = c.positions_mm[i];
     const bool border = p.x() == 0 || p.x() == 40 || p.y() == 0 || p.y() == 20;
     if (border) {  // the plate's open boundary is an edge
-      EXPECT_EQ(e.status[i], ErrorStatus::nominal_edge);
+      EXPECT_EQ(e.status[i], ErrorStatus::kNominalEdge);
       continue;
     }
-    ASSERT_EQ(e.status[i], ErrorStatus::valid) << i;
+    ASSERT_EQ(e.status[i], ErrorStatus::kValid) << i;
     ++valid;
     EXPECT_NEAR(e.normal_mm[i], error(p.x(), p.y()), 1e-9) << p.transpose();
   }
@@ -108,7 +108,7 @@ TEST(RayErrorVectors, BendingLineOfACantilever) {
   EXPECT_GT(valid, c.size() * 8 / 10);
   const ErrorVectorSummary s = summarize(e);
   EXPECT_EQ(s.valid, valid);
-  EXPECT_EQ(s.by_status[static_cast<int>(ErrorStatus::nominal_edge)], c.size() - valid);
+  EXPECT_EQ(s.by_status[static_cast<int>(ErrorStatus::kNominalEdge)], c.size() - valid);
   EXPECT_NEAR(s.max_length_mm, w(39.5), 0.01);
 }
 
@@ -144,9 +144,9 @@ TEST(RayErrorVectors, RigidMisalignmentIsRemovedByRigidBodyMotionRemoval) {
   ErrorVectors e = error_vectors_by_rays(nominal, c, RayScene(scan));
   const std::vector<std::uint8_t> use = e.valid_mask();
   const RigidBodyMotion m = fit_rigid_body_motion(c.positions_mm, e.vectors_mm,
-                                                  RigidBodyFit::normal_components, use, c.normals);
+                                                  RigidBodyFit::kNormalComponents, use, c.normals);
   EXPECT_GT(m.rms_before_mm, m.rms_after_mm);
-  remove_rigid_body_motion(m, RigidBodyFit::normal_components, c.positions_mm, e.vectors_mm,
+  remove_rigid_body_motion(m, RigidBodyFit::kNormalComponents, c.positions_mm, e.vectors_mm,
                            c.normals);
   for (std::size_t i = 0; i < c.size(); ++i) {
     if (!e.valid(i)) continue;
@@ -167,13 +167,13 @@ TEST(RayErrorVectors, NoHitWhereTheScanHasAHole) {
   });
   const CompensationPoints c = points_at({{10, 10, 0}, {15, 15, 0}});
   const ErrorVectors e = error_vectors_by_rays(nominal, c, RayScene(scan));
-  EXPECT_EQ(e.status[0], ErrorStatus::no_hit);
-  EXPECT_EQ(e.status[1], ErrorStatus::valid);
+  EXPECT_EQ(e.status[0], ErrorStatus::kNoHit);
+  EXPECT_EQ(e.status[1], ErrorStatus::kValid);
   EXPECT_NEAR(e.normal_mm[1], 0.05, 1e-12);
   // Also no hit when the surface is beyond the search distance.
   RayMethodOptions near;
   near.max_distance_mm = 0.04;
-  EXPECT_EQ(error_vectors_by_rays(nominal, c, RayScene(scan), near).status[1], ErrorStatus::no_hit);
+  EXPECT_EQ(error_vectors_by_rays(nominal, c, RayScene(scan), near).status[1], ErrorStatus::kNoHit);
 }
 
 TEST(RayErrorVectors, GrazingHitsAreInvalid) {
@@ -186,10 +186,10 @@ TEST(RayErrorVectors, GrazingHitsAreInvalid) {
         plate(2, 20, 4, 10, [&](double x, double) { return 0.1 + slope * (x - 1); }), {9, 0, 0});
     const ErrorVectors e = error_vectors_by_rays(nominal, c, RayScene(scan));
     if (tilt_deg < 60) {
-      ASSERT_EQ(e.status[0], ErrorStatus::valid);
+      ASSERT_EQ(e.status[0], ErrorStatus::kValid);
       EXPECT_NEAR(e.normal_mm[0], 0.1, 1e-12);
     } else {
-      EXPECT_EQ(e.status[0], ErrorStatus::grazing);
+      EXPECT_EQ(e.status[0], ErrorStatus::kGrazing);
     }
   }
 }
@@ -201,11 +201,11 @@ TEST(RayErrorVectors, FarSideOfAWallIsABackFace) {
   for (Triangle& t : scan.triangles)
     std::swap(t[1], t[2]);  // facing −z: the underside of a wall
   const CompensationPoints c = points_at({{10, 10, 0}});
-  EXPECT_EQ(error_vectors_by_rays(nominal, c, RayScene(scan)).status[0], ErrorStatus::back_face);
+  EXPECT_EQ(error_vectors_by_rays(nominal, c, RayScene(scan)).status[0], ErrorStatus::kBackFace);
   RayMethodOptions any_side;
   any_side.reject_back_faces = false;
   const ErrorVectors e = error_vectors_by_rays(nominal, c, RayScene(scan), any_side);
-  ASSERT_EQ(e.status[0], ErrorStatus::valid);
+  ASSERT_EQ(e.status[0], ErrorStatus::kValid);
   EXPECT_NEAR(e.normal_mm[0], -0.2, 1e-12);
 }
 
@@ -219,23 +219,23 @@ TEST(RayErrorVectors, PointsOnOrNearNominalEdgesAreInvalid) {
   const CompensationPoints c = points_at({{20, 20, 10}, {20, 7, 10}, {19.6, 7, 10}, {19.4, 7, 10}});
   const RayScene s(scan);
   const ErrorVectors e = error_vectors_by_rays(nominal, c, s);
-  EXPECT_EQ(e.status[0], ErrorStatus::nominal_edge);
-  EXPECT_EQ(e.status[1], ErrorStatus::nominal_edge);
-  EXPECT_EQ(e.status[2], ErrorStatus::nominal_edge);
-  EXPECT_EQ(e.status[3], ErrorStatus::valid);
+  EXPECT_EQ(e.status[0], ErrorStatus::kNominalEdge);
+  EXPECT_EQ(e.status[1], ErrorStatus::kNominalEdge);
+  EXPECT_EQ(e.status[2], ErrorStatus::kNominalEdge);
+  EXPECT_EQ(e.status[3], ErrorStatus::kValid);
   RayMethodOptions on_edge_only;
   on_edge_only.edge_exclusion_mm = 0.0;
   const ErrorVectors f = error_vectors_by_rays(nominal, c, s, on_edge_only);
-  EXPECT_EQ(f.status[0], ErrorStatus::nominal_edge);
-  EXPECT_EQ(f.status[1], ErrorStatus::nominal_edge);
-  EXPECT_EQ(f.status[2], ErrorStatus::valid);
+  EXPECT_EQ(f.status[0], ErrorStatus::kNominalEdge);
+  EXPECT_EQ(f.status[1], ErrorStatus::kNominalEdge);
+  EXPECT_EQ(f.status[2], ErrorStatus::kValid);
   // A 20° fold is not sharp under the default 30°.
   const TriangleMesh folded = plate(20, 10, 20, 10, [](double x, double) {
     return x > 10 ? (x - 10) * std::tan(M_PI / 9) : 0.0;
   });
   const ErrorVectors g =
       error_vectors_by_rays(folded, points_at({{10, 5, 0}}), RayScene(moved(folded, {0, 0, 0.05})));
-  EXPECT_EQ(g.status[0], ErrorStatus::valid);
+  EXPECT_EQ(g.status[0], ErrorStatus::kValid);
 }
 
 TEST(RayErrorVectors, BatchModesAgree) {
@@ -244,9 +244,9 @@ TEST(RayErrorVectors, BatchModesAgree) {
   const CompensationPoints c = sample_compensation_points(nominal, segment_surfaces(nominal), 0.7);
   RayMethodOptions o;
   const ErrorVectors a = error_vectors_by_rays(nominal, c, RayScene(scan), o);
-  o.batch = RayBatch::packet16;
+  o.batch = RayBatch::kPacket16;
   const ErrorVectors b = error_vectors_by_rays(nominal, c, RayScene(scan), o);
-  o.batch = RayBatch::stream;
+  o.batch = RayBatch::kStream;
   const ErrorVectors d = error_vectors_by_rays(nominal, c, RayScene(scan), o);
   EXPECT_EQ(a.vectors_mm, b.vectors_mm);
   EXPECT_EQ(a.vectors_mm, d.vectors_mm);

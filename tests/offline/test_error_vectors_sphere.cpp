@@ -36,9 +36,9 @@ struct Case {
 
 // Vertices of each kind, at least Rs + 1 mm from any other feature.
 std::vector<Case> cases() {
-  Case surface{SphereCase::surface, {}, {}, 1.0, 1.0};
-  Case edge{SphereCase::edge, {}, {}, 0.5, 2.7};
-  Case corner{SphereCase::corner, {}, {}, 0.25, 4.3};
+  Case surface{SphereCase::kSurface, {}, {}, 1.0, 1.0};
+  Case edge{SphereCase::kEdge, {}, {}, 0.5, 2.7};
+  Case corner{SphereCase::kCorner, {}, {}, 0.25, 4.3};
   for (double x : {6.0, 10.0, 14.0})
     for (double y : {6.0, 10.0, 14.0})
       surface.at.emplace_back(x, y, 20.0);
@@ -59,9 +59,9 @@ std::vector<Case> cases() {
 // displacement d, an edge all but the component along the edge, a corner d.
 Eigen::Vector3d expected(const Case& c, std::size_t i, const Eigen::Vector3d& d) {
   switch (c.kind) {
-    case SphereCase::surface:
+    case SphereCase::kSurface:
       return Eigen::Vector3d(0, 0, d.z());
-    case SphereCase::edge: {
+    case SphereCase::kEdge: {
       const Eigen::Vector3d& e = c.edge_direction[i];
       return d - d.dot(e) * e;
     }
@@ -98,14 +98,14 @@ TEST_P(SphereMethod, SurfaceEdgeAndCornerDisplacementsAreRecovered) {
     for (std::size_t i = 0; i < c.at.size(); ++i) {
       // Below the source's 20 pt/mm² a corner displaced far keeps only a few
       // points on a face; the method must then say so, not guess.
-      if (c.kind == SphereCase::corner && density < kRecommendedDensityPerMm2 && !e.valid(i)) {
-        EXPECT_TRUE(e.status[i] == ErrorStatus::too_few_points ||
-                    e.status[i] == ErrorStatus::plane_tilted)
+      if (c.kind == SphereCase::kCorner && density < kRecommendedDensityPerMm2 && !e.valid(i)) {
+        EXPECT_TRUE(e.status[i] == ErrorStatus::kTooFewPoints ||
+                    e.status[i] == ErrorStatus::kPlaneTilted)
             << to_string(e.status[i]);
         ++low_density_invalid;
         continue;
       }
-      ASSERT_EQ(e.status[i], ErrorStatus::valid)
+      ASSERT_EQ(e.status[i], ErrorStatus::kValid)
           << to_string(c.kind) << " at " << c.at[i].transpose() << ": " << to_string(e.status[i]);
       EXPECT_EQ(e.sphere_case[i], c.kind);
       EXPECT_LT((e.vectors_mm[i] - expected(c, i, d)).norm(), tolerance)
@@ -143,13 +143,13 @@ TEST(SphereMethodLimits, FewerThanFivePointsIsInvalid) {
   SphereMethodOptions o;
   o.radius_mm = kRs;
   const ErrorVectors e = error_vectors_by_spheres(nominal(), one_point({10, 10, 20}), cloud, o);
-  EXPECT_EQ(e.status[0], ErrorStatus::too_few_points);
+  EXPECT_EQ(e.status[0], ErrorStatus::kTooFewPoints);
   EXPECT_EQ(e.points_in_sphere[0], 4u);
   // A fifth point makes it valid.
   std::vector<Eigen::Vector3d> more = cloud;
   more.emplace_back(10, 9.5, 20);
   EXPECT_EQ(error_vectors_by_spheres(nominal(), one_point({10, 10, 20}), more, o).status[0],
-            ErrorStatus::valid);
+            ErrorStatus::kValid);
 }
 
 TEST(SphereMethodLimits, DisplacementBeyondSevenTenthsOfTheRadiusIsInvalid) {
@@ -162,10 +162,10 @@ TEST(SphereMethodLimits, DisplacementBeyondSevenTenthsOfTheRadiusIsInvalid) {
     const auto cloud = test_geo::sample_surface(machined, 40.0, 0.0, 9);
     const ErrorVectors e = error_vectors_by_spheres(nominal(), one_point({10, 10, 20}), cloud, o);
     if (lift < 1.05) {
-      ASSERT_EQ(e.status[0], ErrorStatus::valid);
+      ASSERT_EQ(e.status[0], ErrorStatus::kValid);
       EXPECT_NEAR(e.normal_mm[0], lift, 1e-9);
     } else {
-      EXPECT_EQ(e.status[0], ErrorStatus::beyond_sphere_reach);
+      EXPECT_EQ(e.status[0], ErrorStatus::kBeyondSphereReach);
     }
   }
 }
@@ -185,7 +185,7 @@ TEST(SphereMethodLimits, DensityIsReported) {
   const ErrorVectorSummary s = summarize(e, o.radius_mm);
   EXPECT_NEAR(s.median_density_per_mm2, 12.0, 12.0 * 0.25);  // Poisson scatter of ~150 points
   EXPECT_EQ(s.below_recommended_density, 5u);                // 12 < 20 pt/mm²
-  EXPECT_EQ(s.by_case[static_cast<int>(SphereCase::surface)], 5u);
+  EXPECT_EQ(s.by_case[static_cast<int>(SphereCase::kSurface)], 5u);
 }
 
 }  // namespace

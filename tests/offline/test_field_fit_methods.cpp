@@ -37,7 +37,7 @@ TEST(FieldFitMethods, BothRecoverTheBendingLineAndAgree) {
   FieldFitOptions o;
   o.spacing_mm = 2.5;
   const FieldFitResult mba = fit_correction_field(tools, o);
-  o.method = FieldFitMethod::least_squares;
+  o.method = FieldFitMethod::kLeastSquares;
   const FieldFitResult lsq = fit_correction_field(tools, o);
   EXPECT_LT(mba.layers[0].residual_max_mm, 1e-3);
   EXPECT_LT(lsq.layers[0].residual_max_mm, 1e-3);

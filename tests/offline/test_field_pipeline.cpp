@@ -326,7 +326,7 @@ TEST(FieldPipeline, PointsOutsideTheExpectedCutAreInvalid) {
     const Eigen::Vector3d& p = r.points.positions_mm[i];
     if (p.y() < 2 || p.y() > 18) continue;
     if (p.x() > 21 && p.x() < 39) {
-      EXPECT_EQ(r.errors.status[i], ErrorStatus::no_hit) << p.transpose();
+      EXPECT_EQ(r.errors.status[i], ErrorStatus::kNoHit) << p.transpose();
       ++checked;
     } else if (p.x() > 1 && p.x() < 19) {
       EXPECT_TRUE(r.errors.valid(i)) << p.transpose();
@@ -405,7 +405,7 @@ TEST(FieldPipeline, SampledPointsAndSphereMethod) {
   PlateCase cloud = c;
   cloud.scan.triangles.clear();
   o = {};
-  o.method = ErrorMethod::sphere;
+  o.method = ErrorMethod::kSphere;
   e = field_error(run_case(cloud, o), kLinear);
   EXPECT_LT(e.max_mm, 2e-3);
 }

@@ -47,10 +47,10 @@ TEST(MeshIoCorruption, OnlyMeshIoErrorsEscape) {
   TriangleMesh bare = mesh;
   bare.normals.clear();
   write_stl(dir / "ref.stl", bare);
-  write_stl(dir / "ref_ascii.stl", bare, StlEncoding::ascii);
+  write_stl(dir / "ref_ascii.stl", bare, StlEncoding::kAscii);
   write_ply(dir / "ref_le.ply", mesh);
-  write_ply(dir / "ref_be.ply", mesh, PlyEncoding::binary_big_endian);
-  write_ply(dir / "ref_ascii.ply", mesh, PlyEncoding::ascii);
+  write_ply(dir / "ref_be.ply", mesh, PlyEncoding::kBinaryBigEndian);
+  write_ply(dir / "ref_ascii.ply", mesh, PlyEncoding::kAscii);
   write_point_text(dir / "ref.csv", PointCloud{mesh.vertices_mm, mesh.normals}, {',', true});
   Outcome out;
   for (const char* ref :

@@ -12,11 +12,11 @@ using test_util::files_in;
 using test_util::write_bytes;
 
 TEST(MeshIoDispatch, FormatFromExtension) {
-  EXPECT_EQ(format_from_extension("a/b.STL"), MeshFormat::stl);
-  EXPECT_EQ(format_from_extension("b.ply"), MeshFormat::ply);
-  EXPECT_EQ(format_from_extension("b.xyz"), MeshFormat::xyz);
-  EXPECT_EQ(format_from_extension("b.Csv"), MeshFormat::xyz);
-  EXPECT_EQ(format_from_extension("b.txt"), MeshFormat::xyz);
+  EXPECT_EQ(format_from_extension("a/b.STL"), MeshFormat::kStl);
+  EXPECT_EQ(format_from_extension("b.ply"), MeshFormat::kPly);
+  EXPECT_EQ(format_from_extension("b.xyz"), MeshFormat::kXyz);
+  EXPECT_EQ(format_from_extension("b.Csv"), MeshFormat::kXyz);
+  EXPECT_EQ(format_from_extension("b.txt"), MeshFormat::kXyz);
   EXPECT_FALSE(format_from_extension("b.obj").has_value());
   EXPECT_FALSE(format_from_extension("stl").has_value());
 }
@@ -26,21 +26,21 @@ TEST(MeshIoDispatch, ContentWinsOverTheExtension) {
   const TriangleMesh mesh = test_util::grid_mesh(4, 3);
   write_stl(dir / "binary.stl", mesh);
   std::filesystem::rename(dir / "binary.stl", dir / "binary.dat");
-  EXPECT_EQ(detect_format(dir / "binary.dat"), MeshFormat::stl);
+  EXPECT_EQ(detect_format(dir / "binary.dat"), MeshFormat::kStl);
 
-  write_stl(dir / "ascii.stl", mesh, StlEncoding::ascii);
+  write_stl(dir / "ascii.stl", mesh, StlEncoding::kAscii);
   std::filesystem::rename(dir / "ascii.stl", dir / "ascii.txt");
-  EXPECT_EQ(detect_format(dir / "ascii.txt"), MeshFormat::stl);
+  EXPECT_EQ(detect_format(dir / "ascii.txt"), MeshFormat::kStl);
 
   write_ply(dir / "mesh.ply", mesh);
   std::filesystem::rename(dir / "mesh.ply", dir / "mesh.stl");
-  EXPECT_EQ(detect_format(dir / "mesh.stl"), MeshFormat::ply);
+  EXPECT_EQ(detect_format(dir / "mesh.stl"), MeshFormat::kPly);
   test_util::expect_same(read_mesh(dir / "mesh.stl"), mesh);
 
   write_bytes(dir / "points.pts", "# scan\n1 2 3\n4 5 6\n");
-  EXPECT_EQ(detect_format(dir / "points.pts"), MeshFormat::xyz);
+  EXPECT_EQ(detect_format(dir / "points.pts"), MeshFormat::kXyz);
   write_bytes(dir / "points.xyz", "1 2 3\n");
-  EXPECT_EQ(detect_format(dir / "points.xyz"), MeshFormat::xyz);
+  EXPECT_EQ(detect_format(dir / "points.xyz"), MeshFormat::kXyz);
 }
 
 TEST(MeshIoDispatch, UnknownAndEmptyFiles) {
@@ -65,7 +65,7 @@ TEST(MeshIoDispatch, ReadMeshAndPointCloudFromAnyFormat) {
   EXPECT_EQ(test::read_file(dir / "c.csv").substr(0, 15), "x,y,z,nx,ny,nz\n");
   MeshReadReport report;
   TriangleMesh from_points = read_mesh(dir / "c.csv", {}, &report);
-  EXPECT_EQ(report.format, MeshFormat::xyz);
+  EXPECT_EQ(report.format, MeshFormat::kXyz);
   EXPECT_TRUE(from_points.triangles.empty());
   test_util::expect_same(from_points.vertices_mm, mesh.vertices_mm);
 
@@ -112,7 +112,7 @@ TEST(MeshIoAtomicWrite, MissingDirectoryLeavesNothing) {
     const auto file = dir / "missing" / name;
     expect_error(
         [&] {
-          if (format_from_extension(file) == MeshFormat::xyz) {
+          if (format_from_extension(file) == MeshFormat::kXyz) {
             write_point_cloud(file, PointCloud{mesh.vertices_mm, {}});
           } else {
             write_mesh(file, mesh);
@@ -136,11 +136,11 @@ TEST(MeshIoAtomicWrite, FailingWritersLeaveNoFileAndKeepTheOldOne) {
     std::function<void(const std::filesystem::path&)> write;
   };
   const std::vector<Case> cases = {
-      {"b.stl", [&](auto& f) { write_stl(f, mesh, StlEncoding::binary); }},
-      {"a.stl", [&](auto& f) { write_stl(f, mesh, StlEncoding::ascii); }},
-      {"le.ply", [&](auto& f) { write_ply(f, mesh, PlyEncoding::binary_little_endian); }},
-      {"be.ply", [&](auto& f) { write_ply(f, mesh, PlyEncoding::binary_big_endian); }},
-      {"a.ply", [&](auto& f) { write_ply(f, mesh, PlyEncoding::ascii); }},
+      {"b.stl", [&](auto& f) { write_stl(f, mesh, StlEncoding::kBinary); }},
+      {"a.stl", [&](auto& f) { write_stl(f, mesh, StlEncoding::kAscii); }},
+      {"le.ply", [&](auto& f) { write_ply(f, mesh, PlyEncoding::kBinaryLittleEndian); }},
+      {"be.ply", [&](auto& f) { write_ply(f, mesh, PlyEncoding::kBinaryBigEndian); }},
+      {"a.ply", [&](auto& f) { write_ply(f, mesh, PlyEncoding::kAscii); }},
       {"c.ply", [&](auto& f) { write_ply(f, cloud); }},
       {"c.xyz", [&](auto& f) { write_point_text(f, cloud); }},
       {"c.csv",

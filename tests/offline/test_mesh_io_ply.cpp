@@ -150,7 +150,7 @@ TEST(MeshIoPly, RoundTripEveryEncoding) {
   TriangleMesh bare = mesh;
   bare.normals.clear();
   for (auto enc :
-       {PlyEncoding::binary_little_endian, PlyEncoding::binary_big_endian, PlyEncoding::ascii}) {
+       {PlyEncoding::kBinaryLittleEndian, PlyEncoding::kBinaryBigEndian, PlyEncoding::kAscii}) {
     SCOPED_TRACE(static_cast<int>(enc));
     write_ply(dir / "m.ply", mesh, enc, "round trip\nsecond line");
     MeshReadReport report;
@@ -243,7 +243,7 @@ TEST(MeshIoPly, DegenerateFacesAreErrorsOrDropped) {
               "end_header\n0 0 0\n1 0 0\n2 0 0\n1 1 0\n4 0 3 1 2\n");
   expect_error([&] { read(dir / "fan.ply"); }, {"face 0 (fan triangle 1 of 2) is degenerate"});
   MeshReadOptions drop;
-  drop.degenerate_faces = DegenerateFaces::drop;
+  drop.degenerate_faces = DegenerateFaces::kDrop;
   MeshReadReport report;
   TriangleMesh m = read_ply(dir / "deg.ply", drop, &report);
   EXPECT_EQ(m.triangles, (std::vector<Triangle>{{0, 1, 2}}));

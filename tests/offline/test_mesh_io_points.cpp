@@ -23,7 +23,7 @@ TEST(MeshIoPoints, WhitespaceWithCommentsAndBlankLines) {
   EXPECT_EQ(c.points_mm[1], Eigen::Vector3d(-4.5, 0.5, 6));
   EXPECT_EQ(c.points_mm[2], Eigen::Vector3d(7, 8, 9));
   EXPECT_FALSE(c.has_normals());
-  EXPECT_EQ(report.format, MeshFormat::xyz);
+  EXPECT_EQ(report.format, MeshFormat::kXyz);
   ASSERT_EQ(report.comments.size(), 1u);
   EXPECT_EQ(report.comments[0], "exported by a scanner");
 }

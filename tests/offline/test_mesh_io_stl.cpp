@@ -102,8 +102,8 @@ TEST(MeshIoStl, RoundTripBinaryAndAscii) {
   auto dir = test::scratch_dir();
   TriangleMesh mesh = test_util::grid_mesh(40, 30);
   const TriangleMesh expected = test_util::by_first_use(mesh);
-  write_stl(dir / "b.stl", mesh, StlEncoding::binary, "nominal");
-  write_stl(dir / "a.stl", mesh, StlEncoding::ascii, "nominal");
+  write_stl(dir / "b.stl", mesh, StlEncoding::kBinary, "nominal");
+  write_stl(dir / "a.stl", mesh, StlEncoding::kAscii, "nominal");
   MeshReadReport rb, ra;
   test_util::expect_same(read_stl(dir / "b.stl", {}, &rb), expected);
   test_util::expect_same(read_stl(dir / "a.stl", {}, &ra), expected);
@@ -118,7 +118,7 @@ TEST(MeshIoStl, AsciiRoundTripKeepsFullDoublePrecision) {
   mesh.vertices_mm = {
       {0.1, 1.0 / 3.0, -2.718281828459045}, {10.000000000000002, 0, 1e-300}, {0, 123456.789, 0.3}};
   mesh.triangles = {{0, 1, 2}};
-  write_stl(dir / "a.stl", mesh, StlEncoding::ascii);
+  write_stl(dir / "a.stl", mesh, StlEncoding::kAscii);
   test_util::expect_same(read_stl(dir / "a.stl"), mesh);
 }
 
@@ -169,7 +169,7 @@ TEST(MeshIoStl, DegenerateFacetsAreErrorsOrDropped) {
   write_bytes(dir / "deg.stl", binary_stl("x", f));
   expect_error([&] { read_stl(dir / "deg.stl"); }, {"facet 4 is degenerate", "zero area"});
   MeshReadOptions drop;
-  drop.degenerate_faces = DegenerateFaces::drop;
+  drop.degenerate_faces = DegenerateFaces::kDrop;
   MeshReadReport report;
   TriangleMesh m = read_stl(dir / "deg.stl", drop, &report);
   EXPECT_EQ(m.triangles.size(), 4u);
@@ -207,7 +207,9 @@ TEST(MeshIoStl, EmptyFiles) {
 TEST(MeshIoStl, BinaryHeaderMustNotStartWithSolidWhenWriting) {
   auto dir = test::scratch_dir();
   expect_error(
-      [&] { write_stl(dir / "x.stl", test_util::grid_mesh(3, 3), StlEncoding::binary, "solid x"); },
+      [&] {
+        write_stl(dir / "x.stl", test_util::grid_mesh(3, 3), StlEncoding::kBinary, "solid x");
+      },
       {"solid"});
   EXPECT_EQ(test_util::files_in(dir), 0u);
 }

@@ -34,7 +34,7 @@ TEST(RayScene, HitFarFromTheOriginIsExactInDouble) {
   // Embree's own float result: same triangle, same normal orientation, the
   // distance only to float precision.
   RayHit raw;
-  scene.intersect({&ray, 1}, {&raw, 1}, {RayBatch::single, false});
+  scene.intersect({&ray, 1}, {&raw, 1}, {RayBatch::kSingle, false});
   ASSERT_TRUE(raw.hit());
   EXPECT_GT(raw.normal.dot(n), 0.999);
   EXPECT_NEAR(raw.distance_mm, 1.2345678, 1e-4);
@@ -74,9 +74,9 @@ TEST(RayScene, AllBatchModesGiveIdenticalHits) {
     r.t_max_mm = 10.0;
   }
   std::vector<RayHit> single(rays.size()), packet(rays.size()), stream(rays.size());
-  scene.intersect(rays, single, {RayBatch::single, true});
-  scene.intersect(rays, packet, {RayBatch::packet16, true});
-  scene.intersect(rays, stream, {RayBatch::stream, true});
+  scene.intersect(rays, single, {RayBatch::kSingle, true});
+  scene.intersect(rays, packet, {RayBatch::kPacket16, true});
+  scene.intersect(rays, stream, {RayBatch::kStream, true});
   std::size_t hit_count = 0;
   for (std::size_t i = 0; i < rays.size(); ++i) {
     hit_count += single[i].hit();

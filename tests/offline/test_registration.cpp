@@ -133,7 +133,7 @@ TEST(Registration, TukeyIgnoresAFixtureThatBiasesPlainLeastSquares) {
   EXPECT_LT(ts, kShiftTolerance_mm);
   EXPECT_LT(ta, kAngleTolerance_deg);
   IcpOptions plain;
-  plain.kernel = RobustKernel::none;
+  plain.kernel = RobustKernel::kNone;
   const auto [pa, ps] =
       difference(register_scan(nominal, scan, plain).scan_to_nominal, misplaced.inverse());
   EXPECT_GT(ps, 0.05);  // what the robust weighting saves
@@ -158,14 +158,14 @@ TEST(Registration, DatumRegionsKeepADeformedFaceOutOfTheFit) {
     datums.push_back(ids[static_cast<std::size_t>(face) * 128]);
   IcpOptions restricted;
   restricted.datum_triangles = triangles_of_surfaces(ids, datums);
-  restricted.kernel = RobustKernel::none;  // the datum choice alone must do it
+  restricted.kernel = RobustKernel::kNone;  // the datum choice alone must do it
   const auto [ra, rs] =
       difference(register_scan(nominal, scan, restricted).scan_to_nominal, misplaced.inverse());
   EXPECT_LT(rs, kShiftTolerance_mm);
   EXPECT_LT(ra, kAngleTolerance_deg);
 
   IcpOptions everything;
-  everything.kernel = RobustKernel::none;
+  everything.kernel = RobustKernel::kNone;
   const auto [ea, es] =
       difference(register_scan(nominal, scan, everything).scan_to_nominal, misplaced.inverse());
   EXPECT_GT(es, 0.02);  // the bulge pulls an unrestricted fit
@@ -220,7 +220,7 @@ TEST(RigidBodyMotion, PureRigidMotionLeavesNothing) {
   for (const Eigen::Vector3d& p : f.points)
     f.displacements.push_back(T * p - p);
   const RigidBodyMotion m =
-      fit_rigid_body_motion(f.points, f.displacements, RigidBodyFit::full_vectors);
+      fit_rigid_body_motion(f.points, f.displacements, RigidBodyFit::kFullVectors);
   EXPECT_EQ(m.points_used, f.points.size());
   EXPECT_GT(m.rms_before_mm, 0.05);
   EXPECT_LT(m.rms_after_mm, 1e-12);
@@ -231,7 +231,7 @@ TEST(RigidBodyMotion, PureRigidMotionLeavesNothing) {
   mean /= static_cast<double>(f.displacements.size());
   EXPECT_NEAR((m.translation_mm - mean).norm(), 0.0, 1e-15);
   EXPECT_NEAR((m.transform.matrix - T.matrix()).norm(), 0.0, 1e-12);
-  remove_rigid_body_motion(m, RigidBodyFit::full_vectors, f.points, f.displacements);
+  remove_rigid_body_motion(m, RigidBodyFit::kFullVectors, f.points, f.displacements);
   for (const auto& v : f.displacements)
     EXPECT_LT(v.norm(), 1e-12);
 }
@@ -245,10 +245,10 @@ TEST(RigidBodyMotion, NormalComponentsOnlyStillFindTheMotion) {
     f.displacements.push_back(u.dot(f.normals[i]) * f.normals[i]);
   }
   const RigidBodyMotion m = fit_rigid_body_motion(f.points, f.displacements,
-                                                  RigidBodyFit::normal_components, {}, f.normals);
+                                                  RigidBodyFit::kNormalComponents, {}, f.normals);
   EXPECT_EQ(m.determined_directions, 6);
   EXPECT_NEAR((m.transform.matrix - T.matrix()).norm(), 0.0, 1e-10);
-  remove_rigid_body_motion(m, RigidBodyFit::normal_components, f.points, f.displacements,
+  remove_rigid_body_motion(m, RigidBodyFit::kNormalComponents, f.points, f.displacements,
                            f.normals);
   for (const auto& v : f.displacements)
     EXPECT_LT(v.norm(), 1e-10);
@@ -269,9 +269,9 @@ TEST(RigidBodyMotion, KeepsTheDeformationThatIsNotRigid) {
   for (std::size_t i = 0; i < use.size(); ++i)
     use[i] = f.normals[i].z() > 0.5 ? 0 : 1;
   const RigidBodyMotion m =
-      fit_rigid_body_motion(f.points, f.displacements, RigidBodyFit::full_vectors, use);
+      fit_rigid_body_motion(f.points, f.displacements, RigidBodyFit::kFullVectors, use);
   EXPECT_LT(m.points_used, f.points.size());
-  remove_rigid_body_motion(m, RigidBodyFit::full_vectors, f.points, f.displacements);
+  remove_rigid_body_motion(m, RigidBodyFit::kFullVectors, f.points, f.displacements);
   for (std::size_t i = 0; i < f.points.size(); ++i)
     EXPECT_NEAR((f.displacements[i] - bend[i]).norm(), 0.0, 1e-12) << i;
 }
@@ -280,8 +280,8 @@ TEST(RigidBodyMotion, RejectsTooFewPoints) {
   const std::vector<Eigen::Vector3d> p = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
   const std::vector<Eigen::Vector3d> v(3, Eigen::Vector3d::Zero());
   const std::vector<std::uint8_t> use = {1, 1, 0};
-  EXPECT_THROW(fit_rigid_body_motion(p, v, RigidBodyFit::full_vectors, use), std::invalid_argument);
-  EXPECT_THROW(fit_rigid_body_motion(p, v, RigidBodyFit::normal_components), std::invalid_argument);
+  EXPECT_THROW(fit_rigid_body_motion(p, v, RigidBodyFit::kFullVectors, use), std::invalid_argument);
+  EXPECT_THROW(fit_rigid_body_motion(p, v, RigidBodyFit::kNormalComponents), std::invalid_argument);
 }
 
 }  // namespace

@@ -53,7 +53,7 @@ TEST(TrussSmoothing, ConstantFieldPassesUnchanged) {
   std::vector<std::uint8_t> valid = all_valid(m);
   for (std::size_t i = 0; i < valid.size(); i += 7)
     valid[i] = 0;
-  for (TrussEdgeWeight w : {TrussEdgeWeight::uniform, TrussEdgeWeight::inverse_length}) {
+  for (TrussEdgeWeight w : {TrussEdgeWeight::kUniform, TrussEdgeWeight::kInverseLength}) {
     const TrussResult r = smooth_truss(m.vertices_mm, m.triangles, v, valid, {5.0, w});
     EXPECT_EQ(r.unsupported_count, 0);
     for (std::size_t i = 0; i < v.size(); ++i) {
@@ -230,7 +230,7 @@ TEST(TrussSmoothing, RejectsBadInput) {
   std::vector<std::uint8_t> valid = all_valid(m);
   EXPECT_THROW(smooth_truss({}, m.triangles, v, std::span(valid).first(3)), std::invalid_argument);
   EXPECT_THROW(smooth_truss({}, m.triangles, v, valid, {-1.0}), std::invalid_argument);
-  EXPECT_THROW(smooth_truss({}, m.triangles, v, valid, {0.2, TrussEdgeWeight::inverse_length}),
+  EXPECT_THROW(smooth_truss({}, m.triangles, v, valid, {0.2, TrussEdgeWeight::kInverseLength}),
                std::invalid_argument);
   std::vector<Triangle> bad = m.triangles;
   bad[1][2] = 99;

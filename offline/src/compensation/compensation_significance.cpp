@@ -213,7 +213,7 @@ SignificanceResult test_compensation_significance(const CompensationPoints& poin
           // A sphere at an edge or corner fits several planes, and the
           // point's normal is none of them.
           const bool one_plane =
-              errors.sphere_case.empty() || errors.sphere_case[i] == SphereCase::surface;
+              errors.sphere_case.empty() || errors.sphere_case[i] == SphereCase::kSurface;
           const Eigen::Vector3d d = world_from_scan * scan.vertices_mm[v] - points.positions_mm[i];
           const double along = d.dot(points.normals[i]);
           const bool on_plane = one_plane && along * along <= d.squaredNorm() - along * along;

@@ -239,7 +239,7 @@ void RayScene::intersect(std::span<const Ray> rays, std::span<RayHit> hits,
   auto miss = [](RayHit& h) { h = RayHit{}; };
 
   switch (options.batch) {
-    case RayBatch::single:
+    case RayBatch::kSingle:
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), kRaysPerTask),
                         [&](const tbb::blocked_range<std::size_t>& r) {
                           RTCIntersectContext ctx;
@@ -261,7 +261,7 @@ void RayScene::intersect(std::span<const Ray> rays, std::span<RayHit> hits,
                           }
                         });
       break;
-    case RayBatch::packet16: {
+    case RayBatch::kPacket16: {
       const std::size_t packets = (rays.size() + 15) / 16;
       tbb::parallel_for(
           tbb::blocked_range<std::size_t>(0, packets, kRaysPerTask / 16),
@@ -309,7 +309,7 @@ void RayScene::intersect(std::span<const Ray> rays, std::span<RayHit> hits,
           });
       break;
     }
-    case RayBatch::stream:
+    case RayBatch::kStream:
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), kRaysPerTask),
                         [&](const tbb::blocked_range<std::size_t>& r) {
                           RTCIntersectContext ctx;

@@ -7,23 +7,23 @@ namespace truecut::offline {
 
 std::string_view to_string(ErrorStatus status) {
   switch (status) {
-    case ErrorStatus::valid:
+    case ErrorStatus::kValid:
       return "valid";
-    case ErrorStatus::no_hit:
+    case ErrorStatus::kNoHit:
       return "no_hit";
-    case ErrorStatus::grazing:
+    case ErrorStatus::kGrazing:
       return "grazing";
-    case ErrorStatus::back_face:
+    case ErrorStatus::kBackFace:
       return "back_face";
-    case ErrorStatus::nominal_edge:
+    case ErrorStatus::kNominalEdge:
       return "nominal_edge";
-    case ErrorStatus::too_few_points:
+    case ErrorStatus::kTooFewPoints:
       return "too_few_points";
-    case ErrorStatus::ill_conditioned:
+    case ErrorStatus::kIllConditioned:
       return "ill_conditioned";
-    case ErrorStatus::beyond_sphere_reach:
+    case ErrorStatus::kBeyondSphereReach:
       return "beyond_sphere_reach";
-    case ErrorStatus::plane_tilted:
+    case ErrorStatus::kPlaneTilted:
       return "plane_tilted";
   }
   return "?";
@@ -31,15 +31,15 @@ std::string_view to_string(ErrorStatus status) {
 
 std::string_view to_string(SphereCase c) {
   switch (c) {
-    case SphereCase::none:
+    case SphereCase::kNone:
       return "none";
-    case SphereCase::surface:
+    case SphereCase::kSurface:
       return "surface";
-    case SphereCase::edge:
+    case SphereCase::kEdge:
       return "edge";
-    case SphereCase::corner:
+    case SphereCase::kCorner:
       return "corner";
-    case SphereCase::multi:
+    case SphereCase::kMulti:
       return "multi";
   }
   return "?";

@@ -31,7 +31,7 @@ ErrorVectors empty_result(std::size_t n) {
   ErrorVectors e;
   e.support_begin.assign(n + 1, 0);
   e.vectors_mm.assign(n, Eigen::Vector3d::Zero());
-  e.status.assign(n, ErrorStatus::valid);
+  e.status.assign(n, ErrorStatus::kValid);
   e.normal_mm.assign(n, 0.0);
   return e;
 }
@@ -58,7 +58,7 @@ ErrorVectors error_vectors_by_rays(const TriangleMesh& nominal, const Compensati
   std::vector<std::uint32_t> cast;
   for (std::size_t i = 0; i < n; ++i) {
     if (on_edge[i]) {
-      e.status[i] = ErrorStatus::nominal_edge;
+      e.status[i] = ErrorStatus::kNominalEdge;
     } else {
       cast.push_back(static_cast<std::uint32_t>(i));
     }
@@ -83,7 +83,7 @@ ErrorVectors error_vectors_by_rays(const TriangleMesh& nominal, const Compensati
     const double s_up = up.hit() ? up.distance_mm - kOverlapMm : INFINITY;
     const double s_down = down.hit() ? -(down.distance_mm - kOverlapMm) : -INFINITY;
     if (!up.hit() && !down.hit()) {
-      e.status[i] = ErrorStatus::no_hit;
+      e.status[i] = ErrorStatus::kNoHit;
       continue;
     }
     const bool take_up = std::abs(s_up) <= std::abs(s_down);
@@ -92,9 +92,9 @@ ErrorVectors error_vectors_by_rays(const TriangleMesh& nominal, const Compensati
     const Eigen::Vector3d& nn = points.normals[i];
     const double c = nn.dot(h.normal);
     if (options.reject_back_faces && c < 0.0) {
-      e.status[i] = ErrorStatus::back_face;
+      e.status[i] = ErrorStatus::kBackFace;
     } else if (std::abs(c) < cos_grazing) {
-      e.status[i] = ErrorStatus::grazing;
+      e.status[i] = ErrorStatus::kGrazing;
     } else {
       e.normal_mm[i] = s;
       e.vectors_mm[i] = s * nn;

@@ -188,7 +188,7 @@ void one_point(const Context& c, const Eigen::Vector3d& P, const Eigen::Vector3d
   // the input.
   e.points_in_sphere[i] = static_cast<std::uint32_t>(s.cloud.size());
   if (s.cloud.size() < c.options.min_points) {
-    e.status[i] = ErrorStatus::too_few_points;
+    e.status[i] = ErrorStatus::kTooFewPoints;
     return;
   }
   s.triangles.clear();
@@ -229,11 +229,11 @@ void one_point(const Context& c, const Eigen::Vector3d& P, const Eigen::Vector3d
     if (!p.through_point) continue;
     plane_row[j] = k;
     if (!p.fitted || p.count < c.options.min_points) {
-      e.status[i] = ErrorStatus::too_few_points;
+      e.status[i] = ErrorStatus::kTooFewPoints;
       return;
     }
     if (p.normal.dot(p.nominal_normal) < c.cos_plane) {
-      e.status[i] = ErrorStatus::plane_tilted;
+      e.status[i] = ErrorStatus::kPlaneTilted;
       return;
     }
     A.conservativeResize(k + 1, 3);
@@ -244,17 +244,17 @@ void one_point(const Context& c, const Eigen::Vector3d& P, const Eigen::Vector3d
     w[k] = static_cast<double>(p.count);
     ++k;
   }
-  e.sphere_case[i] = k == 1   ? SphereCase::surface
-                     : k == 2 ? SphereCase::edge
-                     : k == 3 ? SphereCase::corner
-                              : SphereCase::multi;
+  e.sphere_case[i] = k == 1   ? SphereCase::kSurface
+                     : k == 2 ? SphereCase::kEdge
+                     : k == 3 ? SphereCase::kCorner
+                              : SphereCase::kMulti;
   Eigen::Vector3d v;
   if (k <= 3) {
     const Eigen::MatrixXd AAt = A * A.transpose();
     const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(AAt);
     // Smallest eigenvalue of AAᵀ: sin² of the angle between two planes.
     if (eig.eigenvalues().minCoeff() < 1e-4) {
-      e.status[i] = ErrorStatus::ill_conditioned;
+      e.status[i] = ErrorStatus::kIllConditioned;
       return;
     }
     v = A.transpose() * AAt.ldlt().solve(b);
@@ -263,14 +263,14 @@ void one_point(const Context& c, const Eigen::Vector3d& P, const Eigen::Vector3d
     const Eigen::Matrix3d N = A.transpose() * w.asDiagonal() * A;
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(N);
     if (eig.eigenvalues().minCoeff() < 1e-4 * eig.eigenvalues().maxCoeff()) {
-      e.status[i] = ErrorStatus::ill_conditioned;
+      e.status[i] = ErrorStatus::kIllConditioned;
       return;
     }
     v = N.ldlt().solve(A.transpose() * w.asDiagonal() * b);
     record_support(s, plane_row, w.asDiagonal() * (A * N.ldlt().solve(normal)), s.support);
   }
   if (v.norm() > c.options.max_displacement_ratio * Rs) {
-    e.status[i] = ErrorStatus::beyond_sphere_reach;
+    e.status[i] = ErrorStatus::kBeyondSphereReach;
     s.support.clear();
     return;
   }
@@ -290,9 +290,9 @@ ErrorVectors error_vectors_by_spheres(const TriangleMesh& nominal, const Compens
   if (!(options.radius_mm > 0.0)) throw std::invalid_argument("sphere radius must be positive");
   ErrorVectors e;
   e.vectors_mm.assign(n, Eigen::Vector3d::Zero());
-  e.status.assign(n, ErrorStatus::valid);
+  e.status.assign(n, ErrorStatus::kValid);
   e.normal_mm.assign(n, 0.0);
-  e.sphere_case.assign(n, SphereCase::none);
+  e.sphere_case.assign(n, SphereCase::kNone);
   e.points_in_sphere.assign(n, 0);
 
   const std::vector<Eigen::Vector3d> fn = face_normals(nominal);

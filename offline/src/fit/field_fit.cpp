@@ -168,7 +168,7 @@ Eigen::MatrixX3d coarse_guess(const rt::FieldGrid& g, const Unknowns& u, const T
 
 FittedLayer fit_layer(const rt::FieldGrid& g, const ToolSamples& tool, const FieldFitOptions& o) {
   // The multilevel fit needs distances only for the weights.
-  const double reach_nodes = o.method == FieldFitMethod::multilevel_bspline
+  const double reach_nodes = o.method == FieldFitMethod::kMultilevelBspline
                                  ? o.support_radius_nodes + o.fade_nodes
                                  : o.support_radius_nodes + o.fade_nodes + 2.0;
   const std::vector<float> dist = fit_detail::node_distances(g, tool.samples, reach_nodes);
@@ -188,7 +188,7 @@ FittedLayer fit_layer(const rt::FieldGrid& g, const ToolSamples& tool, const Fie
     return out;
   }
 
-  if (o.method == FieldFitMethod::multilevel_bspline) {
+  if (o.method == FieldFitMethod::kMultilevelBspline) {
     const std::vector<Eigen::Vector3d> values =
         fit_detail::multilevel_bspline_nodes(g, tool.samples, o);
     out.layer.tool = tool.tool;
@@ -268,7 +268,7 @@ FieldFitResult fit_correction_field(std::span<const ToolSamples> tools,
     stats.push_back(f.stats);
   }
   rt::CorrectionField field(grid, std::move(layers));
-  if (options.method == FieldFitMethod::multilevel_bspline) {
+  if (options.method == FieldFitMethod::kMultilevelBspline) {
     for (std::size_t t = 0; t < tools.size(); ++t) {
       // Per sample in parallel, summed in order: the same on any thread count.
       const std::vector<FitSample>& samples = tools[t].samples;

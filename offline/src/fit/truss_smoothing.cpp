@@ -51,7 +51,7 @@ std::vector<std::uint8_t> supported_vertices(std::size_t n, std::span<const Edge
 std::vector<double> bar_stiffness(std::span<const Eigen::Vector3d> vertices_mm,
                                   std::span<const Edge> edges, const TrussOptions& options) {
   std::vector<double> k(edges.size(), options.kb_over_kc);
-  if (options.edge_weight == TrussEdgeWeight::uniform || edges.empty()) return k;
+  if (options.edge_weight == TrussEdgeWeight::kUniform || edges.empty()) return k;
   std::vector<double> length_mm(edges.size());
   double sum_mm = 0.0;
   for (std::size_t e = 0; e < edges.size(); ++e) {
@@ -74,7 +74,7 @@ void check_inputs(std::span<const Eigen::Vector3d> vertices_mm, std::span<const 
     throw std::invalid_argument("smooth_truss: " + std::to_string(n) + " vectors but " +
                                 std::to_string(valid.size()) + " valid flags");
   }
-  if (options.edge_weight == TrussEdgeWeight::inverse_length && vertices_mm.size() != n) {
+  if (options.edge_weight == TrussEdgeWeight::kInverseLength && vertices_mm.size() != n) {
     throw std::invalid_argument("smooth_truss: inverse_length needs one vertex per vector");
   }
   if (!std::isfinite(options.kb_over_kc) || options.kb_over_kc < 0.0) {

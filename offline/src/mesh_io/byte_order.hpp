@@ -7,10 +7,10 @@
 
 namespace truecut::offline::mesh_io {
 
-enum class ByteOrder { little, big };
+enum class ByteOrder { kLittle, kBig };
 
 constexpr ByteOrder host_byte_order() {
-  return std::endian::native == std::endian::little ? ByteOrder::little : ByteOrder::big;
+  return std::endian::native == std::endian::little ? ByteOrder::kLittle : ByteOrder::kBig;
 }
 
 template <class T>

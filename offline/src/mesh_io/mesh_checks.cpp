@@ -60,7 +60,7 @@ std::size_t handle_degenerate_triangles(std::vector<Triangle>& triangles,
       ++kept;
       continue;
     }
-    if (options.degenerate_faces == DegenerateFaces::drop) continue;
+    if (options.degenerate_faces == DegenerateFaces::kDrop) continue;
     const std::size_t face = face_of(i);
     std::size_t first = i, last = i;  // the face's triangles are consecutive
     while (first > 0 && face_of(first - 1) == face) {
@@ -77,7 +77,7 @@ std::size_t handle_degenerate_triangles(std::vector<Triangle>& triangles,
     msg += " is degenerate (zero area; vertices " + std::to_string(t[0]) + " " +
            format_point(vertices[t[0]]) + ", " + std::to_string(t[1]) + " " +
            format_point(vertices[t[1]]) + ", " + std::to_string(t[2]) + " " +
-           format_point(vertices[t[2]]) + "); read with DegenerateFaces::drop to drop such faces";
+           format_point(vertices[t[2]]) + "); read with DegenerateFaces::kDrop to drop such faces";
     throw MeshIoError(file, msg);
   }
   const std::size_t dropped = triangles.size() - kept;

@@ -48,9 +48,9 @@ std::optional<MeshFormat> format_from_extension(const std::filesystem::path& fil
   for (char& c : ext) {
     c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   }
-  if (ext == ".stl") return MeshFormat::stl;
-  if (ext == ".ply") return MeshFormat::ply;
-  if (ext == ".xyz" || ext == ".txt" || ext == ".csv") return MeshFormat::xyz;
+  if (ext == ".stl") return MeshFormat::kStl;
+  if (ext == ".ply") return MeshFormat::kPly;
+  if (ext == ".xyz" || ext == ".txt" || ext == ".csv") return MeshFormat::kXyz;
   return std::nullopt;
 }
 
@@ -62,13 +62,13 @@ MeshFormat detect_format(const std::filesystem::path& file) {
   const char* p = in.peek(n);
   if (!p) throw MeshIoError(file, "cannot read the first bytes");
   const std::string_view head(p, n);
-  if (is_ply(head)) return MeshFormat::ply;
+  if (is_ply(head)) return MeshFormat::kPly;
   if (!looks_like_text(head) && binary_stl_size_matches(head, in.file_size())) {
-    return MeshFormat::stl;
+    return MeshFormat::kStl;
   }
-  if (is_ascii_stl(head)) return MeshFormat::stl;
+  if (is_ascii_stl(head)) return MeshFormat::kStl;
   if (auto by_extension = format_from_extension(file)) return *by_extension;
-  if (is_point_text(head)) return MeshFormat::xyz;
+  if (is_point_text(head)) return MeshFormat::kXyz;
   throw MeshIoError(file, "unknown format: the extension " +
                               quote_token(file.extension().string()) +
                               " is not .stl, .ply, .xyz, .txt or .csv, and the content is "
@@ -78,11 +78,11 @@ MeshFormat detect_format(const std::filesystem::path& file) {
 TriangleMesh read_mesh(const std::filesystem::path& file, const MeshReadOptions& options,
                        MeshReadReport* report) {
   switch (detect_format(file)) {
-    case MeshFormat::stl:
+    case MeshFormat::kStl:
       return read_stl(file, options, report);
-    case MeshFormat::ply:
+    case MeshFormat::kPly:
       return read_ply(file, options, report);
-    case MeshFormat::xyz:
+    case MeshFormat::kXyz:
       break;
   }
   PointCloud cloud = read_point_text(file, report);
@@ -94,7 +94,7 @@ TriangleMesh read_mesh(const std::filesystem::path& file, const MeshReadOptions&
 
 PointCloud read_point_cloud(const std::filesystem::path& file, const MeshReadOptions& options,
                             MeshReadReport* report) {
-  if (detect_format(file) == MeshFormat::xyz) return read_point_text(file, report);
+  if (detect_format(file) == MeshFormat::kXyz) return read_point_text(file, report);
   TriangleMesh mesh = read_mesh(file, options, report);
   return {std::move(mesh.vertices_mm), std::move(mesh.normals)};
 }
@@ -106,14 +106,14 @@ void write_mesh(const std::filesystem::path& file, const TriangleMesh& mesh,
     throw MeshIoError(file, "unknown output format: use .stl, .ply, .xyz, .txt or .csv");
   }
   switch (*format) {
-    case MeshFormat::stl:
-      return write_stl(file, mesh, options.ascii ? StlEncoding::ascii : StlEncoding::binary,
+    case MeshFormat::kStl:
+      return write_stl(file, mesh, options.ascii ? StlEncoding::kAscii : StlEncoding::kBinary,
                        options.comment);
-    case MeshFormat::ply:
+    case MeshFormat::kPly:
       return write_ply(file, mesh,
-                       options.ascii ? PlyEncoding::ascii : PlyEncoding::binary_little_endian,
+                       options.ascii ? PlyEncoding::kAscii : PlyEncoding::kBinaryLittleEndian,
                        options.comment);
-    case MeshFormat::xyz:
+    case MeshFormat::kXyz:
       break;
   }
   if (!mesh.triangles.empty()) {
@@ -128,12 +128,12 @@ void write_mesh(const std::filesystem::path& file, const TriangleMesh& mesh,
 void write_point_cloud(const std::filesystem::path& file, const PointCloud& cloud,
                        const MeshWriteOptions& options) {
   const auto format = format_from_extension(file);
-  if (format == MeshFormat::ply) {
+  if (format == MeshFormat::kPly) {
     return write_ply(file, cloud,
-                     options.ascii ? PlyEncoding::ascii : PlyEncoding::binary_little_endian,
+                     options.ascii ? PlyEncoding::kAscii : PlyEncoding::kBinaryLittleEndian,
                      options.comment);
   }
-  if (format == MeshFormat::xyz) {
+  if (format == MeshFormat::kXyz) {
     std::string ext = file.extension().string();
     for (char& c : ext) {
       c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));

@@ -15,22 +15,22 @@ struct TypeName {
   PlyType type;
 };
 constexpr std::array<TypeName, 16> kTypeNames{{
-    {"char", PlyType::int8},
-    {"int8", PlyType::int8},
-    {"uchar", PlyType::uint8},
-    {"uint8", PlyType::uint8},
-    {"short", PlyType::int16},
-    {"int16", PlyType::int16},
-    {"ushort", PlyType::uint16},
-    {"uint16", PlyType::uint16},
-    {"int", PlyType::int32},
-    {"int32", PlyType::int32},
-    {"uint", PlyType::uint32},
-    {"uint32", PlyType::uint32},
-    {"float", PlyType::float32},
-    {"float32", PlyType::float32},
-    {"double", PlyType::float64},
-    {"float64", PlyType::float64},
+    {"char", PlyType::kInt8},
+    {"int8", PlyType::kInt8},
+    {"uchar", PlyType::kUint8},
+    {"uint8", PlyType::kUint8},
+    {"short", PlyType::kInt16},
+    {"int16", PlyType::kInt16},
+    {"ushort", PlyType::kUint16},
+    {"uint16", PlyType::kUint16},
+    {"int", PlyType::kInt32},
+    {"int32", PlyType::kInt32},
+    {"uint", PlyType::kUint32},
+    {"uint32", PlyType::kUint32},
+    {"float", PlyType::kFloat32},
+    {"float32", PlyType::kFloat32},
+    {"double", PlyType::kFloat64},
+    {"float64", PlyType::kFloat64},
 }};
 
 std::optional<PlyType> type_from_name(std::string_view name) {
@@ -44,24 +44,24 @@ std::optional<PlyType> type_from_name(std::string_view name) {
 
 std::size_t ply_type_size(PlyType type) {
   switch (type) {
-    case PlyType::int8:
-    case PlyType::uint8:
+    case PlyType::kInt8:
+    case PlyType::kUint8:
       return 1;
-    case PlyType::int16:
-    case PlyType::uint16:
+    case PlyType::kInt16:
+    case PlyType::kUint16:
       return 2;
-    case PlyType::int32:
-    case PlyType::uint32:
-    case PlyType::float32:
+    case PlyType::kInt32:
+    case PlyType::kUint32:
+    case PlyType::kFloat32:
       return 4;
-    case PlyType::float64:
+    case PlyType::kFloat64:
       return 8;
   }
   return 0;
 }
 
 bool ply_type_is_integer(PlyType type) {
-  return type != PlyType::float32 && type != PlyType::float64;
+  return type != PlyType::kFloat32 && type != PlyType::kFloat64;
 }
 
 bool PlyElement::has_lists() const {
@@ -115,11 +115,11 @@ PlyHeader read_ply_header(BufferedReader& in) {
     } else if (key == "format") {
       if (tok.size() != 3) fail("expected \"format <encoding> 1.0\"");
       if (tok[1] == "ascii") {
-        h.encoding = PlyEncoding::ascii;
+        h.encoding = PlyEncoding::kAscii;
       } else if (tok[1] == "binary_little_endian") {
-        h.encoding = PlyEncoding::binary_little_endian;
+        h.encoding = PlyEncoding::kBinaryLittleEndian;
       } else if (tok[1] == "binary_big_endian") {
-        h.encoding = PlyEncoding::binary_big_endian;
+        h.encoding = PlyEncoding::kBinaryBigEndian;
       } else {
         fail("unknown encoding " + quote_token(tok[1]));
       }
@@ -145,7 +145,7 @@ PlyHeader read_ply_header(BufferedReader& in) {
         if (tok.size() != 3) fail("expected \"property <type> <name>\"");
         auto type = type_from_name(tok[1]);
         if (!type) fail("unknown type " + quote_token(tok[1]));
-        p = {std::string(tok[2]), *type, false, PlyType::uint8};
+        p = {std::string(tok[2]), *type, false, PlyType::kUint8};
       }
       h.elements.back().properties.push_back(std::move(p));
     } else if (key == "end_header") {
@@ -160,21 +160,21 @@ PlyHeader read_ply_header(BufferedReader& in) {
 
 double load_ply_double(const char* p, PlyType type, ByteOrder order) {
   switch (type) {
-    case PlyType::int8:
+    case PlyType::kInt8:
       return load<std::int8_t>(p, order);
-    case PlyType::uint8:
+    case PlyType::kUint8:
       return load<std::uint8_t>(p, order);
-    case PlyType::int16:
+    case PlyType::kInt16:
       return load<std::int16_t>(p, order);
-    case PlyType::uint16:
+    case PlyType::kUint16:
       return load<std::uint16_t>(p, order);
-    case PlyType::int32:
+    case PlyType::kInt32:
       return load<std::int32_t>(p, order);
-    case PlyType::uint32:
+    case PlyType::kUint32:
       return load<std::uint32_t>(p, order);
-    case PlyType::float32:
+    case PlyType::kFloat32:
       return load<float>(p, order);
-    case PlyType::float64:
+    case PlyType::kFloat64:
       return load<double>(p, order);
   }
   return 0;
@@ -182,17 +182,17 @@ double load_ply_double(const char* p, PlyType type, ByteOrder order) {
 
 std::int64_t load_ply_integer(const char* p, PlyType type, ByteOrder order) {
   switch (type) {
-    case PlyType::int8:
+    case PlyType::kInt8:
       return load<std::int8_t>(p, order);
-    case PlyType::uint8:
+    case PlyType::kUint8:
       return load<std::uint8_t>(p, order);
-    case PlyType::int16:
+    case PlyType::kInt16:
       return load<std::int16_t>(p, order);
-    case PlyType::uint16:
+    case PlyType::kUint16:
       return load<std::uint16_t>(p, order);
-    case PlyType::int32:
+    case PlyType::kInt32:
       return load<std::int32_t>(p, order);
-    case PlyType::uint32:
+    case PlyType::kUint32:
       return load<std::uint32_t>(p, order);
     default:
       return -1;  // callers only pass integer types

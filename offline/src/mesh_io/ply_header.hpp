@@ -11,16 +11,25 @@
 
 namespace truecut::offline::mesh_io {
 
-enum class PlyType : std::uint8_t { int8, uint8, int16, uint16, int32, uint32, float32, float64 };
+enum class PlyType : std::uint8_t {
+  kInt8,
+  kUint8,
+  kInt16,
+  kUint16,
+  kInt32,
+  kUint32,
+  kFloat32,
+  kFloat64
+};
 
 std::size_t ply_type_size(PlyType type);
 bool ply_type_is_integer(PlyType type);
 
 struct PlyProperty {
   std::string name;
-  PlyType type = PlyType::float32;  // the item type for lists
+  PlyType type = PlyType::kFloat32;  // the item type for lists
   bool is_list = false;
-  PlyType count_type = PlyType::uint8;
+  PlyType count_type = PlyType::kUint8;
 };
 
 struct PlyElement {
@@ -37,7 +46,7 @@ struct PlyElement {
 };
 
 struct PlyHeader {
-  PlyEncoding encoding = PlyEncoding::ascii;
+  PlyEncoding encoding = PlyEncoding::kAscii;
   std::vector<PlyElement> elements;
   std::vector<std::string> comments;  // comment and obj_info lines
   std::size_t lines = 0;              // header lines, "ply" to "end_header"

@@ -15,7 +15,7 @@ namespace {
 
 using namespace mesh_io;
 
-enum class Role { vertex, face, skip };
+enum class Role { kVertex, kFace, kSkip };
 constexpr int kSlots = 6;  // x y z nx ny nz
 constexpr std::size_t kBatchBytes = 1 << 20;
 
@@ -43,7 +43,7 @@ class PlyReader {
   const MeshReadOptions& options_;
   MeshReadReport& report_;
   PlyHeader h_;
-  ByteOrder order_ = ByteOrder::little;
+  ByteOrder order_ = ByteOrder::kLittle;
   bool ascii_ = false;
   std::size_t line_ = 0;  // ASCII: line number of the current record
 
@@ -60,13 +60,13 @@ class PlyReader {
 TriangleMesh PlyReader::read() {
   if (in_.file_size() == 0) fail("empty file");
   h_ = read_ply_header(in_);
-  ascii_ = h_.encoding == PlyEncoding::ascii;
-  order_ = h_.encoding == PlyEncoding::binary_big_endian ? ByteOrder::big : ByteOrder::little;
+  ascii_ = h_.encoding == PlyEncoding::kAscii;
+  order_ = h_.encoding == PlyEncoding::kBinaryBigEndian ? ByteOrder::kBig : ByteOrder::kLittle;
   line_ = h_.lines;
-  report_.format = MeshFormat::ply;
-  report_.encoding = ascii_                     ? "ascii"
-                     : order_ == ByteOrder::big ? "binary_big_endian"
-                                                : "binary_little_endian";
+  report_.format = MeshFormat::kPly;
+  report_.encoding = ascii_                      ? "ascii"
+                     : order_ == ByteOrder::kBig ? "binary_big_endian"
+                                                 : "binary_little_endian";
   report_.comments = h_.comments;
   plan();
   check_sizes();
@@ -79,9 +79,9 @@ TriangleMesh PlyReader::read() {
     report_.faces_in_file = face_element_->count;
   }
   for (const PlyElement& e : h_.elements) {
-    const Role role = &e == vertex_element_ ? Role::vertex
-                      : &e == face_element_ ? Role::face
-                                            : Role::skip;
+    const Role role = &e == vertex_element_ ? Role::kVertex
+                      : &e == face_element_ ? Role::kFace
+                                            : Role::kSkip;
     if (ascii_) {
       read_ascii(e, role);
     } else {
@@ -232,7 +232,7 @@ void PlyReader::read_binary(const PlyElement& e, Role role) {
       if (!p.is_list) {
         const std::size_t size = ply_type_size(p.type);
         const char* b = need(size, e, k);
-        if (role == Role::vertex && vertex_slot_[i] >= 0) {
+        if (role == Role::kVertex && vertex_slot_[i] >= 0) {
           v[vertex_slot_[i]] = load_ply_double(b, p.type, order_);
         }
         in_.consume(size);
@@ -245,7 +245,7 @@ void PlyReader::read_binary(const PlyElement& e, Role role) {
       const std::size_t item = ply_type_size(p.type);
       const std::size_t bytes = static_cast<std::size_t>(n) * item;
       const char* b = need(bytes, e, k);
-      if (role == Role::face && face_slot_[i] == 0) {
+      if (role == Role::kFace && face_slot_[i] == 0) {
         corners_.resize(static_cast<std::size_t>(n));
         for (std::int64_t j = 0; j < n; ++j) {
           corners_[j] = load_ply_integer(b + j * item, p.type, order_);
@@ -253,8 +253,8 @@ void PlyReader::read_binary(const PlyElement& e, Role role) {
       }
       in_.consume(bytes);
     }
-    if (role == Role::vertex) vertex_done(k, v);
-    if (role == Role::face) face_done(k, corners_);
+    if (role == Role::kVertex) vertex_done(k, v);
+    if (role == Role::kFace) face_done(k, corners_);
   }
 }
 
@@ -267,7 +267,7 @@ void PlyReader::read_binary_fixed(const PlyElement& e, Role role) {
   std::vector<Field> fields;
   std::size_t record = 0;
   for (std::size_t i = 0; i < e.properties.size(); ++i) {
-    if (role == Role::vertex && vertex_slot_[i] >= 0) {
+    if (role == Role::kVertex && vertex_slot_[i] >= 0) {
       fields.push_back({record, e.properties[i].type, vertex_slot_[i]});
     }
     record += ply_type_size(e.properties[i].type);
@@ -278,7 +278,7 @@ void PlyReader::read_binary_fixed(const PlyElement& e, Role role) {
   for (std::size_t first = 0; first < e.count;) {
     const std::size_t n = std::min<std::uint64_t>(batch, e.count - first);
     const char* b = need(n * record, e, first);
-    if (role == Role::vertex) {
+    if (role == Role::kVertex) {
       for (std::size_t r = 0; r < n; ++r, b += record) {
         for (const Field& f : fields) {
           v[f.slot] = load_ply_double(b + f.offset, f.type, order_);
@@ -319,7 +319,7 @@ void PlyReader::read_ascii(const PlyElement& e, Role role) {
       const PlyProperty& p = e.properties[i];
       if (!p.is_list) {
         std::string_view s = next();
-        if (role == Role::vertex && vertex_slot_[i] >= 0 && !parse_double(s, v[vertex_slot_[i]])) {
+        if (role == Role::kVertex && vertex_slot_[i] >= 0 && !parse_double(s, v[vertex_slot_[i]])) {
           fail(where(e, k) + ": " + quote_token(s) + " is not a number");
         }
         continue;
@@ -327,7 +327,7 @@ void PlyReader::read_ascii(const PlyElement& e, Role role) {
       std::int64_t n = 0;
       std::string_view s = next();
       if (!parse_int(s, n) || n < 0) fail(where(e, k) + ": bad list length " + quote_token(s));
-      const bool keep = role == Role::face && face_slot_[i] == 0;
+      const bool keep = role == Role::kFace && face_slot_[i] == 0;
       for (std::int64_t j = 0; j < n; ++j) {
         std::string_view item = next();
         std::int64_t index = 0;
@@ -343,8 +343,8 @@ void PlyReader::read_ascii(const PlyElement& e, Role role) {
       fail(where(e, k) + ": " + std::to_string(tok.size()) +
            " values, more than the header declares");
     }
-    if (role == Role::vertex) vertex_done(k, v);
-    if (role == Role::face) face_done(k, corners_);
+    if (role == Role::kVertex) vertex_done(k, v);
+    if (role == Role::kFace) face_done(k, corners_);
   }
 }
 

@@ -24,9 +24,9 @@ std::string one_line(std::string_view text) {
 std::string header(PlyEncoding encoding, std::size_t vertices, bool normals,
                    const std::vector<Triangle>* triangles, std::string_view comment) {
   std::string h = "ply\nformat ";
-  h += encoding == PlyEncoding::ascii               ? "ascii"
-       : encoding == PlyEncoding::binary_big_endian ? "binary_big_endian"
-                                                    : "binary_little_endian";
+  h += encoding == PlyEncoding::kAscii             ? "ascii"
+       : encoding == PlyEncoding::kBinaryBigEndian ? "binary_big_endian"
+                                                   : "binary_little_endian";
   h += " 1.0\ncomment written by truecut; units mm\n";
   if (!comment.empty()) h += "comment " + one_line(comment) + "\n";
   h += "element vertex " + std::to_string(vertices) +
@@ -125,11 +125,11 @@ void write(const std::filesystem::path& file, const std::vector<Eigen::Vector3d>
   }
   OutputFile out(file);
   out.write(header(encoding, points.size(), !normals.empty(), triangles, comment));
-  if (encoding == PlyEncoding::ascii) {
+  if (encoding == PlyEncoding::kAscii) {
     write_ascii(out, points, normals, triangles, word);
   } else {
     const ByteOrder order =
-        encoding == PlyEncoding::binary_big_endian ? ByteOrder::big : ByteOrder::little;
+        encoding == PlyEncoding::kBinaryBigEndian ? ByteOrder::kBig : ByteOrder::kLittle;
     write_binary(out, points, normals, triangles, order, word);
   }
   out.commit();

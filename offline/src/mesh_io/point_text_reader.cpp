@@ -70,7 +70,7 @@ PointCloud read_point_text(const std::filesystem::path& file, MeshReadReport* re
   MeshReadReport local;
   MeshReadReport& rep = report ? *report : local;
   rep = MeshReadReport{};
-  rep.format = MeshFormat::xyz;
+  rep.format = MeshFormat::kXyz;
   rep.encoding = "ascii";
 
   PointCloud cloud;

@@ -31,7 +31,7 @@ bool starts_with_solid(std::string_view head) {
 
 bool binary_stl_size_matches(std::string_view head, std::uint64_t file_size) {
   if (head.size() < kStlPreambleBytes) return false;
-  auto facets = load<std::uint32_t>(head.data() + kStlHeaderBytes, ByteOrder::little);
+  auto facets = load<std::uint32_t>(head.data() + kStlHeaderBytes, ByteOrder::kLittle);
   return file_size == kStlPreambleBytes + std::uint64_t{kStlFacetBytes} * facets;
 }
 

@@ -72,7 +72,7 @@ TriangleMesh read_binary(BufferedReader& in, const MeshReadOptions& options,
   }
   const std::string header = printable_header({pre, kStlHeaderBytes});
   if (!header.empty()) report.comments.push_back(header);
-  const std::uint32_t facets = load<std::uint32_t>(pre + kStlHeaderBytes, ByteOrder::little);
+  const std::uint32_t facets = load<std::uint32_t>(pre + kStlHeaderBytes, ByteOrder::kLittle);
   const std::uint64_t expected = kStlPreambleBytes + std::uint64_t{kStlFacetBytes} * facets;
   if (size < expected) {
     throw MeshIoError(in.path(), "truncated binary STL: the header declares " +
@@ -106,9 +106,9 @@ TriangleMesh read_binary(BufferedReader& in, const MeshReadOptions& options,
     for (std::size_t f = first; f < first + n; ++f, p += kStlFacetBytes) {
       for (int c = 0; c < 3; ++c) {
         const char* v = p + 12 + 12 * c;
-        float x = load<float>(v, ByteOrder::little);
-        float y = load<float>(v + 4, ByteOrder::little);
-        float z = load<float>(v + 8, ByteOrder::little);
+        float x = load<float>(v, ByteOrder::kLittle);
+        float y = load<float>(v + 4, ByteOrder::kLittle);
+        float z = load<float>(v + 8, ByteOrder::kLittle);
         check_corner_finite(x, y, z, f, c, in.path());
         mesh.triangles[f][c] = corners.add(x, y, z);
       }
@@ -132,14 +132,14 @@ std::string lower(std::string_view s) {
 TriangleMesh read_ascii(BufferedReader& in, const MeshReadOptions& options,
                         MeshReadReport& report) {
   using namespace mesh_io;
-  enum class State { outside, solid, facet, loop, loop_done };
+  enum class State { kOutside, kSolid, kFacet, kLoop, kLoopDone };
   report.encoding = "ascii";
   // A guess for the reservation: ~250 bytes of text per facet.
   CornerSink<double> corners(options.weld_stl_vertices,
                              static_cast<std::size_t>(std::min<std::uint64_t>(
                                  in.file_size() / 80, std::uint64_t{1} << 26)));
   TriangleMesh mesh;
-  State state = State::outside;
+  State state = State::kOutside;
   std::size_t line_no = 0, facet = 0, solids = 0;
   int corner = 0;
   Triangle tri{};
@@ -147,7 +147,7 @@ TriangleMesh read_ascii(BufferedReader& in, const MeshReadOptions& options,
   std::vector<std::string_view> tok;
   auto where = [&] {
     std::string s = "line " + std::to_string(line_no);
-    if (state != State::outside && state != State::solid) {
+    if (state != State::kOutside && state != State::kSolid) {
       s += " (facet " + std::to_string(facet) + ")";
     }
     return s;
@@ -163,31 +163,31 @@ TriangleMesh read_ascii(BufferedReader& in, const MeshReadOptions& options,
     if (tok.empty()) continue;
     const std::string key = lower(tok[0]);
     switch (state) {
-      case State::outside:
+      case State::kOutside:
         if (key != "solid") expect("solid", std::string(tok[0]));
         if (tok.size() > 1) {
           report.comments.emplace_back(trim_blanks(line.substr(tok[1].data() - line.data())));
         }
         ++solids;
-        state = State::solid;
+        state = State::kSolid;
         break;
-      case State::solid:
+      case State::kSolid:
         if (key == "endsolid") {
-          state = State::outside;
+          state = State::kOutside;
         } else if (key == "facet") {
-          state = State::facet;
+          state = State::kFacet;
           corner = 0;
         } else {
           fail("expected 'facet' or 'endsolid', found " + quote_token(tok[0]));
         }
         break;
-      case State::facet:
+      case State::kFacet:
         if (key != "outer" || tok.size() < 2 || lower(tok[1]) != "loop") {
           expect("outer loop", std::string(line));
         }
-        state = State::loop;
+        state = State::kLoop;
         break;
-      case State::loop:
+      case State::kLoop:
         if (key == "vertex") {
           if (tok.size() != 4) fail("expected 'vertex x y z', found " + quote_token(line));
           double v[3];
@@ -203,25 +203,25 @@ TriangleMesh read_ascii(BufferedReader& in, const MeshReadOptions& options,
             fail("facet " + std::to_string(facet) + " has " + std::to_string(corner) +
                  " vertices, a triangle needs 3");
           }
-          state = State::loop_done;
+          state = State::kLoopDone;
         } else {
           fail("expected 'vertex' or 'endloop', found " + quote_token(tok[0]));
         }
         break;
-      case State::loop_done:
+      case State::kLoopDone:
         if (key != "endfacet") expect("endfacet", std::string(tok[0]));
         mesh.triangles.push_back(tri);
         ++facet;
-        state = State::solid;
+        state = State::kSolid;
         break;
     }
   }
-  if (state == State::solid) {
+  if (state == State::kSolid) {
     throw MeshIoError(in.path(), "truncated ASCII STL: the file ends after facet " +
                                      std::to_string(facet) + " (line " + std::to_string(line_no) +
                                      ") without 'endsolid'");
   }
-  if (state != State::outside) {
+  if (state != State::kOutside) {
     throw MeshIoError(in.path(), "truncated ASCII STL: the file ends inside facet " +
                                      std::to_string(facet) + " (line " + std::to_string(line_no) +
                                      ")");
@@ -252,7 +252,7 @@ TriangleMesh read_stl(const std::filesystem::path& file, const MeshReadOptions& 
   MeshReadReport local;
   MeshReadReport& rep = report ? *report : local;
   rep = MeshReadReport{};
-  rep.format = MeshFormat::stl;
+  rep.format = MeshFormat::kStl;
   TriangleMesh mesh = ascii ? read_ascii(in, options, rep) : read_binary(in, options, rep);
   std::vector<std::uint32_t> identity;
   rep.degenerate_triangles_dropped = handle_degenerate_triangles(

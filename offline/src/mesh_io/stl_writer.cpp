@@ -44,7 +44,7 @@ void write_binary(OutputFile& out, const TriangleMesh& mesh, std::string_view he
   std::string h = header.empty() ? std::string("truecut binary STL, mm") : std::string(header);
   std::memcpy(pre, h.data(), std::min(h.size(), kStlHeaderBytes));
   store<std::uint32_t>(pre + kStlHeaderBytes, static_cast<std::uint32_t>(mesh.triangles.size()),
-                       ByteOrder::little);
+                       ByteOrder::kLittle);
   out.write(pre, sizeof pre);
 
   constexpr std::size_t kBatch = 1 << 14;
@@ -58,14 +58,14 @@ void write_binary(OutputFile& out, const TriangleMesh& mesh, std::string_view he
     char* f = buf.data() + used;
     const Eigen::Vector3d n = facet_normal(*p[0], *p[1], *p[2]);
     for (int k = 0; k < 3; ++k) {
-      store<float>(f + 4 * k, static_cast<float>(n[k]), ByteOrder::little);
+      store<float>(f + 4 * k, static_cast<float>(n[k]), ByteOrder::kLittle);
     }
     for (int c = 0; c < 3; ++c) {
       for (int k = 0; k < 3; ++k) {
-        store<float>(f + 12 + 12 * c + 4 * k, static_cast<float>((*p[c])[k]), ByteOrder::little);
+        store<float>(f + 12 + 12 * c + 4 * k, static_cast<float>((*p[c])[k]), ByteOrder::kLittle);
       }
     }
-    store<std::uint16_t>(f + 48, 0, ByteOrder::little);
+    store<std::uint16_t>(f + 48, 0, ByteOrder::kLittle);
     used += kStlFacetBytes;
     if (used == buf.size()) {
       out.write(buf.data(), used);
@@ -112,7 +112,7 @@ void write_ascii(OutputFile& out, const TriangleMesh& mesh, std::string_view hea
 
 void write_stl(const std::filesystem::path& file, const TriangleMesh& mesh, StlEncoding encoding,
                std::string_view header) {
-  if (encoding == StlEncoding::binary && mesh_io::starts_with_solid(header)) {
+  if (encoding == StlEncoding::kBinary && mesh_io::starts_with_solid(header)) {
     throw MeshIoError(file,
                       "a binary STL header must not start with \"solid\" (other readers "
                       "would take the file for ASCII)");
@@ -122,7 +122,7 @@ void write_stl(const std::filesystem::path& file, const TriangleMesh& mesh, StlE
   }
   mesh_io::check_writable(mesh, file);
   OutputFile out(file);
-  if (encoding == StlEncoding::binary) {
+  if (encoding == StlEncoding::kBinary) {
     write_binary(out, mesh, header);
   } else {
     write_ascii(out, mesh, header);

@@ -57,7 +57,7 @@ json parameters_json(const FieldPipelineOptions& o, const AuditContext& c, doubl
                      {"corner_radius_mm", t.corner_radius_mm},
                      {"cutting_length_mm", t.cutting_length_mm}});
   const char* kernel[] = {"none", "huber", "tukey"};
-  return {{"method", o.method == ErrorMethod::ray ? "ray" : "sphere"},
+  return {{"method", o.method == ErrorMethod::kRay ? "ray" : "sphere"},
           {"compensation_points", o.spacing_mm > 0 ? "sampled" : "vertices"},
           {"spacing_mm", o.spacing_mm},
           {"surfaces", o.surfaces},
@@ -94,7 +94,7 @@ json parameters_json(const FieldPipelineOptions& o, const AuditContext& c, doubl
             {"reference_noise_mm", o.truss_reference_noise_mm},
             {"kb_over_kc_used", kb_used},
             {"edge_weight",
-             o.truss.edge_weight == TrussEdgeWeight::uniform ? "uniform" : "inverse_length"}}},
+             o.truss.edge_weight == TrussEdgeWeight::kUniform ? "uniform" : "inverse_length"}}},
           {"field",
            {{"resolution_mm", o.fit.spacing_mm},
             {"smoothness", o.fit.smoothness},
@@ -255,7 +255,7 @@ std::vector<FileDigest> write_field_outputs(const fs::path& dir, const FieldPipe
   rt::write_field_file(files.staged(0), r.fit->field, info);
   write_compensation_matrix(files.staged(1), r.matrix,
                             "mirror method: compensation = -(measured - nominal)");
-  write_stl(files.staged(2), r.adapted, StlEncoding::binary, "truecut adapted model");
+  write_stl(files.staged(2), r.adapted, StlEncoding::kBinary, "truecut adapted model");
   const char* roles[] = {"field", "compensation_matrix", "adapted_model"};
   for (int i = 0; i < 3; ++i) {
     FileDigest d = digest_file(roles[i], files.staged(i));

@@ -267,7 +267,7 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
     throw std::invalid_argument("field pipeline: nominal, scan and program are required");
   const TriangleMesh& nominal = *in.nominal;
   if (nominal.triangles.empty()) throw std::invalid_argument("the nominal model has no triangles");
-  if (opt.method == ErrorMethod::ray && in.scan->triangles.empty())
+  if (opt.method == ErrorMethod::kRay && in.scan->triangles.empty())
     throw std::invalid_argument(
         "the ray method needs a scanned mesh with faces; use the sphere method for a point cloud");
   if (in.scan->vertices_mm.empty()) throw std::invalid_argument("the scan has no points");
@@ -341,12 +341,12 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
   auto build_scene = [&] {
     const auto t0 = timer.now();
     if (in.expected) expected_scene.emplace(*in.expected);
-    if (opt.method == ErrorMethod::ray) scene.emplace(*in.scan);
+    if (opt.method == ErrorMethod::kRay) scene.emplace(*in.scan);
     if (!scene && !expected_scene) return;
     timer.done(kSceneStage, t0, "scan ray scene",
                in.expected ? rt::format_printf(
                                  "%zu + %zu faces (scan + expected cut)",
-                                 opt.method == ErrorMethod::ray ? in.scan->triangles.size() : 0,
+                                 opt.method == ErrorMethod::kRay ? in.scan->triangles.size() : 0,
                                  in.expected->triangles.size())
                            : rt::format_printf("%zu faces", in.scan->triangles.size()));
   };
@@ -362,12 +362,12 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
     }
     const auto t0 = timer.now();
     if (scene && r.registration) scene->set_world_from_mesh(r.registration->scan_to_nominal);
-    if (opt.method == ErrorMethod::sphere) {
+    if (opt.method == ErrorMethod::kSphere) {
       cloud = in.scan->vertices_mm;
       if (r.registration) transform_points(r.registration->scan_to_nominal, cloud);
     }
     auto measured_error_vectors = [&](const CompensationPoints& points) {
-      if (opt.method == ErrorMethod::ray)
+      if (opt.method == ErrorMethod::kRay)
         return error_vectors_by_rays(nominal, points, *scene, opt.ray);
       return error_vectors_by_spheres(nominal, points, cloud, opt.sphere);
     };
@@ -378,8 +378,8 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
       return e;
     };
     r.errors = error_vectors(r.points);
-    const RigidBodyFit rbm_fit = opt.method == ErrorMethod::ray ? RigidBodyFit::normal_components
-                                                                : RigidBodyFit::full_vectors;
+    const RigidBodyFit rbm_fit = opt.method == ErrorMethod::kRay ? RigidBodyFit::kNormalComponents
+                                                                 : RigidBodyFit::kFullVectors;
     if (opt.remove_rigid_body_motion) {
       const std::vector<std::uint8_t> use = r.errors.valid_mask();
       r.rigid_body_motion = fit_rigid_body_motion(r.points.positions_mm, r.errors.vectors_mm,
@@ -395,7 +395,7 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
     r.matrix = mirror(r.points, r.errors);
     timer.done(
         kErrorStage, t0,
-        opt.method == ErrorMethod::ray ? "error vectors (rays)" : "error vectors (spheres)",
+        opt.method == ErrorMethod::kRay ? "error vectors (rays)" : "error vectors (spheres)",
         rt::format_printf("%zu of %zu valid", r.error_summary.valid, r.error_summary.points));
     const auto t_test = timer.now();
     r.significance = test_compensation_significance(
@@ -491,7 +491,7 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
       // What the scan measured: along the normal (rays; spheres on one
       // plane), or the whole vector (spheres at an edge or corner).
       s.along_normal_only =
-          r.errors.sphere_case.empty() || r.errors.sphere_case[pp.point] == SphereCase::surface;
+          r.errors.sphere_case.empty() || r.errors.sphere_case[pp.point] == SphereCase::kSurface;
       max_field = std::max(max_field, s.vector_mm.norm());
       ts.samples.push_back(s);
     }

@@ -184,13 +184,13 @@ double robust_scale(const std::vector<Pair>& pairs, double floor_mm) {
 
 double weight(RobustKernel kernel, double r, double sigma) {
   switch (kernel) {
-    case RobustKernel::none:
+    case RobustKernel::kNone:
       return 1.0;
-    case RobustKernel::huber: {
+    case RobustKernel::kHuber: {
       const double k = 1.345 * sigma;
       return std::abs(r) <= k ? 1.0 : k / std::abs(r);
     }
-    case RobustKernel::tukey: {
+    case RobustKernel::kTukey: {
       const double c = 4.685 * sigma;
       if (std::abs(r) >= c) return 0.0;
       const double s = 1.0 - (r / c) * (r / c);

@@ -44,7 +44,7 @@ RigidBodyMotion fit_rigid_body_motion(std::span<const Eigen::Vector3d> P,
                                       std::span<const Eigen::Vector3d> v, RigidBodyFit fit,
                                       std::span<const std::uint8_t> use,
                                       std::span<const Eigen::Vector3d> normals) {
-  const bool by_normal = fit == RigidBodyFit::normal_components;
+  const bool by_normal = fit == RigidBodyFit::kNormalComponents;
   check_sizes(P.size(), v.size(), use.size(), normals.size(), by_normal);
   auto used = [&](std::size_t i) { return use.empty() || use[i] != 0; };
 
@@ -131,7 +131,7 @@ RigidBodyMotion fit_rigid_body_motion(std::span<const Eigen::Vector3d> P,
 void remove_rigid_body_motion(const RigidBodyMotion& motion, RigidBodyFit fit,
                               std::span<const Eigen::Vector3d> P, std::span<Eigen::Vector3d> v,
                               std::span<const Eigen::Vector3d> normals) {
-  const bool by_normal = fit == RigidBodyFit::normal_components;
+  const bool by_normal = fit == RigidBodyFit::kNormalComponents;
   check_sizes(P.size(), v.size(), 0, normals.size(), by_normal);
   for (std::size_t i = 0; i < P.size(); ++i) {
     const Eigen::Vector3d u = motion.displacement_at(P[i]);

@@ -150,7 +150,7 @@ std::string part_json(const BenchmarkPart& part) {
 
 void write_part(const BenchmarkPart& part, const std::filesystem::path& dir) {
   std::filesystem::create_directories(dir);
-  offline::write_stl(dir / "nominal.stl", part.mesh, offline::StlEncoding::binary,
+  offline::write_stl(dir / "nominal.stl", part.mesh, offline::StlEncoding::kBinary,
                      "truecut nominal " + part.metadata.name + ", workpiece frame, mm");
   rt::write_file_atomically(dir / "program.ngc", part.program);
   rt::write_file_atomically(dir / "tools.tbl", tool_table_text(part.metadata));

@@ -20,23 +20,23 @@
 namespace truecut::offline {
 
 enum class ErrorStatus : std::uint8_t {
-  valid,
+  kValid,
   // ray method
-  no_hit,        // no scanned surface within max_distance_mm either way
-  grazing,       // the ray meets the scanned surface at more than grazing_angle_deg
-  back_face,     // the nearest scanned surface faces the other way (a wall's far side)
-  nominal_edge,  // the point lies on or near a sharp nominal edge or corner
+  kNoHit,        // no scanned surface within max_distance_mm either way
+  kGrazing,      // the ray meets the scanned surface at more than grazing_angle_deg
+  kBackFace,     // the nearest scanned surface faces the other way (a wall's far side)
+  kNominalEdge,  // the point lies on or near a sharp nominal edge or corner
   // sphere method
-  too_few_points,       // < min_points in the sphere, or on a plane through the point
-  ill_conditioned,      // the fitted planes through the point are (nearly) parallel
-  beyond_sphere_reach,  // |error| > max_displacement_ratio · Rs
-  plane_tilted,         // a plane fitted through the point is tilted by more than
-                        // plane_angle_deg from its nominal face: too few or mixed points
+  kTooFewPoints,       // < min_points in the sphere, or on a plane through the point
+  kIllConditioned,     // the fitted planes through the point are (nearly) parallel
+  kBeyondSphereReach,  // |error| > max_displacement_ratio · Rs
+  kPlaneTilted,        // a plane fitted through the point is tilted by more than
+                       // plane_angle_deg from its nominal face: too few or mixed points
 };
 std::string_view to_string(ErrorStatus status);
 
 // Which planes met at the point (sphere method).
-enum class SphereCase : std::uint8_t { none, surface, edge, corner, multi };
+enum class SphereCase : std::uint8_t { kNone, kSurface, kEdge, kCorner, kMulti };
 std::string_view to_string(SphereCase c);
 
 struct ErrorVectors {
@@ -61,7 +61,7 @@ struct ErrorVectors {
   std::vector<float> support_weight;
 
   std::size_t size() const { return vectors_mm.size(); }
-  bool valid(std::size_t i) const { return status[i] == ErrorStatus::valid; }
+  bool valid(std::size_t i) const { return status[i] == ErrorStatus::kValid; }
   // One byte per point, 1 where valid (for fit_rigid_body_motion).
   std::vector<std::uint8_t> valid_mask() const;
 };
@@ -80,7 +80,7 @@ struct RayMethodOptions {
   // face of the scan. A vertex on a sharp edge is always invalid.
   double edge_exclusion_mm = 0.5;
   bool reject_back_faces = true;
-  RayBatch batch = RayBatch::packet16;
+  RayBatch batch = RayBatch::kPacket16;
 };
 
 // `scan` is the scanned mesh (registered).

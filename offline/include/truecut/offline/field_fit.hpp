@@ -83,12 +83,12 @@ struct ToolSamples {
 };
 
 enum class FieldFitMethod {
-  multilevel_bspline,  // default: O(samples), see the top of this file
-  least_squares,       // the regularised system above, solved by CG
+  kMultilevelBspline,  // default: O(samples), see the top of this file
+  kLeastSquares,       // the regularised system above, solved by CG
 };
 
 struct FieldFitOptions {
-  FieldFitMethod method = FieldFitMethod::multilevel_bspline;
+  FieldFitMethod method = FieldFitMethod::kMultilevelBspline;
   double spacing_mm = 1.0;
   double smoothness = 0.1;        // λ
   double membrane_weight = 1e-4;  // μ

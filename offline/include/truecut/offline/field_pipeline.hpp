@@ -25,10 +25,10 @@
 
 namespace truecut::offline {
 
-enum class ErrorMethod { ray, sphere };
+enum class ErrorMethod { kRay, kSphere };
 
 struct FieldPipelineOptions {
-  ErrorMethod method = ErrorMethod::ray;
+  ErrorMethod method = ErrorMethod::kRay;
   // 0: the compensation points are the nominal vertices of the compensated
   // surfaces; > 0: an even sampling of them at this spacing.
   double spacing_mm = 0.0;

@@ -8,18 +8,18 @@
 namespace truecut::offline {
 
 enum class MeshFormat {
-  stl,
-  ply,
-  xyz,  // points as text: .xyz, .txt, .csv (comma-separated XYZ)
+  kStl,
+  kPly,
+  kXyz,  // points as text: .xyz, .txt, .csv (comma-separated XYZ)
 };
 
 enum class DegenerateFaces {
-  error,  // throw MeshIoError naming the first degenerate face
-  drop,   // remove them and count them in MeshReadReport
+  kError,  // throw MeshIoError naming the first degenerate face
+  kDrop,   // remove them and count them in MeshReadReport
 };
 
 struct MeshReadOptions {
-  DegenerateFaces degenerate_faces = DegenerateFaces::error;
+  DegenerateFaces degenerate_faces = DegenerateFaces::kError;
   // A triangle is degenerate (zero area) when |(b−a)×(c−a)| ≤ tolerance·L²,
   // L being its longest edge: scale-free, so it catches repeated corners and
   // exactly collinear corners in any unit without flagging small but sound
@@ -31,7 +31,7 @@ struct MeshReadOptions {
 };
 
 struct MeshReadReport {
-  MeshFormat format = MeshFormat::stl;
+  MeshFormat format = MeshFormat::kStl;
   // "ascii", "binary" (STL), "binary_little_endian" or "binary_big_endian".
   std::string encoding;
   std::size_t faces_in_file = 0;          // STL facets or PLY face records
@@ -42,8 +42,8 @@ struct MeshReadReport {
   std::vector<std::string> comments;
 };
 
-enum class StlEncoding { binary, ascii };
-enum class PlyEncoding { binary_little_endian, binary_big_endian, ascii };
+enum class StlEncoding { kBinary, kAscii };
+enum class PlyEncoding { kBinaryLittleEndian, kBinaryBigEndian, kAscii };
 
 struct PointTextFormat {
   char separator = ' ';  // ' ' for .xyz/.txt, ',' for .csv

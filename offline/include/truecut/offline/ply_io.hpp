@@ -24,10 +24,10 @@ TriangleMesh read_ply(const std::filesystem::path& file, const MeshReadOptions& 
 
 // Atomic (FILE.tmp, then rename). `comment` becomes a header comment line.
 void write_ply(const std::filesystem::path& file, const TriangleMesh& mesh,
-               PlyEncoding encoding = PlyEncoding::binary_little_endian,
+               PlyEncoding encoding = PlyEncoding::kBinaryLittleEndian,
                std::string_view comment = {});
 void write_ply(const std::filesystem::path& file, const PointCloud& cloud,
-               PlyEncoding encoding = PlyEncoding::binary_little_endian,
+               PlyEncoding encoding = PlyEncoding::kBinaryLittleEndian,
                std::string_view comment = {});
 
 }  // namespace truecut::offline

@@ -52,14 +52,14 @@ struct RayHit {
 };
 
 enum class RayBatch {
-  single,    // rtcIntersect1 per ray, blocks of rays spread over TBB threads
-  packet16,  // rtcIntersect16 on packets of 16 consecutive rays, over TBB threads
-  stream,    // rtcIntersect1M on blocks of rays, over TBB threads
+  kSingle,    // rtcIntersect1 per ray, blocks of rays spread over TBB threads
+  kPacket16,  // rtcIntersect16 on packets of 16 consecutive rays, over TBB threads
+  kStream,    // rtcIntersect1M on blocks of rays, over TBB threads
 };
 
 struct RayQueryOptions {
   // packet16 measured ~10 % faster than single and stream (docs/offline.md).
-  RayBatch batch = RayBatch::packet16;
+  RayBatch batch = RayBatch::kPacket16;
   // false: distance, (u, v) and normal as Embree computes them in float
   // (what the benchmark calls raw throughput).
   bool refine_in_double = true;

@@ -13,9 +13,9 @@
 namespace truecut::offline {
 
 enum class RobustKernel {
-  none,   // plain least squares
-  huber,  // weight 1 up to k = 1.345·σ, then k/|r|: outliers count linearly
-  tukey,  // biweight, (1 − (r/c)²)² up to c = 4.685·σ, then 0: outliers ignored
+  kNone,   // plain least squares
+  kHuber,  // weight 1 up to k = 1.345·σ, then k/|r|: outliers count linearly
+  kTukey,  // biweight, (1 − (r/c)²)² up to c = 4.685·σ, then 0: outliers ignored
 };
 
 struct IcpOptions {
@@ -31,7 +31,7 @@ struct IcpOptions {
   double sharp_edge_deg = 30.0;
   // Pairs farther apart are not used; must exceed the initial misalignment.
   double max_correspondence_mm = 2.0;
-  RobustKernel kernel = RobustKernel::tukey;
+  RobustKernel kernel = RobustKernel::kTukey;
   // σ is 1.4826 × the median |residual| of the iteration (the MAD estimate),
   // at least this much: near convergence the residuals are mostly scan
   // noise, and the floor keeps noise-sized residuals at full weight.
@@ -96,10 +96,10 @@ IcpResult register_scan(const TriangleMesh& nominal,
 enum class RigidBodyFit {
   // Full 3-D displacement vectors (sphere method): translation = mean
   // displacement, rotation about the barycentre by least squares (SVD).
-  full_vectors,
+  kFullVectors,
   // Displacements known only along the nominal normals (ray method): rotation
   // and translation fitted to the normal components, about the barycentre.
-  normal_components,
+  kNormalComponents,
 };
 
 struct RigidBodyMotion {

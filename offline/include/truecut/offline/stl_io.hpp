@@ -22,6 +22,6 @@ TriangleMesh read_stl(const std::filesystem::path& file, const MeshReadOptions& 
 // Atomic (FILE.tmp, then rename). `header` goes into the binary header (at
 // most 80 bytes; must not start with "solid") or after "solid " in ASCII.
 void write_stl(const std::filesystem::path& file, const TriangleMesh& mesh,
-               StlEncoding encoding = StlEncoding::binary, std::string_view header = {});
+               StlEncoding encoding = StlEncoding::kBinary, std::string_view header = {});
 
 }  // namespace truecut::offline

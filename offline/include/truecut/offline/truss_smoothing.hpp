@@ -29,8 +29,8 @@
 namespace truecut::offline {
 
 enum class TrussEdgeWeight {
-  uniform,         // every bar kb (the source)
-  inverse_length,  // bar i–j: kb · (mean edge length / |Pi − Pj|)
+  kUniform,        // every bar kb (the source)
+  kInverseLength,  // bar i–j: kb · (mean edge length / |Pi − Pj|)
 };
 
 struct TrussOptions {
@@ -41,7 +41,7 @@ struct TrussOptions {
   // faces' spread fell from 5.3–9.3 to 3.4–6.8 µm against 0.2, at 20 µm it
   // did not change; 5 gave the same as 1.
   double kb_over_kc = 1.0;
-  TrussEdgeWeight edge_weight = TrussEdgeWeight::uniform;
+  TrussEdgeWeight edge_weight = TrussEdgeWeight::kUniform;
 };
 
 struct TrussResult {
@@ -57,7 +57,7 @@ std::vector<std::array<std::uint32_t, 2>> truss_bars(std::span<const Triangle> t
 
 // vectors_mm and valid have one entry per vertex (valid: nonzero = valid;
 // invalid entries of vectors_mm are ignored and may be NaN). vertices_mm is
-// needed only for TrussEdgeWeight::inverse_length (may be empty otherwise).
+// needed only for TrussEdgeWeight::kInverseLength (may be empty otherwise).
 // Throws std::invalid_argument on size mismatch, out-of-range vertex index,
 // negative or non-finite kb_over_kc, or a non-finite valid vector.
 TrussResult smooth_truss(std::span<const Eigen::Vector3d> vertices_mm,
