@@ -165,7 +165,7 @@ void bench_component(std::size_t calls) {
   const Vec3 extent(dims[0] - 1, dims[1] - 1, dims[2] - 1);
 
   ComponentVariant comp_cubic(&cubic), comp_linear(&linear);
-  enum Kind { component_cubic, component_linear, lookup_cubic, lookup_linear, timer_only };
+  enum Kind { kComponentCubic, kComponentLinear, kLookupCubic, kLookupLinear, kTimerOnly };
   struct Variant {
     std::string name;
     Kind kind;
@@ -174,7 +174,7 @@ void bench_component(std::size_t calls) {
   };
   std::vector<Variant> v;
   auto add = [&](const char* name, Kind kind, bool cold) {
-    Variant x{std::string(name) + (kind == timer_only ? ""
+    Variant x{std::string(name) + (kind == kTimerOnly ? ""
                                    : cold             ? ", cold"
                                                       : ", warm"),
               kind,
@@ -185,12 +185,12 @@ void bench_component(std::size_t calls) {
     v.push_back(std::move(x));
   };
   for (bool cold : {false, true}) {
-    add("component, tricubic field", component_cubic, cold);
-    add("component, trilinear field", component_linear, cold);
-    add("lookup tricubic (evaluate)", lookup_cubic, cold);
-    add("lookup trilinear (FANUC-style)", lookup_linear, cold);
+    add("component, tricubic field", kComponentCubic, cold);
+    add("component, trilinear field", kComponentLinear, cold);
+    add("lookup tricubic (evaluate)", kLookupCubic, cold);
+    add("lookup trilinear (FANUC-style)", kLookupLinear, cold);
   }
-  add("timer alone (rdtsc pair)", timer_only, false);
+  add("timer alone (rdtsc pair)", kTimerOnly, false);
 
   const std::size_t block = 10'000;
   for (std::size_t done = 0; done < calls; done += block) {
@@ -202,27 +202,27 @@ void bench_component(std::size_t calls) {
         const Vec3 p = x.points.next();
         uint64_t t0 = 0, t1 = 0;
         switch (x.kind) {
-          case component_cubic:
+          case kComponentCubic:
             t0 = ticks();
             comp_cubic.run(p);
             t1 = ticks();
             break;
-          case component_linear:
+          case kComponentLinear:
             t0 = ticks();
             comp_linear.run(p);
             t1 = ticks();
             break;
-          case lookup_cubic:
+          case kLookupCubic:
             t0 = ticks();
             g_sink = cubic.evaluate_tricubic(1, p).correction_mm.x();
             t1 = ticks();
             break;
-          case lookup_linear:
+          case kLookupLinear:
             t0 = ticks();
             g_sink = cubic.evaluate_trilinear(1, p).correction_mm.x();
             t1 = ticks();
             break;
-          case timer_only:
+          case kTimerOnly:
             t0 = ticks();
             t1 = ticks();
             break;

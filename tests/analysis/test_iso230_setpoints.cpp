@@ -55,7 +55,7 @@ struct PlantedAxis {
   }
 };
 
-enum class Command { target_setpoint, trajectory_setpoint };
+enum class Command { kTargetSetpoint, kTrajectorySetpoint };
 
 struct Log {
   fs::path file;
@@ -121,7 +121,7 @@ Log write_log(const std::string& name, const PlantedAxis& ax, Command command, u
         line(meas_pv, t, ax.read(table, noise(rng)));
         next_meas = t + meas_gap(rng);
       }
-      if (command == Command::trajectory_setpoint && t >= next_cmd) {
+      if (command == Command::kTrajectorySetpoint && t >= next_cmd) {
         if (motor != logged_cmd) line(cmd_pv, t, motor), logged_cmd = motor;
         next_cmd = t + cmd_gap(rng);
       }
@@ -130,7 +130,7 @@ Log write_log(const std::string& name, const PlantedAxis& ax, Command command, u
     }
   };
   for (double goal : goals) {
-    if (command == Command::target_setpoint) line(cmd_pv, t, goal);
+    if (command == Command::kTargetSetpoint) line(cmd_pv, t, goal);
     line("SIM:TestNumber", t, ++test_number);
     advance(goal, ax.dwell);
   }
@@ -176,7 +176,7 @@ void expect_planted(const AxisPositioning& r, const PlantedAxis& ax,
 
 TEST(Iso230Setpoints, CamonitorLogIsRecognisedAndMergedInTimeOrder) {
   const PlantedAxis ax;
-  const auto log = write_log("target.log", ax, Command::target_setpoint, 1);
+  const auto log = write_log("target.log", ax, Command::kTargetSetpoint, 1);
   EXPECT_TRUE(is_camonitor_log(log.file));
   const auto rec = read_camonitor(log.file, camonitor_map());
   ASSERT_GT(rec.rows(), 1000u);
@@ -191,7 +191,7 @@ TEST(Iso230Setpoints, CamonitorLogIsRecognisedAndMergedInTimeOrder) {
 
 TEST(Iso230Setpoints, TargetSetpointGivesPlantedBacklashAndDeviations) {
   const PlantedAxis ax;
-  const auto log = write_log("target.log", ax, Command::target_setpoint, 2);
+  const auto log = write_log("target.log", ax, Command::kTargetSetpoint, 2);
   const auto rec = read_camonitor(log.file, camonitor_map());
   const auto r = evaluate_positioning(rec, "x", {});
   ASSERT_TRUE(r);
@@ -205,8 +205,8 @@ TEST(Iso230Setpoints, TargetSetpointGivesPlantedBacklashAndDeviations) {
 
 TEST(Iso230Setpoints, TrajectorySetpointGivesTheSame) {
   const PlantedAxis ax;
-  const auto traj = write_log("trajectory.log", ax, Command::trajectory_setpoint, 3);
-  const auto target = write_log("target.log", ax, Command::target_setpoint, 3);
+  const auto traj = write_log("trajectory.log", ax, Command::kTrajectorySetpoint, 3);
+  const auto target = write_log("target.log", ax, Command::kTargetSetpoint, 3);
   const auto r = evaluate_positioning(read_camonitor(traj.file, camonitor_map()), "x", {});
   const auto q = evaluate_positioning(read_camonitor(target.file, camonitor_map()), "x", {});
   ASSERT_TRUE(r && q);
@@ -227,11 +227,11 @@ TEST(Iso230Setpoints, TwentySeedsThreeMagnitudesBothCommands) {
     ax.pitch = pitch;
     ax.speed = speed;
     for (unsigned seed = 100; seed < 120; ++seed)
-      for (Command c : {Command::target_setpoint, Command::trajectory_setpoint}) {
+      for (Command c : {Command::kTargetSetpoint, Command::kTrajectorySetpoint}) {
         const auto log = write_log("sweep.log", ax, c, seed);
         const auto r = evaluate_positioning(read_camonitor(log.file, camonitor_map()), "x", {});
         SCOPED_TRACE("backlash " + std::to_string(backlash) + " seed " + std::to_string(seed) +
-                     (c == Command::target_setpoint ? " target" : " trajectory"));
+                     (c == Command::kTargetSetpoint ? " target" : " trajectory"));
         ASSERT_TRUE(r);
         expect_planted(*r, ax, log.targets);
       }
@@ -246,9 +246,9 @@ TEST(Iso230Setpoints, SlowQuantisedReadings) {
   ax.meas_gap_max = 0.6;
   ax.quantum = 0.0004;
   ax.dwell = 2.0;
-  for (Command c : {Command::target_setpoint, Command::trajectory_setpoint}) {
+  for (Command c : {Command::kTargetSetpoint, Command::kTrajectorySetpoint}) {
     const auto log =
-        write_log(c == Command::target_setpoint ? "slow_target.log" : "slow_traj.log", ax, c, 13);
+        write_log(c == Command::kTargetSetpoint ? "slow_target.log" : "slow_traj.log", ax, c, 13);
     const auto r = evaluate_positioning(read_camonitor(log.file, camonitor_map()), "x", {});
     ASSERT_TRUE(r);
     expect_planted(*r, ax, log.targets);
@@ -257,7 +257,7 @@ TEST(Iso230Setpoints, SlowQuantisedReadings) {
 
 TEST(Iso230Setpoints, CliReadsCamonitorLog) {
   const PlantedAxis ax;
-  const auto log = write_log("target.log", ax, Command::target_setpoint, 4);
+  const auto log = write_log("target.log", ax, Command::kTargetSetpoint, 4);
   const auto out = test::scratch_dir() / "out";
   auto r = test::run_process({test::cli_path().string(), "iso230", "--recording", log.file.string(),
                               "--map", "x_cmd=SIM:M1-PosSet,x_meas=SIM:Ref-PosAct", "--out",

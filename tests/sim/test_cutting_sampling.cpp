@@ -66,26 +66,16 @@ double exact_height(const Eigen::Vector3d& p, const CutterShape& tool, double ti
 struct Run {
   DexelModel model = plate();
   std::uint64_t instances = 0;
-  int cuts = 0;
 };
 
-Run per_cycle(const CutterShape& tool, const std::vector<CutterPose>& path) {
+// Replays the path through a sampler (CycleCut or SweptCut), then finish().
+template <class Sampler>
+Run replay(const CutterShape& tool, const std::vector<CutterPose>& path) {
   Run r;
-  CycleCut sampler;
+  Sampler sampler;
   for (const auto& pose : path) {
     const Engagement e = sampler.step(r.model, tool, pose);
     r.instances += e.substeps;
-  }
-  return r;
-}
-
-Run swept(const CutterShape& tool, const std::vector<CutterPose>& path) {
-  Run r;
-  SweptCut sampler;
-  for (const auto& pose : path) {
-    const Engagement e = sampler.step(r.model, tool, pose);
-    r.instances += e.substeps;
-    r.cuts += e.substeps > 0;
     EXPECT_FALSE(e.invalid_input);
   }
   r.instances += sampler.finish(r.model).substeps;
@@ -98,8 +88,8 @@ Run swept(const CutterShape& tool, const std::vector<CutterPose>& path) {
 // lateral step minus one cycle's motion.
 void check_groove(const CutterShape& tool, double tip_z, double lateral_step_mm) {
   const auto path = arc(tip_z);
-  const Run a = per_cycle(tool, path);
-  const Run b = swept(tool, path);
+  const Run a = replay<CycleCut>(tool, path);
+  const Run b = replay<SweptCut>(tool, path);
   const double tol = DexelOptions{}.tolerance_mm;
   int checked = 0;
   double worst_vs_cycle = 0;
