@@ -8,9 +8,15 @@
 
 namespace truecut::interp {
 
+// Brackets and function calls nested deeper than this are refused: each
+// level is a recursion of the expression reader, and no program written by
+// hand or by a CAM system comes near it.
+constexpr int kMaxExpressionNesting = 1000;
+
 struct Cursor {
   const LexedLine* line;
   size_t pos = 0;
+  int nesting = 0;  // brackets open at pos
 
   bool at_end() const { return pos >= line->text.size(); }
   char peek(size_t ahead = 0) const {

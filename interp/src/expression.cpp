@@ -59,17 +59,24 @@ int precedence(Op op) {
   return 0;
 }
 
+struct Spelling {
+  const char* text;
+  Op op;
+};
+constexpr Spelling kOps[] = {{"**", Op::kPower}, {"*", Op::kTimes}, {"/", Op::kDivide},
+                             {"mod", Op::kMod},  {"+", Op::kPlus},  {"-", Op::kMinus},
+                             {"eq", Op::kEq},    {"ne", Op::kNe},   {"gt", Op::kGt},
+                             {"ge", Op::kGe},    {"lt", Op::kLt},   {"le", Op::kLe},
+                             {"and", Op::kAnd},  {"or", Op::kOr},   {"xor", Op::kXor}};
+
+const char* spelling(Op op) {
+  for (const auto& s : kOps)
+    if (s.op == op) return s.text;
+  return "?";
+}
+
 // Reads a binary operator at the cursor without consuming it; sets `len`.
 Op peek_operator(const Cursor& c, size_t& len) {
-  struct Spelling {
-    const char* text;
-    Op op;
-  };
-  static const Spelling kOps[] = {{"**", Op::kPower}, {"*", Op::kTimes}, {"/", Op::kDivide},
-                                  {"mod", Op::kMod},  {"+", Op::kPlus},  {"-", Op::kMinus},
-                                  {"eq", Op::kEq},    {"ne", Op::kNe},   {"gt", Op::kGt},
-                                  {"ge", Op::kGe},    {"lt", Op::kLt},   {"le", Op::kLe},
-                                  {"and", Op::kAnd},  {"or", Op::kOr},   {"xor", Op::kXor}};
   for (const auto& s : kOps) {
     if (c.starts_with(s.text)) {
       len = std::char_traits<char>::length(s.text);
@@ -80,7 +87,14 @@ Op peek_operator(const Cursor& c, size_t& len) {
   return Op::kNone;
 }
 
-double apply(const Cursor& c, size_t at, Op op, double a, double b) {
+// A result that overflowed (EXP[1000], 10**400, 1e300*1e300) is refused
+// where it arises: nothing downstream can use an infinite coordinate.
+double finite_or_fail(const Cursor& c, size_t at, double v, const std::string& what) {
+  if (!std::isfinite(v)) c.fail_at(at, what + " overflows: the result is not a finite number");
+  return v;
+}
+
+double apply_unchecked(const Cursor& c, size_t at, Op op, double a, double b) {
   switch (op) {
     case Op::kPower:
       if (a < 0 && std::floor(b) != b)
@@ -125,6 +139,11 @@ double apply(const Cursor& c, size_t at, Op op, double a, double b) {
   return 0.0;
 }
 
+double apply(const Cursor& c, size_t at, Op op, double a, double b) {
+  return finite_or_fail(c, at, apply_unchecked(c, at, op, a, b),
+                        std::string("the operator ") + spelling(op));
+}
+
 double read_number(Cursor& c) {
   const size_t start = c.pos;
   if (c.peek() == '+' || c.peek() == '-') ++c.pos;
@@ -141,7 +160,9 @@ double read_number(Cursor& c) {
     ++c.pos;
   }
   if (!digits) c.fail_at(start, "bad number format: expected a number");
-  return std::strtod(c.line->text.substr(start, c.pos - start).c_str(), nullptr);
+  return finite_or_fail(c, start,
+                        std::strtod(c.line->text.substr(start, c.pos - start).c_str(), nullptr),
+                        "this number (" + std::to_string(c.pos - start) + " characters)");
 }
 
 // After `#` + `<`: the name up to '>'.
@@ -202,8 +223,7 @@ const Function* peek_function(const Cursor& c) {
   return nullptr;
 }
 
-double call_function(Cursor& c, const Parameters& params, const Function& f) {
-  const size_t at = c.pos;
+double call_function_unchecked(Cursor& c, const Parameters& params, const Function& f, size_t at) {
   c.pos += std::char_traits<char>::length(f.name);
   if (f.kind == Function::kExists) {
     // exists[#<name>]: 1 when the named parameter is defined.
@@ -260,6 +280,14 @@ double call_function(Cursor& c, const Parameters& params, const Function& f) {
   return 0.0;
 }
 
+double call_function(Cursor& c, const Parameters& params, const Function& f) {
+  const size_t at = c.pos;
+  std::string name = f.name;
+  for (char& ch : name)
+    ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+  return finite_or_fail(c, at, call_function_unchecked(c, params, f, at), name);
+}
+
 }  // namespace
 
 ParameterRef read_parameter_ref(Cursor& c, const Parameters& params) {
@@ -280,6 +308,9 @@ ParameterRef read_parameter_ref(Cursor& c, const Parameters& params) {
 
 double read_expression(Cursor& c, const Parameters& params) {
   const size_t open = c.pos;
+  if (++c.nesting > kMaxExpressionNesting)
+    c.fail_at(open, "expression nested deeper than " + std::to_string(kMaxExpressionNesting) +
+                        " brackets");
   ++c.pos;  // '['
   std::vector<double> values;
   std::vector<std::pair<Op, size_t>> ops;
@@ -310,6 +341,7 @@ double read_expression(Cursor& c, const Parameters& params) {
   }
   while (!ops.empty())
     reduce();
+  --c.nesting;
   return values.back();
 }
 

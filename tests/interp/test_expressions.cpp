@@ -2,6 +2,9 @@
 // numbered parameters, LinuxCNC's "set after the line" rule.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <string>
+
 #include "interp_test_util.hpp"
 
 namespace truecut::interp::testing {
@@ -117,6 +120,46 @@ TEST(Expressions, Errors) {
   EXPECT_NE(error_of("G0 X#<nope>\nM2\n").message().find("not defined"), std::string::npos);
   EXPECT_NE(error_of("G0 X#6000\nM2\n").message().find("out of range"), std::string::npos);
   EXPECT_NE(error_of("G0 X[1 $ 2]\nM2\n").message().find("operator"), std::string::npos);
+}
+
+// Hostile input (issue 23): a nesting that used to overflow the stack, and
+// results that used to reach the canon output as inf.
+TEST(Expressions, NestingDeeperThanTheLimitIsRefusedAtTheBracket) {
+  constexpr int kMaxExpressionNesting = 1000;  // docs/gcode.md, "Limits"
+  const int deep = 50000;
+  const auto e =
+      error_of("G0 X" + std::string(deep, '[') + "1" + std::string(deep, ']') + "\nM2\n");
+  EXPECT_EQ(1, e.where().line);
+  EXPECT_EQ(4 + kMaxExpressionNesting + 1, e.where().column);  // "G0 X" then the 1001st '['
+  EXPECT_NE(std::string::npos, e.message().find("nested deeper than 1000")) << e.message();
+  // At the limit itself the expression is read.
+  const int limit = kMaxExpressionNesting;
+  EXPECT_DOUBLE_EQ(2, eval(std::string(limit, '[') + "2" + std::string(limit, ']')));
+}
+
+TEST(Expressions, OverflowIsRefusedWhereItArises) {
+  struct Case {
+    const char* program;
+    int column;
+    const char* says;
+  };
+  for (const Case& c :
+       {Case{"G0 X[10 ** 400]\nM2\n", 9, "the operator ** overflows"},
+        Case{"G0 X[EXP[1000]]\nM2\n", 6, "EXP overflows"},
+        Case{"#1 = [10 ** 200]\nG0 X[#1 * #1]\nM2\n", 9, "the operator * overflows"}}) {
+    const auto e = error_of(c.program);
+    EXPECT_EQ(c.column, e.where().column) << c.program;
+    EXPECT_NE(std::string::npos, e.message().find(c.says)) << e.message();
+    EXPECT_NE(std::string::npos, e.message().find("not a finite number")) << e.message();
+  }
+  const std::string huge = "1" + std::string(400, '0');
+  const auto e = error_of("G0 X" + huge + "\nM2\n");
+  EXPECT_EQ(5, e.where().column);
+  EXPECT_NE(std::string::npos, e.message().find("this number (401 characters) overflows"))
+      << e.message();
+  // The largest values that stay finite are still read.
+  EXPECT_DOUBLE_EQ(std::pow(10.0, 300), eval("[10 ** 300]"));
+  EXPECT_DOUBLE_EQ(std::exp(700.0), eval("[EXP[700]]"));
 }
 
 }  // namespace
