@@ -74,7 +74,7 @@ const char* kDiagnoseHelp =
     "rotary_location (when the program turns A or C), tool_deflection,\n"
     "workpiece_deflection and squareness (one re-machining per parameter).\n"
     "  --surface FILE          a scan (STL/PLY mesh, PLY/XYZ points), registered by ICP\n"
-    "  --cmm FILE              CMM CSV with deviations (as `truecut measure` writes it)\n"
+    "  --cmm FILE              CMM CSV with deviations (as `truecut cmm` writes it)\n"
     "  --program FILE          the program that machined the part (required)\n"
     "  --nominal/--part/--tools  default: beside the program\n"
     "  --split F               held-out region: the last fraction F along the part's\n"
