@@ -15,6 +15,7 @@
 #include "truecut/interp/sha256.hpp"
 #include "truecut/rt/atomic_write.hpp"
 #include "truecut/rt/field_file.hpp"
+#include "truecut/rt/input_file.hpp"
 #include "truecut/rt/number_format.hpp"
 #include "truecut/sim/machine_description.hpp"
 
@@ -74,13 +75,11 @@ const char* kRewriteHelp =
     "exit codes: 0 ok, 1 runtime failure, 2 usage or input error (nothing written)\n";
 
 std::string read_bytes(const std::string& path, const char* what) {
-  std::error_code ec;
-  if (fs::is_directory(path, ec)) throw UsageError(std::string(what) + " " + path + " is a folder");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw UsageError(std::string("cannot open ") + what + " " + path);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
+  try {
+    return rt::read_input_file(path, what);
+  } catch (const rt::InputFileError& e) {
+    throw UsageError(e.what());
+  }
 }
 
 interp::CutType cut_type(const std::string& s) {

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "truecut/interp/error.hpp"
+#include "truecut/rt/input_file.hpp"
 
 namespace truecut::interp {
 
@@ -47,14 +48,11 @@ SourceFile source_from_text(std::string_view text, const std::string& name) {
 }
 
 SourceFile load_source(const std::filesystem::path& file) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(file, ec))
-    throw GcodeError({file.string(), 0, 0}, "is a folder, not a program file");
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw GcodeError({file.string(), 0, 0}, "cannot open file");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return source_from_text(ss.str(), file.string());
+  try {
+    return source_from_text(rt::read_input_file(file, "program file"), file.string());
+  } catch (const rt::InputFileError& e) {
+    throw GcodeError({file.string(), 0, 0}, e.reason());
+  }
 }
 
 }  // namespace truecut::interp

@@ -7,6 +7,7 @@
 
 #include "source_text.hpp"
 #include "truecut/interp/error.hpp"
+#include "truecut/rt/input_file.hpp"
 
 namespace truecut::interp {
 
@@ -125,11 +126,13 @@ ToolTable ToolTable::parse(std::string_view text, const std::string& name) {
 }
 
 ToolTable ToolTable::load(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw GcodeError({file.string(), 0, 0}, "cannot open tool table");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return parse(ss.str(), file.string());
+  std::string text;
+  try {
+    text = rt::read_input_file(file, "tool table");
+  } catch (const rt::InputFileError& e) {
+    throw GcodeError({file.string(), 0, 0}, e.reason());
+  }
+  return parse(text, file.string());
 }
 
 }  // namespace truecut::interp

@@ -3,6 +3,7 @@
 #include "truecut/rt/field_file.hpp"
 
 #include "truecut/rt/atomic_write.hpp"
+#include "truecut/rt/input_file.hpp"
 #include "truecut/rt/number_format.hpp"
 
 #include <algorithm>
@@ -328,10 +329,6 @@ void check_one_line(const std::string& what, const std::string& value) {
 
 // ------------------------------------------------------------ file output
 
-[[noreturn]] void fail_io(const std::filesystem::path& path, const std::string& what, int err) {
-  throw FieldFileError(path.string() + ": " + what + ": " + std::strerror(err));
-}
-
 }  // namespace
 
 std::string encode_field_file(const CorrectionField& field, const FieldFileInfo& info) {
@@ -382,10 +379,12 @@ LoadedField decode_field_file(std::string_view bytes, std::string_view name) {
 }
 
 LoadedField read_field_file(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) fail_io(path, "cannot open correction field", errno);
-  const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  if (in.bad()) fail_io(path, "read failed", errno);
+  std::string bytes;
+  try {
+    bytes = read_input_file(path, "correction field");
+  } catch (const InputFileError& e) {
+    throw FieldFileError(e.what());
+  }
   return decode_field_file(bytes, path.string());
 }
 

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "text_util.hpp"
+#include "truecut/rt/input_file.hpp"
 
 namespace truecut::rt::hal {
 
@@ -162,12 +163,14 @@ void run_command(Context& ctx, std::vector<std::string> w,
     if (ctx.depth > 16) fail("source: nested more than 16 deep");
     std::filesystem::path p = w[1];
     if (p.is_relative()) p = ctx.base_dir / p;
-    std::ifstream in(p, std::ios::binary);
-    if (!in) fail("source: cannot open '" + p.string() + "'");
-    std::ostringstream ss;
-    ss << in.rdbuf();
+    std::string text;
+    try {
+      text = read_input_file(p, ".hal file");
+    } catch (const InputFileError& e) {
+      fail("source: '" + p.string() + "' " + e.reason());
+    }
     Context inner{hal, ctx.ini, p.string(), p.parent_path(), ctx.depth + 1};
-    load_text(inner, ss.str());
+    load_text(inner, text);
   } else if (cmd == "start" || cmd == "stop") {
     // Threads start when `truecut run` executes them.
   } else if (cmd == "loadusr") {
@@ -217,11 +220,12 @@ void load_hal_text(Hal& hal, const std::string& text, const std::string& file_na
 }
 
 void load_hal_file(Hal& hal, const std::filesystem::path& file, const Ini* ini) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw HalFileError(file.string(), 0, "cannot open .hal file");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  std::string text = ss.str();
+  std::string text;
+  try {
+    text = read_input_file(file, ".hal file");
+  } catch (const InputFileError& e) {
+    throw HalFileError(file.string(), 0, e.reason());
+  }
   if (text.find('\0') != std::string::npos)
     throw HalFileError(file.string(), 0, "not a text file (contains NUL bytes)");
   load_hal_text(hal, text, file.string(), ini, file.parent_path());

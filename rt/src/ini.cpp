@@ -4,15 +4,16 @@
 #include <sstream>
 
 #include "text_util.hpp"
+#include "truecut/rt/input_file.hpp"
 
 namespace truecut::rt::hal {
 
 Ini Ini::load(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw IniError(file.string() + ": cannot open INI file");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return parse(ss.str(), file.string());
+  try {
+    return parse(read_input_file(file, "INI file"), file.string());
+  } catch (const InputFileError& e) {
+    throw IniError(e.what());
+  }
 }
 
 Ini Ini::parse(const std::string& text, const std::string& file_name) {

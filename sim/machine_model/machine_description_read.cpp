@@ -6,6 +6,7 @@
 
 #include "json_node.hpp"
 #include "machine_description_keys.hpp"
+#include "truecut/rt/input_file.hpp"
 #include "truecut/sim/machine_description.hpp"
 #include "truecut/sim/machine_model.hpp"
 #include "truecut/sim/true_tool_pose.hpp"
@@ -406,11 +407,13 @@ MachineDescription parse_machine_description(const std::string& json_text,
 }
 
 MachineDescription read_machine_description(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw MachineDescriptionError(file.string() + ": cannot read: " + std::strerror(errno));
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return parse_machine_description(ss.str(), file.string());
+  std::string text;
+  try {
+    text = rt::read_input_file(file, "machine description");
+  } catch (const rt::InputFileError& e) {
+    throw MachineDescriptionError(e.what());
+  }
+  return parse_machine_description(text, file.string());
 }
 
 }  // namespace truecut::sim

@@ -7,6 +7,7 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 
+#include "truecut/rt/input_file.hpp"
 #include "truecut/sim/part_file.hpp"
 
 namespace truecut::sim {
@@ -314,10 +315,12 @@ PartFile parse_part_file(std::string_view text, const std::string& name, unsigne
 }
 
 PartFile read_part_file(const std::filesystem::path& file, unsigned required) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw PartFileError(file.string(), "", "cannot open");
-  const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  if (in.bad()) throw PartFileError(file.string(), "", "cannot read");
+  std::string text;
+  try {
+    text = rt::read_input_file(file, "part file");
+  } catch (const rt::InputFileError& e) {
+    throw PartFileError(file.string(), "", e.reason());
+  }
   return parse_part_file(text, file.string(), required);
 }
 

@@ -82,7 +82,7 @@ TEST(CliRun, MissingFilesAreUsageErrors) {
   EXPECT_NE(std::string::npos, r.err.find("/nonexistent/x.hal: no such file"));
   auto i = run_truecut({"run", example("circle.hal"), "--ini", "/nonexistent/m.ini"});
   EXPECT_EQ(2, i.exit_code);
-  EXPECT_NE(std::string::npos, i.err.find("/nonexistent/m.ini: cannot open INI file"));
+  EXPECT_NE(std::string::npos, i.err.find("/nonexistent/m.ini: cannot open the INI file"));
   auto noini = run_truecut({"run", example("circle.hal"), "--time", "1"});
   EXPECT_EQ(2, noini.exit_code);
   EXPECT_NE(std::string::npos, noini.err.find("circle.hal:10: '[EMCMOT]SERVO_PERIOD' needs an INI"))

@@ -133,7 +133,7 @@ TEST(CliRewrite, MatrixWithNaNOrWrongColumns) {
   expect_refused(c, c.run(with(kArgs, "--matrix", "short.csv")),
                  "short.csv:2: 5 fields, the header has 6");
   expect_refused(c, c.run(with(kArgs, "--matrix", "missing.csv")),
-                 "cannot open compensation matrix missing.csv");
+                 "missing.csv: cannot open the compensation matrix");
 }
 
 TEST(CliRewrite, StepMustBePositive) {

@@ -220,7 +220,7 @@ TEST(MachineDescription, UnreadableFileIsNamed) {
     read_machine_description("/nonexistent/machine.json");
     FAIL();
   } catch (const MachineDescriptionError& e) {
-    EXPECT_EQ(0u, std::string(e.what()).find("/nonexistent/machine.json: cannot read"));
+    EXPECT_EQ(0u, std::string(e.what()).find("/nonexistent/machine.json: cannot open the machine description"));
   }
 }
 

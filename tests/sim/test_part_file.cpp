@@ -141,7 +141,8 @@ TEST(PartFile, ErrorsNameTheFileAndTheKey) {
     read_part_file(missing);
     ADD_FAILURE();
   } catch (const PartFileError& e) {
-    EXPECT_EQ(missing.string() + ": cannot open", std::string(e.what()));
+    EXPECT_EQ(missing.string() + ": cannot open the part file: No such file or directory",
+              std::string(e.what()));
     EXPECT_EQ("", e.key());
   }
 }

@@ -4,10 +4,16 @@
 #include <cstring>
 
 #include "truecut/analysis/recording.hpp"
+#include "truecut/rt/input_file.hpp"
 
 namespace truecut::analysis::detail {
 
 LineReader::LineReader(const std::filesystem::path& file) : file_(file.string()), buf_(1 << 16) {
+  try {
+    rt::check_input_file(file, "recording");
+  } catch (const rt::InputFileError& e) {
+    throw RecordingError(e.what());
+  }
   in_ = std::fopen(file_.c_str(), "rb");
   if (!in_) throw RecordingError(file_ + ": cannot open: " + std::strerror(errno));
 }

@@ -278,6 +278,7 @@ RecordingHeader stream_recording(const std::filesystem::path& path, const Record
     sink(header, row);
     ++index;
   }
+  if (index == 0) throw RecordingError(file + ": a header and no data rows");
   return header;
 }
 

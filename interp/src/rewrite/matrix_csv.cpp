@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "truecut/interp/rewrite_matrix.hpp"
+#include "truecut/rt/input_file.hpp"
 
 namespace truecut::interp {
 
@@ -106,11 +107,13 @@ CompensationMatrixData parse_compensation_matrix(std::string_view text, const st
 }
 
 CompensationMatrixData read_compensation_matrix(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) fail(file.string(), 0, "cannot open file");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return parse_compensation_matrix(ss.str(), file.string());
+  std::string text;
+  try {
+    text = rt::read_input_file(file, "compensation matrix");
+  } catch (const rt::InputFileError& e) {
+    fail(file.string(), 0, e.reason());
+  }
+  return parse_compensation_matrix(text, file.string());
 }
 
 }  // namespace truecut::interp

@@ -1,0 +1,99 @@
+// Input files that are not files a reader can finish (issue 23): a device
+// that never ends (/dev/zero used to make canon, run, diagnose and iso230
+// read until memory ran out), a folder, a file over the input budget. Each
+// is refused at once with exit code 2 and a message naming the file.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "run_process.hpp"
+#include "test_paths.hpp"
+
+using namespace truecut::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+// `truecut <args>` where "{}" stands for the input under test.
+struct Reader {
+  const char* name;
+  std::vector<std::string> args;
+};
+
+std::vector<Reader> readers(const fs::path& out) {
+  const std::string o = out.string();
+  return {
+      {"G-code program", {"canon", "{}"}},
+      {".hal file", {"run", "{}", "--dry-run"}},
+      {"recording (diagnose)", {"diagnose", "--recording", "{}", "--out", o + "/d"}},
+      {"recording (iso230)", {"iso230", "--recording", "{}", "--out", o + "/i"}},
+  };
+}
+
+ProcessResult run_with(const std::vector<std::string>& env, const Reader& r,
+                       const std::string& input) {
+  std::vector<std::string> argv = {"/usr/bin/env"};
+  argv.insert(argv.end(), env.begin(), env.end());
+  argv.push_back(cli_path().string());
+  for (const auto& a : r.args)
+    argv.push_back(a == "{}" ? input : a);
+  return run_process(argv);
+}
+
+}  // namespace
+
+TEST(InputFiles, ADeviceIsRefusedNotReadWithoutEnd) {
+  if (!fs::exists("/dev/zero")) GTEST_SKIP() << "no /dev/zero on this system";
+  const fs::path out = scratch_dir();
+  for (const Reader& r : readers(out)) {
+    const ProcessResult p = run_with({}, r, "/dev/zero");
+    EXPECT_EQ(2, p.exit_code) << r.name << ": " << p.err;
+    EXPECT_NE(std::string::npos, p.err.find("/dev/zero: is not a regular file")) << p.err;
+  }
+}
+
+TEST(InputFiles, AFolderIsRefused) {
+  const fs::path out = scratch_dir();
+  for (const Reader& r : readers(out)) {
+    const ProcessResult p = run_with({}, r, out.string());
+    EXPECT_EQ(2, p.exit_code) << r.name << ": " << p.err;
+    EXPECT_NE(std::string::npos, p.err.find(out.string() + ": is a folder")) << p.err;
+  }
+}
+
+TEST(InputFiles, AFileOverTheBudgetIsRefusedNamingTheBudget) {
+  const fs::path out = scratch_dir();
+  const fs::path big = out / "big.txt";
+  {
+    std::ofstream f(big, std::ios::binary);
+    const std::string line = "; a comment line of a large file\n";
+    for (std::size_t n = 0; n < (2u << 20) / line.size() + 1; ++n)
+      f << line;
+  }
+  for (const Reader& r : readers(out)) {
+    const ProcessResult p = run_with({"TRUECUT_MAX_INPUT_MB=1"}, r, big.string());
+    EXPECT_EQ(2, p.exit_code) << r.name << ": " << p.err;
+    EXPECT_NE(std::string::npos, p.err.find("2 MB is more than the 1 MB an input file may have"))
+        << p.err;
+    EXPECT_NE(std::string::npos, p.err.find("TRUECUT_MAX_INPUT_MB")) << p.err;
+  }
+  // Raised, the same file is read (and refused for what it holds, if at all).
+  const ProcessResult canon = run_with({"TRUECUT_MAX_INPUT_MB=4"}, readers(out)[0], big.string());
+  EXPECT_EQ(std::string::npos, canon.err.find("an input file may have")) << canon.err;
+}
+
+TEST(InputFiles, ARecordingWithOnlyAHeaderIsRefused) {
+  // `truecut diagnose` used to crash on it (signal 11).
+  const fs::path out = scratch_dir();
+  const fs::path header_only = out / "header.csv";
+  std::ofstream(header_only) << "t,x_cmd,x_act\n";
+  for (const Reader& r : readers(out)) {
+    if (r.args[0] != "diagnose" && r.args[0] != "iso230") continue;
+    const ProcessResult p = run_with({}, r, header_only.string());
+    EXPECT_EQ(2, p.exit_code) << r.name << ": " << p.err;
+    EXPECT_NE(std::string::npos, p.err.find("header.csv: a header and no data rows")) << p.err;
+  }
+}
