@@ -237,6 +237,9 @@ void Hal::new_thread(const std::string& name, int64_t period_ns, bool uses_fp) {
   if (period_ns < 10000)
     throw HalError("thread " + q(name) + ": period " + std::to_string(period_ns) +
                    " ns is below the 10000 ns minimum");
+  if (st.threads.size() >= kMaxThreads)
+    throw HalError("thread " + q(name) + ": more than " + std::to_string(kMaxThreads) +
+                   " threads (LinuxCNC's RTAPI has as many tasks at most)");
   // Thread pins belong to a HAL-owned component named after the thread.
   auto comp = std::make_unique<Component>();
   comp->id = st.next_comp_id++;

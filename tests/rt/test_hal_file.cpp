@@ -176,3 +176,16 @@ TEST(HalFile, MissingAndBinaryFilesAreRejected) {
     EXPECT_NE(std::string(e.what()).find("not a text file"), std::string::npos);
   }
 }
+
+TEST(HalFile, ThreadsStopAtLinuxCncsTaskLimit) {
+  // Issue 23: each newthread cost 6.5 MB with no cap.
+  std::string text;
+  for (std::size_t i = 0; i < kMaxThreads; ++i)
+    text += "newthread t" + std::to_string(i) + " 1000000\n";
+  EXPECT_EQ("", load_error(text));
+  EXPECT_EQ(64u, kMaxThreads);  // RTAPI_MAX_TASKS of LinuxCNC 2.9
+  EXPECT_EQ(
+      "cfg.hal:65: thread 't64': more than 64 threads (LinuxCNC's RTAPI has as many tasks "
+      "at most)",
+      load_error(text + "newthread t64 1000000\n"));
+}

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <atomic>
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -47,6 +48,10 @@ struct Value {
 // TRUE, FALSE; numbers must be consumed whole, s32/u32 range-checked).
 // Throws HalError naming the text and the type.
 Value parse_value(Type type, const std::string& text);
+
+// Threads one HAL may have (LinuxCNC's RTAPI_MAX_TASKS): each costs a few
+// MB (its latency record and executor state), and no machine needs more.
+constexpr std::size_t kMaxThreads = 64;
 
 class HalError : public std::runtime_error {
  public:
