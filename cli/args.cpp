@@ -1,6 +1,8 @@
 #include "args.hpp"
 
 #include <cstdlib>
+#include <filesystem>
+#include <system_error>
 
 namespace truecut::cli {
 
@@ -72,6 +74,17 @@ long ParsedArgs::integer(const std::string& name, long fallback, long min, long 
     throw UsageError("--" + name + " " + *v + " is outside " + std::to_string(min) + ".." +
                      std::to_string(max));
   return n;
+}
+
+void refuse_output_over_input(const std::string& output_option, const std::string& output,
+                              const std::vector<std::optional<std::string>>& inputs) {
+  for (const auto& input : inputs) {
+    if (!input) continue;
+    std::error_code ec;
+    if (std::filesystem::equivalent(output, *input, ec) && !ec)
+      throw UsageError("--" + output_option + " " + output + " is the input " + *input +
+                       ": writing it would replace what is being read; choose another file");
+  }
 }
 
 }  // namespace truecut::cli

@@ -37,4 +37,10 @@ class ParsedArgs {
   std::vector<std::string> positionals_;
 };
 
+// Throws UsageError when the output `output_option` = `output` is the same
+// file as one of `inputs` (named by any path, links included): the output
+// would replace an input. Outputs that do not exist yet pass.
+void refuse_output_over_input(const std::string& output_option, const std::string& output,
+                              const std::vector<std::optional<std::string>>& inputs);
+
 }  // namespace truecut::cli

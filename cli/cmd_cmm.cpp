@@ -69,6 +69,7 @@ int cmd_cmm(const std::vector<std::string>& argv) {
     throw UsageError("--points excludes --nominal, --part, --surfaces and --spacing");
   if (!points_file && !(nominal_file && part_file))
     throw UsageError("give --nominal and --part, or --points");
+  refuse_output_over_input("out", *out, {mesh_file, points_file, nominal_file, part_file});
   require_replaceable(*out);
   const CmmSettings settings = cmm_settings(a, "");
   const sim::measure::CmmOptions& opt = settings.options;

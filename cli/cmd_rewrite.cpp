@@ -161,6 +161,8 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
     throw UsageError("--tools FILE is required (the tool radius is D / 2 of the tool in it)");
   const auto out_path = a.value("out");
   if (!out_path) throw UsageError("--out OUT.ngc is required");
+  for (const std::string& written : {*out_path, *out_path + ".audit.json"})
+    refuse_output_over_input("out", written, {in_path, matrix_path, field_path, tools_path});
 
   // OUT and its audit record are written together or not at all; a target
   // that is not a regular file is refused before anything is read.

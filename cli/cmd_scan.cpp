@@ -57,6 +57,8 @@ int cmd_scan(const std::vector<std::string>& argv) {
   if (mesh_out && !has_extension(*mesh_out, {".ply", ".stl"}))
     throw UsageError("--mesh-out " + *mesh_out + ": the scan mesh must be .ply or .stl");
 
+  refuse_output_over_input("out", *out, {mesh_file, mesh_out});
+  if (mesh_out) refuse_output_over_input("mesh-out", *mesh_out, {mesh_file});
   require_replaceable(*out);
   if (mesh_out) require_replaceable(*mesh_out);
   ScanSettings settings = scan_settings(a, "");

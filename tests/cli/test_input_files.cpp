@@ -97,3 +97,41 @@ TEST(InputFiles, ARecordingWithOnlyAHeaderIsRefused) {
     EXPECT_NE(std::string::npos, p.err.find("header.csv: a header and no data rows")) << p.err;
   }
 }
+
+TEST(InputFiles, AnOutputThatIsAnInputIsRefusedAndTheInputKept) {
+  // Issue 23: an output path equal to an input path was accepted.
+  const fs::path dir = scratch_dir();
+  ASSERT_EQ(
+      0, run_process({cli_path().string(), "part", "implant", "--mesh-edge", "2", "--stepover", "2",
+                      "--point-spacing", "2", "--step-down", "4", "--out", (dir / "p").string()})
+             .exit_code);
+  const std::string nominal = (dir / "p" / "nominal.stl").string();
+  const std::string program = (dir / "p" / "program.ngc").string();
+  const std::string link = (dir / "link.stl").string();
+  fs::create_symlink(nominal, link);
+  const auto before = fs::file_size(nominal);
+  struct Case {
+    std::vector<std::string> args;
+    std::string says;
+  };
+  const std::vector<Case> cases = {
+      {{"cmm", nominal, "--nominal", nominal, "--part", (dir / "p" / "part.json").string(), "--out",
+        link},
+       "--out " + link + " is the input " + nominal},
+      {{"scan", nominal, "--out", (dir / "s.ply").string(), "--mesh-out", link},
+       "--mesh-out " + link + " is the input " + nominal},
+      {{"rewrite", program, "--field", (dir / "none.tcf").string(), "--operation", "X", "--type",
+        "face", "--tools", (dir / "p" / "tools.tbl").string(), "--out", program},
+       "--out " + program + " is the input " + program},
+  };
+  for (const Case& c : cases) {
+    std::vector<std::string> argv = {cli_path().string()};
+    argv.insert(argv.end(), c.args.begin(), c.args.end());
+    const ProcessResult p = run_process(argv);
+    EXPECT_EQ(2, p.exit_code) << c.args[0] << ": " << p.err;
+    EXPECT_NE(std::string::npos, p.err.find(c.says)) << p.err;
+  }
+  EXPECT_EQ(before, fs::file_size(nominal));
+  EXPECT_TRUE(fs::is_regular_file(program));
+  EXPECT_FALSE(fs::exists(dir / "s.ply"));
+}
