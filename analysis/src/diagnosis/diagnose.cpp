@@ -90,18 +90,20 @@ void figures(const Trace& tr, const Residuals& raw, const Residuals& before, con
   double sb = 0, sa = 0;
   std::size_t n = 0;
   for (int j : tr.axes) {
-    double jb = 0, ja = 0;
+    double jb = 0, ja = 0, jr = 0;
     std::size_t jn = 0;
     for (std::size_t k = 0; k < tr.rows(); ++k) {
       if (!use[k]) continue;
       const double b = before.r[j][k], a = after.r[j][k];
-      jb += b * b, ja += a * a, ++jn;
+      jb += b * b, ja += a * a, jr += raw.r[j][k] * raw.r[j][k], ++jn;
       f.max_before_mm = std::max(f.max_before_mm, std::abs(b));
       f.max_after_mm = std::max(f.max_after_mm, std::abs(a));
     }
-    if (jn)
+    if (jn) {
       f.per_axis_rms_mm[std::string(sim::kJointNames[j])] = {std::sqrt(jb / jn),
                                                              std::sqrt(ja / jn)};
+      f.per_axis_unaligned_rms_mm[std::string(sim::kJointNames[j])] = std::sqrt(jr / jn);
+    }
     sb += jb, sa += ja, n += jn;
   }
   f.samples = n;

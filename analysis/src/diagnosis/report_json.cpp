@@ -27,8 +27,11 @@ json fit_json(const FitFigures& f) {
             {"improvement",
              f.rms_before_mm > 0 ? num(1 - f.rms_after_mm / f.rms_before_mm) : json(nullptr)}};
   json axes = json::object();
-  for (const auto& [a, v] : f.per_axis_rms_mm)
+  for (const auto& [a, v] : f.per_axis_rms_mm) {
     axes[a] = {{"rms_before_mm", num(v.first)}, {"rms_after_mm", num(v.second)}};
+    if (const auto u = f.per_axis_unaligned_rms_mm.find(a); u != f.per_axis_unaligned_rms_mm.end())
+      axes[a]["rms_unaligned_mm"] = num(u->second);
+  }
   j["per_axis"] = axes;
   return j;
 }

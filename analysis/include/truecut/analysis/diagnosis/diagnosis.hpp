@@ -125,6 +125,8 @@ struct FitFigures {
   double rms_unaligned_mm = 0.0;  // believed model without removing the logging delay
   double max_before_mm = 0.0, max_after_mm = 0.0;
   std::map<std::string, std::pair<double, double>> per_axis_rms_mm;  // before, after
+  // Per axis: the believed model without removing the logging delay (trace mode).
+  std::map<std::string, double> per_axis_unaligned_rms_mm;
 };
 
 struct Whiteness {
