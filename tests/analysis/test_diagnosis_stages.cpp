@@ -4,13 +4,18 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <random>
+#include <set>
+#include <string>
 #include <vector>
 
 #include "diagnose_steps.hpp"
 #include "fit_steps.hpp"
 #include "surface_steps.hpp"
+#include "test_paths.hpp"
+#include "truecut/analysis/recording.hpp"
 
 namespace truecut::analysis::diagnosis {
 namespace {
@@ -111,6 +116,154 @@ TEST(DiagnosisStages, MasksLeaveOutAPlantedSpikeTheMarginsAndSplitTheEnd) {
   }
   EXPECT_GT(train, 600u);
   EXPECT_GT(held, 200u);
+}
+
+// A recording written here from its own kinematics (not MachineModel),
+// sampled every 100 ms with ±1 ms jitter: a 20 mm/s back-and-forth with
+// sharp reversals, a dwell with a 5 mm step of the command, a 300 mm/s fast
+// move out and back and a slow back-and-forth, every speed change ramped at
+// 2000 mm/s²; the actual position a first-order lag (10 ms) of the command
+// with 2 µm noise, recorded in 1 µm steps.
+struct Planted {
+  std::vector<double> t, cmd, act;
+};
+Planted planted_recording() {
+  Planted p;
+  std::mt19937 gen(7);
+  std::normal_distribution<double> noise(0.0, 0.002);
+  std::uniform_real_distribution<double> jitter(-0.001, 0.001);
+  const double h = 1e-3, tau = 0.01;
+  double x = 0, v = 0, act = 0, next = 0;
+  for (int i = 0; i < 60000; ++i) {
+    const double t = i * h;
+    double want = 0;
+    if (t < 20)
+      want = std::fmod(t, 4.0) < 2.0 ? 20.0 : -20.0;
+    else if (t >= 25 && t < 27)
+      want = 300.0;
+    else if (t >= 27 && t < 29)
+      want = -300.0;
+    else if (t >= 35)
+      want = std::fmod(t, 3.0) < 1.5 ? 5.0 : -5.0;
+    v += std::clamp(want - v, -2000 * h, 2000 * h);
+    x += v * h;
+    const double c = x + (t >= 22.0 && t < 24.0 ? 5.0 : 0.0);
+    act += (c - act) * h / tau;
+    if (t >= next) {
+      p.t.push_back(t);
+      p.cmd.push_back(c);
+      p.act.push_back(std::round((act + noise(gen)) * 1000.0) / 1000.0);
+      next = 0.1 * double(p.t.size()) + jitter(gen);
+    }
+  }
+  return p;
+}
+
+std::vector<std::size_t> rows_of(const std::vector<Glitch>& g) {
+  std::vector<std::size_t> r;
+  for (const auto& x : g)
+    r.push_back(x.row);
+  return r;
+}
+
+TEST(DiagnosisStages, GlitchRowsArePlantedSpikesNotReversalsStepsOrFastMoves) {
+  Planted p = planted_recording();
+  ASSERT_GT(p.t.size(), 590u);
+  // The clean recording has none: reversals, the dwell, the command step
+  // and the fast move are motion.
+  EXPECT_TRUE(isolated_glitches(p.t, p.cmd).empty()) << rows_of(isolated_glitches(p.t, p.cmd))[0];
+  EXPECT_TRUE(isolated_glitches(p.t, p.act).empty()) << rows_of(isolated_glitches(p.t, p.act))[0];
+  // Planted: a jump to a home position during the 20 mm/s move (command and
+  // actual), 0.5 mm on the command in the dwell, 3 mm on the actual
+  // position only after the step, and one two rows wide (not isolated).
+  const std::size_t home = 55, small = 210, still = 245, wide = 500;
+  p.cmd[home] = p.act[home] = 198.0;
+  p.cmd[small] -= 0.5;
+  p.act[still] += 3.0;
+  p.act[wide] += 40, p.act[wide + 1] += 40;
+  const auto gc = isolated_glitches(p.t, p.cmd), ga = isolated_glitches(p.t, p.act);
+  EXPECT_EQ(rows_of(gc), (std::vector<std::size_t>{home, small}));
+  EXPECT_EQ(rows_of(ga), (std::vector<std::size_t>{home, still}));
+  if (gc.size() == 2) EXPECT_NEAR(gc[1].deviation, 0.5, 1e-9);
+  if (ga.size() == 2) EXPECT_NEAR(ga[1].deviation, 3.0, 0.02);
+}
+
+TEST(DiagnosisStages, MasksLeaveOutGlitchRowsListThemAndTheCommandIsRepaired) {
+  Planted p = planted_recording();
+  const std::size_t on_cmd = 210, on_act = 245;
+  const double clean = p.cmd[on_cmd];
+  p.cmd[on_cmd] += 50.0;
+  p.act[on_act] -= 2.0;
+  Trace tr;
+  tr.axes = {sim::kZ};
+  tr.t_s = p.t;
+  tr.cmd[sim::kZ] = p.cmd;
+  tr.target[sim::kZ] = p.act;
+  const Masks m = make_masks(tr, 0.5, 0.0);
+  ASSERT_EQ(m.glitch_rows.size(), 2u);
+  EXPECT_EQ(m.glitch_rows[0].row, on_cmd);
+  EXPECT_EQ(m.glitch_rows[0].column, "z_cmd");
+  EXPECT_NEAR(m.glitch_rows[0].deviation_mm, 50.0, 1e-6);
+  EXPECT_EQ(m.glitch_rows[1].row, on_act);
+  EXPECT_EQ(m.glitch_rows[1].column, "z_act");
+  EXPECT_FALSE(m.valid[on_cmd]);
+  EXPECT_FALSE(m.valid[on_act]);
+  EXPECT_TRUE(m.valid[on_cmd - 3]);
+  EXPECT_GE(m.excluded, 2u);
+  repair_command_glitches(tr, m.glitch_rows);
+  EXPECT_NEAR(tr.cmd[sim::kZ][on_cmd], clean, 1e-9);     // in the dwell: the line is the dwell
+  EXPECT_EQ(tr.target[sim::kZ][on_act], p.act[on_act]);  // targets are only left out
+}
+
+// The real UMich recordings (data/umich_cnc_mill): the rows the rule finds,
+// per experiment, column by column (0 = the first data row). Experiment 1
+// has none; the spliced blocks of the other experiments (ten rows or more
+// at another place) are not isolated rows.
+TEST(DiagnosisStages, GlitchRowsOfTheUmichExperiments) {
+  const std::string cols[6][2] = {{"x_cmd", "X1_CommandPosition"}, {"x_act", "X1_ActualPosition"},
+                                  {"y_cmd", "Y1_CommandPosition"}, {"y_act", "Y1_ActualPosition"},
+                                  {"z_cmd", "Z1_CommandPosition"}, {"z_act", "Z1_ActualPosition"}};
+  std::string spec = "t=@index*0.1";
+  for (const auto& c : cols)
+    spec += "," + c[0] + "=" + c[1];
+  RecordingOptions o;
+  o.map = parse_column_map(spec);
+  using Found = std::set<std::pair<std::size_t, std::string>>;
+  std::map<int, Found> expected = {
+      {2,
+       {{313, "x_cmd"},
+        {313, "x_act"},
+        {313, "y_cmd"},
+        {313, "y_act"},
+        {313, "z_cmd"},
+        {313, "z_act"},
+        {525, "x_cmd"},
+        {525, "x_act"},
+        {525, "y_cmd"},
+        {525, "y_act"},
+        {525, "z_cmd"},
+        {525, "z_act"},
+        {956, "x_act"},
+        {1528, "x_cmd"},
+        {1528, "x_act"},
+        {1528, "y_cmd"},
+        {1528, "y_act"},
+        {1528, "z_cmd"},
+        {1528, "z_act"}}},
+      {14, {{231, "y_cmd"}, {231, "y_act"}}},
+      {15, {{466, "z_cmd"}, {466, "z_act"}, {1036, "z_cmd"}, {1036, "z_act"}}}};
+  for (int e = 1; e <= 18; ++e) {
+    char name[32];
+    std::snprintf(name, sizeof name, "experiment_%02d.csv", e);
+    const auto file = truecut::test::data_dir() / "umich_cnc_mill" / name;
+    ASSERT_TRUE(std::filesystem::is_regular_file(file)) << file;
+    const Recording rec = read_recording(file, o);
+    Found found;
+    for (const auto& c : cols)
+      for (const Glitch& g : isolated_glitches(rec.t_s, rec.channel(c[0])))
+        found.insert({g.row, c[0]});
+    EXPECT_EQ(found, expected[e]) << "experiment " << e;
+  }
 }
 
 TEST(DiagnosisStages, BestDelayFindsAPlantedDelay) {

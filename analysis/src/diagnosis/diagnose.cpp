@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <optional>
 
 #include "diagnose_steps.hpp"
@@ -89,18 +90,20 @@ void figures(const Trace& tr, const Residuals& raw, const Residuals& before, con
   double sb = 0, sa = 0;
   std::size_t n = 0;
   for (int j : tr.axes) {
-    double jb = 0, ja = 0;
+    double jb = 0, ja = 0, jr = 0;
     std::size_t jn = 0;
     for (std::size_t k = 0; k < tr.rows(); ++k) {
       if (!use[k]) continue;
       const double b = before.r[j][k], a = after.r[j][k];
-      jb += b * b, ja += a * a, ++jn;
+      jb += b * b, ja += a * a, jr += raw.r[j][k] * raw.r[j][k], ++jn;
       f.max_before_mm = std::max(f.max_before_mm, std::abs(b));
       f.max_after_mm = std::max(f.max_after_mm, std::abs(a));
     }
-    if (jn)
+    if (jn) {
       f.per_axis_rms_mm[std::string(sim::kJointNames[j])] = {std::sqrt(jb / jn),
                                                              std::sqrt(ja / jn)};
+      f.per_axis_unaligned_rms_mm[std::string(sim::kJointNames[j])] = std::sqrt(jr / jn);
+    }
     sb += jb, sa += ja, n += jn;
   }
   f.samples = n;
@@ -110,6 +113,67 @@ void figures(const Trace& tr, const Residuals& raw, const Residuals& before, con
 }
 
 }  // namespace
+
+std::vector<Glitch> isolated_glitches(const std::vector<double>& t, const std::vector<double>& y,
+                                      double factor) {
+  std::vector<Glitch> out;
+  const std::size_t n = y.size();
+  if (n < 5 || t.size() != n) return out;
+  // The recorded resolution per decade of the value (a logger that writes
+  // significant digits has a coarser grid above 100 than below): the
+  // smallest non-zero step between consecutive samples of that decade.
+  auto decade = [](double v) { return v != 0 ? int(std::floor(std::log10(std::abs(v)))) : -1000; };
+  std::map<int, double> grid;
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    const double d = std::abs(y[i + 1] - y[i]);
+    if (d <= 0 || decade(y[i]) != decade(y[i + 1])) continue;
+    auto [it, fresh] = grid.emplace(decade(y[i]), d);
+    if (!fresh) it->second = std::min(it->second, d);
+  }
+  auto grid_at = [&](double v) {
+    const auto it = grid.find(decade(v));
+    return it == grid.end() ? 0.0 : it->second;
+  };
+  const std::size_t w = 10;
+  std::vector<double> steps;
+  for (std::size_t k = 2; k + 2 < n; ++k) {
+    const double dl = t[k - 1] - t[k - 2], dr = t[k + 2] - t[k + 1];
+    if (!(dl > 0) || !(dr > 0)) continue;
+    const double pl = y[k - 1] + (y[k - 1] - y[k - 2]) * (t[k] - t[k - 1]) / dl;
+    const double pr = y[k + 1] - (y[k + 2] - y[k + 1]) * (t[k + 1] - t[k]) / dr;
+    const double el = y[k] - pl, er = y[k] - pr;
+    if (el * er <= 0) continue;
+    // The neighbours' own motion and noise: the median step within ±w rows
+    // (the two intervals touching k left out).
+    steps.clear();
+    for (std::size_t i = k > w ? k - w : 0; i + 1 < n && i < k + w; ++i)
+      if (i + 1 != k && i != k) steps.push_back(std::abs(y[i + 1] - y[i]));
+    std::nth_element(steps.begin(), steps.begin() + std::ptrdiff_t(steps.size() / 2), steps.end());
+    const double median_step = steps[steps.size() / 2];
+    const double s = std::max({std::abs(y[k - 1] - y[k - 2]), std::abs(y[k + 2] - y[k + 1]),
+                               std::abs(y[k + 1] - y[k - 1]), median_step, grid_at(y[k - 1]),
+                               grid_at(y[k + 1])});
+    const double dev = std::min(std::abs(el), std::abs(er));
+    if (dev > factor * s && dev > 0) out.push_back({k, dev});
+  }
+  return out;
+}
+
+void repair_command_glitches(Trace& tr, const std::vector<GlitchRow>& glitches) {
+  for (const GlitchRow& g : glitches)
+    for (int j = 0; j < sim::kJointCount; ++j) {
+      if (g.column != std::string(sim::kJointNames[j]) + "_cmd") continue;
+      auto& c = tr.cmd[j];
+      const std::size_t k = g.row;
+      if (k == 0 || k + 1 >= c.size()) continue;
+      const double a = (tr.t_s[k] - tr.t_s[k - 1]) / (tr.t_s[k + 1] - tr.t_s[k - 1]);
+      c[k] = c[k - 1] + a * (c[k + 1] - c[k - 1]);
+      if (!tr.cmd_slope[j].empty()) {
+        const auto slopes = command_slopes(tr.t_s, c);
+        tr.cmd_slope[j] = slopes;
+      }
+    }
+}
 
 Masks make_masks(const Trace& tr, double margin_s, double holdout_fraction) {
   Masks m;
@@ -147,6 +211,22 @@ Masks make_masks(const Trace& tr, double margin_s, double holdout_fraction) {
         glitch[k - 1] = glitch[k] = glitch[k + 1] = 1;
     }
   }
+  // Glitch rows: single samples off both sides' predictions, each series
+  // (commands and targets) judged on its own.
+  for (int j = 0; j < sim::kJointCount; ++j) {
+    const std::string name(sim::kJointNames[j]);
+    auto add = [&](const std::vector<double>& y, const std::string& column) {
+      if (y.size() != n) return;
+      for (const Glitch& g : isolated_glitches(tr.t_s, y)) {
+        m.glitch_rows.push_back({g.row, column, g.deviation});
+        glitch[g.row] = 1;
+      }
+    };
+    add(tr.cmd[j], name + "_cmd");
+    add(tr.target[j], name + (tr.meas[j] ? "_meas" : "_act"));
+  }
+  std::stable_sort(m.glitch_rows.begin(), m.glitch_rows.end(),
+                   [](const GlitchRow& a, const GlitchRow& b) { return a.row < b.row; });
   for (std::size_t k = 0; k < n; ++k) {
     const double t = tr.t_s[k];
     m.valid[k] = t >= t0 + margin_s && t <= t1 - margin_s && !glitch[k];
@@ -399,9 +479,11 @@ void prepare_traces(const Recording& train_rec, const Recording* holdout_rec, Pi
   P.holdout_fraction = holdout_rec ? 0.0 : o.holdout_fraction;
   P.masks = make_masks(tr, P.dmax, P.holdout_fraction);
   res.excluded_samples = P.masks.excluded;
+  res.glitch_rows = P.masks.glitch_rows;
   if (P.masks.excluded)
     P.say(std::to_string(P.masks.excluded) +
-          " samples around command jumps left out (recorder glitches)");
+          " samples around command jumps and glitch rows left out (recorder glitches)");
+  repair_command_glitches(P.tr, P.masks.glitch_rows);
   // A hold-out recording must carry the same joints.
   if (!holdout_rec) return;
   P.hold_tr = make_trace(*holdout_rec, o.command_interpolation);
@@ -412,6 +494,7 @@ void prepare_traces(const Recording& train_rec, const Recording* holdout_rec, Pi
                          train_rec.file);
   check_rows(*P.hold_tr, holdout_rec->file);
   P.hold_masks = make_masks(*P.hold_tr, P.dmax, 0.0);
+  repair_command_glitches(*P.hold_tr, P.hold_masks.glitch_rows);
 }
 
 // The model fitted with the simulation delayed by d (a hypothesis).
@@ -654,7 +737,9 @@ void heldout_figures(const Pipeline& P, const Recording* holdout_rec, const Mode
   if (holdout_rec) {
     const Trace& ht = *P.hold_tr;
     P.say("re-simulating the hold-out recording " + holdout_rec->file);
-    const Masks hm = make_masks(ht, std::abs(delay_s), 0.0);
+    Masks hm = make_masks(ht, std::abs(delay_s), 0.0);
+    for (const GlitchRow& g : P.hold_masks.glitch_rows)  // found before the repair
+      hm.valid[g.row] = hm.train[g.row] = 0;
     const Simulated hs0 = resimulate(P.base, ht, max_period);
     const Residuals hb = residuals(ht, hs0, delay_s, hm.train, &before.offset);
     const Residuals hr = residuals(ht, hs0, 0.0, hm.train, &raw.offset);

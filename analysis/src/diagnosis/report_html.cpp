@@ -92,6 +92,7 @@ std::string diagnosis_html(const DiagnosisResult& r) {
        (r.map.empty() ? "" : ", map <code>" + esc(r.map) + "</code>") +
        "; believed model: " + esc(r.believed.name) + "</p>\n";
   s += "<p><b>Verdict:</b> " + esc(r.verdict) + "</p>\n";
+  if (!r.glitch_rows.empty()) s += "<p>" + esc(glitch_rows_text(r)) + "</p>\n";
   if (!r.notes.empty()) {
     s += "<ul>";
     for (const auto& n : r.notes)

@@ -27,8 +27,11 @@ json fit_json(const FitFigures& f) {
             {"improvement",
              f.rms_before_mm > 0 ? num(1 - f.rms_after_mm / f.rms_before_mm) : json(nullptr)}};
   json axes = json::object();
-  for (const auto& [a, v] : f.per_axis_rms_mm)
+  for (const auto& [a, v] : f.per_axis_rms_mm) {
     axes[a] = {{"rms_before_mm", num(v.first)}, {"rms_after_mm", num(v.second)}};
+    if (const auto u = f.per_axis_unaligned_rms_mm.find(a); u != f.per_axis_unaligned_rms_mm.end())
+      axes[a]["rms_unaligned_mm"] = num(u->second);
+  }
   j["per_axis"] = axes;
   return j;
 }
@@ -44,6 +47,10 @@ std::string diagnosis_json(const DiagnosisResult& r) {
   j["map"] = r.map;
   j["rows"] = r.rows;
   j["excluded_samples"] = r.excluded_samples;
+  j["glitch_rows"] = json::array();
+  for (const auto& g : r.glitch_rows)
+    j["glitch_rows"].push_back(
+        {{"row", g.row}, {"column", g.column}, {"deviation_mm", num(g.deviation_mm)}});
   j["sample_period_s"] = num(r.sample_period_s);
   j["substeps"] = r.substeps;
   j["delay_s"] = num(r.delay_s);
@@ -135,9 +142,24 @@ std::string diagnosis_json(const DiagnosisResult& r) {
   return j.dump(2) + "\n";
 }
 
+// "glitch rows: 2 (row 313 x_cmd, ...), left out" or nothing; rows of the
+// recording, 0 = the first data row.
+std::string glitch_rows_text(const DiagnosisResult& r) {
+  if (r.glitch_rows.empty()) return "";
+  std::string s = "glitch rows (isolated samples off their neighbours, left out): " +
+                  std::to_string(r.glitch_rows.size()) + " (";
+  for (std::size_t i = 0; i < r.glitch_rows.size() && i < 20; ++i)
+    s += (i ? ", " : "") + std::string("row ") + std::to_string(r.glitch_rows[i].row) + " " +
+         r.glitch_rows[i].column + " " + rt::format_printf("%.4g", r.glitch_rows[i].deviation_mm) +
+         " mm";
+  if (r.glitch_rows.size() > 20) s += ", …";
+  return s + ")\n";
+}
+
 std::string diagnosis_summary(const DiagnosisResult& r) {
   std::string s = "recording " + r.recording + ": " + std::to_string(r.rows) + " samples every " +
                   rt::format_printf("%.4g", r.sample_period_s * 1e3) + " ms\n";
+  s += glitch_rows_text(r);
   s += "logging delay: " + rt::format_printf("%.4g", r.delay_s * 1e3) + " ms";
   if (r.delay_ci95_s)
     s += " (95 % " + rt::format_printf("%.4g", r.delay_ci95_s->first * 1e3) + " .. " +

@@ -125,6 +125,8 @@ struct FitFigures {
   double rms_unaligned_mm = 0.0;  // believed model without removing the logging delay
   double max_before_mm = 0.0, max_after_mm = 0.0;
   std::map<std::string, std::pair<double, double>> per_axis_rms_mm;  // before, after
+  // Per axis: the believed model without removing the logging delay (trace mode).
+  std::map<std::string, double> per_axis_unaligned_rms_mm;
 };
 
 struct Whiteness {
@@ -152,12 +154,21 @@ struct AxisSeries {
   std::vector<char> heldout;  // 1 where the sample belongs to the held-out block
 };
 
+// A single recorded sample inconsistent with its neighbours (isolated_glitches
+// in diagnose_steps.hpp): left out of every fit and statistic.
+struct GlitchRow {
+  std::size_t row = 0;        // data row of the recording, 0 = the first after the header
+  std::string column;         // <j>_cmd, <j>_act or <j>_meas
+  double deviation_mm = 0.0;  // from the nearer of the two one-sided predictions
+};
+
 struct DiagnosisResult {
   std::string recording, holdout_recording, map;
   std::size_t rows = 0;
-  std::size_t excluded_samples = 0;  // around implausible command jumps (recorder glitches)
-  double sample_period_s = 0.0;      // median
-  int substeps = 1;                  // for the median interval
+  std::size_t excluded_samples = 0;    // around implausible command jumps and glitch rows
+  std::vector<GlitchRow> glitch_rows;  // isolated samples off their neighbours, by row
+  double sample_period_s = 0.0;        // median
+  int substeps = 1;                    // for the median interval
   double delay_s = 0.0;
   std::optional<std::pair<double, double>> delay_ci95_s;
   std::string delay_note;
@@ -197,5 +208,7 @@ DiagnosisResult diagnose(const Recording& train, const Recording* holdout,
 std::string diagnosis_json(const DiagnosisResult& result);
 std::string diagnosis_html(const DiagnosisResult& result);
 std::string diagnosis_summary(const DiagnosisResult& result);  // for stdout
+// One line listing the glitch rows (empty when there are none).
+std::string glitch_rows_text(const DiagnosisResult& result);
 
 }  // namespace truecut::analysis::diagnosis
