@@ -106,6 +106,23 @@ TEST(CompMath, SanitizeReplacesInvalidTunablesBySafeValues) {
   EXPECT_EQ(0.0, safe.fade_time_s);
 }
 
+TEST(CompMath, AdoptLimitsKeepsTheLastValidValueOfEachTunable) {
+  CompLimits good{0.5, 2.0, 0.3}, use;
+  EXPECT_TRUE(adopt_limits({0.4, 3.0, 0.2}, good, use));
+  EXPECT_EQ(0.4, use.max_correction_mm);
+  EXPECT_EQ(3.0, good.max_rate_mm_per_s);
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  EXPECT_FALSE(adopt_limits({kNaN, -1.0, kInf}, good, use));
+  EXPECT_EQ(0.4, use.max_correction_mm);
+  EXPECT_EQ(3.0, use.max_rate_mm_per_s);
+  EXPECT_EQ(0.2, use.fade_time_s);
+  EXPECT_FALSE(adopt_limits({0.1, 0.0, 0.0}, good, use)) << "max rate 0 could never fade out";
+  EXPECT_EQ(0.1, use.max_correction_mm);
+  EXPECT_EQ(3.0, use.max_rate_mm_per_s);
+  EXPECT_EQ(0.0, use.fade_time_s) << "fade time 0 is valid: the rate limit does the fade";
+  EXPECT_EQ(0.1, good.max_correction_mm);
+}
+
 namespace {
 
 // Runs rt::comp::step() along a path; checks the contract every cycle.
@@ -534,4 +551,85 @@ TEST(CompJoint, CorrectedJointsMoveTheTcpByTheCorrection) {
   const rt::AcJoints j{1, 2, 3, 4, 5};
   const rt::AcJoints same = correct_joints(k, j, rt::forward_ac(k, j), Vec3::Zero());
   EXPECT_EQ(0, std::memcmp(&j, &same, sizeof j)) << "zero correction passes joints bit for bit";
+}
+
+TEST(CompCore, InvalidParametersNeverFreezeTheOutputAndDisableAlwaysReachesZero) {
+  // Each tunable NaN, infinite, negative (and max-rate 0): the fault is
+  // reported, the correction fades to zero at the last valid limits, with
+  // or without `enable`, and fades back in without a jump once the
+  // parameter is valid again.
+  const auto field = make_field({});
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  const double bad[] = {kNaN, kInf, -kInf, -1.0, 0.0};
+  for (int which = 0; which < 3; ++which)
+    for (double b : bad) {
+      if (b == 0.0 && which != 1) continue;  // 0 is a valid bound and fade time
+      for (bool disable : {false, true}) {
+        SCOPED_TRACE(testing::Message()
+                     << "tunable " << which << " = " << b << " disable " << disable);
+        Driver d;
+        d.limits = {10.0, 5.0, 0.05};
+        CycleInput in;
+        in.tool = 1;
+        in.enable = true;
+        in.tcp_mm = Vec3(1.0, 1.0, 0.0);
+        in.candidate = &field;
+        d.cycle(in);
+        in.candidate = nullptr;
+        for (int i = 0; i < 100; ++i)
+          d.cycle(in);
+        const Vec3 full = d.state.output;
+        ASSERT_GT(full.norm(), 0.05);
+        const CompLimits valid = d.limits;
+        double* tunable[] = {&d.limits.max_correction_mm, &d.limits.max_rate_mm_per_s,
+                             &d.limits.fade_time_s};
+        *tunable[which] = b;
+        if (disable) in.enable = false;
+        CycleOutput o;
+        for (int i = 0; i < 200; ++i) {
+          o = d.cycle(in);
+          ASSERT_EQ(Fault::kBadParameter, o.fault) << i;
+        }
+        EXPECT_EQ(Vec3::Zero(), o.correction_mm);
+        EXPECT_FALSE(o.active);
+        EXPECT_LE(d.max_step_mm, 5.0 * kDt * (1 + kSlack));
+        // Recovery: no jump, the correction fades back in.
+        d.limits = valid;
+        in.enable = true;
+        for (int i = 0; i < 200; ++i)
+          ASSERT_EQ(Fault::kNone, d.cycle(in).fault);
+        EXPECT_EQ(full, d.state.output);
+        EXPECT_LE(d.max_step_mm, 5.0 * kDt * (1 + kSlack));
+      }
+    }
+}
+
+TEST(CompCore, NoJumpWhenANaNInputRecoversElsewhere) {
+  // The input is NaN for a while and comes back at another place with
+  // another correction: the correction cross-fades, never steps.
+  FieldSpec big;
+  big.scale = 20.0;
+  const auto field = make_field(big);
+  Driver d;
+  d.limits = {5.0, 10.0, 0.1};
+  CycleInput in;
+  in.tool = 1;
+  in.enable = true;
+  in.tcp_mm = Vec3(-8.0, 6.0, 1.0);
+  in.candidate = &field;
+  d.cycle(in);
+  in.candidate = nullptr;
+  for (int i = 0; i < 200; ++i)
+    d.cycle(in);
+  for (int nan_cycles : {1, 5, 40, 300}) {
+    in.input_fault = Fault::kInputNotFinite;
+    for (int i = 0; i < nan_cycles; ++i)
+      d.cycle(in);
+    in.input_fault = Fault::kNone;
+    in.tcp_mm = -in.tcp_mm;
+    for (int i = 0; i < 300; ++i)
+      d.cycle(in);
+    EXPECT_EQ(field.evaluate(1, in.tcp_mm).correction_mm, d.state.output) << nan_cycles;
+  }
+  EXPECT_LE(d.max_step_mm, 10.0 * kDt * (1 + kSlack));
 }

@@ -1,7 +1,8 @@
 // The servo-cycle logic of truecut_comp, free of the HAL: one call per cycle
 // takes the inputs and the state, returns the correction. Called in this
 // order inside step():
-//   1. sanitise the tunables
+//   1. check the tunables (an invalid one: the last valid value, and a fault
+//      that fades the correction to zero)
 //   2. switch source (new field, new tool) if no cross-fade is running
 //   3. evaluate the current and the outgoing source at the TCP
 //   4. fault handling: a failing source holds its last good correction
@@ -28,7 +29,7 @@ enum class Fault : int32_t {
   kOutsideGrid = 3,     // the TCP is outside the field's grid
   kInputNotFinite = 4,  // NaN/Inf on a position or axis input
   kFieldNotFinite = 5,  // the field evaluated to NaN/Inf
-  kBadParameter = 6,    // max-correction, max-rate or fade-time NaN/Inf or < 0
+  kBadParameter = 6,    // a limit NaN/Inf or < 0, or max-rate 0: the last valid one is used
   kKinematics = 7,      // joint mode: joint A outside [a-min, a-max]
 };
 
@@ -67,6 +68,9 @@ struct CompState {
   Channel current;             // the source being faded in (or held)
   Channel outgoing;            // the source being faded out; idle when u == 0
   Vec3 output = Vec3::Zero();  // correction output by the last cycle, mm
+  // The last valid value of each tunable (kBadParameter: the invalid one is
+  // replaced by it, and the correction fades to zero at these limits).
+  CompLimits last_good;
 };
 
 struct CycleInput {
@@ -137,7 +141,7 @@ inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& ra
                         double dt_s) noexcept {
   CycleOutput out;
   CompLimits lim;
-  const bool limits_ok = sanitize(raw_limits, lim);
+  const bool limits_ok = adopt_limits(raw_limits, s.last_good, lim);
 
   // 2. A new field or tool starts a cross-fade from the current source; a
   // second change waits until the first cross-fade has finished.

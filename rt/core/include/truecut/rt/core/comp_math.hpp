@@ -75,13 +75,38 @@ struct CompLimits {
 
 // Replaces each invalid tunable (not finite, or negative) by its safe value:
 // max correction 0 (the correction goes to zero), max rate 0 (the correction
-// holds), fade time 0. Returns whether all were valid.
+// holds), fade time 0. Returns whether all were valid. (The servo cycle uses
+// adopt_limits() instead, which keeps the last valid values.)
 inline bool sanitize(const CompLimits& raw, CompLimits& safe) noexcept {
   auto ok = [](double v) { return std::isfinite(v) && v >= 0.0; };
   safe.max_correction_mm = ok(raw.max_correction_mm) ? raw.max_correction_mm : 0.0;
   safe.max_rate_mm_per_s = ok(raw.max_rate_mm_per_s) ? raw.max_rate_mm_per_s : 0.0;
   safe.fade_time_s = ok(raw.fade_time_s) ? raw.fade_time_s : 0.0;
   return ok(raw.max_correction_mm) && ok(raw.max_rate_mm_per_s) && ok(raw.fade_time_s);
+}
+
+// The servo cycle's parameter discipline: each tunable that is valid is
+// used and remembered in `last_good`; each invalid one (NaN, infinite,
+// negative, or a max rate of 0, which could never bring the correction back
+// to zero) is replaced by its last valid value, so that the correction can
+// always be faded to zero at limits the integrator once set. Returns whether
+// all were valid (false: the kBadParameter fault).
+inline bool adopt_limits(const CompLimits& raw, CompLimits& last_good, CompLimits& use) noexcept {
+  auto ok = [](double v) { return std::isfinite(v) && v >= 0.0; };
+  bool all = true;
+  auto take = [&](double v, double& good, bool valid) {
+    if (valid)
+      good = v;
+    else
+      all = false;
+    return good;
+  };
+  use.max_correction_mm =
+      take(raw.max_correction_mm, last_good.max_correction_mm, ok(raw.max_correction_mm));
+  use.max_rate_mm_per_s = take(raw.max_rate_mm_per_s, last_good.max_rate_mm_per_s,
+                               ok(raw.max_rate_mm_per_s) && raw.max_rate_mm_per_s > 0.0);
+  use.fade_time_s = take(raw.fade_time_s, last_good.fade_time_s, ok(raw.fade_time_s));
+  return all;
 }
 
 }  // namespace truecut::rt::comp
