@@ -86,14 +86,14 @@ bool all_outputs_finite(const Hal& h) {
 
 TEST(TruecutComp, ExportsTheDocumentedPins) {
   Rig r("");
-  for (const char* pin : {"enable",     "tool",       "max-correction", "max-rate",
-                          "fade-time",  "reload",     "swap-inhibit",   "tcp-x",
-                          "tcp-y",      "tcp-z",      "axis-i",         "axis-j",
-                          "axis-k",     "tcp-x-out",  "tcp-y-out",      "tcp-z-out",
-                          "axis-i-out", "axis-j-out", "axis-k-out",     "corr-x",
-                          "corr-y",     "corr-z",     "corr-mag",       "active",
-                          "fault",      "limited",    "fade",           "field-generation",
-                          "load-errors"})
+  for (const char* pin : {"enable",      "tool",       "max-correction", "max-rate",
+                          "fade-time",   "reload",     "swap-inhibit",   "tcp-x",
+                          "tcp-y",       "tcp-z",      "axis-i",         "axis-j",
+                          "axis-k",      "tcp-x-out",  "tcp-y-out",      "tcp-z-out",
+                          "axis-i-out",  "axis-j-out", "axis-k-out",     "corr-x",
+                          "corr-y",      "corr-z",     "corr-mag",       "active",
+                          "fault",       "limited",    "fade",           "field-generation",
+                          "load-errors", "clamp-count"})
     EXPECT_TRUE(r.hal.has_pin(std::string("c.") + pin)) << pin;
   EXPECT_TRUE(r.hal.has_function("c.update"));
   EXPECT_EQ(1.0, getf(r.hal, "c.max-correction"));

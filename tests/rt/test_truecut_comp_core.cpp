@@ -633,3 +633,76 @@ TEST(CompCore, NoJumpWhenANaNInputRecoversElsewhere) {
   }
   EXPECT_LE(d.max_step_mm, 10.0 * kDt * (1 + kSlack));
 }
+
+TEST(CompCore, MaxCorrectionIsHardInEveryCycleAndAStepDownIsAFault) {
+  // The probe: the bound lowered in six steps from 0.065 to 0.005 mm
+  // at 1 kHz under a correction larger than all of them.
+  FieldSpec big;
+  big.scale = 20.0;
+  const auto field = make_field(big);
+  const Vec3 p(2.0, 3.0, 1.0);
+  ASSERT_GT(field.evaluate(1, p).correction_mm.norm(), 0.1);
+  Driver d;
+  d.limits = {0.065, 10.0, 0.05};
+  CycleInput in;
+  in.tool = 1;
+  in.tcp_mm = p;
+  in.enable = true;
+  in.candidate = &field;
+  d.cycle(in);
+  in.candidate = nullptr;
+  for (int i = 0; i < 100; ++i)
+    d.cycle(in);
+  ASSERT_NEAR(0.065, d.state.output.norm(), 1e-15);
+  const int32_t clamps_before = d.state.clamp_count;
+  int faults = 0;
+  for (double bound : {0.05, 0.045, 0.03, 0.025, 0.01, 0.005}) {
+    const double before = d.state.output.norm();
+    d.limits.max_correction_mm = bound;
+    for (int i = 0; i < 20; ++i) {
+      const CycleOutput o = d.cycle(in);
+      ASSERT_LE(o.correction_mm.norm(), bound) << bound << " cycle " << i;
+      ASSERT_TRUE(o.clamped);
+      ASSERT_TRUE(o.limited);
+      // The step is a fault exactly when it is larger than max-rate allows.
+      const bool step = i == 0 && before - bound > 10.0 * kDt;
+      ASSERT_EQ(step ? Fault::kBoundStep : Fault::kNone, o.fault) << bound << " cycle " << i;
+      faults += o.fault == Fault::kBoundStep;
+    }
+  }
+  EXPECT_EQ(3, faults) << "steps of 0.005 mm are within one cycle's step (0.01 mm)";
+  EXPECT_EQ(clamps_before + 120, d.state.clamp_count);
+  EXPECT_NEAR(0.005, d.state.output.norm(), 1e-15);
+  // Raising the bound again is no fault: the rate limit follows it up.
+  d.limits.max_correction_mm = 0.065;
+  d.max_step_mm = 0.0;
+  for (int i = 0; i < 100; ++i)
+    ASSERT_EQ(Fault::kNone, d.cycle(in).fault);
+  EXPECT_LE(d.max_step_mm, 10.0 * kDt * (1 + kSlack));
+  EXPECT_NEAR(0.065, d.state.output.norm(), 1e-15);
+}
+
+TEST(CompCore, ABoundLoweredWithinTheRateIsFollowedWithoutAFault) {
+  FieldSpec big;
+  big.scale = 20.0;
+  const auto field = make_field(big);
+  Driver d;
+  d.limits = {0.5, 10.0, 0.05};
+  CycleInput in;
+  in.tool = 1;
+  in.tcp_mm = Vec3(2.0, 3.0, 1.0);
+  in.enable = true;
+  in.candidate = &field;
+  d.cycle(in);
+  in.candidate = nullptr;
+  for (int i = 0; i < 100; ++i)
+    d.cycle(in);
+  d.max_step_mm = 0.0;
+  while (d.limits.max_correction_mm > 0.01) {
+    d.limits.max_correction_mm -= 0.5 * 10.0 * kDt;  // half the rate
+    const CycleOutput o = d.cycle(in);
+    ASSERT_EQ(Fault::kNone, o.fault);
+    ASSERT_LE(o.correction_mm.norm(), d.limits.max_correction_mm);
+  }
+  EXPECT_LE(d.max_step_mm, 10.0 * kDt * (1 + kSlack));
+}

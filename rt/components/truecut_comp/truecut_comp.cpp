@@ -56,6 +56,7 @@ struct Pins {
   double* fade;
   int32_t* field_generation;
   int32_t* load_errors;
+  int32_t* clamp_count;
 };
 
 struct Instance {
@@ -184,6 +185,7 @@ void update(void* arg, long period_ns) {
   *p.limited = out.limited;
   *p.fade = out.fade;
   *p.load_errors = s.source.load_errors();
+  *p.clamp_count = s.core.clamp_count;
   // Position outputs hold their last value while the inputs are unusable.
   if (in.input_fault == Fault::kInputNotFinite) return;
   write3(p.tcp_out, pose.tcp_mm + out.correction_mm);
@@ -276,6 +278,7 @@ void make_pins(rt::hal::component::Builder& b, const std::string& n, Mode mode, 
   out_f("fade", &p.fade);
   b.pin(n + ".field-generation", TC_HAL_S32, TC_HAL_OUT, &p.field_generation);
   b.pin(n + ".load-errors", TC_HAL_S32, TC_HAL_OUT, &p.load_errors);
+  b.pin(n + ".clamp-count", TC_HAL_S32, TC_HAL_OUT, &p.clamp_count);
 
   const rt::comp::CompLimits defaults;
   *p.max_correction = defaults.max_correction_mm;

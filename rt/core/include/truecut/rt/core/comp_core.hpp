@@ -7,7 +7,7 @@
 //   3. evaluate the current and the outgoing source at the TCP
 //   4. fault handling: a failing source holds its last good correction
 //   5. advance the fades, cross-fade
-//   6. clamp the magnitude, then limit the rate
+//   6. clamp the magnitude, then limit the rate, then the hard bound
 // Real-time safe: noexcept, no allocation, at most two field evaluations.
 #pragma once
 
@@ -31,6 +31,8 @@ enum class Fault : int32_t {
   kFieldNotFinite = 5,  // the field evaluated to NaN/Inf
   kBadParameter = 6,    // a limit NaN/Inf or < 0, or max-rate 0: the last valid one is used
   kKinematics = 7,      // joint mode: joint A outside [a-min, a-max]
+  kBoundStep = 8,       // max-correction was lowered below the output by more
+                        // than the limits let it follow: the output stepped
 };
 
 inline const char* to_string(Fault f) noexcept {
@@ -51,6 +53,8 @@ inline const char* to_string(Fault f) noexcept {
       return "bad-parameter";
     case Fault::kKinematics:
       return "kinematics";
+    case Fault::kBoundStep:
+      return "bound-step";
   }
   return "unknown";
 }
@@ -71,6 +75,7 @@ struct CompState {
   // The last valid value of each tunable (kBadParameter: the invalid one is
   // replaced by it, and the correction fades to zero at these limits).
   CompLimits last_good;
+  int32_t clamp_count = 0;  // cycles in which max-correction acted (wraps)
 };
 
 struct CycleInput {
@@ -89,6 +94,7 @@ struct CycleOutput {
   Vec3 correction_mm = Vec3::Zero();
   Fault fault = Fault::kNone;
   bool limited = false;  // the magnitude clamp or the rate limit acted
+  bool clamped = false;  // max-correction acted (on the target or, hard, on the output)
   bool active = false;   // a correction is applied or fading
   double fade = 0.0;     // gain of the current source, 0..1
   bool adopted = false;  // the candidate became the current field
@@ -190,18 +196,29 @@ inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& ra
     s.outgoing = Channel{};
   }
 
-  // 6. Clamp, then rate-limit against last cycle's output.
+  // 6. Clamp, then rate-limit against last cycle's output, then the hard
+  // bound: the rate-limited output can be above max-correction only when the
+  // bound was lowered below it by more than one cycle's step; the bound wins
+  // and the step is a fault.
   const Limited m = limit_magnitude(blended, lim.max_correction_mm);
   Limited r = limit_rate(m.value, s.output, lim.max_rate_mm_per_s * dt_s);
   if (!r.value.allFinite()) r = {s.output, true};  // cannot happen; never pass NaN on
-  s.output = r.value;
+  const Limited h = limit_magnitude_hard(r.value, lim.max_correction_mm);
+  s.output = h.value;
+  // (Rounding of the rate step can put the output 1 ulp above the bound: the
+  // clamp removes it, but that is no step.)
+  const bool bound_step =
+      h.limited && r.value.norm() - lim.max_correction_mm > 1e-12 * (1.0 + lim.max_correction_mm);
+  out.clamped = m.limited || h.limited;
+  if (out.clamped) s.clamp_count = static_cast<int32_t>(static_cast<uint32_t>(s.clamp_count) + 1u);
 
-  out.correction_mm = r.value;
-  out.limited = m.limited || r.limited;
+  out.correction_mm = h.value;
+  out.limited = m.limited || r.limited || h.limited;
   out.fade = fade_gain(s.current.u);
   out.active = s.current.u > 0.0 || s.outgoing.u > 0.0 || !s.output.isZero(0.0);
   out.fault = in.input_fault != Fault::kNone ? in.input_fault
               : !limits_ok                   ? Fault::kBadParameter
+              : bound_step                   ? Fault::kBoundStep
                                              : cur.fault;
   return out;
 }

@@ -50,6 +50,18 @@ inline Limited limit_magnitude(const Vec3& c, double max_mm) noexcept {
   return {c * (max_mm / n), true};  // n > max_mm >= 0
 }
 
+// limit_magnitude() whose result's computed length is never above max_mm,
+// not even by rounding: the hard bound on the output.
+inline Limited limit_magnitude_hard(const Vec3& c, double max_mm) noexcept {
+  Limited r = limit_magnitude(c, max_mm);
+  for (int i = 0; i < 4 && r.value.norm() > max_mm; ++i) {
+    r.value *= 1.0 - 4e-16;
+    r.limited = true;
+  }
+  if (r.value.norm() > max_mm) r.value.setZero();  // cannot happen
+  return r;
+}
+
 // Moves from `previous` towards `target` by at most max_step_mm (Euclidean):
 // the vector rate limit, so the correction never steps further than
 // max rate x period, in any direction.
