@@ -706,3 +706,168 @@ TEST(CompCore, ABoundLoweredWithinTheRateIsFollowedWithoutAFault) {
   }
   EXPECT_LE(d.max_step_mm, 10.0 * kDt * (1 + kSlack));
 }
+
+namespace {
+
+// Velocity and acceleration of the output, per cycle, against the limits.
+struct MotionProbe {
+  Vec3 c1 = Vec3::Zero(), v1 = Vec3::Zero();
+  double max_v = 0.0, max_a = 0.0;
+  void add(const Vec3& c) {
+    const Vec3 v = (c - c1) / kDt;
+    max_v = std::max(max_v, v.norm());
+    max_a = std::max(max_a, (v - v1).norm() / kDt);
+    c1 = c;
+    v1 = v;
+  }
+};
+
+}  // namespace
+
+TEST(CompMath, LimitMotionFollowsAFeasibleTargetExactlyAndBrakesOntoAStep) {
+  // A target within the limits is followed bit for bit.
+  Vec3 y = Vec3::Zero(), v = Vec3::Zero(), prev = Vec3::Zero();
+  for (int i = 1; i <= 1000; ++i) {
+    const Vec3 t = Vec3(1.0, -0.5, 0.2) * fade_gain(i / 1000.0);
+    const Motion m = limit_motion(t, prev, y, v, 10.0, 100.0, 10.0, kDt);
+    ASSERT_FALSE(m.limited) << i;
+    ASSERT_EQ(t, m.position);
+    y = m.position;
+    v = m.velocity;
+    prev = t;
+  }
+  // Steps in random directions: velocity and acceleration stay within the
+  // limits, and the output lands on the target exactly.
+  std::mt19937_64 rng(19);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (int k = 0; k < 50; ++k) {
+    const Vec3 t(n(rng), n(rng), n(rng));
+    MotionProbe probe;
+    probe.c1 = y;
+    probe.v1 = v;
+    int cycles = 0;
+    while (y != t && cycles < 20000) {
+      const Motion m = limit_motion(t, t, y, v, 10.0, 100.0, 10.0, kDt);
+      y = m.position;
+      v = m.velocity;
+      probe.add(y);
+      ++cycles;
+    }
+    ASSERT_EQ(t, y) << k;
+    EXPECT_LE(probe.max_v, 10.0 * (1 + 1e-9));
+    EXPECT_LE(probe.max_a, 100.0 * (1 + 1e-6));
+  }
+}
+
+namespace {
+
+// The cases with an acceleration limit: the output's velocity and
+// acceleration in every cycle.
+struct AccelRig {
+  FieldSpec spec;
+  rt::CorrectionField field;
+  Driver d;
+  CycleInput in;
+  MotionProbe probe;
+  explicit AccelRig(double scale) : spec(with_scale(scale)), field(make_field(spec)) {
+    d.limits = {1.0, 10.0, 1.0, 100.0};
+    in.tool = 1;
+    in.enable = true;
+    in.candidate = &field;
+  }
+  static FieldSpec with_scale(double scale) {
+    FieldSpec s;
+    s.scale = scale;
+    return s;
+  }
+  CycleOutput cycle() {
+    const CycleOutput o = d.cycle(in);
+    in.candidate = nullptr;
+    probe.add(o.correction_mm);
+    EXPECT_LE(o.correction_mm.norm(), d.limits.max_correction_mm);
+    return o;
+  }
+};
+
+}  // namespace
+
+TEST(CompCore, AccelerationLimitHoldsForSwapsToolChangesFadesAndGridExit) {
+  // Fade-time 0: every change of the wanted correction is a step that only
+  // the limits smooth.
+  AccelRig r(20.0);
+  r.d.limits.max_correction_mm = 10.0;  // not clamped here (see the bound tests)
+  r.d.limits.fade_time_s = 0.0;
+  r.in.tcp_mm = Vec3(-3.0, 4.0, 1.0);
+  for (int i = 0; i < 1000; ++i)
+    r.cycle();
+  EXPECT_EQ(r.field.evaluate(1, r.in.tcp_mm).correction_mm, r.d.state.output);
+  r.in.tool = 2;  // tool change
+  for (int i = 0; i < 1000; ++i)
+    r.cycle();
+  r.in.tcp_mm = Vec3(100.0, 0.0, 0.0);  // leaves the grid
+  for (int i = 0; i < 1000; ++i)
+    EXPECT_EQ(Fault::kOutsideGrid, r.cycle().fault);
+  EXPECT_EQ(Vec3::Zero(), r.d.state.output);
+  r.in.tcp_mm = Vec3(2.0, -2.0, 0.0);
+  r.in.enable = false;
+  for (int i = 0; i < 10; ++i)
+    r.cycle();
+  r.in.enable = true;
+  for (int i = 0; i < 300; ++i)  // enable during a reversal of the disable
+    r.cycle();
+  r.in.enable = false;
+  for (int i = 0; i < 1000; ++i)
+    r.cycle();
+  EXPECT_EQ(Vec3::Zero(), r.d.state.output) << "disable reaches zero";
+  EXPECT_LE(r.probe.max_v, 10.0 * (1 + 1e-9));
+  EXPECT_LE(r.probe.max_a, 100.0 * (1 + 1e-6));
+  EXPECT_TRUE(r.d.ever_limited);
+}
+
+TEST(CompCore, AccelerationLimitHoldsForAFadeReversedMidwayAndABoundRaised) {
+  AccelRig r(1.0);
+  r.d.limits = {1.0, 10.0, 0.02, 100.0};  // a fast fade: the limits act
+  r.in.tcp_mm = Vec3(1.0, 2.0, 0.5);
+  for (int i = 0; i < 10; ++i)
+    r.cycle();
+  r.in.enable = false;  // reversal mid-fade
+  for (int i = 0; i < 8; ++i)
+    r.cycle();
+  r.in.enable = true;
+  for (int i = 0; i < 500; ++i)
+    r.cycle();
+  r.d.limits.max_correction_mm = 0.5;
+  for (int i = 0; i < 500; ++i)
+    ASSERT_EQ(Fault::kNone, r.cycle().fault);
+  EXPECT_LE(r.probe.max_v, 10.0 * (1 + 1e-9));
+  EXPECT_LE(r.probe.max_a, 100.0 * (1 + 1e-6));
+}
+
+TEST(CompCore, ABoundSteppedDownStepsOnceAsAFaultThenMovesWithinTheLimits) {
+  // The probe: max-correction from 0.065 to 0.005 mm in one step at
+  // 1 kHz. The bound is hard: one reported step, then the output rests at
+  // the bound; a bound lowered smoothly (0.5 s, C1) never steps.
+  AccelRig r(20.0);
+  r.d.limits = {0.065, 10.0, 1.0, 100.0};
+  r.in.tcp_mm = Vec3(2.0, 3.0, 1.0);
+  for (int i = 0; i < 1500; ++i)
+    r.cycle();
+  ASSERT_NEAR(0.065, r.d.state.output.norm(), 1e-15);
+  r.d.limits.max_correction_mm = 0.005;
+  EXPECT_EQ(Fault::kBoundStep, r.cycle().fault);
+  r.probe = MotionProbe{r.d.state.output, Vec3::Zero()};
+  for (int i = 0; i < 500; ++i)
+    ASSERT_EQ(Fault::kNone, r.cycle().fault);
+  EXPECT_LT(r.probe.max_v, 1e-9) << "at rest at the bound";
+  // Up again (the limits follow), then down along a smooth ramp.
+  r.d.limits.max_correction_mm = 0.065;
+  for (int i = 0; i < 500; ++i)
+    ASSERT_EQ(Fault::kNone, r.cycle().fault);
+  ASSERT_NEAR(0.065, r.d.state.output.norm(), 1e-15);
+  for (int i = 1; i <= 500; ++i) {
+    r.d.limits.max_correction_mm = 0.065 - 0.06 * fade_gain(i / 500.0);
+    ASSERT_EQ(Fault::kNone, r.cycle().fault) << i;
+  }
+  EXPECT_LE(r.probe.max_v, 10.0 * (1 + 1e-9));
+  EXPECT_LE(r.probe.max_a, 100.0 * (1 + 1e-6));
+}

@@ -31,6 +31,7 @@ struct Pins {
   double* max_correction;  // mm
   double* max_rate;        // mm/s
   double* fade_time;       // s
+  double* max_accel;       // mm/s^2
   bool* reload;
   bool* swap_inhibit;
   std::array<double*, 3> tcp_in;  // tcp mode, mm
@@ -170,7 +171,7 @@ void update(void* arg, long period_ns) {
   }
   in.tcp_mm = pose.tcp_mm;
 
-  const rt::comp::CompLimits limits{*p.max_correction, *p.max_rate, *p.fade_time};
+  const rt::comp::CompLimits limits{*p.max_correction, *p.max_rate, *p.fade_time, *p.max_accel};
   const rt::comp::CycleOutput out = rt::comp::step(s.core, in, limits, double(period_ns) * 1e-9);
   if (out.adopted) {
     s.pending = nullptr;
@@ -241,6 +242,7 @@ void make_pins(rt::hal::component::Builder& b, const std::string& n, Mode mode, 
   in_f("max-correction", &p.max_correction);
   in_f("max-rate", &p.max_rate);
   in_f("fade-time", &p.fade_time);
+  in_f("max-accel", &p.max_accel);
   b.pin(n + ".reload", TC_HAL_BIT, TC_HAL_IN, &p.reload);
   b.pin(n + ".swap-inhibit", TC_HAL_BIT, TC_HAL_IN, &p.swap_inhibit);
   static const char* const kXyz[] = {"x", "y", "z"};
@@ -284,6 +286,7 @@ void make_pins(rt::hal::component::Builder& b, const std::string& n, Mode mode, 
   *p.max_correction = defaults.max_correction_mm;
   *p.max_rate = defaults.max_rate_mm_per_s;
   *p.fade_time = defaults.fade_time_s;
+  *p.max_accel = rt::comp::kDefaultMaxAccelMmPerS2;
   if (mode == Mode::kTcp) {
     *p.axis_in[2] = 1.0;
   } else {

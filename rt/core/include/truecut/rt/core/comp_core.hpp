@@ -7,7 +7,8 @@
 //   3. evaluate the current and the outgoing source at the TCP
 //   4. fault handling: a failing source holds its last good correction
 //   5. advance the fades, cross-fade
-//   6. clamp the magnitude, then limit the rate, then the hard bound
+//   6. clamp the magnitude, then limit the velocity and acceleration, then
+//      the hard bound
 // Real-time safe: noexcept, no allocation, at most two field evaluations.
 #pragma once
 
@@ -75,7 +76,10 @@ struct CompState {
   // The last valid value of each tunable (kBadParameter: the invalid one is
   // replaced by it, and the correction fades to zero at these limits).
   CompLimits last_good;
-  int32_t clamp_count = 0;  // cycles in which max-correction acted (wraps)
+  Vec3 velocity = Vec3::Zero();                 // of the output, mm/s
+  Vec3 target_prev = Vec3::Zero();              // last cycle's wanted (clamped) correction
+  double bound_prev = kDefaultMaxCorrectionMm;  // last cycle's max-correction
+  int32_t clamp_count = 0;                      // cycles in which max-correction acted (wraps)
 };
 
 struct CycleInput {
@@ -196,19 +200,40 @@ inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& ra
     s.outgoing = Channel{};
   }
 
-  // 6. Clamp, then rate-limit against last cycle's output, then the hard
-  // bound: the rate-limited output can be above max-correction only when the
-  // bound was lowered below it by more than one cycle's step; the bound wins
-  // and the step is a fault.
+  // 6. Clamp, then limit the velocity (and acceleration) against last
+  // cycle's output, then the hard bound: the limited output can be above
+  // max-correction only when the bound was lowered below it; the bound wins,
+  // and a step beyond the limits is a fault.
   const Limited m = limit_magnitude(blended, lim.max_correction_mm);
-  Limited r = limit_rate(m.value, s.output, lim.max_rate_mm_per_s * dt_s);
-  if (!r.value.allFinite()) r = {s.output, true};  // cannot happen; never pass NaN on
+  const Motion mo =
+      limit_motion(m.value, s.target_prev, s.output, s.velocity, lim.max_rate_mm_per_s,
+                   lim.max_accel_mm_per_s2, lim.max_correction_mm, dt_s);
+  s.target_prev = m.value;
+  Limited r{mo.position, mo.limited};
+  Vec3 velocity = mo.velocity;
+  if (!r.value.allFinite() || !velocity.allFinite()) {  // cannot happen; never pass NaN on
+    r = {s.output, true};
+    velocity.setZero();
+  }
   const Limited h = limit_magnitude_hard(r.value, lim.max_correction_mm);
+  bool bound_step = false;
+  // (Rounding can put the output 1 ulp above the bound: the clamp removes
+  // it, but that is no step.)
+  if (h.limited && r.value.norm() - lim.max_correction_mm > 1e-12 * (1.0 + lim.max_correction_mm)) {
+    const Vec3 v_new = (h.value - s.output) / dt_s;
+    constexpr double kTol = 1.0 + 1e-9;
+    // A step is a fault only in a cycle that lowered the bound; otherwise
+    // the clip is the output grazing the bound (reported on `limited`).
+    bound_step = lim.max_correction_mm < s.bound_prev &&
+                 (v_new.norm() > lim.max_rate_mm_per_s * kTol ||
+                  (lim.max_accel_mm_per_s2 > 0.0 &&
+                   (v_new - s.velocity).norm() > lim.max_accel_mm_per_s2 * dt_s * kTol));
+    // After a step the output starts from rest.
+    velocity = bound_step ? Vec3::Zero() : v_new;
+  }
   s.output = h.value;
-  // (Rounding of the rate step can put the output 1 ulp above the bound: the
-  // clamp removes it, but that is no step.)
-  const bool bound_step =
-      h.limited && r.value.norm() - lim.max_correction_mm > 1e-12 * (1.0 + lim.max_correction_mm);
+  s.velocity = velocity;
+  s.bound_prev = lim.max_correction_mm;
   out.clamped = m.limited || h.limited;
   if (out.clamped) s.clamp_count = static_cast<int32_t>(static_cast<uint32_t>(s.clamp_count) + 1u);
 
