@@ -87,14 +87,15 @@ bool all_outputs_finite(const Hal& h) {
 
 TEST(TruecutComp, ExportsTheDocumentedPins) {
   Rig r("");
-  for (const char* pin : {"enable",      "tool",        "max-correction", "max-rate",
-                          "fade-time",   "reload",      "swap-inhibit",   "tcp-x",
-                          "tcp-y",       "tcp-z",       "axis-i",         "axis-j",
-                          "axis-k",      "tcp-x-out",   "tcp-y-out",      "tcp-z-out",
-                          "axis-i-out",  "axis-j-out",  "axis-k-out",     "corr-x",
-                          "corr-y",      "corr-z",      "corr-mag",       "active",
-                          "fault",       "limited",     "fade",           "field-generation",
-                          "load-errors", "clamp-count", "max-accel"})
+  for (const char* pin : {"enable",       "tool",        "max-correction", "max-rate",
+                          "fade-time",    "reload",      "swap-inhibit",   "tcp-x",
+                          "tcp-y",        "tcp-z",       "axis-i",         "axis-j",
+                          "axis-k",       "tcp-x-out",   "tcp-y-out",      "tcp-z-out",
+                          "axis-i-out",   "axis-j-out",  "axis-k-out",     "corr-x",
+                          "corr-y",       "corr-z",      "corr-mag",       "active",
+                          "fault",        "limited",     "fade",           "field-generation",
+                          "load-errors",  "clamp-count", "max-accel",      "reset",
+                          "fault-latched"})
     EXPECT_TRUE(r.hal.has_pin(std::string("c.") + pin)) << pin;
   EXPECT_TRUE(r.hal.has_function("c.update"));
   EXPECT_EQ(1.0, getf(r.hal, "c.max-correction"));
@@ -264,11 +265,23 @@ TEST(TruecutComp, EveryFaultHasItsCodeAndFadesWithoutNaN) {
     if (c.code == 4) {
       EXPECT_EQ(out_before, r.tcp_out()) << "outputs hold while inputs are NaN";
     }
-    // The fault clears with its cause and the correction fades back in.
+    EXPECT_EQ(c.code == 6 ? 6 : 0, gets32(r.hal, "c.fault-latched"));
+    // The fault clears with its cause and the correction fades back in; a
+    // bad parameter stays latched until `reset` rises.
     if (c.input < 0)
       r.set("tool", 1.0);
     else
       *src.pins[c.input] = initial[c.input];
+    if (c.code == 6) {
+      r.run(200);
+      EXPECT_EQ(0, r.fault());
+      EXPECT_EQ(6, gets32(r.hal, "c.fault-latched"));
+      EXPECT_EQ(Eigen::Vector3d::Zero(), r.corr()) << "latched: no correction before reset";
+      r.set("reset", 1.0);
+      r.run(1);
+      r.set("reset", 0.0);
+      EXPECT_EQ(0, gets32(r.hal, "c.fault-latched"));
+    }
     r.run(200);
     EXPECT_EQ(0, r.fault());
     EXPECT_EQ(full, r.corr());

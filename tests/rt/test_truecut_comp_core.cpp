@@ -593,11 +593,24 @@ TEST(CompCore, InvalidParametersNeverFreezeTheOutputAndDisableAlwaysReachesZero)
         EXPECT_EQ(Vec3::Zero(), o.correction_mm);
         EXPECT_FALSE(o.active);
         EXPECT_LE(d.max_step_mm, 5.0 * kDt * (1 + kSlack));
-        // Recovery: no jump, the correction fades back in.
+        EXPECT_EQ(Fault::kBadParameter, o.latched);
+        // Recovery: latched until reset, then no jump: the correction fades
+        // back in.
         d.limits = valid;
         in.enable = true;
-        for (int i = 0; i < 200; ++i)
-          ASSERT_EQ(Fault::kNone, d.cycle(in).fault);
+        for (int i = 0; i < 50; ++i) {
+          o = d.cycle(in);
+          ASSERT_EQ(Fault::kNone, o.fault);
+          ASSERT_EQ(Fault::kBadParameter, o.latched);
+          ASSERT_EQ(Vec3::Zero(), o.correction_mm);
+        }
+        in.reset = true;
+        for (int i = 0; i < 200; ++i) {
+          o = d.cycle(in);
+          ASSERT_EQ(Fault::kNone, o.fault);
+          ASSERT_EQ(Fault::kNone, o.latched);
+        }
+        in.reset = false;
         EXPECT_EQ(full, d.state.output);
         EXPECT_LE(d.max_step_mm, 5.0 * kDt * (1 + kSlack));
       }
@@ -660,6 +673,7 @@ TEST(CompCore, MaxCorrectionIsHardInEveryCycleAndAStepDownIsAFault) {
     const double before = d.state.output.norm();
     d.limits.max_correction_mm = bound;
     for (int i = 0; i < 20; ++i) {
+      in.reset = i == 1;  // acknowledge a step at once (it latches)
       const CycleOutput o = d.cycle(in);
       ASSERT_LE(o.correction_mm.norm(), bound) << bound << " cycle " << i;
       ASSERT_TRUE(o.clamped);
@@ -855,6 +869,11 @@ TEST(CompCore, ABoundSteppedDownStepsOnceAsAFaultThenMovesWithinTheLimits) {
   ASSERT_NEAR(0.065, r.d.state.output.norm(), 1e-15);
   r.d.limits.max_correction_mm = 0.005;
   EXPECT_EQ(Fault::kBoundStep, r.cycle().fault);
+  EXPECT_EQ(Fault::kBoundStep, r.d.state.latched);
+  r.in.reset = true;  // acknowledged at once
+  r.cycle();
+  r.in.reset = false;
+  EXPECT_EQ(Fault::kNone, r.d.state.latched);
   r.probe = MotionProbe{r.d.state.output, Vec3::Zero()};
   for (int i = 0; i < 500; ++i)
     ASSERT_EQ(Fault::kNone, r.cycle().fault);
@@ -870,4 +889,55 @@ TEST(CompCore, ABoundSteppedDownStepsOnceAsAFaultThenMovesWithinTheLimits) {
   }
   EXPECT_LE(r.probe.max_v, 10.0 * (1 + 1e-9));
   EXPECT_LE(r.probe.max_a, 100.0 * (1 + 1e-6));
+}
+
+TEST(CompCore, ALatchedFaultHoldsTheCorrectionAtZeroUntilResetRises) {
+  const auto field = make_field({});
+  Driver d;
+  d.limits = {10.0, 5.0, 0.05};
+  CycleInput in;
+  in.tool = 1;
+  in.enable = true;
+  in.candidate = &field;
+  d.cycle(in);
+  in.candidate = nullptr;
+  for (int i = 0; i < 100; ++i)
+    d.cycle(in);
+  const Vec3 full = d.state.output;
+  ASSERT_GT(full.norm(), 0.05);
+  // A reset held high does not pre-empt a fault: only its rising edge acts.
+  in.reset = true;
+  d.cycle(in);
+  d.limits.fade_time_s = -1.0;
+  CycleOutput o = d.cycle(in);
+  EXPECT_EQ(Fault::kBadParameter, o.fault);
+  EXPECT_EQ(Fault::kBadParameter, o.latched);
+  d.limits.fade_time_s = 0.05;
+  for (int i = 0; i < 300; ++i) {
+    o = d.cycle(in);
+    ASSERT_EQ(Fault::kBadParameter, o.latched);
+  }
+  EXPECT_EQ(Vec3::Zero(), o.correction_mm);
+  EXPECT_FALSE(o.active);
+  // A rising reset while the cause persists latches again at once.
+  in.reset = false;
+  d.cycle(in);
+  d.limits.max_rate_mm_per_s = kNaN;
+  in.reset = true;
+  EXPECT_EQ(Fault::kBadParameter, d.cycle(in).latched);
+  d.limits.max_rate_mm_per_s = 5.0;
+  in.reset = false;
+  d.cycle(in);
+  EXPECT_EQ(Fault::kBadParameter, d.state.latched);
+  in.reset = true;  // the cause is gone: the latch clears, the correction fades in
+  for (int i = 0; i < 200; ++i)
+    ASSERT_EQ(Fault::kNone, d.cycle(in).latched);
+  EXPECT_EQ(full, d.state.output);
+  EXPECT_LE(d.max_step_mm, 5.0 * kDt * (1 + kSlack));
+  // Conditions of the input or the field do not latch.
+  in.tcp_mm = Vec3(100.0, 0.0, 0.0);
+  EXPECT_EQ(Fault::kOutsideGrid, d.cycle(in).fault);
+  EXPECT_EQ(Fault::kNone, d.state.latched);
+  EXPECT_FALSE(latches(Fault::kInputNotFinite));
+  EXPECT_TRUE(latches(Fault::kBoundStep));
 }

@@ -34,6 +34,7 @@ struct Pins {
   double* max_accel;       // mm/s^2
   bool* reload;
   bool* swap_inhibit;
+  bool* reset;
   std::array<double*, 3> tcp_in;  // tcp mode, mm
   std::array<double*, 3> axis_in;
   std::array<double*, 5> joint_in;  // joint mode: x y z (mm) a c (deg)
@@ -58,6 +59,7 @@ struct Pins {
   int32_t* field_generation;
   int32_t* load_errors;
   int32_t* clamp_count;
+  int32_t* fault_latched;
 };
 
 struct Instance {
@@ -148,6 +150,7 @@ void update(void* arg, long period_ns) {
   in.tool = *p.tool;
   in.candidate = can_swap ? s.pending : nullptr;
   in.swap_inhibit = *p.swap_inhibit;
+  in.reset = *p.reset;
 
   rt::AcTrtParams kins;
   rt::AcJoints joints;
@@ -187,6 +190,7 @@ void update(void* arg, long period_ns) {
   *p.fade = out.fade;
   *p.load_errors = s.source.load_errors();
   *p.clamp_count = s.core.clamp_count;
+  *p.fault_latched = static_cast<int32_t>(out.latched);
   // Position outputs hold their last value while the inputs are unusable.
   if (in.input_fault == Fault::kInputNotFinite) return;
   write3(p.tcp_out, pose.tcp_mm + out.correction_mm);
@@ -245,6 +249,7 @@ void make_pins(rt::hal::component::Builder& b, const std::string& n, Mode mode, 
   in_f("max-accel", &p.max_accel);
   b.pin(n + ".reload", TC_HAL_BIT, TC_HAL_IN, &p.reload);
   b.pin(n + ".swap-inhibit", TC_HAL_BIT, TC_HAL_IN, &p.swap_inhibit);
+  b.pin(n + ".reset", TC_HAL_BIT, TC_HAL_IN, &p.reset);
   static const char* const kXyz[] = {"x", "y", "z"};
   static const char* const kIjk[] = {"i", "j", "k"};
   static const char* const kJoints[] = {"x", "y", "z", "a", "c"};
@@ -281,6 +286,7 @@ void make_pins(rt::hal::component::Builder& b, const std::string& n, Mode mode, 
   b.pin(n + ".field-generation", TC_HAL_S32, TC_HAL_OUT, &p.field_generation);
   b.pin(n + ".load-errors", TC_HAL_S32, TC_HAL_OUT, &p.load_errors);
   b.pin(n + ".clamp-count", TC_HAL_S32, TC_HAL_OUT, &p.clamp_count);
+  b.pin(n + ".fault-latched", TC_HAL_S32, TC_HAL_OUT, &p.fault_latched);
 
   const rt::comp::CompLimits defaults;
   *p.max_correction = defaults.max_correction_mm;

@@ -1,6 +1,7 @@
 // The servo-cycle logic of truecut_comp, free of the HAL: one call per cycle
 // takes the inputs and the state, returns the correction. Called in this
 // order inside step():
+//   0. a rising reset clears the fault latch
 //   1. check the tunables (an invalid one: the last valid value, and a fault
 //      that fades the correction to zero)
 //   2. switch source (new field, new tool) if no cross-fade is running
@@ -79,7 +80,9 @@ struct CompState {
   Vec3 velocity = Vec3::Zero();                 // of the output, mm/s
   Vec3 target_prev = Vec3::Zero();              // last cycle's wanted (clamped) correction
   double bound_prev = kDefaultMaxCorrectionMm;  // last cycle's max-correction
-  int32_t clamp_count = 0;                      // cycles in which max-correction acted (wraps)
+  int32_t clamp_count = 0;
+  Fault latched = Fault::kNone;  // a latching fault, held until a rising `reset`
+  bool reset_prev = false;       // cycles in which max-correction acted (wraps)
 };
 
 struct CycleInput {
@@ -92,20 +95,29 @@ struct CycleInput {
   // then owned by the state, when out.adopted is set.
   const rt::CorrectionField* candidate = nullptr;
   bool swap_inhibit = false;  // keep a candidate that would replace a field waiting
+  bool reset = false;         // rising edge: clear a latched fault whose cause is gone
 };
 
 struct CycleOutput {
   Vec3 correction_mm = Vec3::Zero();
   Fault fault = Fault::kNone;
-  bool limited = false;  // the magnitude clamp or the rate limit acted
-  bool clamped = false;  // max-correction acted (on the target or, hard, on the output)
-  bool active = false;   // a correction is applied or fading
-  double fade = 0.0;     // gain of the current source, 0..1
-  bool adopted = false;  // the candidate became the current field
+  bool limited = false;          // the magnitude clamp or the rate limit acted
+  bool clamped = false;          // max-correction acted (on the target or, hard, on the output)
+  bool active = false;           // a correction is applied or fading
+  double fade = 0.0;             // gain of the current source, 0..1
+  bool adopted = false;          // the candidate became the current field
+  Fault latched = Fault::kNone;  // the latched fault (see latches()), until `reset`
   // A field no longer referenced by the state: retire it (free it outside
   // the servo thread). At most one per cycle.
   const rt::CorrectionField* released = nullptr;
 };
+
+// The faults that latch: the integrator's own limits were violated. The
+// others describe the input or the field in this cycle and clear with their
+// cause.
+inline bool latches(Fault f) noexcept {
+  return f == Fault::kBadParameter || f == Fault::kBoundStep;
+}
 
 namespace detail {
 
@@ -150,6 +162,10 @@ inline Vec3 channel_value(Channel& ch, const Evaluated& e) noexcept {
 inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& raw_limits,
                         double dt_s) noexcept {
   CycleOutput out;
+  // 0. A rising `reset` clears the latch; a cause still present latches
+  // again at the end of this cycle.
+  if (in.reset && !s.reset_prev) s.latched = Fault::kNone;
+  s.reset_prev = in.reset;
   CompLimits lim;
   const bool limits_ok = adopt_limits(raw_limits, s.last_good, lim);
 
@@ -190,7 +206,7 @@ inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& ra
         detail::channel_value(s.outgoing, detail::evaluate(s.outgoing, in.tcp_mm, in.input_fault));
 
   // 5. Fade and blend.
-  const bool wanted = in.enable && limits_ok && !s.current.frozen;
+  const bool wanted = in.enable && limits_ok && s.latched == Fault::kNone && !s.current.frozen;
   s.current.u = advance_fade(s.current.u, wanted ? 1.0 : 0.0, dt_s, lim.fade_time_s);
   s.outgoing.u = advance_fade(s.outgoing.u, 0.0, dt_s, lim.fade_time_s);
   const Vec3 blended = fade_gain(s.current.u) * v_cur + fade_gain(s.outgoing.u) * v_out;
@@ -245,6 +261,8 @@ inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& ra
               : !limits_ok                   ? Fault::kBadParameter
               : bound_step                   ? Fault::kBoundStep
                                              : cur.fault;
+  if (s.latched == Fault::kNone && latches(out.fault)) s.latched = out.fault;
+  out.latched = s.latched;
   return out;
 }
 
