@@ -934,6 +934,19 @@ TEST(CompCore, ALatchedFaultHoldsTheCorrectionAtZeroUntilResetRises) {
     ASSERT_EQ(Fault::kNone, d.cycle(in).latched);
   EXPECT_EQ(full, d.state.output);
   EXPECT_LE(d.max_step_mm, 5.0 * kDt * (1 + kSlack));
+  // A latching fault latches even in a cycle whose `fault` shows an input
+  // fault.
+  in.input_fault = Fault::kInputNotFinite;
+  d.limits.max_correction_mm = kNaN;
+  o = d.cycle(in);
+  EXPECT_EQ(Fault::kInputNotFinite, o.fault);
+  EXPECT_EQ(Fault::kBadParameter, o.latched);
+  in.input_fault = Fault::kNone;
+  d.limits.max_correction_mm = 10.0;
+  in.reset = false;
+  d.cycle(in);
+  in.reset = true;
+  EXPECT_EQ(Fault::kNone, d.cycle(in).latched);
   // Conditions of the input or the field do not latch.
   in.tcp_mm = Vec3(100.0, 0.0, 0.0);
   EXPECT_EQ(Fault::kOutsideGrid, d.cycle(in).fault);

@@ -261,7 +261,9 @@ inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& ra
               : !limits_ok                   ? Fault::kBadParameter
               : bound_step                   ? Fault::kBoundStep
                                              : cur.fault;
-  if (s.latched == Fault::kNone && latches(out.fault)) s.latched = out.fault;
+  // Latch even when an input fault hides the latching one on `fault`.
+  if (s.latched == Fault::kNone)
+    s.latched = !limits_ok ? Fault::kBadParameter : bound_step ? Fault::kBoundStep : Fault::kNone;
   out.latched = s.latched;
   return out;
 }
