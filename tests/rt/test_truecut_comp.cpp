@@ -10,6 +10,7 @@
 #include <limits>
 
 #include "test_truecut_comp_support.hpp"
+#include "truecut/rt/core/comp_math.hpp"
 #include "truecut/rt/core/kinematics_ac.hpp"
 #include "truecut/rt/executor.hpp"
 #include "truecut/rt/hal_file.hpp"
@@ -86,19 +87,21 @@ bool all_outputs_finite(const Hal& h) {
 
 TEST(TruecutComp, ExportsTheDocumentedPins) {
   Rig r("");
-  for (const char* pin : {"enable",     "tool",       "max-correction", "max-rate",
-                          "fade-time",  "reload",     "swap-inhibit",   "tcp-x",
-                          "tcp-y",      "tcp-z",      "axis-i",         "axis-j",
-                          "axis-k",     "tcp-x-out",  "tcp-y-out",      "tcp-z-out",
-                          "axis-i-out", "axis-j-out", "axis-k-out",     "corr-x",
-                          "corr-y",     "corr-z",     "corr-mag",       "active",
-                          "fault",      "limited",    "fade",           "field-generation",
-                          "load-errors"})
+  for (const char* pin : {"enable",       "tool",        "max-correction", "max-rate",
+                          "fade-time",    "reload",      "swap-inhibit",   "tcp-x",
+                          "tcp-y",        "tcp-z",       "axis-i",         "axis-j",
+                          "axis-k",       "tcp-x-out",   "tcp-y-out",      "tcp-z-out",
+                          "axis-i-out",   "axis-j-out",  "axis-k-out",     "corr-x",
+                          "corr-y",       "corr-z",      "corr-mag",       "active",
+                          "fault",        "limited",     "fade",           "field-generation",
+                          "load-errors",  "clamp-count", "max-accel",      "reset",
+                          "fault-latched"})
     EXPECT_TRUE(r.hal.has_pin(std::string("c.") + pin)) << pin;
   EXPECT_TRUE(r.hal.has_function("c.update"));
   EXPECT_EQ(1.0, getf(r.hal, "c.max-correction"));
   EXPECT_EQ(10.0, getf(r.hal, "c.max-rate"));
   EXPECT_EQ(1.0, getf(r.hal, "c.fade-time"));
+  EXPECT_EQ(rt::comp::kDefaultMaxAccelMmPerS2, getf(r.hal, "c.max-accel"));
   EXPECT_EQ(1.0, getf(r.hal, "c.axis-k"));
   EXPECT_FALSE(r.hal.has_pin("c.joint-x"));
 
@@ -130,6 +133,7 @@ TEST(TruecutComp, CorrectionAtGridNodesEqualsTheStoredVectors) {
   Rig r("field=" + path.string());
   r.set("fade-time", 0.0);
   r.set("max-rate", 1e9);
+  r.set("max-accel", 0.0);  // no acceleration limit
   r.set("max-correction", 1e3);
   r.set("enable", 1.0);
   const auto& g = field.grid();
@@ -162,7 +166,7 @@ TEST(TruecutComp, JointModeCorrectsThroughTheKinematics) {
   Rig r("field=" + path.string() + " mode=joint",
         "setp c.x-rot-point 5\nsetp c.y-rot-point -3\nsetp c.z-rot-point 20\n"
         "setp c.z-offset -12\nsetp c.tool-offset 50\nsetp c.fade-time 0\n"
-        "setp c.max-rate 1e9\nsetp c.tool 1\n");
+        "setp c.max-rate 1e9\nsetp c.max-accel 0\nsetp c.tool 1\n");
   rt::AcTrtParams k;
   k.x_rot_point_mm = 5;
   k.y_rot_point_mm = -3;
@@ -254,20 +258,30 @@ TEST(TruecutComp, EveryFaultHasItsCodeAndFadesWithoutNaN) {
       prev = r.corr();
     }
     EXPECT_LE(max_step, 20.0 * 1e-3 * (1 + 1e-12));
-    if (c.input == 7) {
-      EXPECT_EQ(full, r.corr()) << "no valid rate: the correction holds";
-    } else {
-      EXPECT_EQ(Eigen::Vector3d::Zero(), r.corr());
-      EXPECT_FALSE(getbit(r.hal, "c.active"));
-    }
+    // Every fault, a bad max-rate included (the last valid rate is used),
+    // brings the correction to zero.
+    EXPECT_EQ(Eigen::Vector3d::Zero(), r.corr());
+    EXPECT_FALSE(getbit(r.hal, "c.active"));
     if (c.code == 4) {
       EXPECT_EQ(out_before, r.tcp_out()) << "outputs hold while inputs are NaN";
     }
-    // The fault clears with its cause and the correction fades back in.
+    EXPECT_EQ(c.code == 6 ? 6 : 0, gets32(r.hal, "c.fault-latched"));
+    // The fault clears with its cause and the correction fades back in; a
+    // bad parameter stays latched until `reset` rises.
     if (c.input < 0)
       r.set("tool", 1.0);
     else
       *src.pins[c.input] = initial[c.input];
+    if (c.code == 6) {
+      r.run(200);
+      EXPECT_EQ(0, r.fault());
+      EXPECT_EQ(6, gets32(r.hal, "c.fault-latched"));
+      EXPECT_EQ(Eigen::Vector3d::Zero(), r.corr()) << "latched: no correction before reset";
+      r.set("reset", 1.0);
+      r.run(1);
+      r.set("reset", 0.0);
+      EXPECT_EQ(0, gets32(r.hal, "c.fault-latched"));
+    }
     r.run(200);
     EXPECT_EQ(0, r.fault());
     EXPECT_EQ(full, r.corr());
@@ -407,7 +421,9 @@ TEST(TruecutComp, SwapInhibitHoldsTheNewFieldBack) {
   FieldSpec b_spec;
   b_spec.scale = 2.0;
   write_field(file, {});
-  Rig r("field=" + file.string(), "setp c.enable 1\nsetp c.tool 1\nsetp c.fade-time 0.01\n");
+  // A 10 ms fade of 0.2 mm needs 5 m/s^2: no acceleration limit here.
+  Rig r("field=" + file.string(),
+        "setp c.enable 1\nsetp c.tool 1\nsetp c.fade-time 0.01\nsetp c.max-accel 0\n");
   r.set_tcp({0.0, 0.0, 0.0});
   r.run(20);
   write_field(file, b_spec);

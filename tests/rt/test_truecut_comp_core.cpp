@@ -106,6 +106,23 @@ TEST(CompMath, SanitizeReplacesInvalidTunablesBySafeValues) {
   EXPECT_EQ(0.0, safe.fade_time_s);
 }
 
+TEST(CompMath, AdoptLimitsKeepsTheLastValidValueOfEachTunable) {
+  CompLimits good{0.5, 2.0, 0.3}, use;
+  EXPECT_TRUE(adopt_limits({0.4, 3.0, 0.2}, good, use));
+  EXPECT_EQ(0.4, use.max_correction_mm);
+  EXPECT_EQ(3.0, good.max_rate_mm_per_s);
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  EXPECT_FALSE(adopt_limits({kNaN, -1.0, kInf}, good, use));
+  EXPECT_EQ(0.4, use.max_correction_mm);
+  EXPECT_EQ(3.0, use.max_rate_mm_per_s);
+  EXPECT_EQ(0.2, use.fade_time_s);
+  EXPECT_FALSE(adopt_limits({0.1, 0.0, 0.0}, good, use)) << "max rate 0 could never fade out";
+  EXPECT_EQ(0.1, use.max_correction_mm);
+  EXPECT_EQ(3.0, use.max_rate_mm_per_s);
+  EXPECT_EQ(0.0, use.fade_time_s) << "fade time 0 is valid: the rate limit does the fade";
+  EXPECT_EQ(0.1, good.max_correction_mm);
+}
+
 namespace {
 
 // Runs rt::comp::step() along a path; checks the contract every cycle.
@@ -534,4 +551,406 @@ TEST(CompJoint, CorrectedJointsMoveTheTcpByTheCorrection) {
   const rt::AcJoints j{1, 2, 3, 4, 5};
   const rt::AcJoints same = correct_joints(k, j, rt::forward_ac(k, j), Vec3::Zero());
   EXPECT_EQ(0, std::memcmp(&j, &same, sizeof j)) << "zero correction passes joints bit for bit";
+}
+
+TEST(CompCore, InvalidParametersNeverFreezeTheOutputAndDisableAlwaysReachesZero) {
+  // Each tunable NaN, infinite, negative (and max-rate 0): the fault is
+  // reported, the correction fades to zero at the last valid limits, with
+  // or without `enable`, and fades back in without a jump once the
+  // parameter is valid again.
+  const auto field = make_field({});
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  const double bad[] = {kNaN, kInf, -kInf, -1.0, 0.0};
+  for (int which = 0; which < 3; ++which)
+    for (double b : bad) {
+      if (b == 0.0 && which != 1) continue;  // 0 is a valid bound and fade time
+      for (bool disable : {false, true}) {
+        SCOPED_TRACE(testing::Message()
+                     << "tunable " << which << " = " << b << " disable " << disable);
+        Driver d;
+        d.limits = {10.0, 5.0, 0.05};
+        CycleInput in;
+        in.tool = 1;
+        in.enable = true;
+        in.tcp_mm = Vec3(1.0, 1.0, 0.0);
+        in.candidate = &field;
+        d.cycle(in);
+        in.candidate = nullptr;
+        for (int i = 0; i < 100; ++i)
+          d.cycle(in);
+        const Vec3 full = d.state.output;
+        ASSERT_GT(full.norm(), 0.05);
+        const CompLimits valid = d.limits;
+        double* tunable[] = {&d.limits.max_correction_mm, &d.limits.max_rate_mm_per_s,
+                             &d.limits.fade_time_s};
+        *tunable[which] = b;
+        if (disable) in.enable = false;
+        CycleOutput o;
+        for (int i = 0; i < 200; ++i) {
+          o = d.cycle(in);
+          ASSERT_EQ(Fault::kBadParameter, o.fault) << i;
+        }
+        EXPECT_EQ(Vec3::Zero(), o.correction_mm);
+        EXPECT_FALSE(o.active);
+        EXPECT_LE(d.max_step_mm, 5.0 * kDt * (1 + kSlack));
+        EXPECT_EQ(Fault::kBadParameter, o.latched);
+        // Recovery: latched until reset, then no jump: the correction fades
+        // back in.
+        d.limits = valid;
+        in.enable = true;
+        for (int i = 0; i < 50; ++i) {
+          o = d.cycle(in);
+          ASSERT_EQ(Fault::kNone, o.fault);
+          ASSERT_EQ(Fault::kBadParameter, o.latched);
+          ASSERT_EQ(Vec3::Zero(), o.correction_mm);
+        }
+        in.reset = true;
+        for (int i = 0; i < 200; ++i) {
+          o = d.cycle(in);
+          ASSERT_EQ(Fault::kNone, o.fault);
+          ASSERT_EQ(Fault::kNone, o.latched);
+        }
+        in.reset = false;
+        EXPECT_EQ(full, d.state.output);
+        EXPECT_LE(d.max_step_mm, 5.0 * kDt * (1 + kSlack));
+      }
+    }
+}
+
+TEST(CompCore, NoJumpWhenANaNInputRecoversElsewhere) {
+  // The input is NaN for a while and comes back at another place with
+  // another correction: the correction cross-fades, never steps.
+  FieldSpec big;
+  big.scale = 20.0;
+  const auto field = make_field(big);
+  Driver d;
+  d.limits = {5.0, 10.0, 0.1};
+  CycleInput in;
+  in.tool = 1;
+  in.enable = true;
+  in.tcp_mm = Vec3(-8.0, 6.0, 1.0);
+  in.candidate = &field;
+  d.cycle(in);
+  in.candidate = nullptr;
+  for (int i = 0; i < 200; ++i)
+    d.cycle(in);
+  for (int nan_cycles : {1, 5, 40, 300}) {
+    in.input_fault = Fault::kInputNotFinite;
+    for (int i = 0; i < nan_cycles; ++i)
+      d.cycle(in);
+    in.input_fault = Fault::kNone;
+    in.tcp_mm = -in.tcp_mm;
+    for (int i = 0; i < 300; ++i)
+      d.cycle(in);
+    EXPECT_EQ(field.evaluate(1, in.tcp_mm).correction_mm, d.state.output) << nan_cycles;
+  }
+  EXPECT_LE(d.max_step_mm, 10.0 * kDt * (1 + kSlack));
+}
+
+TEST(CompCore, MaxCorrectionIsHardInEveryCycleAndAStepDownIsAFault) {
+  // The probe: the bound lowered in six steps from 0.065 to 0.005 mm
+  // at 1 kHz under a correction larger than all of them.
+  FieldSpec big;
+  big.scale = 20.0;
+  const auto field = make_field(big);
+  const Vec3 p(2.0, 3.0, 1.0);
+  ASSERT_GT(field.evaluate(1, p).correction_mm.norm(), 0.1);
+  Driver d;
+  d.limits = {0.065, 10.0, 0.05};
+  CycleInput in;
+  in.tool = 1;
+  in.tcp_mm = p;
+  in.enable = true;
+  in.candidate = &field;
+  d.cycle(in);
+  in.candidate = nullptr;
+  for (int i = 0; i < 100; ++i)
+    d.cycle(in);
+  ASSERT_NEAR(0.065, d.state.output.norm(), 1e-15);
+  const int32_t clamps_before = d.state.clamp_count;
+  int faults = 0;
+  for (double bound : {0.05, 0.045, 0.03, 0.025, 0.01, 0.005}) {
+    const double before = d.state.output.norm();
+    d.limits.max_correction_mm = bound;
+    for (int i = 0; i < 20; ++i) {
+      in.reset = i == 1;  // acknowledge a step at once (it latches)
+      const CycleOutput o = d.cycle(in);
+      ASSERT_LE(o.correction_mm.norm(), bound) << bound << " cycle " << i;
+      ASSERT_TRUE(o.clamped);
+      ASSERT_TRUE(o.limited);
+      // The step is a fault exactly when it is larger than max-rate allows.
+      const bool step = i == 0 && before - bound > 10.0 * kDt;
+      ASSERT_EQ(step ? Fault::kBoundStep : Fault::kNone, o.fault) << bound << " cycle " << i;
+      faults += o.fault == Fault::kBoundStep;
+    }
+  }
+  EXPECT_EQ(3, faults) << "steps of 0.005 mm are within one cycle's step (0.01 mm)";
+  EXPECT_EQ(clamps_before + 120, d.state.clamp_count);
+  EXPECT_NEAR(0.005, d.state.output.norm(), 1e-15);
+  // Raising the bound again is no fault: the rate limit follows it up.
+  d.limits.max_correction_mm = 0.065;
+  d.max_step_mm = 0.0;
+  for (int i = 0; i < 100; ++i)
+    ASSERT_EQ(Fault::kNone, d.cycle(in).fault);
+  EXPECT_LE(d.max_step_mm, 10.0 * kDt * (1 + kSlack));
+  EXPECT_NEAR(0.065, d.state.output.norm(), 1e-15);
+}
+
+TEST(CompCore, ABoundLoweredWithinTheRateIsFollowedWithoutAFault) {
+  FieldSpec big;
+  big.scale = 20.0;
+  const auto field = make_field(big);
+  Driver d;
+  d.limits = {0.5, 10.0, 0.05};
+  CycleInput in;
+  in.tool = 1;
+  in.tcp_mm = Vec3(2.0, 3.0, 1.0);
+  in.enable = true;
+  in.candidate = &field;
+  d.cycle(in);
+  in.candidate = nullptr;
+  for (int i = 0; i < 100; ++i)
+    d.cycle(in);
+  d.max_step_mm = 0.0;
+  while (d.limits.max_correction_mm > 0.01) {
+    d.limits.max_correction_mm -= 0.5 * 10.0 * kDt;  // half the rate
+    const CycleOutput o = d.cycle(in);
+    ASSERT_EQ(Fault::kNone, o.fault);
+    ASSERT_LE(o.correction_mm.norm(), d.limits.max_correction_mm);
+  }
+  EXPECT_LE(d.max_step_mm, 10.0 * kDt * (1 + kSlack));
+}
+
+namespace {
+
+// Velocity and acceleration of the output, per cycle, against the limits.
+struct MotionProbe {
+  Vec3 c1 = Vec3::Zero(), v1 = Vec3::Zero();
+  double max_v = 0.0, max_a = 0.0;
+  void add(const Vec3& c) {
+    const Vec3 v = (c - c1) / kDt;
+    max_v = std::max(max_v, v.norm());
+    max_a = std::max(max_a, (v - v1).norm() / kDt);
+    c1 = c;
+    v1 = v;
+  }
+};
+
+}  // namespace
+
+TEST(CompMath, LimitMotionFollowsAFeasibleTargetExactlyAndBrakesOntoAStep) {
+  // A target within the limits is followed bit for bit.
+  Vec3 y = Vec3::Zero(), v = Vec3::Zero(), prev = Vec3::Zero();
+  for (int i = 1; i <= 1000; ++i) {
+    const Vec3 t = Vec3(1.0, -0.5, 0.2) * fade_gain(i / 1000.0);
+    const Motion m = limit_motion(t, prev, y, v, 10.0, 100.0, 10.0, kDt);
+    ASSERT_FALSE(m.limited) << i;
+    ASSERT_EQ(t, m.position);
+    y = m.position;
+    v = m.velocity;
+    prev = t;
+  }
+  // Steps in random directions: velocity and acceleration stay within the
+  // limits, and the output lands on the target exactly.
+  std::mt19937_64 rng(19);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (int k = 0; k < 50; ++k) {
+    const Vec3 t(n(rng), n(rng), n(rng));
+    MotionProbe probe;
+    probe.c1 = y;
+    probe.v1 = v;
+    int cycles = 0;
+    while (y != t && cycles < 20000) {
+      const Motion m = limit_motion(t, t, y, v, 10.0, 100.0, 10.0, kDt);
+      y = m.position;
+      v = m.velocity;
+      probe.add(y);
+      ++cycles;
+    }
+    ASSERT_EQ(t, y) << k;
+    EXPECT_LE(probe.max_v, 10.0 * (1 + 1e-9));
+    EXPECT_LE(probe.max_a, 100.0 * (1 + 1e-6));
+  }
+}
+
+namespace {
+
+// The cases with an acceleration limit: the output's velocity and
+// acceleration in every cycle.
+struct AccelRig {
+  FieldSpec spec;
+  rt::CorrectionField field;
+  Driver d;
+  CycleInput in;
+  MotionProbe probe;
+  explicit AccelRig(double scale) : spec(with_scale(scale)), field(make_field(spec)) {
+    d.limits = {1.0, 10.0, 1.0, 100.0};
+    in.tool = 1;
+    in.enable = true;
+    in.candidate = &field;
+  }
+  static FieldSpec with_scale(double scale) {
+    FieldSpec s;
+    s.scale = scale;
+    return s;
+  }
+  CycleOutput cycle() {
+    const CycleOutput o = d.cycle(in);
+    in.candidate = nullptr;
+    probe.add(o.correction_mm);
+    EXPECT_LE(o.correction_mm.norm(), d.limits.max_correction_mm);
+    return o;
+  }
+};
+
+}  // namespace
+
+TEST(CompCore, AccelerationLimitHoldsForSwapsToolChangesFadesAndGridExit) {
+  // Fade-time 0: every change of the wanted correction is a step that only
+  // the limits smooth.
+  AccelRig r(20.0);
+  r.d.limits.max_correction_mm = 10.0;  // not clamped here (see the bound tests)
+  r.d.limits.fade_time_s = 0.0;
+  r.in.tcp_mm = Vec3(-3.0, 4.0, 1.0);
+  for (int i = 0; i < 1000; ++i)
+    r.cycle();
+  EXPECT_EQ(r.field.evaluate(1, r.in.tcp_mm).correction_mm, r.d.state.output);
+  r.in.tool = 2;  // tool change
+  for (int i = 0; i < 1000; ++i)
+    r.cycle();
+  r.in.tcp_mm = Vec3(100.0, 0.0, 0.0);  // leaves the grid
+  for (int i = 0; i < 1000; ++i)
+    EXPECT_EQ(Fault::kOutsideGrid, r.cycle().fault);
+  EXPECT_EQ(Vec3::Zero(), r.d.state.output);
+  r.in.tcp_mm = Vec3(2.0, -2.0, 0.0);
+  r.in.enable = false;
+  for (int i = 0; i < 10; ++i)
+    r.cycle();
+  r.in.enable = true;
+  for (int i = 0; i < 300; ++i)  // enable during a reversal of the disable
+    r.cycle();
+  r.in.enable = false;
+  for (int i = 0; i < 1000; ++i)
+    r.cycle();
+  EXPECT_EQ(Vec3::Zero(), r.d.state.output) << "disable reaches zero";
+  EXPECT_LE(r.probe.max_v, 10.0 * (1 + 1e-9));
+  EXPECT_LE(r.probe.max_a, 100.0 * (1 + 1e-6));
+  EXPECT_TRUE(r.d.ever_limited);
+}
+
+TEST(CompCore, AccelerationLimitHoldsForAFadeReversedMidwayAndABoundRaised) {
+  AccelRig r(1.0);
+  r.d.limits = {1.0, 10.0, 0.02, 100.0};  // a fast fade: the limits act
+  r.in.tcp_mm = Vec3(1.0, 2.0, 0.5);
+  for (int i = 0; i < 10; ++i)
+    r.cycle();
+  r.in.enable = false;  // reversal mid-fade
+  for (int i = 0; i < 8; ++i)
+    r.cycle();
+  r.in.enable = true;
+  for (int i = 0; i < 500; ++i)
+    r.cycle();
+  r.d.limits.max_correction_mm = 0.5;
+  for (int i = 0; i < 500; ++i)
+    ASSERT_EQ(Fault::kNone, r.cycle().fault);
+  EXPECT_LE(r.probe.max_v, 10.0 * (1 + 1e-9));
+  EXPECT_LE(r.probe.max_a, 100.0 * (1 + 1e-6));
+}
+
+TEST(CompCore, ABoundSteppedDownStepsOnceAsAFaultThenMovesWithinTheLimits) {
+  // The probe: max-correction from 0.065 to 0.005 mm in one step at
+  // 1 kHz. The bound is hard: one reported step, then the output rests at
+  // the bound; a bound lowered smoothly (0.5 s, C1) never steps.
+  AccelRig r(20.0);
+  r.d.limits = {0.065, 10.0, 1.0, 100.0};
+  r.in.tcp_mm = Vec3(2.0, 3.0, 1.0);
+  for (int i = 0; i < 1500; ++i)
+    r.cycle();
+  ASSERT_NEAR(0.065, r.d.state.output.norm(), 1e-15);
+  r.d.limits.max_correction_mm = 0.005;
+  EXPECT_EQ(Fault::kBoundStep, r.cycle().fault);
+  EXPECT_EQ(Fault::kBoundStep, r.d.state.latched);
+  r.in.reset = true;  // acknowledged at once
+  r.cycle();
+  r.in.reset = false;
+  EXPECT_EQ(Fault::kNone, r.d.state.latched);
+  r.probe = MotionProbe{r.d.state.output, Vec3::Zero()};
+  for (int i = 0; i < 500; ++i)
+    ASSERT_EQ(Fault::kNone, r.cycle().fault);
+  EXPECT_LT(r.probe.max_v, 1e-9) << "at rest at the bound";
+  // Up again (the limits follow), then down along a smooth ramp.
+  r.d.limits.max_correction_mm = 0.065;
+  for (int i = 0; i < 500; ++i)
+    ASSERT_EQ(Fault::kNone, r.cycle().fault);
+  ASSERT_NEAR(0.065, r.d.state.output.norm(), 1e-15);
+  for (int i = 1; i <= 500; ++i) {
+    r.d.limits.max_correction_mm = 0.065 - 0.06 * fade_gain(i / 500.0);
+    ASSERT_EQ(Fault::kNone, r.cycle().fault) << i;
+  }
+  EXPECT_LE(r.probe.max_v, 10.0 * (1 + 1e-9));
+  EXPECT_LE(r.probe.max_a, 100.0 * (1 + 1e-6));
+}
+
+TEST(CompCore, ALatchedFaultHoldsTheCorrectionAtZeroUntilResetRises) {
+  const auto field = make_field({});
+  Driver d;
+  d.limits = {10.0, 5.0, 0.05};
+  CycleInput in;
+  in.tool = 1;
+  in.enable = true;
+  in.candidate = &field;
+  d.cycle(in);
+  in.candidate = nullptr;
+  for (int i = 0; i < 100; ++i)
+    d.cycle(in);
+  const Vec3 full = d.state.output;
+  ASSERT_GT(full.norm(), 0.05);
+  // A reset held high does not pre-empt a fault: only its rising edge acts.
+  in.reset = true;
+  d.cycle(in);
+  d.limits.fade_time_s = -1.0;
+  CycleOutput o = d.cycle(in);
+  EXPECT_EQ(Fault::kBadParameter, o.fault);
+  EXPECT_EQ(Fault::kBadParameter, o.latched);
+  d.limits.fade_time_s = 0.05;
+  for (int i = 0; i < 300; ++i) {
+    o = d.cycle(in);
+    ASSERT_EQ(Fault::kBadParameter, o.latched);
+  }
+  EXPECT_EQ(Vec3::Zero(), o.correction_mm);
+  EXPECT_FALSE(o.active);
+  // A rising reset while the cause persists latches again at once.
+  in.reset = false;
+  d.cycle(in);
+  d.limits.max_rate_mm_per_s = kNaN;
+  in.reset = true;
+  EXPECT_EQ(Fault::kBadParameter, d.cycle(in).latched);
+  d.limits.max_rate_mm_per_s = 5.0;
+  in.reset = false;
+  d.cycle(in);
+  EXPECT_EQ(Fault::kBadParameter, d.state.latched);
+  in.reset = true;  // the cause is gone: the latch clears, the correction fades in
+  for (int i = 0; i < 200; ++i)
+    ASSERT_EQ(Fault::kNone, d.cycle(in).latched);
+  EXPECT_EQ(full, d.state.output);
+  EXPECT_LE(d.max_step_mm, 5.0 * kDt * (1 + kSlack));
+  // A latching fault latches even in a cycle whose `fault` shows an input
+  // fault.
+  in.input_fault = Fault::kInputNotFinite;
+  d.limits.max_correction_mm = kNaN;
+  o = d.cycle(in);
+  EXPECT_EQ(Fault::kInputNotFinite, o.fault);
+  EXPECT_EQ(Fault::kBadParameter, o.latched);
+  in.input_fault = Fault::kNone;
+  d.limits.max_correction_mm = 10.0;
+  in.reset = false;
+  d.cycle(in);
+  in.reset = true;
+  EXPECT_EQ(Fault::kNone, d.cycle(in).latched);
+  // Conditions of the input or the field do not latch.
+  in.tcp_mm = Vec3(100.0, 0.0, 0.0);
+  EXPECT_EQ(Fault::kOutsideGrid, d.cycle(in).fault);
+  EXPECT_EQ(Fault::kNone, d.state.latched);
+  EXPECT_FALSE(latches(Fault::kInputNotFinite));
+  EXPECT_TRUE(latches(Fault::kBoundStep));
 }

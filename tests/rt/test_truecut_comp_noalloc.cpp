@@ -86,6 +86,53 @@ TEST(CompNoAlloc, CyclesAllocateNothingWhileFieldsAreSwapped) {
   EXPECT_EQ(0, h.get_pin_or_param("c.load-errors").s);
 }
 
+// The paths added for issue 19: bad parameters (NaN, negative, max-rate 0),
+// bound steps under the acceleration limit, the fault latch and its reset.
+TEST(CompNoAlloc, FaultLatchBoundStepsAndBadParametersAllocateNothing) {
+  const auto file = scratch_dir() / "f.tcf";
+  write_field(file, wide_field(20.0));
+  Hal h(hal_options());
+  load_hal_text(h,
+                "loadrt threads name1=servo-thread period1=1000000\n"
+                "loadrt siggen names=path\n"
+                "loadrt truecut_comp names=c field=" +
+                    file.string() +
+                    "\nsetp path.amplitude 20\n"
+                    "setp c.enable 1\nsetp c.tool 1\nsetp c.fade-time 0.05\n"
+                    "net x path.cosine => c.tcp-x\nnet y path.sine => c.tcp-y\n"
+                    "addf path.update servo-thread\naddf c.update servo-thread\n",
+                "latch.hal");
+  rt::hal::Executor ex(h);
+  rt::hal::RunLimits lim;
+  lim.max_cycles = 300;
+  lim.cycle_probe = alloc_counting_probe;
+  reset_alloc_counter();
+  const char* steps[][2] = {{"c.max-correction", "0.5"},
+                            {"c.max-correction", "0.01"},
+                            {"c.reset", "1"},
+                            {"c.reset", "0"},
+                            {"c.max-rate", "-5"},
+                            {"c.max-rate", "0"},
+                            {"c.max-rate", "10"},
+                            {"c.reset", "1"},
+                            {"c.max-accel", "-1"},
+                            {"c.max-accel", "1000"},
+                            {"c.reset", "0"},
+                            {"c.reset", "1"}};
+  bool stepped = false, latched = false;
+  for (const auto& st : steps) {
+    h.set_pin_or_param(st[0], st[1]);
+    ex.run_simulated(lim);
+    stepped = stepped || h.get_pin_or_param("c.fault-latched").s == 8;
+    latched = latched || h.get_pin_or_param("c.fault-latched").s == 6;
+  }
+  EXPECT_EQ(0u, armed_allocations());
+  EXPECT_TRUE(stepped);
+  EXPECT_TRUE(latched);
+  EXPECT_EQ(0, h.get_pin_or_param("c.fault-latched").s);
+  EXPECT_GT(h.get_pin_or_param("c.clamp-count").s, 0);
+}
+
 TEST(CompNoAlloc, JointModeCyclesAllocateNothing) {
   const auto file = scratch_dir() / "f.tcf";
   write_field(file, wide_field(1.0));

@@ -31,8 +31,10 @@ struct Pins {
   double* max_correction;  // mm
   double* max_rate;        // mm/s
   double* fade_time;       // s
+  double* max_accel;       // mm/s^2
   bool* reload;
   bool* swap_inhibit;
+  bool* reset;
   std::array<double*, 3> tcp_in;  // tcp mode, mm
   std::array<double*, 3> axis_in;
   std::array<double*, 5> joint_in;  // joint mode: x y z (mm) a c (deg)
@@ -56,6 +58,8 @@ struct Pins {
   double* fade;
   int32_t* field_generation;
   int32_t* load_errors;
+  int32_t* clamp_count;
+  int32_t* fault_latched;
 };
 
 struct Instance {
@@ -146,6 +150,7 @@ void update(void* arg, long period_ns) {
   in.tool = *p.tool;
   in.candidate = can_swap ? s.pending : nullptr;
   in.swap_inhibit = *p.swap_inhibit;
+  in.reset = *p.reset;
 
   rt::AcTrtParams kins;
   rt::AcJoints joints;
@@ -169,7 +174,7 @@ void update(void* arg, long period_ns) {
   }
   in.tcp_mm = pose.tcp_mm;
 
-  const rt::comp::CompLimits limits{*p.max_correction, *p.max_rate, *p.fade_time};
+  const rt::comp::CompLimits limits{*p.max_correction, *p.max_rate, *p.fade_time, *p.max_accel};
   const rt::comp::CycleOutput out = rt::comp::step(s.core, in, limits, double(period_ns) * 1e-9);
   if (out.adopted) {
     s.pending = nullptr;
@@ -184,6 +189,8 @@ void update(void* arg, long period_ns) {
   *p.limited = out.limited;
   *p.fade = out.fade;
   *p.load_errors = s.source.load_errors();
+  *p.clamp_count = s.core.clamp_count;
+  *p.fault_latched = static_cast<int32_t>(out.latched);
   // Position outputs hold their last value while the inputs are unusable.
   if (in.input_fault == Fault::kInputNotFinite) return;
   write3(p.tcp_out, pose.tcp_mm + out.correction_mm);
@@ -239,8 +246,10 @@ void make_pins(rt::hal::component::Builder& b, const std::string& n, Mode mode, 
   in_f("max-correction", &p.max_correction);
   in_f("max-rate", &p.max_rate);
   in_f("fade-time", &p.fade_time);
+  in_f("max-accel", &p.max_accel);
   b.pin(n + ".reload", TC_HAL_BIT, TC_HAL_IN, &p.reload);
   b.pin(n + ".swap-inhibit", TC_HAL_BIT, TC_HAL_IN, &p.swap_inhibit);
+  b.pin(n + ".reset", TC_HAL_BIT, TC_HAL_IN, &p.reset);
   static const char* const kXyz[] = {"x", "y", "z"};
   static const char* const kIjk[] = {"i", "j", "k"};
   static const char* const kJoints[] = {"x", "y", "z", "a", "c"};
@@ -276,11 +285,14 @@ void make_pins(rt::hal::component::Builder& b, const std::string& n, Mode mode, 
   out_f("fade", &p.fade);
   b.pin(n + ".field-generation", TC_HAL_S32, TC_HAL_OUT, &p.field_generation);
   b.pin(n + ".load-errors", TC_HAL_S32, TC_HAL_OUT, &p.load_errors);
+  b.pin(n + ".clamp-count", TC_HAL_S32, TC_HAL_OUT, &p.clamp_count);
+  b.pin(n + ".fault-latched", TC_HAL_S32, TC_HAL_OUT, &p.fault_latched);
 
   const rt::comp::CompLimits defaults;
   *p.max_correction = defaults.max_correction_mm;
   *p.max_rate = defaults.max_rate_mm_per_s;
   *p.fade_time = defaults.fade_time_s;
+  *p.max_accel = rt::comp::kDefaultMaxAccelMmPerS2;
   if (mode == Mode::kTcp) {
     *p.axis_in[2] = 1.0;
   } else {

@@ -1,12 +1,15 @@
 // The servo-cycle logic of truecut_comp, free of the HAL: one call per cycle
 // takes the inputs and the state, returns the correction. Called in this
 // order inside step():
-//   1. sanitise the tunables
+//   0. a rising reset clears the fault latch
+//   1. check the tunables (an invalid one: the last valid value, and a fault
+//      that fades the correction to zero)
 //   2. switch source (new field, new tool) if no cross-fade is running
 //   3. evaluate the current and the outgoing source at the TCP
 //   4. fault handling: a failing source holds its last good correction
 //   5. advance the fades, cross-fade
-//   6. clamp the magnitude, then limit the rate
+//   6. clamp the magnitude, then limit the velocity and acceleration, then
+//      the hard bound
 // Real-time safe: noexcept, no allocation, at most two field evaluations.
 #pragma once
 
@@ -28,8 +31,10 @@ enum class Fault : int32_t {
   kOutsideGrid = 3,     // the TCP is outside the field's grid
   kInputNotFinite = 4,  // NaN/Inf on a position or axis input
   kFieldNotFinite = 5,  // the field evaluated to NaN/Inf
-  kBadParameter = 6,    // max-correction, max-rate or fade-time NaN/Inf or < 0
+  kBadParameter = 6,    // a limit NaN/Inf or < 0, or max-rate 0: the last valid one is used
   kKinematics = 7,      // joint mode: joint A outside [a-min, a-max]
+  kBoundStep = 8,       // max-correction was lowered below the output by more
+                        // than the limits let it follow: the output stepped
 };
 
 inline const char* to_string(Fault f) noexcept {
@@ -50,6 +55,8 @@ inline const char* to_string(Fault f) noexcept {
       return "bad-parameter";
     case Fault::kKinematics:
       return "kinematics";
+    case Fault::kBoundStep:
+      return "bound-step";
   }
   return "unknown";
 }
@@ -67,6 +74,15 @@ struct CompState {
   Channel current;             // the source being faded in (or held)
   Channel outgoing;            // the source being faded out; idle when u == 0
   Vec3 output = Vec3::Zero();  // correction output by the last cycle, mm
+  // The last valid value of each tunable (kBadParameter: the invalid one is
+  // replaced by it, and the correction fades to zero at these limits).
+  CompLimits last_good;
+  Vec3 velocity = Vec3::Zero();                 // of the output, mm/s
+  Vec3 target_prev = Vec3::Zero();              // last cycle's wanted (clamped) correction
+  double bound_prev = kDefaultMaxCorrectionMm;  // last cycle's max-correction
+  int32_t clamp_count = 0;
+  Fault latched = Fault::kNone;  // a latching fault, held until a rising `reset`
+  bool reset_prev = false;       // cycles in which max-correction acted (wraps)
 };
 
 struct CycleInput {
@@ -79,19 +95,29 @@ struct CycleInput {
   // then owned by the state, when out.adopted is set.
   const rt::CorrectionField* candidate = nullptr;
   bool swap_inhibit = false;  // keep a candidate that would replace a field waiting
+  bool reset = false;         // rising edge: clear a latched fault whose cause is gone
 };
 
 struct CycleOutput {
   Vec3 correction_mm = Vec3::Zero();
   Fault fault = Fault::kNone;
-  bool limited = false;  // the magnitude clamp or the rate limit acted
-  bool active = false;   // a correction is applied or fading
-  double fade = 0.0;     // gain of the current source, 0..1
-  bool adopted = false;  // the candidate became the current field
+  bool limited = false;          // the magnitude clamp or the rate limit acted
+  bool clamped = false;          // max-correction acted (on the target or, hard, on the output)
+  bool active = false;           // a correction is applied or fading
+  double fade = 0.0;             // gain of the current source, 0..1
+  bool adopted = false;          // the candidate became the current field
+  Fault latched = Fault::kNone;  // the latched fault (see latches()), until `reset`
   // A field no longer referenced by the state: retire it (free it outside
   // the servo thread). At most one per cycle.
   const rt::CorrectionField* released = nullptr;
 };
+
+// The faults that latch: the integrator's own limits were violated. The
+// others describe the input or the field in this cycle and clear with their
+// cause.
+inline bool latches(Fault f) noexcept {
+  return f == Fault::kBadParameter || f == Fault::kBoundStep;
+}
 
 namespace detail {
 
@@ -136,8 +162,12 @@ inline Vec3 channel_value(Channel& ch, const Evaluated& e) noexcept {
 inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& raw_limits,
                         double dt_s) noexcept {
   CycleOutput out;
+  // 0. A rising `reset` clears the latch; a cause still present latches
+  // again at the end of this cycle.
+  if (in.reset && !s.reset_prev) s.latched = Fault::kNone;
+  s.reset_prev = in.reset;
   CompLimits lim;
-  const bool limits_ok = sanitize(raw_limits, lim);
+  const bool limits_ok = adopt_limits(raw_limits, s.last_good, lim);
 
   // 2. A new field or tool starts a cross-fade from the current source; a
   // second change waits until the first cross-fade has finished.
@@ -176,7 +206,7 @@ inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& ra
         detail::channel_value(s.outgoing, detail::evaluate(s.outgoing, in.tcp_mm, in.input_fault));
 
   // 5. Fade and blend.
-  const bool wanted = in.enable && limits_ok && !s.current.frozen;
+  const bool wanted = in.enable && limits_ok && s.latched == Fault::kNone && !s.current.frozen;
   s.current.u = advance_fade(s.current.u, wanted ? 1.0 : 0.0, dt_s, lim.fade_time_s);
   s.outgoing.u = advance_fade(s.outgoing.u, 0.0, dt_s, lim.fade_time_s);
   const Vec3 blended = fade_gain(s.current.u) * v_cur + fade_gain(s.outgoing.u) * v_out;
@@ -186,19 +216,55 @@ inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& ra
     s.outgoing = Channel{};
   }
 
-  // 6. Clamp, then rate-limit against last cycle's output.
+  // 6. Clamp, then limit the velocity (and acceleration) against last
+  // cycle's output, then the hard bound: the limited output can be above
+  // max-correction only when the bound was lowered below it; the bound wins,
+  // and a step beyond the limits is a fault.
   const Limited m = limit_magnitude(blended, lim.max_correction_mm);
-  Limited r = limit_rate(m.value, s.output, lim.max_rate_mm_per_s * dt_s);
-  if (!r.value.allFinite()) r = {s.output, true};  // cannot happen; never pass NaN on
-  s.output = r.value;
+  const Motion mo =
+      limit_motion(m.value, s.target_prev, s.output, s.velocity, lim.max_rate_mm_per_s,
+                   lim.max_accel_mm_per_s2, lim.max_correction_mm, dt_s);
+  s.target_prev = m.value;
+  Limited r{mo.position, mo.limited};
+  Vec3 velocity = mo.velocity;
+  if (!r.value.allFinite() || !velocity.allFinite()) {  // cannot happen; never pass NaN on
+    r = {s.output, true};
+    velocity.setZero();
+  }
+  const Limited h = limit_magnitude_hard(r.value, lim.max_correction_mm);
+  bool bound_step = false;
+  // (Rounding can put the output 1 ulp above the bound: the clamp removes
+  // it, but that is no step.)
+  if (h.limited && r.value.norm() - lim.max_correction_mm > 1e-12 * (1.0 + lim.max_correction_mm)) {
+    const Vec3 v_new = (h.value - s.output) / dt_s;
+    constexpr double kTol = 1.0 + 1e-9;
+    // A step is a fault only in a cycle that lowered the bound; otherwise
+    // the clip is the output grazing the bound (reported on `limited`).
+    bound_step = lim.max_correction_mm < s.bound_prev &&
+                 (v_new.norm() > lim.max_rate_mm_per_s * kTol ||
+                  (lim.max_accel_mm_per_s2 > 0.0 &&
+                   (v_new - s.velocity).norm() > lim.max_accel_mm_per_s2 * dt_s * kTol));
+    // After a step the output starts from rest.
+    velocity = bound_step ? Vec3::Zero() : v_new;
+  }
+  s.output = h.value;
+  s.velocity = velocity;
+  s.bound_prev = lim.max_correction_mm;
+  out.clamped = m.limited || h.limited;
+  if (out.clamped) s.clamp_count = static_cast<int32_t>(static_cast<uint32_t>(s.clamp_count) + 1u);
 
-  out.correction_mm = r.value;
-  out.limited = m.limited || r.limited;
+  out.correction_mm = h.value;
+  out.limited = m.limited || r.limited || h.limited;
   out.fade = fade_gain(s.current.u);
   out.active = s.current.u > 0.0 || s.outgoing.u > 0.0 || !s.output.isZero(0.0);
   out.fault = in.input_fault != Fault::kNone ? in.input_fault
               : !limits_ok                   ? Fault::kBadParameter
+              : bound_step                   ? Fault::kBoundStep
                                              : cur.fault;
+  // Latch even when an input fault hides the latching one on `fault`.
+  if (s.latched == Fault::kNone)
+    s.latched = !limits_ok ? Fault::kBadParameter : bound_step ? Fault::kBoundStep : Fault::kNone;
+  out.latched = s.latched;
   return out;
 }
 
