@@ -184,8 +184,12 @@ TEST(DiagnosisStages, GlitchRowsArePlantedSpikesNotReversalsStepsOrFastMoves) {
   const auto gc = isolated_glitches(p.t, p.cmd), ga = isolated_glitches(p.t, p.act);
   EXPECT_EQ(rows_of(gc), (std::vector<std::size_t>{home, small}));
   EXPECT_EQ(rows_of(ga), (std::vector<std::size_t>{home, still}));
-  if (gc.size() == 2) EXPECT_NEAR(gc[1].deviation, 0.5, 1e-9);
-  if (ga.size() == 2) EXPECT_NEAR(ga[1].deviation, 3.0, 0.02);
+  if (gc.size() == 2) {
+    EXPECT_NEAR(gc[1].deviation, 0.5, 1e-9);
+  }
+  if (ga.size() == 2) {
+    EXPECT_NEAR(ga[1].deviation, 3.0, 0.02);
+  }
 }
 
 TEST(DiagnosisStages, MasksLeaveOutGlitchRowsListThemAndTheCommandIsRepaired) {
