@@ -21,7 +21,6 @@ Engagement SweptCut::cut_to(DexelModel& model, const CutterShape& shape, const C
                             std::uint64_t to_cycle) noexcept {
   const Engagement e = model.cut(shape, cut_, to, false);
   covered_ = static_cast<int>(std::clamp<std::uint64_t>(to_cycle - cut_cycle_, 1, 1u << 30));
-  late_ = to_cycle != cycle_;
   cut_ = to;
   cut_cycle_ = to_cycle;
   return e;
@@ -31,19 +30,16 @@ Engagement SweptCut::step(DexelModel& model, const CutterShape& shape,
                           const CutterPose& pose) noexcept {
   ++cycle_;
   if (!valid(shape) || !valid(pose)) {
-    moved_ = false;
     Engagement e = finish(model);
     e.invalid_input = true;
     return e;
   }
-  moved_ = started_ && !same(pose, last_);
   if (!started_) {
     const Engagement e = model.cut(shape, pose, pose, false);  // the instance at `pose`
     shape_ = shape;
     cut_ = last_ = pose;
     cut_cycle_ = cycle_;
     covered_ = 1;
-    late_ = false;
     started_ = true;
     pending_ = false;
     return e;

@@ -151,7 +151,6 @@ TEST(CuttingSampling, StandingStillCutsNothingAndLeavesNothingPending) {
   for (int k = 0; k < 10; ++k)
     EXPECT_EQ(0u, s.step(m, {3, 3, 10}, here).substeps);
   EXPECT_FALSE(s.pending());
-  EXPECT_FALSE(s.moved());
 }
 
 TEST(CuttingSampling, ChangedToolCutsAtOnce) {
@@ -191,6 +190,5 @@ TEST(CuttingSampling, AMoveLongerThanAnInstanceSpacingIsCutInTheSameCycle) {
   EXPECT_EQ(static_cast<std::uint32_t>(std::ceil(1.0 / (0.5 * std::sqrt(8 * 3 * 1e-3)))),
             e.substeps);
   EXPECT_FALSE(s.pending());
-  EXPECT_FALSE(s.cut_one_cycle_late());
   EXPECT_EQ(1, s.cycles_covered());
 }

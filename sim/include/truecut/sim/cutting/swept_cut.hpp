@@ -34,11 +34,6 @@ class SweptCut {
   // The number of cycles (step() calls) whose motion the latest cut covered:
   // its removal belongs to that many cycles, not to the one it was cut in.
   int cycles_covered() const noexcept { return covered_; }
-  // Whether the latest cut ended at the pose before this call's (the motion
-  // of this call is still pending) rather than at this call's pose.
-  bool cut_one_cycle_late() const noexcept { return late_; }
-  // Whether this call's pose differs from the previous call's.
-  bool moved() const noexcept { return moved_; }
 
  private:
   Engagement cut_to(DexelModel& model, const CutterShape& shape, const CutterPose& to,
@@ -50,8 +45,6 @@ class SweptCut {
   std::uint64_t cycle_ = 0;      // step() calls so far
   std::uint64_t cut_cycle_ = 0;  // the call whose pose cut_ is
   int covered_ = 1;
-  bool late_ = false;
-  bool moved_ = false;
   bool started_ = false;
   bool pending_ = false;
 };
@@ -66,7 +59,6 @@ class CycleCut {
     return {};
   }
   int cycles_covered() const noexcept { return 1; }
-  bool cut_one_cycle_late() const noexcept { return false; }
 
  private:
   CutterPose previous_;
