@@ -17,6 +17,7 @@
 #include "truecut/offline/field_pipeline.hpp"
 #include "truecut/offline/mesh_io.hpp"
 #include "truecut/rt/field_file.hpp"
+#include "truecut/rt/number_format.hpp"
 #include "truecut/sim/part_file.hpp"
 
 namespace truecut::cli {
@@ -86,6 +87,9 @@ const char* kFieldHelp =
     "                        length, else the table's Z length, else 10 x radius)\n"
     "  --max-correction MM   refuse (exit 1) above this correction (default 0.2)\n"
     "  --force               write although the correction exceeds --max-correction\n"
+    "  --strict-mesh         refuse a mesh with degenerate (zero-area) facets instead\n"
+    "                        of dropping them (dropped facets are listed on stderr\n"
+    "                        and in audit.json)\n"
     "  --quiet               no progress on stderr\n"
     "  --help                this text\n";
 
@@ -185,12 +189,39 @@ std::vector<ToolShape> tool_shapes(const interp::ToolTable& table, const fs::pat
   return shapes;
 }
 
-offline::TriangleMesh read_input_mesh(const fs::path& file) {
+// Reads a mesh; degenerate (zero-area) facets are dropped and reported
+// unless --strict-mesh, which refuses the file instead.
+offline::TriangleMesh read_input_mesh(const fs::path& file, const std::string& role, bool strict,
+                                      std::vector<offline::MeshInputAudit>& audit) {
+  offline::MeshReadOptions options;
+  options.degenerate_faces =
+      strict ? offline::DegenerateFaces::kError : offline::DegenerateFaces::kDrop;
+  offline::MeshReadReport report;
+  offline::TriangleMesh mesh;
   try {
-    return offline::read_mesh(file);
+    mesh = offline::read_mesh(file, options, &report);
   } catch (const offline::MeshIoError& e) {
-    throw InputError(e.what());
+    std::string what = e.what();
+    if (strict && what.find(" is degenerate (") != std::string::npos)
+      what += "; without --strict-mesh such facets are dropped and counted";
+    throw InputError(what);
   }
+  audit.push_back({role, file, report.faces_in_file, std::move(report.dropped_triangles)});
+  return mesh;
+}
+
+// "scan.stl: dropped 2 degenerate facets of 113906: #48211 (area 3e-12 mm²), ..."
+std::string dropped_message(const offline::MeshInputAudit& m) {
+  const std::size_t n = m.dropped.size();
+  std::string s = m.file.filename().string() + ": dropped " + std::to_string(n) +
+                  " degenerate facet" + (n == 1 ? "" : "s") + " of " +
+                  std::to_string(m.facets_in_file) + ":";
+  constexpr std::size_t kListed = 5;
+  for (std::size_t i = 0; i < std::min(n, kListed); ++i)
+    s += rt::format_printf("%s #%zu (area %.3g mm², longest edge %.3g mm)", i ? "," : "",
+                           m.dropped[i].face, m.dropped[i].area_mm2, m.dropped[i].longest_edge_mm);
+  if (n > kListed) s += rt::format_printf(" and %zu more (all in audit.json)", n - kListed);
+  return s + "; --strict-mesh refuses such a mesh instead";
 }
 
 struct Inputs {
@@ -201,13 +232,15 @@ struct Inputs {
   std::optional<PartFile> part;
   std::optional<rt::CorrectionField> base;
   std::vector<offline::FileDigest> digests;
+  std::vector<offline::MeshInputAudit> meshes;
 };
 
 Inputs read_inputs(const ParsedArgs& a, const fs::path& program_file, const fs::path& tools_file) {
   Inputs in;
   const fs::path nominal_file = a.positionals()[0], scan_file = a.positionals()[1];
-  in.nominal = read_input_mesh(nominal_file);
-  in.scan = read_input_mesh(scan_file);
+  const bool strict = a.flag("strict-mesh");
+  in.nominal = read_input_mesh(nominal_file, "nominal", strict, in.meshes);
+  in.scan = read_input_mesh(scan_file, "scan", strict, in.meshes);
   try {
     interp::InterpreterOptions io;
     in.tools = interp::ToolTable::load(tools_file);
@@ -225,7 +258,7 @@ Inputs read_inputs(const ParsedArgs& a, const fs::path& program_file, const fs::
   in.digests.push_back(offline::digest_file("tools", tools_file));
   if (auto p = a.value("part")) in.digests.push_back(offline::digest_file("part", *p));
   if (auto e = a.value("expected")) {
-    in.expected = read_input_mesh(*e);
+    in.expected = read_input_mesh(*e, "expected", strict, in.meshes);
     if (in.expected->triangles.empty())
       throw InputError(*e + ": the expected cut must be a mesh with faces");
     in.digests.push_back(offline::digest_file("expected", *e));
@@ -348,6 +381,12 @@ int run_field(const ParsedArgs& a, const std::vector<std::string>& argv) {
   if (in.base) pin.base_field = &*in.base;
   if (in.expected) pin.expected = &*in.expected;
   if (in.part) {
+    // part.json numbers the triangles of the file, dropped ones included.
+    const auto& dropped = in.meshes.front().dropped;
+    auto& ids = in.part->triangle_surface_ids;
+    if (!dropped.empty() && ids.size() == in.nominal.triangles.size() + dropped.size())
+      for (auto d = dropped.rbegin(); d != dropped.rend(); ++d)
+        ids.erase(ids.begin() + static_cast<std::ptrdiff_t>(d->triangle));
     if (in.part->triangle_surface_ids.size() != in.nominal.triangles.size())
       throw InputError(*a.value("part") + ": " +
                        std::to_string(in.part->triangle_surface_ids.size()) +
@@ -359,6 +398,8 @@ int run_field(const ParsedArgs& a, const std::vector<std::string>& argv) {
     if (!quiet)
       std::fprintf(stderr, "field: %-34s %8.3f s  %s\n", stage.c_str(), s, detail.c_str());
   };
+  for (const offline::MeshInputAudit& m : in.meshes)
+    if (!m.dropped.empty()) std::fprintf(stderr, "field: %s\n", dropped_message(m).c_str());
   offline::FieldPipelineResult result;
   try {
     result = offline::run_field_pipeline(pin, options, progress);
@@ -376,6 +417,7 @@ int run_field(const ParsedArgs& a, const std::vector<std::string>& argv) {
   }
   offline::AuditContext ctx;
   ctx.inputs = in.digests;
+  ctx.meshes = in.meshes;
   ctx.command_line.push_back("truecut");
   ctx.command_line.push_back("field");
   ctx.command_line.insert(ctx.command_line.end(), argv.begin(), argv.end());
@@ -423,6 +465,7 @@ int cmd_field(const std::vector<std::string>& argv) {
                       {"force", false},
                       {"base", true},
                       {"quiet", false},
+                      {"strict-mesh", false},
                       {"help", false}});
   if (a.flag("help")) {
     std::fputs(kFieldHelp, stdout);

@@ -151,6 +151,63 @@ TEST(FieldCli, RefusesAboveMaxCorrectionUnlessForced) {
   EXPECT_GT(audit["max_correction"]["max_mm"].get<double>(), 0.02);
 }
 
+// A CAD export with a zero-area facet (two corners the same) in the middle of
+// the nominal, and part.json numbering the file's facets: by default the
+// facet is dropped, named on stderr and in audit.json, and the result is the
+// clean nominal's; --strict-mesh refuses the file and writes nothing.
+TEST(FieldCli, DegenerateFacetIsDroppedAndNamedOrRefusedWhenStrict) {
+  const fs::path root = scratch_dir();
+  const Part p = make_part_and_scan(root, 0.05);
+  const ProcessResult clean = truecut(field_args(p, root / "clean"));
+  ASSERT_EQ(clean.exit_code, 0) << clean.err;
+  EXPECT_EQ(clean.err.find("degenerate"), std::string::npos) << clean.err;
+
+  std::string stl = read_file(p.nominal);
+  std::uint32_t n = 0;
+  std::memcpy(&n, stl.data() + 80, 4);
+  const std::uint32_t k = n / 2;
+  std::string sliver = stl.substr(84 + 50 * std::size_t{k}, 50);
+  std::memcpy(sliver.data() + 12 + 24, sliver.data() + 12, 12);  // corner 2 := corner 0
+  stl.insert(84 + 50 * std::size_t{k}, sliver);
+  const std::uint32_t n1 = n + 1;
+  std::memcpy(stl.data() + 80, &n1, 4);
+  Part q = p;
+  q.nominal = root / "with_sliver.stl";
+  write_text(q.nominal, stl);
+  nlohmann::json part = nlohmann::json::parse(read_file(p.part));
+  auto& ids = part["triangle_surface_ids"];
+  ids.insert(ids.begin() + k, ids[k]);
+  q.part = root / "with_sliver.json";
+  write_text(q.part, part.dump());
+
+  const ProcessResult r = truecut(field_args(q, root / "dropped"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("with_sliver.stl: dropped 1 degenerate facet of " + std::to_string(n1) +
+                       ": #" + std::to_string(k) + " (area 0 mm²"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(read_file(root / "dropped" / "compensation_matrix.csv"),
+            read_file(root / "clean" / "compensation_matrix.csv"));
+  const nlohmann::json audit = nlohmann::json::parse(read_file(root / "dropped" / "audit.json"));
+  ASSERT_EQ(audit["meshes"].size(), 2u);
+  EXPECT_EQ(audit["meshes"][0]["role"], "nominal");
+  EXPECT_EQ(audit["meshes"][0]["facets_in_file"], n1);
+  ASSERT_EQ(audit["meshes"][0]["degenerate_facets_dropped"].size(), 1u);
+  EXPECT_EQ(audit["meshes"][0]["degenerate_facets_dropped"][0]["facet"], k);
+  EXPECT_TRUE(audit["meshes"][1]["degenerate_facets_dropped"].empty());
+
+  std::vector<std::string> strict = field_args(q, root / "strict");
+  strict.push_back("--strict-mesh");
+  const ProcessResult s = truecut(strict);
+  EXPECT_EQ(s.exit_code, 2) << s.err;
+  for (const std::string& part_of_message :
+       {std::string("with_sliver.stl"), "facet " + std::to_string(k) + " is degenerate",
+        std::string("zero area"), std::string("without --strict-mesh")})
+    EXPECT_NE(s.err.find(part_of_message), std::string::npos) << s.err;
+  EXPECT_EQ(s.err.find("DegenerateFaces"), std::string::npos) << s.err;
+  EXPECT_FALSE(fs::exists(root / "strict"));
+}
+
 TEST(FieldCli, MalformedInputsExit2AndWriteNothing) {
   const fs::path root = scratch_dir();
   const Part p = make_part_and_scan(root, 0.05);

@@ -6,6 +6,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <cmath>
 
 namespace truecut::offline::mesh_io {
 
@@ -43,11 +44,11 @@ bool is_degenerate(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eig
   return ab.cross(ac).norm() <= tolerance * longest_sq;
 }
 
-std::size_t handle_degenerate_triangles(std::vector<Triangle>& triangles,
-                                        std::vector<std::uint32_t>& source_face,
-                                        const std::vector<Eigen::Vector3d>& vertices,
-                                        const MeshReadOptions& options,
-                                        const std::filesystem::path& file, std::string_view word) {
+void handle_degenerate_triangles(std::vector<Triangle>& triangles,
+                                 std::vector<std::uint32_t>& source_face,
+                                 const std::vector<Eigen::Vector3d>& vertices,
+                                 const MeshReadOptions& options, const std::filesystem::path& file,
+                                 std::string_view word, MeshReadReport& report) {
   const bool mapped = !source_face.empty();
   auto face_of = [&](std::size_t i) { return mapped ? std::size_t{source_face[i]} : i; };
   std::size_t kept = 0;
@@ -60,8 +61,15 @@ std::size_t handle_degenerate_triangles(std::vector<Triangle>& triangles,
       ++kept;
       continue;
     }
-    if (options.degenerate_faces == DegenerateFaces::kDrop) continue;
     const std::size_t face = face_of(i);
+    const Eigen::Vector3d &a = vertices[t[0]], &b = vertices[t[1]], &c = vertices[t[2]];
+    const double area_mm2 = 0.5 * (b - a).cross(c - a).norm();
+    const double longest_mm =
+        std::sqrt(std::max({(b - a).squaredNorm(), (c - a).squaredNorm(), (c - b).squaredNorm()}));
+    if (options.degenerate_faces == DegenerateFaces::kDrop) {
+      report.dropped_triangles.push_back({i, face, area_mm2, longest_mm});
+      continue;
+    }
     std::size_t first = i, last = i;  // the face's triangles are consecutive
     while (first > 0 && face_of(first - 1) == face) {
       --first;
@@ -74,16 +82,18 @@ std::size_t handle_degenerate_triangles(std::vector<Triangle>& triangles,
       msg += " (fan triangle " + std::to_string(i - first) + " of " +
              std::to_string(last - first + 1) + ")";
     }
-    msg += " is degenerate (zero area; vertices " + std::to_string(t[0]) + " " +
-           format_point(vertices[t[0]]) + ", " + std::to_string(t[1]) + " " +
-           format_point(vertices[t[1]]) + ", " + std::to_string(t[2]) + " " +
-           format_point(vertices[t[2]]) + "); read with DegenerateFaces::kDrop to drop such faces";
+    msg += " is degenerate (zero area: ";
+    append_double(msg, area_mm2);
+    msg += " mm² for a longest edge of ";
+    append_double(msg, longest_mm);
+    msg += " mm; vertices " + std::to_string(t[0]) + " " + format_point(vertices[t[0]]) + ", " +
+           std::to_string(t[1]) + " " + format_point(vertices[t[1]]) + ", " + std::to_string(t[2]) +
+           " " + format_point(vertices[t[2]]) + ")";
     throw MeshIoError(file, msg);
   }
-  const std::size_t dropped = triangles.size() - kept;
+  report.degenerate_triangles_dropped = triangles.size() - kept;
   triangles.resize(kept);
   if (mapped) source_face.resize(kept);
-  return dropped;
 }
 
 void check_writable(const TriangleMesh& mesh, const std::filesystem::path& file) {

@@ -33,12 +33,12 @@ bool is_degenerate(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eig
 // Applies options.degenerate_faces. source_face[i] is the index in the file of
 // the face triangle i came from (empty: i itself); faces with more than one
 // triangle are fan-triangulated polygons. `word` names faces in messages
-// ("facet", "face"). Returns the number of triangles dropped.
-std::size_t handle_degenerate_triangles(std::vector<Triangle>& triangles,
-                                        std::vector<std::uint32_t>& source_face,
-                                        const std::vector<Eigen::Vector3d>& vertices,
-                                        const MeshReadOptions& options,
-                                        const std::filesystem::path& file, std::string_view word);
+// ("facet", "face"). Records what it drops in report (count and list).
+void handle_degenerate_triangles(std::vector<Triangle>& triangles,
+                                 std::vector<std::uint32_t>& source_face,
+                                 const std::vector<Eigen::Vector3d>& vertices,
+                                 const MeshReadOptions& options, const std::filesystem::path& file,
+                                 std::string_view word, MeshReadReport& report);
 
 // For writers: throws naming the triangle whose index is out of range, or the
 // normals array when its size does not match.

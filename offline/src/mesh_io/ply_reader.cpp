@@ -108,8 +108,8 @@ TriangleMesh PlyReader::read() {
   }
 
   check_finite(mesh_.vertices_mm, mesh_.normals, in_.path(), "vertex");
-  report_.degenerate_triangles_dropped = handle_degenerate_triangles(
-      mesh_.triangles, source_face_, mesh_.vertices_mm, options_, in_.path(), "face");
+  handle_degenerate_triangles(mesh_.triangles, source_face_, mesh_.vertices_mm, options_,
+                              in_.path(), "face", report_);
   return std::move(mesh_);
 }
 

@@ -255,8 +255,8 @@ TriangleMesh read_stl(const std::filesystem::path& file, const MeshReadOptions& 
   rep.format = MeshFormat::kStl;
   TriangleMesh mesh = ascii ? read_ascii(in, options, rep) : read_binary(in, options, rep);
   std::vector<std::uint32_t> identity;
-  rep.degenerate_triangles_dropped = handle_degenerate_triangles(
-      mesh.triangles, identity, mesh.vertices_mm, options, file, "facet");
+  handle_degenerate_triangles(mesh.triangles, identity, mesh.vertices_mm, options, file, "facet",
+                              rep);
   return mesh;
 }
 

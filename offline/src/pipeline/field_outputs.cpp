@@ -133,6 +133,18 @@ std::string audit_json(const FieldPipelineResult& r, const FieldPipelineOptions&
     out.push_back(digest_json(d));
   j["inputs"] = in;
   j["outputs"] = out;
+  json meshes = json::array();
+  for (const MeshInputAudit& m : c.meshes) {
+    json dropped = json::array();
+    for (const DroppedTriangle& d : m.dropped)
+      dropped.push_back(
+          {{"facet", d.face}, {"area_mm2", d.area_mm2}, {"longest_edge_mm", d.longest_edge_mm}});
+    meshes.push_back({{"role", m.role},
+                      {"path", m.file.string()},
+                      {"facets_in_file", m.facets_in_file},
+                      {"degenerate_facets_dropped", dropped}});
+  }
+  j["meshes"] = meshes;
   j["parameters"] = parameters_json(o, c, r.truss_kb_over_kc);
   if (r.registration) {
     const IcpResult& g = *r.registration;

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "truecut/offline/field_pipeline.hpp"
+#include "truecut/offline/mesh_io_options.hpp"
 #include "truecut/rt/comp.hpp"
 
 namespace truecut::offline {
@@ -41,8 +42,17 @@ struct FileDigest {
 // std::runtime_error naming the file when it cannot be read.
 FileDigest digest_file(const std::string& role, const std::filesystem::path& file);
 
+// A mesh input as read: its facets and the degenerate ones dropped.
+struct MeshInputAudit {
+  std::string role;  // "nominal", "scan", "expected"
+  std::filesystem::path file;
+  std::size_t facets_in_file = 0;
+  std::vector<DroppedTriangle> dropped;
+};
+
 struct AuditContext {
   std::vector<FileDigest> inputs;
+  std::vector<MeshInputAudit> meshes;
   std::vector<std::string> command_line;  // argv as given
   std::string created_utc;                // ISO 8601; empty: now
   std::vector<ToolShape> tools;           // the tool shapes the placement used

@@ -30,6 +30,14 @@ struct MeshReadOptions {
   bool weld_stl_vertices = true;
 };
 
+// A triangle DegenerateFaces::kDrop removed.
+struct DroppedTriangle {
+  std::size_t triangle = 0;  // its index among the triangles before dropping
+  std::size_t face = 0;      // the STL facet or PLY face it came from
+  double area_mm2 = 0.0;
+  double longest_edge_mm = 0.0;
+};
+
 struct MeshReadReport {
   MeshFormat format = MeshFormat::kStl;
   // "ascii", "binary" (STL), "binary_little_endian" or "binary_big_endian".
@@ -37,7 +45,8 @@ struct MeshReadReport {
   std::size_t faces_in_file = 0;          // STL facets or PLY face records
   std::size_t polygons_triangulated = 0;  // PLY faces with more than 3 corners
   std::size_t degenerate_triangles_dropped = 0;
-  std::size_t stl_corners_welded = 0;  // corners merged into an earlier vertex
+  std::vector<DroppedTriangle> dropped_triangles;  // each of them, in file order
+  std::size_t stl_corners_welded = 0;              // corners merged into an earlier vertex
   // PLY comment and obj_info lines, the STL header or solid names.
   std::vector<std::string> comments;
 };
