@@ -62,6 +62,12 @@ const char* kFieldHelp =
     "  --register-significance P  apply the registration only when a motion that\n"
     "                        large arises from the scan's noise with probability\n"
     "                        below P (default 0.001; 0: always apply)\n"
+    "  --max-scan-offset MM  refuse a scan (exit 2) that registration must move, or\n"
+    "                        that with --no-register sits, farther than this off\n"
+    "                        the nominal anywhere on the part (default 0.3)\n"
+    "  --max-scan-outliers PERCENT  refuse a scan with more of its points than this\n"
+    "                        farther than --max-scan-offset from the nominal after\n"
+    "                        registration (default 20)\n"
     "  --remove-rbm          remove the rigid-body motion left in the error vectors\n"
     "  --sphere-radius MM    sphere method radius Rs (default 1.5)\n"
     "  --max-distance MM     ray method search distance each way (default 1)\n"
@@ -297,6 +303,10 @@ offline::FieldPipelineOptions pipeline_options(const ParsedArgs& a, const Inputs
   if (auto d = a.value("datum")) o.datum_surfaces = id_list("datum", *d);
   o.register_scan = !a.flag("no-register");
   o.icp.significance_level = a.number("register-significance", 0.001, 0.0, 0.5);
+  o.scan_check.max_offset_mm =
+      a.number("max-scan-offset", o.scan_check.max_offset_mm, 1e-3, 1000.0);
+  o.scan_check.max_off_percent =
+      a.number("max-scan-outliers", o.scan_check.max_off_percent, 0.0, 100.0);
   o.remove_rigid_body_motion = a.flag("remove-rbm");
   o.sphere.radius_mm = a.number("sphere-radius", o.sphere.radius_mm, 0.01, 100.0);
   o.ray.max_distance_mm = a.number("max-distance", o.ray.max_distance_mm, 0.001, 100.0);
@@ -405,6 +415,8 @@ int run_field(const ParsedArgs& a, const std::vector<std::string>& argv) {
     result = offline::run_field_pipeline(pin, options, progress);
   } catch (const std::invalid_argument& e) {
     throw InputError(e.what());
+  } catch (const offline::ScanMismatchError& e) {
+    throw InputError(a.positionals()[1] + ": " + e.what() + "; nothing written");
   }
 
   const bool exceeded = result.max_correction_mm > max_correction;
@@ -446,6 +458,8 @@ int cmd_field(const std::vector<std::string>& argv) {
                       {"datum", true},
                       {"no-register", false},
                       {"remove-rbm", false},
+                      {"max-scan-offset", true},
+                      {"max-scan-outliers", true},
                       {"sphere-radius", true},
                       {"max-distance", true},
                       {"kb-kc", true},

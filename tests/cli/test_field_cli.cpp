@@ -4,9 +4,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <set>
 #include <string>
 #include <vector>
@@ -206,6 +208,103 @@ TEST(FieldCli, DegenerateFacetIsDroppedAndNamedOrRefusedWhenStrict) {
     EXPECT_NE(s.err.find(part_of_message), std::string::npos) << s.err;
   EXPECT_EQ(s.err.find("DegenerateFaces"), std::string::npos) << s.err;
   EXPECT_FALSE(fs::exists(root / "strict"));
+}
+
+// The binary STL with every corner moved by f.
+std::string moved_stl(std::string stl, const std::function<void(float*)>& f) {
+  std::uint32_t n = 0;
+  std::memcpy(&n, stl.data() + 80, 4);
+  for (std::uint32_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) {
+      float xyz[3];
+      char* at = stl.data() + 84 + 50 * std::size_t{i} + 12 + 12 * c;
+      std::memcpy(xyz, at, 12);
+      f(xyz);
+      std::memcpy(at, xyz, 12);
+    }
+  return stl;
+}
+
+// Scans that are not of this part or not where they say: refused with exit 2,
+// a message that says how far off and which option accepts it, and nothing
+// written; the same scans pass when the option says the offset is intended.
+TEST(FieldCli, WrongScansAreRefused) {
+  const fs::path root = scratch_dir();
+  const Part p = make_part_and_scan(root, 0.05);
+  const fs::path out = root / "out";
+  struct Case {
+    std::string name;
+    std::string stl;
+    std::vector<std::string> options;
+    std::vector<std::string> message;
+  };
+  const std::string scan = read_file(p.scan);
+  auto shifted_z = [&](float dz) { return moved_stl(scan, [dz](float* v) { v[2] += dz; }); };
+  const ProcessResult other =
+      truecut({"part", "benchmark004", "--out", (root / "other").string(), "--mesh-edge", "1"});
+  ASSERT_EQ(other.exit_code, 0) << other.err;
+  std::vector<Case> cases;
+  for (float dz : {1.0f, 2.0f, 5.0f}) {
+    cases.push_back({"declared in frame, z + " + std::to_string(dz),
+                     shifted_z(dz),
+                     {"--no-register"},
+                     {"--no-register", "--max-scan-offset"}});
+    cases.push_back(
+        {"registered, z + " + std::to_string(dz), shifted_z(dz), {}, {"--max-scan-offset"}});
+  }
+  cases.push_back(
+      {"another part", read_file(root / "other" / "nominal.stl"), {}, {"--max-scan-offset"}});
+  cases.push_back({"scaled 1.5 (points mostly off the nominal)",
+                   moved_stl(scan,
+                             [](float* v) {
+                               for (int i = 0; i < 3; ++i)
+                                 v[i] *= 1.5f;
+                             }),
+                   {"--no-register"},
+                   {"--max-scan-outliers"}});
+  for (const Case& c : cases) {
+    const fs::path file = root / "wrong_scan.stl";
+    write_text(file, c.stl);
+    Part q = p;
+    q.scan = file;
+    std::vector<std::string> args = field_args(q, out);
+    args.insert(args.end(), c.options.begin(), c.options.end());
+    const ProcessResult r = truecut(args);
+    EXPECT_EQ(r.exit_code, 2) << c.name << "\n" << r.err;
+    EXPECT_NE(r.err.find("wrong_scan.stl: "), std::string::npos) << c.name << "\n" << r.err;
+    for (const std::string& m : c.message)
+      EXPECT_NE(r.err.find(m), std::string::npos) << c.name << ": " << m << "\n" << r.err;
+    EXPECT_NE(r.err.find("nothing written"), std::string::npos) << c.name << "\n" << r.err;
+    EXPECT_FALSE(fs::exists(out)) << c.name;
+  }
+  // A scan 0.4 mm off along the diagonal: registration must move it more
+  // than the default allows, and does so when told that is intended.
+  write_text(root / "shifted.stl", moved_stl(scan, [](float* v) {
+               for (int i = 0; i < 3; ++i)
+                 v[i] += 0.4f / std::sqrt(3.0f);
+             }));
+  Part q = p;
+  q.scan = root / "shifted.stl";
+  std::vector<std::string> args = field_args(q, out);
+  ProcessResult r = truecut(args);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("registration fits the scan to the nominal only by moving it up to 0.4"),
+            std::string::npos)
+      << r.err;
+  args.insert(args.end(), {"--max-scan-offset", "0.5"});
+  r = truecut(args);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json audit = nlohmann::json::parse(read_file(out / "audit.json"));
+  for (int i = 0; i < 3; ++i)
+    EXPECT_NEAR(audit["scan_check"]["motion"]["translation_mm"][i].get<double>(),
+                -0.4 / std::sqrt(3.0), 0.01);
+  EXPECT_LT(audit["scan_check"]["off_percent"].get<double>(), 1.0);
+  write_text(root / "nudged.stl", shifted_z(0.1f));
+  q.scan = root / "nudged.stl";
+  args = field_args(q, root / "nudged");
+  args.push_back("--no-register");
+  r = truecut(args);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
 }
 
 TEST(FieldCli, MalformedInputsExit2AndWriteNothing) {

@@ -447,10 +447,15 @@ TEST(FieldPipeline, ConcurrentStagesGiveTheSameResult) {
   std::vector<std::string> names;
   for (const StageTime& t : concurrent.stages)
     names.push_back(t.name);
-  const std::vector<std::string> expected{"registration",      "compensation points",
-                                          "scan ray scene",    "error vectors (rays)",
-                                          "significance test", "truss smoothing and adapted mesh",
-                                          "tool path",         "tool-centre placement",
+  const std::vector<std::string> expected{"registration",
+                                          "compensation points",
+                                          "scan ray scene",
+                                          "scan check",
+                                          "error vectors (rays)",
+                                          "significance test",
+                                          "truss smoothing and adapted mesh",
+                                          "tool path",
+                                          "tool-centre placement",
                                           "field fit"};
   EXPECT_EQ(names, expected);
 }

@@ -146,6 +146,18 @@ std::string audit_json(const FieldPipelineResult& r, const FieldPipelineOptions&
   }
   j["meshes"] = meshes;
   j["parameters"] = parameters_json(o, c, r.truss_kb_over_kc);
+  if (r.scan_check) {
+    const ScanCheck& c = *r.scan_check;
+    j["scan_check"] = {{"declared_in_frame", c.declared_in_frame},
+                       {"motion", transform_json(c.motion)},
+                       {"motion_max_displacement_mm", c.motion_max_displacement_mm},
+                       {"points_checked", c.points_checked},
+                       {"points_off", c.points_off},
+                       {"off_percent", c.off_percent},
+                       {"off_median_distance_mm", c.off_median_distance_mm},
+                       {"max_offset_mm", o.scan_check.max_offset_mm},
+                       {"max_off_percent", o.scan_check.max_off_percent}};
+  }
   if (r.registration) {
     const IcpResult& g = *r.registration;
     json reg = transform_json(g.transform);

@@ -60,6 +60,7 @@ enum StageOrder : int {
   kRegistrationStage,
   kPointsStage,
   kSceneStage,
+  kScanCheckStage,
   kErrorStage,
   kSignificanceStage,
   kVertexErrorStage,
@@ -350,6 +351,27 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
                                  in.expected->triangles.size())
                            : rt::format_printf("%zu faces", in.scan->triangles.size()));
   };
+  // Refuses (ScanMismatchError) a scan that does not belong to the nominal. A
+  // scan declared in the workpiece frame is registered here only to measure
+  // how far off it sits; the motion is not applied.
+  auto check_scan_fits = [&] {
+    if (!opt.scan_check.enabled) return;
+    const auto t0 = timer.now();
+    Eigen::Isometry3d scan_to_nominal = Eigen::Isometry3d::Identity(), motion = scan_to_nominal;
+    if (r.registration) {
+      scan_to_nominal = r.registration->scan_to_nominal;
+      motion = scan_to_nominal;
+    } else {
+      const IcpResult found = register_scan(nominal, in.scan->vertices_mm, icp);
+      if (found.applied) motion = found.scan_to_nominal;
+    }
+    r.scan_check = check_scan(nominal, in.scan->vertices_mm, scan_to_nominal, motion,
+                              !opt.register_scan, opt.scan_check);
+    timer.done(kScanCheckStage, t0, "scan check",
+               rt::format_printf("motion up to %.4f mm; %.1f %% of %zu points off the nominal",
+                                 r.scan_check->motion_max_displacement_mm,
+                                 r.scan_check->off_percent, r.scan_check->points_checked));
+  };
   auto scan_chain = [&] {
     if (opt.concurrent_stages) {
       tbb::task_group g;
@@ -360,6 +382,7 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
       registration();
       build_scene();
     }
+    check_scan_fits();
     const auto t0 = timer.now();
     if (scene && r.registration) scene->set_world_from_mesh(r.registration->scan_to_nominal);
     if (opt.method == ErrorMethod::kSphere) {
@@ -463,7 +486,14 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
   if (opt.concurrent_stages) {
     tbb::task_group chains;
     chains.run(program_chain);
-    scan_chain();
+    try {
+      scan_chain();
+    } catch (...) {
+      // The program chain is left to finish (it holds references to this
+      // frame); cancelling the group here crashed oneTBB 2021.8.
+      chains.wait();
+      throw;
+    }
     chains.wait();
   } else {
     scan_chain();

@@ -19,6 +19,7 @@
 #include "truecut/offline/field_fit.hpp"
 #include "truecut/offline/mesh.hpp"
 #include "truecut/offline/registration.hpp"
+#include "truecut/offline/scan_check.hpp"
 #include "truecut/offline/tool_centre_placement.hpp"
 #include "truecut/offline/tool_path.hpp"
 #include "truecut/offline/truss_smoothing.hpp"
@@ -37,6 +38,7 @@ struct FieldPipelineOptions {
   bool register_scan = true;                 // false: the scan is already in the workpiece frame
   bool remove_rigid_body_motion = false;  // after the error vectors (model-adaptation eqs. 3–6)
   IcpOptions icp;
+  ScanCheckOptions scan_check;  // refuse scans that do not belong to the nominal
   RayMethodOptions ray;
   SphereMethodOptions sphere;
   // Which surfaces the scan shows measurably wrong; the others get no
@@ -109,6 +111,7 @@ struct StageTime {
 struct FieldPipelineResult {
   std::vector<std::int32_t> triangle_surface_ids;
   std::optional<IcpResult> registration;
+  std::optional<ScanCheck> scan_check;
   std::optional<RigidBodyMotion> rigid_body_motion;
   CompensationPoints points;
   ErrorVectors errors;
