@@ -337,13 +337,25 @@ void print_summary(const offline::FieldPipelineResult& r,
         "%.1f); RMS residual %.4f mm\n",
         r.registration->motion_chi2, r.registration->motion_threshold,
         r.registration->rms_after_mm);
-  else if (r.registration)
+  else if (r.registration) {
+    const offline::RigidTransformReport& t = r.registration->transform;
+    constexpr double kUradPerDeg = 1e6 * 3.14159265358979323846 / 180.0;
     std::printf(
-        "registration: %d iterations, RMS residual %.4f mm, translation %.4f %.4f %.4f mm, "
-        "rotation %.4f deg\n",
-        r.registration->iterations, r.registration->rms_after_mm,
-        r.registration->transform.translation_mm.x(), r.registration->transform.translation_mm.y(),
-        r.registration->transform.translation_mm.z(), r.registration->transform.rotation_angle_deg);
+        "registration: %d iterations, RMS residual %.4f mm; it removed translation %.1f %.1f "
+        "%.1f um, rotation %.1f %.1f %.1f urad (about x, y, z), up to %.1f um on the part\n",
+        r.registration->iterations, r.registration->rms_after_mm, 1e3 * t.translation_mm.x(),
+        1e3 * t.translation_mm.y(), 1e3 * t.translation_mm.z(),
+        kUradPerDeg * t.rotation_xyz_deg.x(), kUradPerDeg * t.rotation_xyz_deg.y(),
+        kUradPerDeg * t.rotation_xyz_deg.z(), 1e3 * r.registration_max_displacement_mm);
+  }
+  if (r.registration_absorbed_beyond_noise)
+    std::fprintf(stderr,
+                 "truecut field: WARNING: registration on all faces moved the scan by up to %.1f "
+                 "um, more than 3 x the scan's noise (%.1f um): a rigid part of the machined "
+                 "error (a side cut long or short) may have been fitted away with the "
+                 "misplacement. Register on the faces that define the part's frame (fixture "
+                 "references) with --datum ID,...\n",
+                 1e3 * r.registration_max_displacement_mm, 1e3 * r.significance.pooled_noise_mm);
   const auto& e = r.error_statistics;
   std::printf(
       "error vectors: %zu points, %.1f %% invalid, mean %.4f mm, RMS %.4f mm, max %.4f mm\n",

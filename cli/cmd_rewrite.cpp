@@ -41,7 +41,10 @@ const char* kRewriteHelp =
     "rather than the real-time mode: docs/rewrite.md.\n"
     "\n"
     "options:\n"
-    "  --matrix FILE        compensation matrix CSV (x,y,z,dx,dy,dz[,valid,surface_id])\n"
+    "  --matrix FILE        compensation matrix CSV (x,y,z,dx,dy,dz[,valid,surface_id]);\n"
+    "                       from truecut field, dx,dy,dz are smoothed and tested\n"
+    "  --raw-matrix         matrix mode: read raw_dx,raw_dy,raw_dz instead (the mirror\n"
+    "                       of the raw error vectors, scan noise included)\n"
     "  --field FILE         correction field .tcf (instead of --matrix)\n"
     "  --operation NAME     the CAM operation, as in (OPERATION: NAME)\n"
     "  --type T             peripheral (flat end mill, side), face (flat end mill,\n"
@@ -137,6 +140,7 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
                       {"surfaces", true},
                       {"placement", true},
                       {"smooth", true},
+                      {"raw-matrix", false},
                       {"cutting-length", true},
                       {"tools", true},
                       {"machine", true},
@@ -152,6 +156,7 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
   const std::string in_path = a.positionals()[0];
   const auto matrix_path = a.value("matrix"), field_path = a.value("field");
   if (!matrix_path == !field_path) throw UsageError("give exactly one of --matrix and --field");
+  if (a.flag("raw-matrix") && !matrix_path) throw UsageError("--raw-matrix goes with --matrix");
   const auto operation = a.value("operation");
   if (!operation) throw UsageError("--operation NAME is required");
   const auto type = a.value("type");
@@ -221,7 +226,9 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
     if (matrix_path) {
       const std::string bytes = read_bytes(*matrix_path, "compensation matrix");
       add_input("matrix", *matrix_path, bytes);
-      const auto matrix = interp::parse_compensation_matrix(bytes, *matrix_path);
+      const auto matrix = interp::parse_compensation_matrix(
+          bytes, *matrix_path,
+          a.flag("raw-matrix") ? interp::MatrixVectors::kRaw : interp::MatrixVectors::kSmoothed);
       result = interp::rewrite_program(program, in_path, matrix, o);
     } else {
       const std::string bytes = read_bytes(*field_path, "correction field");

@@ -271,12 +271,13 @@ TEST(RewriteClosedLoop, FiveAxisRewriteCompensatesAsWellAsTheRealTimeModeWithThe
   // one block and the cycle time the original's: equal footing.
   const std::vector<std::string> matrix{
       "--matrix", "field/compensation_matrix.csv", "--surfaces", "2", "--step", "0.6"};
-  std::vector<std::string> smoothed = matrix;
+  std::vector<std::string> smoothed = matrix, raw = matrix;
   smoothed.insert(smoothed.end(), {"--smooth", "2"});
+  raw.push_back("--raw-matrix");
   const double field_s =
       loop.rewrite("rewrite_field", {"--field", "field/field.tcf", "--step", "0.6"});
   const double matrix_s = loop.rewrite("rewrite_matrix", smoothed);
-  const double raw_s = loop.rewrite("rewrite_matrix_raw", matrix);
+  const double raw_s = loop.rewrite("rewrite_matrix_raw", raw);
   std::printf("cycle time s: original %.3f, rewritten from the field %.3f, matrix %.3f, raw %.3f\n",
               cycle_s, field_s, matrix_s, raw_s);
   // The field keeps the cycle time. The smoothed matrix follows the scan's

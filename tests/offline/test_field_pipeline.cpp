@@ -373,6 +373,44 @@ TEST(FieldPipeline, NoiseIsNotPassedOn) {
   }
 }
 
+// What the rewriter reads (the compensation matrix's dx,dy,dz) carries the
+// field's smoothing, not the scan's noise: on a σ 20 µm scan of a plane the
+// error of the valid points is at most 5 µm RMS at the nominal vertices
+// (issue 20), where the raw mirror has σ. At points sampled every 0.7 mm
+// the matrix is what the field applies there, about 7 µm (printed): not
+// yet within the issue's 5 µm (docs/offline.md, "What the rewriter reads").
+TEST(FieldPipeline, MatrixTheRewriterReadsIsSmoothed) {
+  const double sigma = 0.02;
+  for (const double spacing : {0.0, 0.7}) {
+    for (const auto& [name, w] : {std::pair{"linear", kLinear}, std::pair{"bending", kBending}}) {
+      const PlateCase c = plate_case(w, sigma);
+      FieldPipelineOptions o;
+      o.spacing_mm = spacing;
+      const FieldPipelineResult r = run_case(c, o);
+      ASSERT_EQ(r.smoothed_matrix_mm.size(), r.points.size());
+      double smoothed2 = 0, raw2 = 0;
+      int n = 0;
+      for (std::size_t i = 0; i < r.points.size(); ++i) {
+        if (!r.matrix.valid[i]) continue;
+        const Eigen::Vector3d& p = r.points.positions_mm[i];
+        const Eigen::Vector3d truth(0, 0, -w(p.x(), p.y()));
+        smoothed2 += (r.smoothed_matrix_mm[i] - truth).squaredNorm();
+        raw2 += (r.matrix.vectors_mm[i] - truth).squaredNorm();
+        ++n;
+      }
+      ASSERT_GT(n, 400) << name;
+      const double smoothed = std::sqrt(smoothed2 / n), raw = std::sqrt(raw2 / n);
+      std::printf("spacing %.1f, %s: matrix error RMS %.4f mm smoothed, %.4f mm raw\n", spacing,
+                  name, smoothed, raw);
+      EXPECT_LT(smoothed, 0.6 * raw) << name << " spacing " << spacing;
+      if (spacing == 0.0) {
+        EXPECT_LE(smoothed, 0.005) << name;
+        EXPECT_GT(raw, 0.8 * sigma) << name;
+      }
+    }
+  }
+}
+
 TEST(FieldPipeline, StatisticsAndAdaptedMesh) {
   const PlateCase c = plate_case(kConstant, 0.0);
   const FieldPipelineResult r = run_case(c);

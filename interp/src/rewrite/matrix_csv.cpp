@@ -37,10 +37,18 @@ std::vector<std::string_view> split(std::string_view line) {
 
 }  // namespace
 
-CompensationMatrixData parse_compensation_matrix(std::string_view text, const std::string& name) {
+CompensationMatrixData parse_compensation_matrix(std::string_view text, const std::string& name,
+                                                 MatrixVectors vectors) {
   enum Column { kX, kY, kZ, kDx, kDy, kDz, kValid, kSurface, kCount };
-  static const char* const kNames[kCount] = {"x",  "y",  "z",     "dx",
-                                             "dy", "dz", "valid", "surface_id"};
+  const bool raw = vectors == MatrixVectors::kRaw;
+  const char* const kNames[kCount] = {"x",
+                                      "y",
+                                      "z",
+                                      raw ? "raw_dx" : "dx",
+                                      raw ? "raw_dy" : "dy",
+                                      raw ? "raw_dz" : "dz",
+                                      "valid",
+                                      "surface_id"};
   int index[kCount];
   for (int& i : index)
     i = -1;
@@ -71,7 +79,9 @@ CompensationMatrixData parse_compensation_matrix(std::string_view text, const st
         if (index[c] < 0)
           fail(name, line_no,
                "header has no column '" + std::string(kNames[c]) +
-                   "' (expected x,y,z,dx,dy,dz[,valid][,surface_id])");
+                   (raw ? "' (--raw-matrix reads raw_dx,raw_dy,raw_dz, which truecut field "
+                          "writes beside the smoothed dx,dy,dz)"
+                        : "' (expected x,y,z,dx,dy,dz[,valid][,surface_id])"));
       fields = cells.size();
       have_header = true;
       continue;
@@ -106,14 +116,15 @@ CompensationMatrixData parse_compensation_matrix(std::string_view text, const st
   return m;
 }
 
-CompensationMatrixData read_compensation_matrix(const std::filesystem::path& file) {
+CompensationMatrixData read_compensation_matrix(const std::filesystem::path& file,
+                                                MatrixVectors vectors) {
   std::string text;
   try {
     text = rt::read_input_file(file, "compensation matrix");
   } catch (const rt::InputFileError& e) {
     fail(file.string(), 0, e.reason());
   }
-  return parse_compensation_matrix(text, file.string());
+  return parse_compensation_matrix(text, file.string(), vectors);
 }
 
 }  // namespace truecut::interp

@@ -33,11 +33,14 @@ void write_compensation_matrix(const std::filesystem::path& file, const Compensa
                                const std::string& comment) {
   using namespace mesh_io;
   const std::size_t n = m.size();
-  if (m.vectors_mm.size() != n || m.valid.size() != n || m.surface_ids.size() != n) {
+  const bool raw = !m.raw_vectors_mm.empty();
+  if (m.vectors_mm.size() != n || m.valid.size() != n || m.surface_ids.size() != n ||
+      (raw && m.raw_vectors_mm.size() != n)) {
     throw MeshIoError(file, "compensation matrix columns differ in length");
   }
   for (std::size_t i = 0; i < n; ++i) {
-    if (!m.positions_mm[i].allFinite() || !m.vectors_mm[i].allFinite()) {
+    if (!m.positions_mm[i].allFinite() || !m.vectors_mm[i].allFinite() ||
+        (raw && !m.raw_vectors_mm[i].allFinite())) {
       throw MeshIoError(file, "row " + std::to_string(i) + " has a non-finite value");
     }
   }
@@ -45,8 +48,11 @@ void write_compensation_matrix(const std::filesystem::path& file, const Compensa
   std::string s =
       "# truecut compensation matrix v1\n"
       "# frame: workpiece\n"
-      "# units: mm\n"
-      "# dx,dy,dz: compensation vector = -(measured - nominal); 0 where valid = 0\n";
+      "# units: mm\n";
+  s +=
+      raw ? "# dx,dy,dz: compensation vector, smoothed and significance-tested; 0 where valid = 0\n"
+            "# raw_dx,raw_dy,raw_dz: -(measured - nominal), point by point, noise included\n"
+          : "# dx,dy,dz: compensation vector = -(measured - nominal); 0 where valid = 0\n";
   std::string_view rest = comment;
   while (!rest.empty()) {
     const std::size_t eol = rest.find('\n');
@@ -55,7 +61,8 @@ void write_compensation_matrix(const std::filesystem::path& file, const Compensa
     s += '\n';
     rest = eol == std::string_view::npos ? std::string_view{} : rest.substr(eol + 1);
   }
-  s += "x,y,z,dx,dy,dz,valid,surface_id\n";
+  s += raw ? "x,y,z,dx,dy,dz,valid,surface_id,raw_dx,raw_dy,raw_dz\n"
+           : "x,y,z,dx,dy,dz,valid,surface_id\n";
   for (std::size_t i = 0; i < n; ++i) {
     for (int k = 0; k < 3; ++k) {
       append_double(s, m.positions_mm[i][k] + 0.0);  // + 0.0: no "-0"
@@ -68,6 +75,11 @@ void write_compensation_matrix(const std::filesystem::path& file, const Compensa
     s += m.valid[i] ? '1' : '0';
     s += ',';
     s += std::to_string(m.surface_ids[i]);
+    if (raw)
+      for (int k = 0; k < 3; ++k) {
+        s += ',';
+        append_double(s, m.raw_vectors_mm[i][k] + 0.0);
+      }
     s += '\n';
     out.write_if_large(s);
   }

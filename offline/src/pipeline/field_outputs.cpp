@@ -172,6 +172,9 @@ std::string audit_json(const FieldPipelineResult& r, const FieldPipelineOptions&
     reg["applied"] = g.applied;
     reg["motion_chi2"] = g.motion_chi2;
     reg["motion_threshold"] = g.motion_threshold;
+    reg["max_displacement_mm"] = r.registration_max_displacement_mm;
+    reg["absorbed_beyond_noise"] = r.registration_absorbed_beyond_noise;
+    reg["datum"] = o.datum_surfaces.empty() ? "all faces" : "datum surfaces";
     j["registration"] = reg;
   } else {
     j["registration"] = nullptr;
@@ -277,8 +280,15 @@ std::vector<FileDigest> write_field_outputs(const fs::path& dir, const FieldPipe
   rt::FieldFileInfo info;
   info.source = "truecut field";
   rt::write_field_file(files.staged(0), r.fit->field, info);
-  write_compensation_matrix(files.staged(1), r.matrix,
-                            "mirror method: compensation = -(measured - nominal)");
+  CompensationMatrix matrix = r.matrix;
+  matrix.raw_vectors_mm = r.matrix.vectors_mm;
+  matrix.vectors_mm = r.smoothed_matrix_mm;
+  write_compensation_matrix(
+      files.staged(1), matrix,
+      rt::format_printf("dx,dy,dz: the mirror smoothed by the truss (kb/kc %.4g) at the point, "
+                        "0 on surfaces whose error is within the scan's noise\n"
+                        "raw_dx,raw_dy,raw_dz: mirror method, -(measured - nominal)",
+                        r.truss_kb_over_kc));
   write_stl(files.staged(2), r.adapted, StlEncoding::kBinary, "truecut adapted model");
   const char* roles[] = {"field", "compensation_matrix", "adapted_model"};
   for (int i = 0; i < 3; ++i) {

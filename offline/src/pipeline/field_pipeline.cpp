@@ -80,17 +80,36 @@ bool selected(const std::vector<std::int32_t>& surfaces, std::int32_t id) {
 // 18 % short). A vertex on an edge gets the mean of its surfaces' results;
 // every other vertex its own surface's. Surfaces are solved in parallel and
 // merged in the order of their ids.
+struct SurfaceTruss {
+  std::vector<std::uint32_t> vertices;  // ascending; local index = position
+  TrussResult result;
+};
+using SurfaceTrusses = std::map<std::int32_t, SurfaceTruss>;
+
+// A vertex's displacement in its surface's own truss; false when the
+// surface's truss does not support it.
+bool surface_displacement(const SurfaceTrusses& trusses, std::int32_t surface, std::uint32_t v,
+                          Eigen::Vector3d& d) {
+  const auto it = trusses.find(surface);
+  if (it == trusses.end()) return false;
+  const auto& list = it->second.vertices;
+  const auto at = std::lower_bound(list.begin(), list.end(), v);
+  if (at == list.end() || *at != v) return false;
+  const std::size_t local = static_cast<std::size_t>(at - list.begin());
+  if (!it->second.result.supported[local]) return false;
+  d = it->second.result.displacement_mm[local];
+  return true;
+}
+
 TrussResult smooth_per_surface(const TriangleMesh& nominal, const std::vector<std::int32_t>& ids,
                                const std::vector<std::int32_t>& surfaces,
                                const std::vector<Eigen::Vector3d>& vectors,
-                               const std::vector<std::uint8_t>& valid, const TrussOptions& o) {
+                               const std::vector<std::uint8_t>& valid, const TrussOptions& o,
+                               SurfaceTrusses& per_surface) {
   std::map<std::int32_t, std::vector<std::uint32_t>> triangles_of;
   for (std::size_t t = 0; t < nominal.triangles.size(); ++t)
     if (selected(surfaces, ids[t])) triangles_of[ids[t]].push_back(static_cast<std::uint32_t>(t));
-  struct Surface {
-    std::vector<std::uint32_t> vertices;  // ascending; local index = position
-    TrussResult result;
-  };
+  using Surface = SurfaceTruss;
   std::vector<Surface> parts(triangles_of.size());
   std::vector<const std::vector<std::uint32_t>*> tris;
   for (const auto& [id, list] : triangles_of)
@@ -146,6 +165,9 @@ TrussResult smooth_per_surface(const TriangleMesh& nominal, const std::vector<st
       ++out.unsupported_count;
     }
   }
+  std::size_t k = 0;
+  for (const auto& entry : triangles_of)
+    per_surface[entry.first] = std::move(parts[k++]);
   return out;
 }
 
@@ -204,8 +226,9 @@ void smooth_and_adapt(const TriangleMesh& nominal, const FieldPipelineOptions& o
     vertex_of_point.push_back(static_cast<std::uint32_t>(v));
     ++k;
   }
+  SurfaceTrusses per_surface;
   r.truss = smooth_per_surface(nominal, r.triangle_surface_ids, opt.surfaces, vertex_vectors,
-                               vertex_valid, opt.truss);
+                               vertex_valid, opt.truss, per_surface);
   r.adapted = nominal;
   r.adapted.normals.clear();
   r.vertex_compensated.assign(nv, 0);
@@ -216,8 +239,42 @@ void smooth_and_adapt(const TriangleMesh& nominal, const FieldPipelineOptions& o
     r.vertex_compensated[v] = 1;
     r.max_vertex_move_mm = std::max(r.max_vertex_move_mm, r.truss.displacement_mm[v].norm());
   }
+  // The matrix's smoothed vectors: the truss result at the point,
+  // interpolated in its triangle over the vertices the truss supports.
+  r.smoothed_matrix_mm.assign(r.points.size(), Eigen::Vector3d::Zero());
+  for (std::size_t i = 0; i < r.points.size(); ++i) {
+    if (!r.matrix.valid[i] || !r.significance.compensated(r.points.surface_ids[i])) continue;
+    if (at_vertices) {
+      r.smoothed_matrix_mm[i] = r.truss.displacement_mm[vertex_of_point[i]];
+      continue;
+    }
+    const Triangle& t = nominal.triangles[r.points.triangles[i]];
+    const Eigen::Vector3d &a = nominal.vertices_mm[t[0]], &b = nominal.vertices_mm[t[1]],
+                          &c = nominal.vertices_mm[t[2]];
+    const Eigen::Vector3d n = (b - a).cross(c - a), p = r.points.positions_mm[i];
+    const double w[3] = {(c - b).cross(p - b).dot(n), (a - c).cross(p - c).dot(n),
+                         (b - a).cross(p - a).dot(n)};
+    // In the point's own surface's truss: at an edge the merged result mixes
+    // in the neighbouring face's compensation.
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero(), d;
+    double weight = 0.0;
+    bool supported = true;
+    for (int k = 0; k < 3 && supported; ++k) {
+      supported = surface_displacement(per_surface, r.points.surface_ids[i], t[k], d);
+      const double wk = std::max(w[k], 0.0);
+      sum += wk * d;
+      weight += wk;
+    }
+    // A triangle the truss does not hold at every corner keeps the raw mirror.
+    r.smoothed_matrix_mm[i] =
+        supported && weight > 0.0 ? Eigen::Vector3d(sum / weight) : r.matrix.vectors_mm[i];
+  }
   // Vectors for the field: at vertex points the truss-smoothed compensation,
-  // at sampled points the raw mirror (the fit's regularisation smooths them).
+  // at sampled points the raw mirror (the fit's regularisation smooths
+  // them). Fitting the truss interpolated at sampled points instead left
+  // 4.4 µm instead of 7 µm of a σ 20 µm scan on a plate, but on the
+  // implant's 1.6 mm shaft top, where the truss holds few valid vertices,
+  // 8.4 µm instead of 3.4 µm.
   r.field_vectors_mm.resize(r.points.size());
   for (std::size_t i = 0; i < r.points.size(); ++i) {
     r.field_vectors_mm[i] =
@@ -537,10 +594,43 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
                                r.fit->layers.size(), r.fit->field.grid().dims[0],
                                r.fit->field.grid().dims[1], r.fit->field.grid().dims[2]));
 
+  // Where a tool cuts the point, the matrix holds what the field applies
+  // there: the mean of its correction (less the base field's) over the
+  // passes that cut it, the scan's noise smoothed as in the field.
+  {
+    const std::size_t n = r.points.size();
+    std::vector<Eigen::Vector3d> sum(n, Eigen::Vector3d::Zero());
+    std::vector<int> count(n, 0);
+    for (const ToolPlacement& tp : r.placement.tools)
+      for (const PointPlacement& pp : tp.points) {
+        if (!r.matrix.valid[pp.point] ||
+            !r.significance.compensated(r.points.surface_ids[pp.point]))
+          continue;
+        const rt::FieldSample f = r.fit->field.evaluate(tp.tool, pp.tcp_mm);
+        if (f.status != rt::FieldStatus::kOk) continue;
+        Eigen::Vector3d v = f.correction_mm;
+        if (in.base_field) {
+          const rt::FieldSample b = in.base_field->evaluate(tp.tool, pp.tcp_mm);
+          if (b.status == rt::FieldStatus::kOk) v -= b.correction_mm;
+        }
+        sum[pp.point] += v;
+        ++count[pp.point];
+      }
+    for (std::size_t i = 0; i < n; ++i)
+      if (count[i] > 0) r.smoothed_matrix_mm[i] = sum[i] / count[i];
+  }
+
   const std::vector<std::uint8_t> valid = r.errors.valid_mask();
   r.error_statistics = vector_statistics(r.errors.vectors_mm, valid, r.points.normals);
   r.compensation_statistics = vector_statistics(r.field_vectors_mm, valid, r.points.normals);
   r.max_correction_mm = std::max(max_field, r.max_vertex_move_mm);
+  if (r.registration && r.registration->applied) {
+    r.registration_max_displacement_mm =
+        max_displacement_on_mesh_mm(nominal, r.registration->scan_to_nominal);
+    r.registration_absorbed_beyond_noise =
+        opt.datum_surfaces.empty() &&
+        r.registration_max_displacement_mm > 3.0 * r.significance.pooled_noise_mm;
+  }
   timer.finish();
   return r;
 }

@@ -38,7 +38,13 @@ struct CompensationMatrixData {
 // RewriteError "NAME:LINE: message" on a missing column, a row with the
 // wrong number of fields, a value that is not a number, NaN or infinite,
 // valid not 0/1, or a file without rows.
-CompensationMatrixData parse_compensation_matrix(std::string_view text, const std::string& name);
-CompensationMatrixData read_compensation_matrix(const std::filesystem::path& file);
+// Which vectors to read: dx,dy,dz, or raw_dx,raw_dy,raw_dz (truecut field
+// writes the smoothed, significance-tested compensation as dx,dy,dz and the
+// mirror of the raw error vectors beside it).
+enum class MatrixVectors { kSmoothed, kRaw };
+CompensationMatrixData parse_compensation_matrix(std::string_view text, const std::string& name,
+                                                 MatrixVectors vectors = MatrixVectors::kSmoothed);
+CompensationMatrixData read_compensation_matrix(const std::filesystem::path& file,
+                                                MatrixVectors vectors = MatrixVectors::kSmoothed);
 
 }  // namespace truecut::interp

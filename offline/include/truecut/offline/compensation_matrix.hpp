@@ -17,6 +17,9 @@ struct CompensationMatrix {
   std::vector<Eigen::Vector3d> vectors_mm;    // compensation = −error; zero where invalid
   std::vector<std::uint8_t> valid;
   std::vector<std::int32_t> surface_ids;
+  // Optional: the mirror of the raw error vectors, written as
+  // raw_dx,raw_dy,raw_dz when vectors_mm holds a smoothed compensation.
+  std::vector<Eigen::Vector3d> raw_vectors_mm;
 
   std::size_t size() const { return positions_mm.size(); }
 };
@@ -28,7 +31,8 @@ CompensationMatrix mirror(const CompensationPoints& points, const ErrorVectors& 
 
 // CSV (docs/formats.md, "Compensation matrix"): '#' comment lines naming
 // format version, frame and units (plus `comment`, one '#' line per line of
-// it), the header `x,y,z,dx,dy,dz,valid,surface_id`, one row per point with
+// it), the header `x,y,z,dx,dy,dz,valid,surface_id` (plus
+// `,raw_dx,raw_dy,raw_dz` when raw_vectors_mm is set), one row per point with
 // the shortest decimal that reads back to the identical double. Atomic
 // (FILE.tmp, then rename); throws MeshIoError on I/O failure or a
 // non-finite value.

@@ -112,6 +112,13 @@ struct FieldPipelineResult {
   std::vector<std::int32_t> triangle_surface_ids;
   std::optional<IcpResult> registration;
   std::optional<ScanCheck> scan_check;
+  // What the registration took out of the measurement: the largest
+  // displacement of the motion it applied, anywhere on the nominal. Without
+  // datum surfaces a rigid part of the machined error (one side cut 30 µm
+  // long) is fitted away with the misplacement; absorbed_beyond_noise says
+  // the motion exceeds 3 σ of the scan's noise, all faces being the datum.
+  double registration_max_displacement_mm = 0.0;
+  bool registration_absorbed_beyond_noise = false;
   std::optional<RigidBodyMotion> rigid_body_motion;
   CompensationPoints points;
   ErrorVectors errors;
@@ -129,6 +136,14 @@ struct FieldPipelineResult {
   // points, smoothed by the fit's regularisation); zero on surfaces whose
   // measured error is within the scan's noise.
   std::vector<Eigen::Vector3d> field_vectors_mm;
+  // The compensation matrix's vectors (dx,dy,dz of compensation_matrix.csv,
+  // what the rewriter reads), one per compensation point: where a tool cuts
+  // the point, the mean of the field's correction at the tool centres that
+  // cut it (what the component applies there); elsewhere the truss-smoothed
+  // vertex compensation at the point (interpolated in its triangle at a
+  // sampled point); zero where the point is invalid or its surface's error
+  // is within the scan's noise. matrix keeps the raw mirror.
+  std::vector<Eigen::Vector3d> smoothed_matrix_mm;
   ToolPath path;
   PlacementResult placement;
   std::vector<ToolSamples> tool_samples;     // what the fit got, per tool
