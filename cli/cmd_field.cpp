@@ -351,7 +351,7 @@ void print_summary(const offline::FieldPipelineResult& r,
   if (r.registration_absorbed_beyond_noise)
     std::fprintf(stderr,
                  "truecut field: WARNING: registration on all faces moved the scan by up to %.1f "
-                 "um, more than 3 x the scan's noise (%.1f um): a rigid part of the machined "
+                 "um, more than the scan's noise (%.1f um): a rigid part of the machined "
                  "error (a side cut long or short) may have been fitted away with the "
                  "misplacement. Register on the faces that define the part's frame (fixture "
                  "references) with --datum ID,...\n",

@@ -629,7 +629,7 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
         max_displacement_on_mesh_mm(nominal, r.registration->scan_to_nominal);
     r.registration_absorbed_beyond_noise =
         opt.datum_surfaces.empty() &&
-        r.registration_max_displacement_mm > 3.0 * r.significance.pooled_noise_mm;
+        r.registration_max_displacement_mm > r.significance.pooled_noise_mm;
   }
   timer.finish();
   return r;

@@ -116,7 +116,8 @@ struct FieldPipelineResult {
   // displacement of the motion it applied, anywhere on the nominal. Without
   // datum surfaces a rigid part of the machined error (one side cut 30 µm
   // long) is fitted away with the misplacement; absorbed_beyond_noise says
-  // the motion exceeds 3 σ of the scan's noise, all faces being the datum.
+  // the motion, applied because the noise cannot explain it, exceeds σ of
+  // the scan's noise, all faces being the datum.
   double registration_max_displacement_mm = 0.0;
   bool registration_absorbed_beyond_noise = false;
   std::optional<RigidBodyMotion> rigid_body_motion;
