@@ -16,6 +16,7 @@
 #include "truecut/offline/field_outputs.hpp"
 #include "truecut/offline/field_pipeline.hpp"
 #include "truecut/offline/mesh_io.hpp"
+#include "truecut/offline/mesh_topology.hpp"
 #include "truecut/rt/field_file.hpp"
 #include "truecut/rt/number_format.hpp"
 #include "truecut/sim/part_file.hpp"
@@ -93,9 +94,9 @@ const char* kFieldHelp =
     "                        length, else the table's Z length, else 10 x radius)\n"
     "  --max-correction MM   refuse (exit 1) above this correction (default 0.2)\n"
     "  --force               write although the correction exceeds --max-correction\n"
-    "  --strict-mesh         refuse a mesh with degenerate (zero-area) facets instead\n"
-    "                        of dropping them (dropped facets are listed on stderr\n"
-    "                        and in audit.json)\n"
+    "  --strict-mesh         refuse a mesh with degenerate (zero-area) facets or facets\n"
+    "                        wound against their neighbours, instead of dropping or\n"
+    "                        turning them round (listed on stderr and in audit.json)\n"
     "  --quiet               no progress on stderr\n"
     "  --help                this text\n";
 
@@ -212,8 +213,37 @@ offline::TriangleMesh read_input_mesh(const fs::path& file, const std::string& r
       what += "; without --strict-mesh such facets are dropped and counted";
     throw InputError(what);
   }
-  audit.push_back({role, file, report.faces_in_file, std::move(report.dropped_triangles)});
+  std::optional<offline::MeshTopology> topology;
+  if (!mesh.triangles.empty()) {
+    topology = offline::orient_mesh(mesh);
+    if (strict && topology->flipped_triangles > 0)
+      throw InputError(file.string() + ": " + std::to_string(topology->flipped_triangles) +
+                       " facets are wound against their neighbours or the solid is inside out; "
+                       "without --strict-mesh they are turned round");
+  }
+  audit.push_back(
+      {role, file, report.faces_in_file, std::move(report.dropped_triangles), topology});
   return mesh;
+}
+
+// "nominal.stl: 1 shell (0 open), 3 facets wound against ... turned round"
+std::string topology_message(const offline::MeshInputAudit& m) {
+  const offline::MeshTopology& t = *m.topology;
+  std::string s = rt::format_printf("%s: %zu shell%s (%zu open: %zu boundary edges)",
+                                    m.file.filename().string().c_str(), t.shells,
+                                    t.shells == 1 ? "" : "s", t.open_shells, t.boundary_edges);
+  if (t.nonmanifold_edges)
+    s += rt::format_printf(", %zu non-manifold edges (more than two facets)", t.nonmanifold_edges);
+  if (t.nonorientable_shells)
+    s += rt::format_printf(", %zu non-orientable shells left as they are", t.nonorientable_shells);
+  if (t.inverted_shells)
+    s += rt::format_printf(", %zu closed shells inside out", t.inverted_shells);
+  if (t.inconsistent_edges)
+    s += rt::format_printf(", %zu edges between facets wound against each other",
+                           t.inconsistent_edges);
+  if (t.flipped_triangles)
+    s += rt::format_printf("; %zu facets turned round (normals outwards)", t.flipped_triangles);
+  return s;
 }
 
 // "scan.stl: dropped 2 degenerate facets of 113906: #48211 (area 3e-12 mm²), ..."
@@ -420,8 +450,14 @@ int run_field(const ParsedArgs& a, const std::vector<std::string>& argv) {
     if (!quiet)
       std::fprintf(stderr, "field: %-34s %8.3f s  %s\n", stage.c_str(), s, detail.c_str());
   };
-  for (const offline::MeshInputAudit& m : in.meshes)
+  for (const offline::MeshInputAudit& m : in.meshes) {
     if (!m.dropped.empty()) std::fprintf(stderr, "field: %s\n", dropped_message(m).c_str());
+    // A scan mesh is an open surface by nature; a nominal should be clean.
+    const bool report =
+        m.topology && (m.topology->flipped_triangles > 0 || m.topology->nonmanifold_edges > 0 ||
+                       (m.role != "scan" && m.topology->open_shells > 0));
+    if (report) std::fprintf(stderr, "field: %s\n", topology_message(m).c_str());
+  }
   offline::FieldPipelineResult result;
   try {
     result = offline::run_field_pipeline(pin, options, progress);

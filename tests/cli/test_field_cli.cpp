@@ -210,6 +210,62 @@ TEST(FieldCli, DegenerateFacetIsDroppedAndNamedOrRefusedWhenStrict) {
   EXPECT_FALSE(fs::exists(root / "strict"));
 }
 
+// Facets wound against their neighbours, and the whole solid inside out (as
+// CAD exports sometimes are): turned round, said on stderr and in
+// audit.json, and the result is the clean nominal's; --strict-mesh refuses.
+TEST(FieldCli, FacetsWoundWrongAreTurnedRoundOrRefusedWhenStrict) {
+  const fs::path root = scratch_dir();
+  const Part p = make_part_and_scan(root, 0.05);
+  const ProcessResult clean = truecut(field_args(p, root / "clean"));
+  ASSERT_EQ(clean.exit_code, 0) << clean.err;
+  EXPECT_EQ(clean.err.find("turned round"), std::string::npos) << clean.err;
+  const std::string stl = read_file(p.nominal);
+  std::uint32_t n = 0;
+  std::memcpy(&n, stl.data() + 80, 4);
+  auto turned = [&](const std::vector<std::uint32_t>& facets) {
+    std::string out = stl;
+    for (std::uint32_t f : facets) {
+      char* corners = out.data() + 84 + 50 * std::size_t{f} + 24;  // corners 1 and 2
+      char tmp[12];
+      std::memcpy(tmp, corners, 12);
+      std::memcpy(corners, corners + 12, 12);
+      std::memcpy(corners + 12, tmp, 12);
+    }
+    return out;
+  };
+  std::vector<std::uint32_t> all(n);
+  for (std::uint32_t f = 0; f < n; ++f)
+    all[f] = f;
+  const std::vector<std::pair<std::string, std::vector<std::uint32_t>>> cases{
+      {"three facets", {n / 3, n / 2, n - 1}}, {"inside out", all}};
+  for (const auto& [name, facets] : cases) {
+    Part q = p;
+    q.nominal = root / "wound.stl";
+    write_text(q.nominal, turned(facets));
+    const fs::path out = root / ("out_" + std::to_string(facets.size()));
+    const ProcessResult r = truecut(field_args(q, out));
+    ASSERT_EQ(r.exit_code, 0) << name << "\n" << r.err;
+    EXPECT_NE(r.err.find("wound.stl: 1 shell (0 open"), std::string::npos) << name << r.err;
+    EXPECT_NE(r.err.find(std::to_string(facets.size()) + " facets turned round"), std::string::npos)
+        << name << r.err;
+    EXPECT_EQ(read_file(out / "compensation_matrix.csv"),
+              read_file(root / "clean" / "compensation_matrix.csv"))
+        << name;
+    const nlohmann::json audit = nlohmann::json::parse(read_file(out / "audit.json"));
+    EXPECT_EQ(audit["meshes"][0]["topology"]["facets_turned_round"], facets.size()) << name;
+    EXPECT_EQ(audit["meshes"][0]["topology"]["inverted_shells"], facets.size() == n ? 1 : 0)
+        << name;
+    std::vector<std::string> strict = field_args(q, root / "strict");
+    strict.push_back("--strict-mesh");
+    const ProcessResult s = truecut(strict);
+    EXPECT_EQ(s.exit_code, 2) << name << s.err;
+    EXPECT_NE(s.err.find("wound.stl: " + std::to_string(facets.size()) + " facets are wound"),
+              std::string::npos)
+        << name << s.err;
+    EXPECT_FALSE(fs::exists(root / "strict")) << name;
+  }
+}
+
 // The binary STL with every corner moved by f.
 std::string moved_stl(std::string stl, const std::function<void(float*)>& f) {
   std::uint32_t n = 0;

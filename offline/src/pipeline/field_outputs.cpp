@@ -139,10 +139,24 @@ std::string audit_json(const FieldPipelineResult& r, const FieldPipelineOptions&
     for (const DroppedTriangle& d : m.dropped)
       dropped.push_back(
           {{"facet", d.face}, {"area_mm2", d.area_mm2}, {"longest_edge_mm", d.longest_edge_mm}});
+    json topology = nullptr;
+    if (m.topology) {
+      const MeshTopology& t = *m.topology;
+      topology = {{"edges", t.edges},
+                  {"boundary_edges", t.boundary_edges},
+                  {"nonmanifold_edges", t.nonmanifold_edges},
+                  {"inconsistent_edges", t.inconsistent_edges},
+                  {"shells", t.shells},
+                  {"open_shells", t.open_shells},
+                  {"nonorientable_shells", t.nonorientable_shells},
+                  {"inverted_shells", t.inverted_shells},
+                  {"facets_turned_round", t.flipped_triangles}};
+    }
     meshes.push_back({{"role", m.role},
                       {"path", m.file.string()},
                       {"facets_in_file", m.facets_in_file},
-                      {"degenerate_facets_dropped", dropped}});
+                      {"degenerate_facets_dropped", dropped},
+                      {"topology", topology}});
   }
   j["meshes"] = meshes;
   j["parameters"] = parameters_json(o, c, r.truss_kb_over_kc);

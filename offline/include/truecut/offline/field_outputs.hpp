@@ -12,12 +12,14 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "truecut/offline/field_pipeline.hpp"
 #include "truecut/offline/mesh_io_options.hpp"
+#include "truecut/offline/mesh_topology.hpp"
 #include "truecut/rt/comp.hpp"
 
 namespace truecut::offline {
@@ -48,6 +50,7 @@ struct MeshInputAudit {
   std::filesystem::path file;
   std::size_t facets_in_file = 0;
   std::vector<DroppedTriangle> dropped;
+  std::optional<MeshTopology> topology;  // as read, before the winding was repaired
 };
 
 struct AuditContext {
