@@ -276,7 +276,7 @@ std::string audit_json(const FieldPipelineResult& r, const FieldPipelineOptions&
                          {"forced", exceeded && c.forced}};
   json stages = json::array();
   for (const StageTime& s : r.stages)
-    stages.push_back({{"name", s.name}, {"wall_s", s.wall_s}});
+    stages.push_back({{"name", s.name}, {"wall_s", s.wall_s}, {"peak_rss_mb", s.peak_rss_mb}});
   j["stages"] = stages;
   j["total_wall_s"] = r.total_wall_s;
   return j.dump(2) + "\n";

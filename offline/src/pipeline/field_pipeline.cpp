@@ -8,6 +8,7 @@
 #include <mutex>
 #include <stdexcept>
 
+#include <sys/resource.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 
@@ -35,9 +36,12 @@ class StageTimer {
   void done(int order, Clock::time_point started, const std::string& name,
             const std::string& detail = {}) {
     const double s = std::chrono::duration<double>(Clock::now() - started).count();
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    const double rss_mb = double(usage.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
     std::lock_guard lock(mutex_);
-    timed_.push_back({order, {name, s}});
-    if (progress_) progress_(name, s, detail);
+    timed_.push_back({order, {name, s, rss_mb}});
+    if (progress_) progress_(name, s, detail + rt::format_printf("  [peak %.0f MB]", rss_mb));
   }
   void finish() {
     std::stable_sort(timed_.begin(), timed_.end(),

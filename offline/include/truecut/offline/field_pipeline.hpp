@@ -106,6 +106,9 @@ VectorStatistics vector_statistics(std::span<const Eigen::Vector3d> vectors_mm,
 struct StageTime {
   std::string name;
   double wall_s = 0.0;
+  // The process's peak resident memory when the stage ended (getrusage
+  // ru_maxrss): the high-water mark so far, not the stage's own use.
+  double peak_rss_mb = 0.0;
 };
 
 struct FieldPipelineResult {

@@ -1,0 +1,177 @@
+// `truecut field`'s pipeline on a closed solid at several sizes: a cylinder
+// R 30 mm, H 40 mm with a hemispherical cap (the shape and size with which
+// issue 20 found the pipeline slow), its nominal at about N facets, a point
+// cloud scan of 5.5 points per facet (the model-adaptation source's ratio,
+// 624,436 points to 113,906 facets) with a planted error and 5 µm of noise,
+// and a ball-end ring program over wall and cap. Prints every stage's wall
+// time, the peak resident memory and the whole; asserts nothing.
+//
+//   build/field_solid_scale [FACETS ...]     default 10000 100000
+#include "truecut/interp/interpreter.hpp"
+#include "truecut/offline/field_pipeline.hpp"
+
+#include <sys/resource.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <numbers>
+#include <random>
+#include <string>
+#include <vector>
+
+using namespace truecut::offline;
+namespace interp = truecut::interp;
+
+namespace {
+
+constexpr double kR = 30.0, kH = 40.0, kBallR = 3.0;
+constexpr double kPi = std::numbers::pi;
+
+// Around: n segments; wall: rows of about the segment length; cap: n/4
+// latitude rings; the bottom: a fan. Surfaces: wall 1, cap 2, bottom 3.
+struct Solid {
+  TriangleMesh mesh;
+  std::vector<std::int32_t> ids;
+};
+
+Solid cylinder_with_cap(int around) {
+  Solid s;
+  auto& v = s.mesh.vertices_mm;
+  const int rows = std::max(1, int(std::lround(kH / (2 * kPi * kR / around)))),
+            rings = std::max(2, around / 4);
+  auto ring = [&](double r, double z) {
+    const auto first = static_cast<std::uint32_t>(v.size());
+    for (int i = 0; i < around; ++i)
+      v.emplace_back(r * std::cos(2 * kPi * i / around), r * std::sin(2 * kPi * i / around), z);
+    return first;
+  };
+  std::vector<std::uint32_t> first;
+  for (int j = 0; j <= rows; ++j)
+    first.push_back(ring(kR, kH * j / rows));
+  for (int j = 1; j < rings; ++j) {
+    const double phi = 0.5 * kPi * j / rings;  // from the equator up
+    first.push_back(ring(kR * std::cos(phi), kH + kR * std::sin(phi)));
+  }
+  const auto top = static_cast<std::uint32_t>(v.size());
+  v.emplace_back(0, 0, kH + kR);
+  const auto bottom = static_cast<std::uint32_t>(v.size());
+  v.emplace_back(0, 0, 0);
+  auto quad_band = [&](std::uint32_t lo, std::uint32_t hi, std::int32_t id) {
+    for (int i = 0; i < around; ++i) {
+      const std::uint32_t a = lo + i, b = lo + (i + 1) % around, c = hi + (i + 1) % around,
+                          d = hi + i;
+      s.mesh.triangles.push_back({a, b, c});
+      s.mesh.triangles.push_back({a, c, d});
+      s.ids.push_back(id);
+      s.ids.push_back(id);
+    }
+  };
+  for (std::size_t j = 0; j + 1 < first.size(); ++j)
+    quad_band(first[j], first[j + 1], j < std::size_t(rows) ? 1 : 2);
+  for (int i = 0; i < around; ++i) {
+    s.mesh.triangles.push_back({first.back() + i, first.back() + (i + 1) % around, top});
+    s.ids.push_back(2);
+    s.mesh.triangles.push_back({bottom, first[0] + (i + 1) % around, first[0] + i});
+    s.ids.push_back(3);
+  }
+  return s;
+}
+
+// The machined part: radially 20 µm oversize at the bottom growing to 40 µm
+// at the top of the wall, 40 µm over the cap; area-uniform points with 5 µm
+// of noise along the normal.
+std::vector<Eigen::Vector3d> scan_cloud(std::size_t n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.005);
+  const double wall = 2 * kPi * kR * kH, cap = 2 * kPi * kR * kR, disc = kPi * kR * kR;
+  std::vector<Eigen::Vector3d> p;
+  p.reserve(n);
+  while (p.size() < n) {
+    const double pick = u(rng) * (wall + cap + disc), t = 2 * kPi * u(rng);
+    const Eigen::Vector3d radial(std::cos(t), std::sin(t), 0);
+    if (pick < wall) {
+      const double z = kH * u(rng), e = 0.02 + 0.02 * z / kH + noise(rng);
+      p.push_back((kR + e) * radial + Eigen::Vector3d(0, 0, z));
+    } else if (pick < wall + cap) {
+      const double sin_phi = u(rng), cos_phi = std::sqrt(1 - sin_phi * sin_phi);
+      const double r = kR + 0.04 + noise(rng);
+      p.push_back(r * cos_phi * radial + Eigen::Vector3d(0, 0, kH + r * sin_phi));
+    } else {
+      const double r = kR * std::sqrt(u(rng));
+      p.push_back(r * radial + Eigen::Vector3d(0, 0, noise(rng)));
+    }
+  }
+  return p;
+}
+
+// Ball end mill R 3 (tip programmed): rings 0.5 mm apart down the wall and
+// over the cap, each a full circle in two G2 halves.
+std::string ring_program() {
+  std::string s = "G21 G17 G40 G49 G80 G90 G94\nT1 M6\nG43 H1\nF2000\nG0 X0 Y0 Z100\n";
+  auto circle = [&](double r, double z_tip) {
+    char b[256];
+    std::snprintf(b, sizeof b,
+                  "G0 X%.4f Y0\nG0 Z%.4f\nG2 X%.4f Y0 I%.4f J0\nG2 X%.4f Y0 I%.4f J0\n", r, z_tip,
+                  -r, -r, r, r);
+    s += b;
+  };
+  const double step = 0.5;
+  for (double phi = 0.5 * kPi - step / kR; phi > 0; phi -= step / kR)  // cap, top down
+    circle((kR + kBallR) * std::cos(phi), kH + (kR + kBallR) * std::sin(phi) - kBallR);
+  for (double z = kH; z >= 0.5; z -= step)  // wall
+    circle(kR + kBallR, z - kBallR);
+  return s + "G0 Z100\nM30\n";
+}
+
+double peak_rss_mb() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_maxrss) / 1024.0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<long> sizes;
+  for (int i = 1; i < argc; ++i)
+    sizes.push_back(std::atol(argv[i]));
+  if (sizes.empty()) sizes = {10000, 100000};
+  interp::InterpreterOptions io;
+  io.tools = interp::ToolTable::parse("T1 P1 D6 Z50\n", "tools.tbl");
+  const interp::CanonProgram program =
+      interp::Interpreter(std::move(io)).run_text(ring_program(), "rings.ngc");
+  for (const long facets : sizes) {
+    // facets ≈ around · (2 rows + 2 rings + 2) with rows ≈ around · H / (2πR)
+    // and rings = around / 4.
+    const double k = 2 * kH / (2 * kPi * kR) + 0.5;
+    const int around = std::max(8, int(std::lround(std::sqrt(double(facets) / k))));
+    const Solid solid = cylinder_with_cap(around);
+    TriangleMesh scan;
+    scan.vertices_mm = scan_cloud(std::size_t(5.5 * double(solid.mesh.triangles.size())), 7);
+    FieldPipelineInputs in;
+    in.nominal = &solid.mesh;
+    in.scan = &scan;
+    in.program = &program;
+    in.tools = {{1, kBallR, kBallR, 10.0}};
+    in.triangle_surface_ids = solid.ids;
+    FieldPipelineOptions o;
+    o.method = ErrorMethod::kSphere;
+    o.sphere.radius_mm = 1.0;
+    o.datum_surfaces = {3};
+    std::printf("\n--- %zu facets, %zu scan points ---\n", solid.mesh.triangles.size(),
+                scan.vertices_mm.size());
+    const auto t0 = std::chrono::steady_clock::now();
+    const FieldPipelineResult r = run_field_pipeline(
+        in, o, [](const std::string& stage, double s, const std::string& detail) {
+          std::printf("  %-34s %8.3f s  %s\n", stage.c_str(), s, detail.c_str());
+          std::fflush(stdout);
+        });
+    const double total =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::printf("  whole pipeline %.3f s wall, peak resident %.0f MB; %zu points, %zu valid\n",
+                total, peak_rss_mb(), r.points.size(), r.error_statistics.valid);
+  }
+}
