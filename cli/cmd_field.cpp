@@ -92,6 +92,10 @@ const char* kFieldHelp =
     "  --corner-radius T=MM  corner radius of tool T (repeatable; default 0, or part.json)\n"
     "  --cutting-length T=MM cutting length of tool T (default: part.json's flute\n"
     "                        length, else the table's Z length, else 10 x radius)\n"
+    "  --max-points N        budget: refuse (exit 2) a --spacing that would place more\n"
+    "                        compensation points than this (default 20000000)\n"
+    "  --max-grid-nodes N    budget: refuse (exit 2) a --resolution whose field grid\n"
+    "                        would exceed this many nodes per layer (default 16777216)\n"
     "  --max-correction MM   refuse (exit 1) above this correction (default 0.2)\n"
     "  --force               write although the correction exceeds --max-correction\n"
     "  --strict-mesh         refuse a mesh with degenerate (zero-area) facets or facets\n"
@@ -348,6 +352,8 @@ offline::FieldPipelineOptions pipeline_options(const ParsedArgs& a, const Inputs
   if (a.value("kb-kc")) o.truss_reference_noise_mm = 0.0;
   o.fit.spacing_mm = a.number("resolution", o.fit.spacing_mm, 0.05, 100.0);
   o.fit.smoothness = a.number("smoothness", o.fit.smoothness, 0.0, 1e6);
+  o.max_compensation_points = a.number("max-points", o.max_compensation_points, 1.0, 1e12);
+  o.max_grid_nodes = a.number("max-grid-nodes", o.max_grid_nodes, 8.0, 1e12);
   o.path.step_mm = a.number("path-step", o.path.step_mm, 0.001, 10.0);
   o.placement.contact_tolerance_mm =
       a.number("contact-tolerance", o.placement.contact_tolerance_mm, 1e-6, 10.0);
@@ -507,6 +513,8 @@ int cmd_field(const std::vector<std::string>& argv) {
                       {"no-register", false},
                       {"remove-rbm", false},
                       {"max-scan-offset", true},
+                      {"max-points", true},
+                      {"max-grid-nodes", true},
                       {"max-scan-outliers", true},
                       {"sphere-radius", true},
                       {"max-distance", true},

@@ -363,6 +363,37 @@ TEST(FieldCli, WrongScansAreRefused) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
 }
 
+// A --spacing or --resolution that would take without bound is refused at
+// once (exit 2, the estimate and the option that raises the budget); a
+// resolution within the (lowered) budget passes.
+TEST(FieldCli, BudgetsRefuseRunawaySpacingAndResolution) {
+  const fs::path root = scratch_dir();
+  const Part p = make_part_and_scan(root, 0.05);
+  const fs::path out = root / "out";
+  struct Case {
+    std::vector<std::string> options;
+    std::vector<std::string> message;
+  };
+  const std::vector<Case> cases{
+      {{"--spacing", "0.0001"}, {"--spacing 0.0001 mm would place about", "--max-points"}},
+      {{"--resolution", "0.05", "--max-grid-nodes", "100000"},
+       {"--resolution 0.05 mm gives a field grid of about", "--max-grid-nodes 100000"}},
+  };
+  for (const Case& c : cases) {
+    std::vector<std::string> args = field_args(p, out);
+    args.insert(args.end(), c.options.begin(), c.options.end());
+    const ProcessResult r = truecut(args);
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    for (const std::string& m : c.message)
+      EXPECT_NE(r.err.find(m), std::string::npos) << m << "\n" << r.err;
+    EXPECT_FALSE(fs::exists(out));
+  }
+  std::vector<std::string> args = field_args(p, out);
+  args.insert(args.end(), {"--resolution", "0.5", "--max-grid-nodes", "100000"});
+  const ProcessResult r = truecut(args);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
 TEST(FieldCli, MalformedInputsExit2AndWriteNothing) {
   const fs::path root = scratch_dir();
   const Part p = make_part_and_scan(root, 0.05);

@@ -291,6 +291,53 @@ void smooth_and_adapt(const TriangleMesh& nominal, const FieldPipelineOptions& o
                                static_cast<long long>(r.truss.edge_count)));
 }
 
+// What spacing and resolution would cost, from the nominal alone.
+void check_budgets(const FieldPipelineInputs& in, const FieldPipelineOptions& opt,
+                   const std::vector<std::int32_t>& ids) {
+  const TriangleMesh& nominal = *in.nominal;
+  double area_mm2 = 0.0;
+  Eigen::AlignedBox3d box;
+  for (std::size_t t = 0; t < nominal.triangles.size(); ++t) {
+    if (!selected(opt.surfaces, ids[t])) continue;
+    const auto& [a, b, c] = nominal.triangles[t];
+    const Eigen::Vector3d &pa = nominal.vertices_mm[a], &pb = nominal.vertices_mm[b],
+                          &pc = nominal.vertices_mm[c];
+    area_mm2 += 0.5 * (pb - pa).cross(pc - pa).norm();
+    box.extend(pa);
+    box.extend(pb);
+    box.extend(pc);
+  }
+  if (opt.spacing_mm > 0.0) {
+    const double points = area_mm2 / (opt.spacing_mm * opt.spacing_mm);
+    if (points > opt.max_compensation_points)
+      throw std::invalid_argument(rt::format_printf(
+          "--spacing %g mm would place about %.3g compensation points on the %.4g mm² of the "
+          "compensated surfaces, more than --max-points %.0f; choose a larger --spacing or raise "
+          "--max-points",
+          opt.spacing_mm, points, area_mm2, opt.max_compensation_points));
+  }
+  if (box.isEmpty()) return;
+  // The tool centres lie about a tool radius off the surfaces they cut (a
+  // flank cut holds the tip lower, which this estimate leaves out; the
+  // fit's own limit of 2^26 nodes per layer stays the backstop).
+  double reach_mm = 0.0;
+  for (const ToolShape& t : in.tools)
+    reach_mm = std::max(reach_mm, t.radius_mm);
+  const double h = opt.fit.spacing_mm;
+  const double margin_mm = (opt.fit.support_radius_nodes + opt.fit.fade_nodes + 2.0) * h;
+  const Eigen::Vector3d extent = box.sizes();
+  double nodes = 1.0;
+  for (int a = 0; a < 3; ++a)
+    nodes *= std::ceil((extent[a] + 2.0 * (reach_mm + margin_mm)) / h) + 1.0;
+  if (nodes > opt.max_grid_nodes)
+    throw std::invalid_argument(rt::format_printf(
+        "--resolution %g mm gives a field grid of about %.3g nodes per layer over the compensated "
+        "surfaces (%.4g x %.4g x %.4g mm plus a tool radius of %.4g mm), more than --max-grid-nodes "
+        "%.0f (about 135 bytes each while fitting); choose a coarser --resolution or raise "
+        "--max-grid-nodes (a field file holds at most 2^26 nodes per layer)",
+        h, nodes, extent.x(), extent.y(), extent.z(), reach_mm, opt.max_grid_nodes));
+}
+
 }  // namespace
 
 VectorStatistics vector_statistics(std::span<const Eigen::Vector3d> vectors_mm,
@@ -365,6 +412,8 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
     if (icp.datum_triangles.empty())
       throw std::invalid_argument("the datum surfaces have no triangles in the nominal model");
   }
+
+  check_budgets(in, opt, r.triangle_surface_ids);
 
   // Compensation points (and, for the truss, the vertices of the compensated surfaces).
   auto started = timer.now();

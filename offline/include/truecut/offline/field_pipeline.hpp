@@ -54,6 +54,13 @@ struct FieldPipelineOptions {
   FieldFitOptions fit;  // fit.spacing_mm is the field resolution
   ToolPathOptions path;
   PlacementOptions placement;
+  // Budgets, checked before any work: refused (std::invalid_argument naming
+  // the command-line option) when the compensation points that spacing_mm
+  // would place (about the compensated area / spacing²), or the field grid
+  // per layer that fit.spacing_mm would need over the part (its extent plus
+  // the largest tool radius), exceed them.
+  double max_compensation_points = 20e6;
+  double max_grid_nodes = double(std::int64_t{1} << 24);
   // Run the scan chain (registration, error vectors, truss) and the program
   // chain (tool path, placement) concurrently; false: one after the other
   // (per-stage CPU times in the benchmark). The results are the same.
