@@ -8,6 +8,7 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "truecut/interp/interpreter.hpp"
+#include "truecut/rt/number_format.hpp"
 #include "truecut/sim/benchmark_parts.hpp"
 #include "truecut/sim/program_travel.hpp"
 
@@ -31,6 +32,8 @@ const char* kPartHelp =
     "options:\n"
     "  --out DIR            output folder (created)\n"
     "  --mesh-edge MM       longest mesh edge (default 0.5)\n"
+    "  --max-triangles N    budget: refuse (exit 2) a --mesh-edge that would make more\n"
+    "                       triangles (default 20000000)\n"
     "  --stepover MM        distance between passes (default 0.5)\n"
     "  --point-spacing MM   distance between points along a curved pass (default 0.5)\n"
     "  --step-down MM       axial depth per level (default 1.0)\n"
@@ -41,6 +44,7 @@ const char* kPartHelp =
 int cmd_part(const std::vector<std::string>& argv) {
   ParsedArgs a(argv, {{"out", true},
                       {"mesh-edge", true},
+                      {"max-triangles", true},
                       {"stepover", true},
                       {"point-spacing", true},
                       {"step-down", true},
@@ -62,6 +66,21 @@ int cmd_part(const std::vector<std::string>& argv) {
   opt.stepover_mm = a.number("stepover", opt.stepover_mm, 0.001, 100);
   opt.point_spacing_mm = a.number("point-spacing", opt.point_spacing_mm, 0.001, 100);
   opt.step_down_mm = a.number("step-down", opt.step_down_mm, 0.001, 100);
+  const double max_triangles = a.number("max-triangles", 20e6, 1.0, 1e12);
+  // Budget: the triangle count grows as 1 / mesh-edge²; a mesh at 1 mm
+  // (a fraction of a second) tells what the requested edge would give.
+  constexpr double kProbeEdgeMm = 1.0;
+  if (opt.mesh_edge_mm < kProbeEdgeMm) {
+    sim::PartOptions probe = opt;
+    probe.mesh_edge_mm = kProbeEdgeMm;
+    const double estimate = double(sim::make_part(*id, probe).mesh.triangles.size()) *
+                            (kProbeEdgeMm / opt.mesh_edge_mm) * (kProbeEdgeMm / opt.mesh_edge_mm);
+    if (estimate > max_triangles)
+      throw UsageError(rt::format_printf(
+          "--mesh-edge %g mm would make about %.3g triangles (%.3g GB of STL), more than "
+          "--max-triangles %.0f; choose a larger --mesh-edge or raise --max-triangles",
+          opt.mesh_edge_mm, estimate, estimate * 50e-9, max_triangles));
+  }
   const sim::BenchmarkPart part = sim::make_part(*id, opt);
   // The program must stay inside the travel of its machine; a part that does
   // not is a generator bug, reported before anything is written.

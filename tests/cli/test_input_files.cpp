@@ -135,3 +135,24 @@ TEST(InputFiles, AnOutputThatIsAnInputIsRefusedAndTheInputKept) {
   EXPECT_TRUE(fs::is_regular_file(program));
   EXPECT_FALSE(fs::exists(dir / "s.ply"));
 }
+
+// `truecut part --mesh-edge 0.002` tried to build hundreds of millions of
+// triangles (15 s and 1.6 GB before it was stopped); it is refused at once
+// with the estimate and the option that raises the budget, and a mesh edge
+// within a lowered budget passes.
+TEST(InputFiles, APartMeshOverTheTriangleBudgetIsRefusedAtOnce) {
+  const fs::path dir = scratch_dir();
+  ProcessResult r = run_process({cli_path().string(), "part", "implant", "--out",
+                                 (dir / "a").string(), "--mesh-edge", "0.002"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--mesh-edge 0.002 mm would make about"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--max-triangles 20000000"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "a"));
+  r = run_process({cli_path().string(), "part", "implant", "--out", (dir / "b").string(),
+                   "--mesh-edge", "0.5", "--max-triangles", "100"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--max-triangles 100;"), std::string::npos) << r.err;
+  r = run_process({cli_path().string(), "part", "implant", "--out", (dir / "c").string(),
+                   "--mesh-edge", "0.5", "--max-triangles", "100000"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
