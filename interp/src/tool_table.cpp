@@ -1,6 +1,8 @@
 #include "truecut/interp/tool_table.hpp"
 
 #include <cctype>
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -21,8 +23,35 @@ double parse_number(const std::string& text, size_t start, size_t end, const std
   if (s.empty() || *stop != '\0')
     throw GcodeError({file, line, static_cast<int>(start) + 1},
                      std::string("bad number after '") + text[start] + "' in tool table");
+  if (!std::isfinite(v))
+    throw GcodeError({file, line, static_cast<int>(start) + 1},
+                     std::string("'") + text[start] + s + "' in tool table: not a finite number");
   return v;
 }
+
+// Plausibility: a value outside [lo, hi] is a typo or a unit mix-up, not a
+// tool (the limits are far beyond any milling tool).
+void check_range(double v, double lo, double hi, const char* what, const std::string& file,
+                 int line, size_t column) {
+  if (v >= lo && v <= hi) return;
+  char b[200];
+  std::snprintf(b, sizeof b, "%s %.6g in tool table is outside %g to %g", what, v, lo, hi);
+  throw GcodeError({file, line, static_cast<int>(column) + 1}, b);
+}
+
+int whole_number(double v, const char* what, const std::string& file, int line, size_t column) {
+  check_range(v, 0, 99999, what, file, line, column);
+  if (v != std::floor(v)) {
+    char b[160];
+    std::snprintf(b, sizeof b, "%s %.6g in tool table is not a whole number", what, v);
+    throw GcodeError({file, line, static_cast<int>(column) + 1}, b);
+  }
+  return static_cast<int>(v);
+}
+
+constexpr double kMaxDiameterMm = 1000.0;  // a 1 m cutter
+constexpr double kMaxOffsetMm = 10000.0;   // 10 m of tool length or offset
+constexpr double kMaxAngleDeg = 3600.0;
 
 }  // namespace
 
@@ -74,31 +103,31 @@ ToolTable ToolTable::parse(std::string_view text, const std::string& name) {
       const double v = parse_number(s, i, end, name, line);
       switch (key) {
         case 'T':
-          e.number = static_cast<int>(v);
+          e.number = whole_number(v, "tool number T", name, line, i);
           has_t = true;
           break;
         case 'P':
-          e.pocket = static_cast<int>(v);
+          e.pocket = whole_number(v, "pocket P", name, line, i);
           break;
         case 'X':
-          e.offset_mm.x = v;
-          break;
         case 'Y':
-          e.offset_mm.y = v;
+        case 'Z': {
+          check_range(v, -kMaxOffsetMm, kMaxOffsetMm,
+                      key == 'X'   ? "offset X"
+                      : key == 'Y' ? "offset Y"
+                                   : "offset Z (length)",
+                      name, line, i);
+          (key == 'X' ? e.offset_mm.x : key == 'Y' ? e.offset_mm.y : e.offset_mm.z) = v;
           break;
-        case 'Z':
-          e.offset_mm.z = v;
-          break;
+        }
         case 'A':
-          e.offset_mm.a = v;
-          break;
         case 'B':
-          e.offset_mm.b = v;
-          break;
         case 'C':
-          e.offset_mm.c = v;
+          check_range(v, -kMaxAngleDeg, kMaxAngleDeg, "angular offset", name, line, i);
+          (key == 'A' ? e.offset_mm.a : key == 'B' ? e.offset_mm.b : e.offset_mm.c) = v;
           break;
         case 'D':
+          check_range(v, 0.0, kMaxDiameterMm, "diameter D", name, line, i);
           e.diameter_mm = v;
           break;
         case 'U':

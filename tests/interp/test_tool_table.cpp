@@ -45,6 +45,41 @@ TEST(ToolTable, ErrorsAreLocated) {
   EXPECT_THROW(ToolTable::load(truecut::test::scratch_dir() / "missing.tbl"), GcodeError);
 }
 
+// Entries no tool can have (issue 23: read silently before, NaN tool-centre
+// points or a 1e30 tool number cast to int): refused at their line and
+// column, with the value and the range.
+TEST(ToolTable, ImplausibleEntriesAreRefusedAtTheirColumn) {
+  const struct {
+    const char* line;
+    const char* message;
+  } cases[] = {
+      {"T1 P1 D-6 Z50", "x.tbl:1:7: diameter D -6 in tool table is outside 0 to 1000"},
+      {"T1 P1 D1e9 Z50", "x.tbl:1:7: diameter D 1e+09 in tool table is outside 0 to 1000"},
+      {"T1 P1 D6 Z-1e12", "x.tbl:1:10: offset Z (length) -1e+12 in tool table is outside"},
+      {"T1 P1 D6 Znan", "x.tbl:1:10: 'Znan' in tool table: not a finite number"},
+      {"T1 P1 Dinf", "x.tbl:1:7: 'Dinf' in tool table: not a finite number"},
+      {"T1e30 P1 D6", "x.tbl:1:1: tool number T 1e+30 in tool table is outside 0 to 99999"},
+      {"T1.5 P1 D6", "x.tbl:1:1: tool number T 1.5 in tool table is not a whole number"},
+      {"T-2 P1 D6", "x.tbl:1:1: tool number T -2 in tool table is outside"},
+      {"T2 P1e12 D6", "x.tbl:1:4: pocket P 1e+12 in tool table is outside"},
+      {"T2 P1 D6 C1e9", "x.tbl:1:10: angular offset 1e+09 in tool table is outside"},
+  };
+  for (const auto& c : cases) {
+    try {
+      ToolTable::parse(std::string("T9 P9 D1\n") + c.line + "\n", "x.tbl");
+      ADD_FAILURE() << c.line;
+    } catch (const GcodeError& e) {
+      std::string expected = c.message;
+      expected.replace(expected.find(":1:"), 3, ":2:");
+      EXPECT_EQ(std::string(e.what()).rfind(expected, 0), 0u) << e.what();
+    }
+  }
+  // The largest plausible values pass.
+  const ToolTable t = ToolTable::parse("T99999 P99999 D1000 Z-10000 X10000 C-3600\n", "x.tbl");
+  ASSERT_NE(t.find(99999), nullptr);
+  EXPECT_EQ(t.find(99999)->diameter_mm, 1000.0);
+}
+
 TEST(ToolTable, LoadsFromFile) {
   const auto file = truecut::test::scratch_dir() / "tool.tbl";
   std::ofstream(file) << "T3 P3 Z7 D2\n";
