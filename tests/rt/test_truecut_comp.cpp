@@ -87,21 +87,22 @@ bool all_outputs_finite(const Hal& h) {
 
 TEST(TruecutComp, ExportsTheDocumentedPins) {
   Rig r("");
-  for (const char* pin : {"enable",       "tool",        "max-correction", "max-rate",
-                          "fade-time",    "reload",      "swap-inhibit",   "tcp-x",
-                          "tcp-y",        "tcp-z",       "axis-i",         "axis-j",
-                          "axis-k",       "tcp-x-out",   "tcp-y-out",      "tcp-z-out",
-                          "axis-i-out",   "axis-j-out",  "axis-k-out",     "corr-x",
-                          "corr-y",       "corr-z",      "corr-mag",       "active",
-                          "fault",        "limited",     "fade",           "field-generation",
-                          "load-errors",  "clamp-count", "max-accel",      "reset",
-                          "fault-latched"})
+  for (const char* pin : {"enable",      "tool",         "max-correction", "max-rate",
+                          "fade-time",   "reload",       "swap-inhibit",   "tcp-x",
+                          "tcp-y",       "tcp-z",        "axis-i",         "axis-j",
+                          "axis-k",      "tcp-x-out",    "tcp-y-out",      "tcp-z-out",
+                          "axis-i-out",  "axis-j-out",   "axis-k-out",     "corr-x",
+                          "corr-y",      "corr-z",       "corr-mag",       "active",
+                          "fault",       "limited",      "fade",           "field-generation",
+                          "load-errors", "clamp-count",  "max-accel",      "reset",
+                          "max-jerk",    "fault-latched"})
     EXPECT_TRUE(r.hal.has_pin(std::string("c.") + pin)) << pin;
   EXPECT_TRUE(r.hal.has_function("c.update"));
   EXPECT_EQ(1.0, getf(r.hal, "c.max-correction"));
   EXPECT_EQ(10.0, getf(r.hal, "c.max-rate"));
   EXPECT_EQ(1.0, getf(r.hal, "c.fade-time"));
   EXPECT_EQ(rt::comp::kDefaultMaxAccelMmPerS2, getf(r.hal, "c.max-accel"));
+  EXPECT_EQ(rt::comp::kDefaultMaxJerkMmPerS3, getf(r.hal, "c.max-jerk"));
   EXPECT_EQ(1.0, getf(r.hal, "c.axis-k"));
   EXPECT_FALSE(r.hal.has_pin("c.joint-x"));
 
@@ -134,6 +135,7 @@ TEST(TruecutComp, CorrectionAtGridNodesEqualsTheStoredVectors) {
   r.set("fade-time", 0.0);
   r.set("max-rate", 1e9);
   r.set("max-accel", 0.0);  // no acceleration limit
+  r.set("max-jerk", 0.0);   // nor jerk limit
   r.set("max-correction", 1e3);
   r.set("enable", 1.0);
   const auto& g = field.grid();
@@ -166,7 +168,7 @@ TEST(TruecutComp, JointModeCorrectsThroughTheKinematics) {
   Rig r("field=" + path.string() + " mode=joint",
         "setp c.x-rot-point 5\nsetp c.y-rot-point -3\nsetp c.z-rot-point 20\n"
         "setp c.z-offset -12\nsetp c.tool-offset 50\nsetp c.fade-time 0\n"
-        "setp c.max-rate 1e9\nsetp c.max-accel 0\nsetp c.tool 1\n");
+        "setp c.max-rate 1e9\nsetp c.max-accel 0\nsetp c.max-jerk 0\nsetp c.tool 1\n");
   rt::AcTrtParams k;
   k.x_rot_point_mm = 5;
   k.y_rot_point_mm = -3;
@@ -423,7 +425,8 @@ TEST(TruecutComp, SwapInhibitHoldsTheNewFieldBack) {
   write_field(file, {});
   // A 10 ms fade of 0.2 mm needs 5 m/s^2: no acceleration limit here.
   Rig r("field=" + file.string(),
-        "setp c.enable 1\nsetp c.tool 1\nsetp c.fade-time 0.01\nsetp c.max-accel 0\n");
+        "setp c.enable 1\nsetp c.tool 1\nsetp c.fade-time 0.01\nsetp c.max-accel 0\nsetp "
+        "c.max-jerk 0\n");
   r.set_tcp({0.0, 0.0, 0.0});
   r.run(20);
   write_field(file, b_spec);

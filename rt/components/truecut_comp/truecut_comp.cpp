@@ -32,6 +32,7 @@ struct Pins {
   double* max_rate;        // mm/s
   double* fade_time;       // s
   double* max_accel;       // mm/s^2
+  double* max_jerk;        // mm/s^3
   bool* reload;
   bool* swap_inhibit;
   bool* reset;
@@ -174,7 +175,8 @@ void update(void* arg, long period_ns) {
   }
   in.tcp_mm = pose.tcp_mm;
 
-  const rt::comp::CompLimits limits{*p.max_correction, *p.max_rate, *p.fade_time, *p.max_accel};
+  const rt::comp::CompLimits limits{*p.max_correction, *p.max_rate, *p.fade_time, *p.max_accel,
+                                    *p.max_jerk};
   const rt::comp::CycleOutput out = rt::comp::step(s.core, in, limits, double(period_ns) * 1e-9);
   if (out.adopted) {
     s.pending = nullptr;
@@ -247,6 +249,7 @@ void make_pins(rt::hal::component::Builder& b, const std::string& n, Mode mode, 
   in_f("max-rate", &p.max_rate);
   in_f("fade-time", &p.fade_time);
   in_f("max-accel", &p.max_accel);
+  in_f("max-jerk", &p.max_jerk);
   b.pin(n + ".reload", TC_HAL_BIT, TC_HAL_IN, &p.reload);
   b.pin(n + ".swap-inhibit", TC_HAL_BIT, TC_HAL_IN, &p.swap_inhibit);
   b.pin(n + ".reset", TC_HAL_BIT, TC_HAL_IN, &p.reset);
@@ -293,6 +296,7 @@ void make_pins(rt::hal::component::Builder& b, const std::string& n, Mode mode, 
   *p.max_rate = defaults.max_rate_mm_per_s;
   *p.fade_time = defaults.fade_time_s;
   *p.max_accel = rt::comp::kDefaultMaxAccelMmPerS2;
+  *p.max_jerk = rt::comp::kDefaultMaxJerkMmPerS3;
   if (mode == Mode::kTcp) {
     *p.axis_in[2] = 1.0;
   } else {
