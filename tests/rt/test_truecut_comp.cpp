@@ -87,15 +87,48 @@ bool all_outputs_finite(const Hal& h) {
 
 TEST(TruecutComp, ExportsTheDocumentedPins) {
   Rig r("");
-  for (const char* pin : {"enable",      "tool",         "max-correction", "max-rate",
-                          "fade-time",   "reload",       "swap-inhibit",   "tcp-x",
-                          "tcp-y",       "tcp-z",        "axis-i",         "axis-j",
-                          "axis-k",      "tcp-x-out",    "tcp-y-out",      "tcp-z-out",
-                          "axis-i-out",  "axis-j-out",   "axis-k-out",     "corr-x",
-                          "corr-y",      "corr-z",       "corr-mag",       "active",
-                          "fault",       "limited",      "fade",           "field-generation",
-                          "load-errors", "clamp-count",  "max-accel",      "reset",
-                          "max-jerk",    "fault-latched"})
+  for (const char* pin : {"enable",
+                          "tool",
+                          "max-correction",
+                          "max-rate",
+                          "fade-time",
+                          "reload",
+                          "swap-inhibit",
+                          "tcp-x",
+                          "tcp-y",
+                          "tcp-z",
+                          "axis-i",
+                          "axis-j",
+                          "axis-k",
+                          "tcp-x-out",
+                          "tcp-y-out",
+                          "tcp-z-out",
+                          "axis-i-out",
+                          "axis-j-out",
+                          "axis-k-out",
+                          "corr-x",
+                          "corr-y",
+                          "corr-z",
+                          "corr-mag",
+                          "active",
+                          "fault",
+                          "limited",
+                          "fade",
+                          "field-generation",
+                          "load-errors",
+                          "clamp-count",
+                          "max-accel",
+                          "reset",
+                          "max-jerk",
+                          "fault-latched",
+                          "expect-machine-id",
+                          "expect-part-id",
+                          "expect-tool-set-id",
+                          "field-crc-lo",
+                          "field-crc-hi",
+                          "field-machine-id",
+                          "field-part-id",
+                          "field-tool-set-id"})
     EXPECT_TRUE(r.hal.has_pin(std::string("c.") + pin)) << pin;
   EXPECT_TRUE(r.hal.has_function("c.update"));
   EXPECT_EQ(1.0, getf(r.hal, "c.max-correction"));
@@ -113,6 +146,48 @@ TEST(TruecutComp, ExportsTheDocumentedPins) {
     EXPECT_TRUE(j.hal.has_pin(std::string("c.") + pin)) << pin;
   EXPECT_FALSE(j.hal.has_pin("c.tcp-x"));
   EXPECT_EQ(-180.0, getf(j.hal, "c.a-min"));
+}
+
+TEST(TruecutComp, FieldIdentityIsOnPinsAndAFieldForAnotherMachineIsRefused) {
+  // Issue 19, point 5: CRC (two u32 halves) and the ids the field names on
+  // pins; expected ids set by the integrator; a mismatch is fault 10
+  // (wrong-field) and the field is not applied.
+  const rt::CorrectionField field = make_field({});
+  rt::FieldFileInfo info{"2026-11-21T00:00:00Z", "truecut_comp test", "mill-2", "part-7", "T1 T2"};
+  const auto path = field_path("named.tcf");
+  rt::write_field_file(path, field, info);
+  const rt::LoadedField loaded = rt::read_field_file(path);
+  Rig r("field=" + path);
+  r.set("enable", 1.0);
+  r.set("tool", 1.0);
+  r.run(1);
+  auto getu = [&](const char* pin) { return r.hal.get_pin_or_param(std::string("c.") + pin).u; };
+  EXPECT_EQ(static_cast<uint32_t>(loaded.crc64), getu("field-crc-lo"));
+  EXPECT_EQ(static_cast<uint32_t>(loaded.crc64 >> 32), getu("field-crc-hi"));
+  EXPECT_EQ(rt::field_identity_id("mill-2"), getu("field-machine-id"));
+  EXPECT_EQ(rt::field_identity_id("part-7"), getu("field-part-id"));
+  EXPECT_EQ(rt::field_identity_id("T1 T2"), getu("field-tool-set-id"));
+  EXPECT_EQ(1, gets32(r.hal, "c.field-generation"));
+  r.run(1500);
+  EXPECT_EQ(0, r.fault());
+  EXPECT_GT(r.corr().norm(), 0.01);
+  // Expecting another machine: the current field fades out, fault 10.
+  r.hal.set_pin_or_param("c.expect-machine-id", std::to_string(rt::field_identity_id("mill-3")));
+  r.run(1500);
+  EXPECT_EQ(10, r.fault());
+  EXPECT_EQ(Eigen::Vector3d::Zero(), r.corr());
+  // A component expecting mill-3 never applies the mill-2 field.
+  Rig other("field=" + path,
+            "setp c.expect-machine-id " + std::to_string(rt::field_identity_id("mill-3")) + "\n");
+  other.set("enable", 1.0);
+  other.set("tool", 1.0);
+  for (int i = 0; i < 500; ++i) {
+    other.run(1);
+    ASSERT_EQ(10, other.fault());
+    ASSERT_EQ(Eigen::Vector3d::Zero(), other.corr());
+  }
+  EXPECT_EQ(0, gets32(other.hal, "c.field-generation"));
+  EXPECT_EQ(0u, other.hal.get_pin_or_param("c.field-crc-lo").u);
 }
 
 TEST(TruecutComp, RejectsBadLoadArguments) {

@@ -1190,3 +1190,57 @@ TEST(CompCore, RunningAlongTheBoundIsWithinTheLimitsOrReported) {
     }
   }
 }
+
+TEST(CompCore, AFieldBuiltForAnotherMachinePartOrToolSetIsRefused) {
+  // Issue 19, point 5: the integrator sets the ids the field must name; a
+  // candidate that names others is not adopted (fault wrong-field), and a
+  // current field that stops matching is faded out like any field fault.
+  auto a = make_field({}), b = make_field({});
+  a.set_identity({0x1111, 7, 8, 9});
+  b.set_identity({0x2222, 7, 8, 10});  // another tool set
+  Driver d;
+  d.limits = {10.0, 1000.0, 0.05};
+  CycleInput in;
+  in.tool = 1;
+  in.enable = true;
+  in.tcp_mm = Vec3(1.0, 2.0, 0.5);
+  in.expect_machine = 7;
+  in.expect_tool_set = 9;  // part not checked
+  in.candidate = &b;
+  for (int i = 0; i < 10; ++i) {
+    const CycleOutput o = d.cycle(in);
+    ASSERT_FALSE(o.adopted);
+    ASSERT_EQ(Fault::kWrongField, o.fault);
+    ASSERT_EQ(Vec3::Zero(), o.correction_mm);
+  }
+  in.candidate = &a;
+  EXPECT_TRUE(d.cycle(in).adopted);
+  in.candidate = nullptr;
+  for (int i = 0; i < 100; ++i)
+    ASSERT_EQ(Fault::kNone, d.cycle(in).fault);
+  EXPECT_EQ(a.evaluate(1, in.tcp_mm).correction_mm, d.state.output);
+  // A matching candidate is adopted; a wrong one waits and is reported
+  // while the current field stays applied.
+  in.candidate = &b;
+  for (int i = 0; i < 10; ++i) {
+    const CycleOutput o = d.cycle(in);
+    ASSERT_FALSE(o.adopted);
+    ASSERT_EQ(Fault::kWrongField, o.fault);
+  }
+  EXPECT_EQ(a.evaluate(1, in.tcp_mm).correction_mm, d.state.output);
+  in.candidate = nullptr;
+  // The expectation changes: the current field is wrong now and fades out.
+  in.expect_machine = 6;
+  CycleOutput o;
+  for (int i = 0; i < 100; ++i) {
+    o = d.cycle(in);
+    ASSERT_EQ(Fault::kWrongField, o.fault);
+  }
+  EXPECT_EQ(Vec3::Zero(), o.correction_mm);
+  EXPECT_LE(d.max_step_mm, kFadeGainMaxSlope * a.evaluate(1, in.tcp_mm).correction_mm.norm() * kDt /
+                               0.05 * (1 + 1e-9));
+  in.expect_machine = 0;  // not checked: it fades back in
+  for (int i = 0; i < 100; ++i)
+    ASSERT_EQ(Fault::kNone, d.cycle(in).fault);
+  EXPECT_EQ(a.evaluate(1, in.tcp_mm).correction_mm, d.state.output);
+}

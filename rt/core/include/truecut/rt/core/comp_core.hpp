@@ -37,6 +37,8 @@ enum class Fault : int32_t {
                         // than the limits let it follow: the output stepped
   kBoundClip = 9,       // the output reached max-correction faster than the
                         // limits let it stop there: clipped, a limit exceeded
+  kWrongField = 10,     // the field names another machine, part or tool set
+                        // than the expected ids: not applied
 };
 
 inline const char* to_string(Fault f) noexcept {
@@ -61,6 +63,8 @@ inline const char* to_string(Fault f) noexcept {
       return "bound-step";
     case Fault::kBoundClip:
       return "bound-clip";
+    case Fault::kWrongField:
+      return "wrong-field";
   }
   return "unknown";
 }
@@ -103,6 +107,11 @@ struct CycleInput {
   const rt::CorrectionField* candidate = nullptr;
   bool swap_inhibit = false;  // keep a candidate that would replace a field waiting
   bool reset = false;         // rising edge: clear a latched fault whose cause is gone
+  // The ids of the machine, part and tool set the integrator expects a field
+  // to be built for (rt::FieldIdentity); 0: not checked.
+  uint32_t expect_machine = 0;
+  uint32_t expect_part = 0;
+  uint32_t expect_tool_set = 0;
 };
 
 struct CycleOutput {
@@ -128,6 +137,16 @@ inline bool latches(Fault f) noexcept {
 
 namespace detail {
 
+// Whether `field` was built for what `in` expects (every expected id that is
+// not 0 equals the field's).
+inline bool identity_ok(const rt::CorrectionField* field, const CycleInput& in) noexcept {
+  if (field == nullptr) return true;
+  const rt::FieldIdentity& id = field->identity();
+  return (in.expect_machine == 0 || in.expect_machine == id.machine) &&
+         (in.expect_part == 0 || in.expect_part == id.part) &&
+         (in.expect_tool_set == 0 || in.expect_tool_set == id.tool_set);
+}
+
 struct Evaluated {
   Vec3 value = Vec3::Zero();
   Fault fault = Fault::kNone;
@@ -147,9 +166,11 @@ inline Fault fault_of(rt::FieldStatus status) noexcept {
   return Fault::kFieldNotFinite;
 }
 
-inline Evaluated evaluate(const Channel& ch, const Vec3& tcp_mm, Fault input_fault) noexcept {
-  if (input_fault != Fault::kNone) return {ch.held, input_fault};
+inline Evaluated evaluate(const Channel& ch, const CycleInput& in) noexcept {
+  const Vec3& tcp_mm = in.tcp_mm;
+  if (in.input_fault != Fault::kNone) return {ch.held, in.input_fault};
   if (ch.field == nullptr) return {ch.held, Fault::kNoField};
+  if (!identity_ok(ch.field, in)) return {ch.held, Fault::kWrongField};
   const rt::FieldSample s = ch.field->evaluate(ch.tool, tcp_mm);
   const Fault f = fault_of(s.status);
   if (f != Fault::kNone) return {ch.held, f};
@@ -179,8 +200,11 @@ inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& ra
   // 2. A new field or tool starts a cross-fade from the current source; a
   // second change waits until the first cross-fade has finished.
   const bool outgoing_idle = s.outgoing.u <= 0.0;
-  const bool new_field =
-      in.candidate != nullptr && (!in.swap_inhibit || s.current.field == nullptr);
+  // A candidate built for another machine, part or tool set is refused
+  // (it waits, reported, until a matching one replaces it).
+  const bool candidate_wrong = !detail::identity_ok(in.candidate, in);
+  const bool new_field = in.candidate != nullptr && !candidate_wrong &&
+                         (!in.swap_inhibit || s.current.field == nullptr);
   const bool new_tool = in.tool != s.current.tool;
   if (outgoing_idle && (new_field || new_tool)) {
     if (s.current.u > 0.0)
@@ -196,7 +220,7 @@ inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& ra
 
   // 3./4. Evaluate. A current source that recovers from a failure while still
   // partly faded in cross-fades from its held value to its live value.
-  const detail::Evaluated cur = detail::evaluate(s.current, in.tcp_mm, in.input_fault);
+  const detail::Evaluated cur = detail::evaluate(s.current, in);
   if (s.current.frozen && cur.fault == Fault::kNone) {
     if (s.current.u <= 0.0) {
       s.current.frozen = false;
@@ -209,8 +233,7 @@ inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& ra
   const Vec3 v_cur = detail::channel_value(s.current, cur);
   Vec3 v_out = Vec3::Zero();
   if (s.outgoing.u > 0.0)
-    v_out =
-        detail::channel_value(s.outgoing, detail::evaluate(s.outgoing, in.tcp_mm, in.input_fault));
+    v_out = detail::channel_value(s.outgoing, detail::evaluate(s.outgoing, in));
 
   // 5. Fade and blend.
   const bool wanted = in.enable && limits_ok && s.latched == Fault::kNone && !s.current.frozen;
@@ -299,6 +322,7 @@ inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& ra
               : !limits_ok                   ? Fault::kBadParameter
               : bound_step                   ? Fault::kBoundStep
               : clip_reported                ? Fault::kBoundClip
+              : candidate_wrong              ? Fault::kWrongField
                                              : cur.fault;
   // Latch even when an input fault hides the latching one on `fault`.
   if (s.latched == Fault::kNone)

@@ -80,6 +80,16 @@ struct FieldSample {
   Eigen::Matrix3d jacobian = Eigen::Matrix3d::Zero();
 };
 
+// What a field was built for, as the real-time side sees it: the CRC-64 of
+// its file and 32-bit ids of the machine, the part and the tool set it names
+// (0: not named). Set by the loader (field_file.hpp: field_identity_id()).
+struct FieldIdentity {
+  uint64_t crc64 = 0;
+  uint32_t machine = 0;
+  uint32_t part = 0;
+  uint32_t tool_set = 0;
+};
+
 // Immutable once built. Build it outside the real-time thread; publish it by
 // pointer.
 class CorrectionField {
@@ -105,6 +115,9 @@ class CorrectionField {
   // Node values of the layer for `tool`; empty when there is none.
   std::span<const FieldNode> nodes(int32_t tool) const noexcept;
   bool inside(const Eigen::Vector3d& position_mm) const noexcept;
+  const FieldIdentity& identity() const noexcept { return identity_; }
+  // Before publishing only (the field is immutable once shared).
+  void set_identity(const FieldIdentity& identity) noexcept { identity_ = identity; }
 
  private:
   struct Layer {
@@ -120,6 +133,7 @@ class CorrectionField {
   FieldInterpolation interpolation_;
   std::vector<int32_t> tools_;
   std::vector<Layer> layers_;  // same order as tools_
+  FieldIdentity identity_;
 };
 
 }  // namespace truecut::rt
