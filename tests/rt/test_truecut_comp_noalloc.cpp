@@ -130,7 +130,10 @@ TEST(CompNoAlloc, FaultLatchBoundStepsAndBadParametersAllocateNothing) {
                             {"c.max-correction", "0.3"},
                             {"c.max-jerk", "0"},
                             {"c.max-jerk", "1e5"},
-                            {"c.fade-time", "0.05"}};
+                            {"c.fade-time", "0.05"},
+                            // a field for another machine: fades out, fault 10
+                            {"c.expect-machine-id", "12345"},
+                            {"c.expect-machine-id", "0"}};
   bool stepped = false, latched = false;
   for (const auto& st : steps) {
     h.set_pin_or_param(st[0], st[1]);

@@ -27,9 +27,9 @@ struct FieldFileInfo {
   // What the field was built for (one line each; empty: not named, and the
   // key is not written, so such a file is byte for byte what it was before
   // these keys existed).
-  std::string machine;
-  std::string part;
-  std::string tool_set;
+  std::string machine = {};
+  std::string part = {};
+  std::string tool_set = {};
 };
 
 struct LoadedField {
