@@ -30,9 +30,9 @@ constexpr std::string_view kEncoding = "float64-le";
 constexpr std::size_t kMaxHeaderBytes = 64 * 1024;
 constexpr std::size_t kBytesPerNode = 4 * sizeof(double);
 constexpr const char* kChannelNames[] = {"dx", "dy", "dz", "weight"};
-constexpr std::string_view kKeys[] = {"frame",  "units",         "origin",   "spacing",  "dims",
-                                      "tools",  "interpolation", "channels", "encoding", "created",
-                                      "source", "payload_bytes", "crc64"};
+constexpr std::string_view kKeys[] = {
+    "frame",    "units",   "origin", "spacing", "dims", "tools",    "interpolation", "channels",
+    "encoding", "created", "source", "machine", "part", "tool_set", "payload_bytes", "crc64"};
 
 // ---------------------------------------------------------------- helpers
 
@@ -131,8 +131,14 @@ class Decoder {
            std::to_string(expected) + "-byte payload");
     check_crc(header);
 
-    LoadedField loaded{{header_value(header, "created"), header_value(header, "source")},
+    LoadedField loaded{{header_value(header, "created"), header_value(header, "source"),
+                        header_value(header, "machine"), header_value(header, "part"),
+                        header_value(header, "tool_set")},
                        make_field(grid, tools, interpolation, header.payload_offset)};
+    loaded.crc64 = *parse_number<uint64_t>(required(header, "crc64"), 16);
+    loaded.field.set_identity({loaded.crc64, field_identity_id(loaded.info.machine),
+                               field_identity_id(loaded.info.part),
+                               field_identity_id(loaded.info.tool_set)});
     return loaded;
   }
 
@@ -331,9 +337,21 @@ void check_one_line(const std::string& what, const std::string& value) {
 
 }  // namespace
 
+uint32_t field_identity_id(std::string_view text) noexcept {
+  if (text.empty()) return 0;
+  Crc64 crc;
+  crc.update(text);
+  const auto id = static_cast<uint32_t>(crc.value());
+  return id == 0 ? 1u : id;
+}
+
 std::string encode_field_file(const CorrectionField& field, const FieldFileInfo& info) {
   check_one_line("created", info.created);
   check_one_line("source", info.source);
+  check_one_line("machine", info.machine);
+  check_one_line("part", info.part);
+  check_one_line("tool_set", info.tool_set);
+
   const FieldGrid& g = field.grid();
   auto triple = [](const Eigen::Vector3d& v) {
     return format_shortest(v.x()) + " " + format_shortest(v.y()) + " " + format_shortest(v.z());
@@ -365,6 +383,9 @@ std::string encode_field_file(const CorrectionField& field, const FieldFileInfo&
   header += "encoding: " + std::string(kEncoding) + "\n";
   header += "created: " + (info.created.empty() ? utc_timestamp_now() : info.created) + "\n";
   header += "source: " + info.source + "\n";
+  if (!info.machine.empty()) header += "machine: " + info.machine + "\n";
+  if (!info.part.empty()) header += "part: " + info.part + "\n";
+  if (!info.tool_set.empty()) header += "tool_set: " + info.tool_set + "\n";
   header += "payload_bytes: " + std::to_string(payload.size()) + "\n";
   Crc64 crc;
   crc.update(header);

@@ -245,6 +245,46 @@ TEST(CorrectionField, ZeroWeightRimFadesSmoothlyToZeroAtTheGridFaces) {
   EXPECT_NEAR(centre.weight, 1.0, 1e-15);
 }
 
+TEST(CorrectionField, AnInvalidNodeContributesNothingAndFadesByDistance) {
+  // Issue 19, point 3: one isolated invalid node (weight 0) whose stored
+  // vector is far from its neighbours'. Its own value must not appear
+  // anywhere, its weight is 0, and the weight fades by the distance to it
+  // (full at the next node) instead of taking 0.70 of a smoothed weight.
+  const FieldGrid g = test_grid();
+  const Eigen::Vector3d bad = g.node_position_mm(3, 3, 2);
+  const CorrectionField field(
+      g, {layer_from(g, 0, [&](const Eigen::Vector3d& p) {
+        return p == bad ? FieldNode{5.0, -4.0, 3.0, 0.0} : FieldNode{0.1, 0.0, 0.0, 1.0};
+      })});
+  const FieldSample at = field.evaluate(0, bad);
+  ASSERT_EQ(at.status, FieldStatus::kOk);
+  EXPECT_EQ(0.0, at.weight);
+  EXPECT_EQ(Eigen::Vector3d::Zero(), at.correction_mm);
+  // Near it the correction is the neighbours' 0.1 mm along x, weighted:
+  // nothing of (5, -4, 3).
+  std::mt19937_64 rng(19);
+  std::uniform_real_distribution<double> near(-1.5, 1.5);
+  for (int n = 0; n < 5000; ++n) {
+    const Eigen::Vector3d p =
+        bad + g.spacing_mm.cwiseProduct(Eigen::Vector3d(near(rng), near(rng), near(rng)));
+    const FieldSample s = field.evaluate(0, p);
+    ASSERT_EQ(s.status, FieldStatus::kOk);
+    ASSERT_NEAR(0.1 * s.weight, s.correction_mm.x(), 1e-12) << p.transpose();
+    ASSERT_NEAR(0.0, s.correction_mm.tail<2>().norm(), 1e-12) << p.transpose();
+  }
+  // The weight by distance: 0 at the node, 1/2 halfway to a neighbour, 1 at
+  // every neighbouring node.
+  for (int a = 0; a < 3; ++a) {
+    Eigen::Vector3d e = Eigen::Vector3d::Zero();
+    e[a] = g.spacing_mm[a];
+    EXPECT_NEAR(0.5, field.evaluate(0, bad + 0.5 * e).weight, 1e-15) << a;
+    EXPECT_EQ(1.0, field.evaluate(0, bad + e).weight) << a;
+    EXPECT_EQ(1.0, field.evaluate(0, bad - e).weight) << a;
+  }
+  EXPECT_EQ(1.0, field.evaluate(0, g.node_position_mm(4, 4, 3)).weight);
+  EXPECT_GT(field.evaluate(0, bad + 0.1 * g.spacing_mm).weight, 0.0);
+}
+
 TEST(CorrectionField, OutsideTheGridGivesZeroAndAStatus) {
   std::mt19937_64 rng(10);
   const FieldGrid g = test_grid();

@@ -289,3 +289,46 @@ TEST(FieldFile, ToleratesCarriageReturnsInTheHeader) {
 
 }  // namespace
 }  // namespace truecut::rt
+
+namespace truecut::rt {
+namespace {
+
+TEST(FieldFile, IdentityRoundTripsAndIsOptional) {
+  // Issue 19, point 5: the field names the machine, part and tool set it
+  // was built for; files without them read as before.
+  FieldFileInfo info = kInfo;
+  info.machine = "umc-750 #2";
+  info.part = "implant rev C";
+  info.tool_set = "T3 ball 6 mm, T7 flat 10 mm";
+  const std::string bytes = encode_field_file(sample_field(), info);
+  EXPECT_NE(std::string::npos, bytes.find("\nmachine: umc-750 #2\npart: implant rev C\n"
+                                          "tool_set: T3 ball 6 mm, T7 flat 10 mm\n"));
+  const LoadedField loaded = decode_field_file(bytes, "named.tcf");
+  EXPECT_EQ(info.machine, loaded.info.machine);
+  EXPECT_EQ(info.part, loaded.info.part);
+  EXPECT_EQ(info.tool_set, loaded.info.tool_set);
+  const FieldIdentity& id = loaded.field.identity();
+  EXPECT_EQ(field_identity_id(info.machine), id.machine);
+  EXPECT_EQ(field_identity_id(info.part), id.part);
+  EXPECT_EQ(field_identity_id(info.tool_set), id.tool_set);
+  EXPECT_NE(0u, id.machine);
+  EXPECT_NE(id.machine, id.part);
+  // The CRC is the one in the header.
+  const std::size_t at = bytes.find("\ncrc64: ") + 8;
+  EXPECT_EQ(std::stoull(bytes.substr(at, 16), nullptr, 16), loaded.crc64);
+  EXPECT_EQ(loaded.crc64, id.crc64);
+  // Unnamed: no keys, ids 0, the crc still there.
+  const std::string plain = encode_field_file(sample_field(), kInfo);
+  EXPECT_EQ(std::string::npos, plain.find("machine:"));
+  const LoadedField old = decode_field_file(plain, "plain.tcf");
+  EXPECT_EQ(0u, old.field.identity().machine);
+  EXPECT_EQ(0u, old.field.identity().tool_set);
+  EXPECT_NE(0u, old.crc64);
+  EXPECT_EQ(0u, field_identity_id(""));
+  // CRC-64/XZ of "123456789" is 0x995dc9bbdf1939fa: the id is its low half.
+  EXPECT_EQ(0xdf1939fau, field_identity_id("123456789"));
+  EXPECT_THROW(encode_field_file(sample_field(), {"", "", "two\nlines"}), FieldFileError);
+}
+
+}  // namespace
+}  // namespace truecut::rt

@@ -87,21 +87,55 @@ bool all_outputs_finite(const Hal& h) {
 
 TEST(TruecutComp, ExportsTheDocumentedPins) {
   Rig r("");
-  for (const char* pin : {"enable",       "tool",        "max-correction", "max-rate",
-                          "fade-time",    "reload",      "swap-inhibit",   "tcp-x",
-                          "tcp-y",        "tcp-z",       "axis-i",         "axis-j",
-                          "axis-k",       "tcp-x-out",   "tcp-y-out",      "tcp-z-out",
-                          "axis-i-out",   "axis-j-out",  "axis-k-out",     "corr-x",
-                          "corr-y",       "corr-z",      "corr-mag",       "active",
-                          "fault",        "limited",     "fade",           "field-generation",
-                          "load-errors",  "clamp-count", "max-accel",      "reset",
-                          "fault-latched"})
+  for (const char* pin : {"enable",
+                          "tool",
+                          "max-correction",
+                          "max-rate",
+                          "fade-time",
+                          "reload",
+                          "swap-inhibit",
+                          "tcp-x",
+                          "tcp-y",
+                          "tcp-z",
+                          "axis-i",
+                          "axis-j",
+                          "axis-k",
+                          "tcp-x-out",
+                          "tcp-y-out",
+                          "tcp-z-out",
+                          "axis-i-out",
+                          "axis-j-out",
+                          "axis-k-out",
+                          "corr-x",
+                          "corr-y",
+                          "corr-z",
+                          "corr-mag",
+                          "active",
+                          "fault",
+                          "limited",
+                          "fade",
+                          "field-generation",
+                          "load-errors",
+                          "clamp-count",
+                          "max-accel",
+                          "reset",
+                          "max-jerk",
+                          "fault-latched",
+                          "expect-machine-id",
+                          "expect-part-id",
+                          "expect-tool-set-id",
+                          "field-crc-lo",
+                          "field-crc-hi",
+                          "field-machine-id",
+                          "field-part-id",
+                          "field-tool-set-id"})
     EXPECT_TRUE(r.hal.has_pin(std::string("c.") + pin)) << pin;
   EXPECT_TRUE(r.hal.has_function("c.update"));
   EXPECT_EQ(1.0, getf(r.hal, "c.max-correction"));
   EXPECT_EQ(10.0, getf(r.hal, "c.max-rate"));
   EXPECT_EQ(1.0, getf(r.hal, "c.fade-time"));
   EXPECT_EQ(rt::comp::kDefaultMaxAccelMmPerS2, getf(r.hal, "c.max-accel"));
+  EXPECT_EQ(rt::comp::kDefaultMaxJerkMmPerS3, getf(r.hal, "c.max-jerk"));
   EXPECT_EQ(1.0, getf(r.hal, "c.axis-k"));
   EXPECT_FALSE(r.hal.has_pin("c.joint-x"));
 
@@ -112,6 +146,48 @@ TEST(TruecutComp, ExportsTheDocumentedPins) {
     EXPECT_TRUE(j.hal.has_pin(std::string("c.") + pin)) << pin;
   EXPECT_FALSE(j.hal.has_pin("c.tcp-x"));
   EXPECT_EQ(-180.0, getf(j.hal, "c.a-min"));
+}
+
+TEST(TruecutComp, FieldIdentityIsOnPinsAndAFieldForAnotherMachineIsRefused) {
+  // Issue 19, point 5: CRC (two u32 halves) and the ids the field names on
+  // pins; expected ids set by the integrator; a mismatch is fault 10
+  // (wrong-field) and the field is not applied.
+  const rt::CorrectionField field = make_field({});
+  rt::FieldFileInfo info{"2026-11-21T00:00:00Z", "truecut_comp test", "mill-2", "part-7", "T1 T2"};
+  const auto path = field_path("named.tcf");
+  rt::write_field_file(path, field, info);
+  const rt::LoadedField loaded = rt::read_field_file(path);
+  Rig r("field=" + path);
+  r.set("enable", 1.0);
+  r.set("tool", 1.0);
+  r.run(1);
+  auto getu = [&](const char* pin) { return r.hal.get_pin_or_param(std::string("c.") + pin).u; };
+  EXPECT_EQ(static_cast<uint32_t>(loaded.crc64), getu("field-crc-lo"));
+  EXPECT_EQ(static_cast<uint32_t>(loaded.crc64 >> 32), getu("field-crc-hi"));
+  EXPECT_EQ(rt::field_identity_id("mill-2"), getu("field-machine-id"));
+  EXPECT_EQ(rt::field_identity_id("part-7"), getu("field-part-id"));
+  EXPECT_EQ(rt::field_identity_id("T1 T2"), getu("field-tool-set-id"));
+  EXPECT_EQ(1, gets32(r.hal, "c.field-generation"));
+  r.run(1500);
+  EXPECT_EQ(0, r.fault());
+  EXPECT_GT(r.corr().norm(), 0.01);
+  // Expecting another machine: the current field fades out, fault 10.
+  r.hal.set_pin_or_param("c.expect-machine-id", std::to_string(rt::field_identity_id("mill-3")));
+  r.run(1500);
+  EXPECT_EQ(10, r.fault());
+  EXPECT_EQ(Eigen::Vector3d::Zero(), r.corr());
+  // A component expecting mill-3 never applies the mill-2 field.
+  Rig other("field=" + path,
+            "setp c.expect-machine-id " + std::to_string(rt::field_identity_id("mill-3")) + "\n");
+  other.set("enable", 1.0);
+  other.set("tool", 1.0);
+  for (int i = 0; i < 500; ++i) {
+    other.run(1);
+    ASSERT_EQ(10, other.fault());
+    ASSERT_EQ(Eigen::Vector3d::Zero(), other.corr());
+  }
+  EXPECT_EQ(0, gets32(other.hal, "c.field-generation"));
+  EXPECT_EQ(0u, other.hal.get_pin_or_param("c.field-crc-lo").u);
 }
 
 TEST(TruecutComp, RejectsBadLoadArguments) {
@@ -134,6 +210,7 @@ TEST(TruecutComp, CorrectionAtGridNodesEqualsTheStoredVectors) {
   r.set("fade-time", 0.0);
   r.set("max-rate", 1e9);
   r.set("max-accel", 0.0);  // no acceleration limit
+  r.set("max-jerk", 0.0);   // nor jerk limit
   r.set("max-correction", 1e3);
   r.set("enable", 1.0);
   const auto& g = field.grid();
@@ -166,7 +243,7 @@ TEST(TruecutComp, JointModeCorrectsThroughTheKinematics) {
   Rig r("field=" + path.string() + " mode=joint",
         "setp c.x-rot-point 5\nsetp c.y-rot-point -3\nsetp c.z-rot-point 20\n"
         "setp c.z-offset -12\nsetp c.tool-offset 50\nsetp c.fade-time 0\n"
-        "setp c.max-rate 1e9\nsetp c.max-accel 0\nsetp c.tool 1\n");
+        "setp c.max-rate 1e9\nsetp c.max-accel 0\nsetp c.max-jerk 0\nsetp c.tool 1\n");
   rt::AcTrtParams k;
   k.x_rot_point_mm = 5;
   k.y_rot_point_mm = -3;
@@ -423,7 +500,8 @@ TEST(TruecutComp, SwapInhibitHoldsTheNewFieldBack) {
   write_field(file, {});
   // A 10 ms fade of 0.2 mm needs 5 m/s^2: no acceleration limit here.
   Rig r("field=" + file.string(),
-        "setp c.enable 1\nsetp c.tool 1\nsetp c.fade-time 0.01\nsetp c.max-accel 0\n");
+        "setp c.enable 1\nsetp c.tool 1\nsetp c.fade-time 0.01\nsetp c.max-accel 0\nsetp "
+        "c.max-jerk 0\n");
   r.set_tcp({0.0, 0.0, 0.0});
   r.run(20);
   write_field(file, b_spec);

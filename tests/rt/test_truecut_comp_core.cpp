@@ -954,3 +954,293 @@ TEST(CompCore, ALatchedFaultHoldsTheCorrectionAtZeroUntilResetRises) {
   EXPECT_FALSE(latches(Fault::kInputNotFinite));
   EXPECT_TRUE(latches(Fault::kBoundStep));
 }
+
+TEST(CompMath, BrakingSpeedIsExactAlongABrakingRunAndNeverOvershoots) {
+  // From s = braking_speed(d), one cycle at s leaves exactly s - dv_max for
+  // the rest, and never more than the distance left (the smooth curve
+  // through the same points let the last cycle overshoot by ~12 %).
+  const double dv = 0.1, dt = kDt;
+  for (int i = 1; i <= 20000; ++i) {
+    const double d = i * 1e-6;
+    const double s = braking_speed(d, dv, dt);
+    ASSERT_LE(s * dt, d * (1 + 1e-12)) << d;
+    if (s > dv) {
+      ASSERT_NEAR(s - dv, braking_speed(d - s * dt, dv, dt), 1e-12 * s) << d;
+    }
+  }
+  EXPECT_NEAR(3 * dv, braking_speed(6 * dv * dt, dv, dt), 1e-15) << "the lattice points";
+  EXPECT_EQ(0.0, braking_speed(-1.0, dv, dt));
+  EXPECT_EQ(0.0, braking_speed(1.0, 0.0, dt));
+}
+
+namespace {
+
+// Velocity, acceleration and jerk of the output, per cycle (differences of
+// the recorded outputs); cycles can be left out.
+struct JerkProbe {
+  Vec3 c1 = Vec3::Zero(), v1 = Vec3::Zero(), a1 = Vec3::Zero();
+  double max_v = 0.0, max_a = 0.0, max_j = 0.0;
+  Vec3 v = Vec3::Zero(), a = Vec3::Zero(), j = Vec3::Zero();  // this cycle's
+  void add(const Vec3& c, bool count = true) {
+    v = (c - c1) / kDt;
+    a = (v - v1) / kDt;
+    j = (a - a1) / kDt;
+    if (count) {
+      max_v = std::max(max_v, v.norm());
+      max_a = std::max(max_a, a.norm());
+      max_j = std::max(max_j, j.norm());
+    }
+    c1 = c;
+    v1 = v;
+    a1 = a;
+  }
+};
+
+// Runs step() with the velocity, acceleration and jerk limits and checks
+// every cycle: above a limit only in a cycle that reports it (bound-clip),
+// or in a bound-step cycle and the two after it (which start from rest).
+struct JerkRig {
+  rt::CorrectionField field, other;
+  Driver d;
+  CycleInput in;
+  JerkProbe probe;
+  int excused = 0;     // cycles left that a bound step excuses
+  int reported = 0;    // cycles excused by a report
+  int unreported = 0;  // cycles above a limit without a report
+  JerkRig(double scale, double fade_time)
+      : field(make_field(with_scale(scale))), other(make_field(with_scale(-0.7 * scale))) {
+    d.limits = {1.0, 10.0, fade_time, 1000.0, 1.0e5};
+    in.tool = 1;
+    in.enable = true;
+    in.candidate = &field;
+  }
+  static FieldSpec with_scale(double scale) {
+    FieldSpec s;
+    s.scale = scale;
+    return s;
+  }
+  CycleOutput cycle() {
+    const CycleOutput o = d.cycle(in);
+    if (o.adopted) in.candidate = nullptr;
+    if (o.fault == Fault::kBoundStep) excused = 3;
+    const bool excuse = excused > 0 || o.fault == Fault::kBoundClip;
+    probe.add(o.correction_mm, !excuse);
+    if (excused > 0) --excused;
+    const CompLimits& l = d.limits;
+    const bool above =
+        probe.v.norm() > l.max_rate_mm_per_s * (1 + 1e-9) ||
+        probe.a.norm() > l.max_accel_mm_per_s2 * (1 + 1e-6) ||
+        (l.max_jerk_mm_per_s3 > 0.0 && probe.j.norm() > l.max_jerk_mm_per_s3 * (1 + 1e-5));
+    reported += above && excuse;
+    unreported += above && !excuse;
+    EXPECT_LE(o.correction_mm.norm(), d.limits.max_correction_mm);
+    return o;
+  }
+  void run(int cycles) {
+    for (int i = 0; i < cycles; ++i)
+      cycle();
+  }
+  void expect_within_limits() const {
+    EXPECT_EQ(0, unreported);
+    EXPECT_LE(probe.max_v, d.limits.max_rate_mm_per_s * (1 + 1e-9));
+    EXPECT_LE(probe.max_a, d.limits.max_accel_mm_per_s2 * (1 + 1e-6));
+    if (d.limits.max_jerk_mm_per_s3 > 0.0) {
+      EXPECT_LE(probe.max_j, d.limits.max_jerk_mm_per_s3 * (1 + 1e-5));
+    }
+  }
+};
+
+}  // namespace
+
+TEST(CompCore, JerkLimitHoldsInEveryTransition) {
+  // Fade-time 0: every change of the wanted correction is a step that only
+  // the limits smooth. Each transition of the issue in turn, on one record.
+  JerkRig r(20.0, 0.0);
+  r.d.limits.max_correction_mm = 10.0;  // not clamped here except where lowered
+  r.in.tcp_mm = Vec3(-3.0, 4.0, 1.0);
+  r.run(1000);  // enable
+  EXPECT_EQ(r.field.evaluate(1, r.in.tcp_mm).correction_mm, r.d.state.output) << "lands exactly";
+  r.in.tool = 2;  // tool change
+  r.run(1000);
+  EXPECT_EQ(r.field.evaluate(2, r.in.tcp_mm).correction_mm, r.d.state.output);
+  r.in.candidate = &r.other;  // field swap
+  r.run(1000);
+  EXPECT_EQ(r.other.evaluate(2, r.in.tcp_mm).correction_mm, r.d.state.output);
+  // Grid exit while moving: 20 mm/s in x out of the grid and back.
+  for (int i = 0; i < 3000; ++i) {
+    r.in.tcp_mm.x() = -3.0 + 60.0 * std::sin(i * kDt / 3.0);
+    r.cycle();
+  }
+  r.in.tcp_mm = Vec3(2.0, -2.0, 0.0);
+  r.run(1000);
+  // NaN input recovering elsewhere.
+  r.in.input_fault = Fault::kInputNotFinite;
+  r.run(7);
+  r.in.input_fault = Fault::kNone;
+  r.in.tcp_mm = Vec3(-12.0, 9.0, -3.0);
+  r.run(1000);
+  EXPECT_EQ(r.other.evaluate(2, r.in.tcp_mm).correction_mm, r.d.state.output);
+  // Bound lowered below the correction smoothly (within the limits), then
+  // raised.
+  const double full = r.d.state.output.norm();
+  ASSERT_GT(full, 0.5);
+  for (int i = 0; i <= 1000; ++i) {
+    r.d.limits.max_correction_mm = (1.0 - 0.7 * fade_gain(i / 1000.0)) * full;
+    ASSERT_EQ(Fault::kNone, r.cycle().fault) << i;
+  }
+  r.d.limits.max_correction_mm = 10.0;
+  r.run(1000);
+  // Disable during an enable (a reversal), enable, disable: reaches zero.
+  r.in.enable = false;
+  r.run(30);
+  r.in.enable = true;
+  r.run(20);
+  r.in.enable = false;
+  r.run(1000);
+  EXPECT_EQ(Vec3::Zero(), r.d.state.output) << "disable reaches zero";
+  r.expect_within_limits();
+  EXPECT_GT(r.probe.max_j, 0.5e5) << "the jerk limit was what acted";
+  EXPECT_TRUE(r.d.ever_limited);
+}
+
+TEST(CompCore, JerkLimitHoldsThroughAReportedBoundStep) {
+  // The issue's probe (0.065 -> 0.005 mm at once): one reported step, then
+  // within the limits again; every other cycle within the limits.
+  JerkRig r(20.0, 1.0);
+  r.d.limits.max_correction_mm = 0.065;
+  r.in.tcp_mm = Vec3(2.0, 3.0, 1.0);
+  r.run(1500);
+  ASSERT_NEAR(0.065, r.d.state.output.norm(), 1e-15);
+  r.d.limits.max_correction_mm = 0.005;
+  EXPECT_EQ(Fault::kBoundStep, r.cycle().fault);
+  r.in.reset = true;
+  r.run(2000);
+  r.d.limits.max_correction_mm = 0.065;
+  r.run(1000);
+  EXPECT_NEAR(0.065, r.d.state.output.norm(), 1e-15);
+  r.expect_within_limits();
+}
+
+TEST(CompCore, DefaultLimitsLeaveADefaultFadeUntouched) {
+  // The HAL pins' defaults: a default fade of the largest correction the
+  // default bound lets through is followed exactly.
+  FieldSpec spec;
+  spec.scale = 8.0;  // about 1 mm
+  const auto field = make_field(spec);
+  Driver d;
+  d.limits = {kDefaultMaxCorrectionMm, 10.0, 1.0, kDefaultMaxAccelMmPerS2, kDefaultMaxJerkMmPerS3};
+  CycleInput in;
+  in.tool = 1;
+  in.enable = true;
+  in.tcp_mm = Vec3(0.0, 0.0, 0.0);
+  in.candidate = &field;
+  const Vec3 full = field.evaluate(1, in.tcp_mm).correction_mm;
+  ASSERT_GT(full.norm(), 0.5);
+  ASSERT_LE(full.norm(), kDefaultMaxCorrectionMm);
+  for (int i = 0; i < 1500; ++i) {
+    const CycleOutput o = d.cycle(in);
+    in.candidate = nullptr;
+    ASSERT_FALSE(o.limited) << i;
+  }
+  EXPECT_EQ(full, d.state.output);
+  in.enable = false;
+  for (int i = 0; i < 1500; ++i)
+    ASSERT_FALSE(d.cycle(in).limited) << i;
+  EXPECT_EQ(Vec3::Zero(), d.state.output);
+}
+
+TEST(CompCore, AnInvalidJerkIsABadParameter) {
+  JerkRig r(1.0, 0.05);
+  r.in.tcp_mm = Vec3(1.0, 1.0, 0.0);
+  r.run(200);
+  ASSERT_GT(r.d.state.output.norm(), 0.05);
+  r.d.limits.max_jerk_mm_per_s3 = -1.0;
+  CycleOutput o;
+  for (int i = 0; i < 500; ++i) {
+    o = r.cycle();
+    ASSERT_EQ(Fault::kBadParameter, o.fault);
+  }
+  EXPECT_EQ(Vec3::Zero(), o.correction_mm);
+  r.d.limits.max_jerk_mm_per_s3 = 1.0e5;  // the last valid value was used
+  r.expect_within_limits();
+}
+
+TEST(CompCore, RunningAlongTheBoundIsWithinTheLimitsOrReported) {
+  // A wanted correction far above max-correction whose direction turns as
+  // the tool moves: the clamped correction runs along the sphere, faster
+  // than its curvature allows at max-accel. Every cycle above a limit is
+  // reported (bound-clip), the clip is counted, and the bound holds.
+  for (double jerk : {0.0, 1.0e4}) {
+    for (double speed : {0.5, 2.0}) {
+      SCOPED_TRACE(testing::Message() << "jerk " << jerk << " speed " << speed);
+      JerkRig r(20.0, 0.2);
+      r.d.limits = {0.5, 10.0, 0.2, 100.0, jerk};
+      for (int i = 0; i < 8000; ++i) {
+        const double t = i * kDt;
+        r.in.tcp_mm =
+            Vec3(15.0 * std::sin(speed * t), 15.0 * std::cos(0.7 * speed * t), 2.0 * std::sin(t));
+        if (i == 4000) r.in.tool = 2;
+        r.in.enable = i < 6000 || i >= 6300;
+        r.cycle();
+      }
+      EXPECT_EQ(0, r.unreported);
+      if (speed > 1.0) {
+        EXPECT_GT(r.reported, 0) << "the case does run along the bound too fast";
+      }
+    }
+  }
+}
+
+TEST(CompCore, AFieldBuiltForAnotherMachinePartOrToolSetIsRefused) {
+  // Issue 19, point 5: the integrator sets the ids the field must name; a
+  // candidate that names others is not adopted (fault wrong-field), and a
+  // current field that stops matching is faded out like any field fault.
+  auto a = make_field({}), b = make_field({});
+  a.set_identity({0x1111, 7, 8, 9});
+  b.set_identity({0x2222, 7, 8, 10});  // another tool set
+  Driver d;
+  d.limits = {10.0, 1000.0, 0.05};
+  CycleInput in;
+  in.tool = 1;
+  in.enable = true;
+  in.tcp_mm = Vec3(1.0, 2.0, 0.5);
+  in.expect_machine = 7;
+  in.expect_tool_set = 9;  // part not checked
+  in.candidate = &b;
+  for (int i = 0; i < 10; ++i) {
+    const CycleOutput o = d.cycle(in);
+    ASSERT_FALSE(o.adopted);
+    ASSERT_EQ(Fault::kWrongField, o.fault);
+    ASSERT_EQ(Vec3::Zero(), o.correction_mm);
+  }
+  in.candidate = &a;
+  EXPECT_TRUE(d.cycle(in).adopted);
+  in.candidate = nullptr;
+  for (int i = 0; i < 100; ++i)
+    ASSERT_EQ(Fault::kNone, d.cycle(in).fault);
+  EXPECT_EQ(a.evaluate(1, in.tcp_mm).correction_mm, d.state.output);
+  // A matching candidate is adopted; a wrong one waits and is reported
+  // while the current field stays applied.
+  in.candidate = &b;
+  for (int i = 0; i < 10; ++i) {
+    const CycleOutput o = d.cycle(in);
+    ASSERT_FALSE(o.adopted);
+    ASSERT_EQ(Fault::kWrongField, o.fault);
+  }
+  EXPECT_EQ(a.evaluate(1, in.tcp_mm).correction_mm, d.state.output);
+  in.candidate = nullptr;
+  // The expectation changes: the current field is wrong now and fades out.
+  in.expect_machine = 6;
+  CycleOutput o;
+  for (int i = 0; i < 100; ++i) {
+    o = d.cycle(in);
+    ASSERT_EQ(Fault::kWrongField, o.fault);
+  }
+  EXPECT_EQ(Vec3::Zero(), o.correction_mm);
+  EXPECT_LE(d.max_step_mm, kFadeGainMaxSlope * a.evaluate(1, in.tcp_mm).correction_mm.norm() * kDt /
+                               0.05 * (1 + 1e-9));
+  in.expect_machine = 0;  // not checked: it fades back in
+  for (int i = 0; i < 100; ++i)
+    ASSERT_EQ(Fault::kNone, d.cycle(in).fault);
+  EXPECT_EQ(a.evaluate(1, in.tcp_mm).correction_mm, d.state.output);
+}

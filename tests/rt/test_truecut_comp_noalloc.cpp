@@ -118,7 +118,22 @@ TEST(CompNoAlloc, FaultLatchBoundStepsAndBadParametersAllocateNothing) {
                             {"c.max-accel", "-1"},
                             {"c.max-accel", "1000"},
                             {"c.reset", "0"},
-                            {"c.reset", "1"}};
+                            {"c.reset", "1"},
+                            // the jerk limit: bad, then a step of the wanted
+                            // correction (fade-time 0, bound raised) that it
+                            // smooths, lands and clips, then off and on
+                            {"c.max-jerk", "-1"},
+                            {"c.max-jerk", "1e4"},
+                            {"c.reset", "0"},
+                            {"c.reset", "1"},
+                            {"c.fade-time", "0"},
+                            {"c.max-correction", "0.3"},
+                            {"c.max-jerk", "0"},
+                            {"c.max-jerk", "1e5"},
+                            {"c.fade-time", "0.05"},
+                            // a field for another machine: fades out, fault 10
+                            {"c.expect-machine-id", "12345"},
+                            {"c.expect-machine-id", "0"}};
   bool stepped = false, latched = false;
   for (const auto& st : steps) {
     h.set_pin_or_param(st[0], st[1]);

@@ -32,6 +32,7 @@ struct Pins {
   double* max_rate;        // mm/s
   double* fade_time;       // s
   double* max_accel;       // mm/s^2
+  double* max_jerk;        // mm/s^3
   bool* reload;
   bool* swap_inhibit;
   bool* reset;
@@ -60,6 +61,14 @@ struct Pins {
   int32_t* load_errors;
   int32_t* clamp_count;
   int32_t* fault_latched;
+  uint32_t* expect_machine;  // ids a field must name (0: not checked)
+  uint32_t* expect_part;
+  uint32_t* expect_tool_set;
+  uint32_t* field_crc_lo;  // CRC-64 of the current field's file, low and high 32 bits
+  uint32_t* field_crc_hi;
+  uint32_t* field_machine;  // ids the current field names
+  uint32_t* field_part;
+  uint32_t* field_tool_set;
 };
 
 struct Instance {
@@ -151,6 +160,9 @@ void update(void* arg, long period_ns) {
   in.candidate = can_swap ? s.pending : nullptr;
   in.swap_inhibit = *p.swap_inhibit;
   in.reset = *p.reset;
+  in.expect_machine = *p.expect_machine;
+  in.expect_part = *p.expect_part;
+  in.expect_tool_set = *p.expect_tool_set;
 
   rt::AcTrtParams kins;
   rt::AcJoints joints;
@@ -174,7 +186,8 @@ void update(void* arg, long period_ns) {
   }
   in.tcp_mm = pose.tcp_mm;
 
-  const rt::comp::CompLimits limits{*p.max_correction, *p.max_rate, *p.fade_time, *p.max_accel};
+  const rt::comp::CompLimits limits{*p.max_correction, *p.max_rate, *p.fade_time, *p.max_accel,
+                                    *p.max_jerk};
   const rt::comp::CycleOutput out = rt::comp::step(s.core, in, limits, double(period_ns) * 1e-9);
   if (out.adopted) {
     s.pending = nullptr;
@@ -191,6 +204,13 @@ void update(void* arg, long period_ns) {
   *p.load_errors = s.source.load_errors();
   *p.clamp_count = s.core.clamp_count;
   *p.fault_latched = static_cast<int32_t>(out.latched);
+  const rt::FieldIdentity id =
+      s.core.current.field != nullptr ? s.core.current.field->identity() : rt::FieldIdentity{};
+  *p.field_crc_lo = static_cast<uint32_t>(id.crc64);
+  *p.field_crc_hi = static_cast<uint32_t>(id.crc64 >> 32);
+  *p.field_machine = id.machine;
+  *p.field_part = id.part;
+  *p.field_tool_set = id.tool_set;
   // Position outputs hold their last value while the inputs are unusable.
   if (in.input_fault == Fault::kInputNotFinite) return;
   write3(p.tcp_out, pose.tcp_mm + out.correction_mm);
@@ -247,6 +267,7 @@ void make_pins(rt::hal::component::Builder& b, const std::string& n, Mode mode, 
   in_f("max-rate", &p.max_rate);
   in_f("fade-time", &p.fade_time);
   in_f("max-accel", &p.max_accel);
+  in_f("max-jerk", &p.max_jerk);
   b.pin(n + ".reload", TC_HAL_BIT, TC_HAL_IN, &p.reload);
   b.pin(n + ".swap-inhibit", TC_HAL_BIT, TC_HAL_IN, &p.swap_inhibit);
   b.pin(n + ".reset", TC_HAL_BIT, TC_HAL_IN, &p.reset);
@@ -287,12 +308,21 @@ void make_pins(rt::hal::component::Builder& b, const std::string& n, Mode mode, 
   b.pin(n + ".load-errors", TC_HAL_S32, TC_HAL_OUT, &p.load_errors);
   b.pin(n + ".clamp-count", TC_HAL_S32, TC_HAL_OUT, &p.clamp_count);
   b.pin(n + ".fault-latched", TC_HAL_S32, TC_HAL_OUT, &p.fault_latched);
+  b.pin(n + ".expect-machine-id", TC_HAL_U32, TC_HAL_IN, &p.expect_machine);
+  b.pin(n + ".expect-part-id", TC_HAL_U32, TC_HAL_IN, &p.expect_part);
+  b.pin(n + ".expect-tool-set-id", TC_HAL_U32, TC_HAL_IN, &p.expect_tool_set);
+  b.pin(n + ".field-crc-lo", TC_HAL_U32, TC_HAL_OUT, &p.field_crc_lo);
+  b.pin(n + ".field-crc-hi", TC_HAL_U32, TC_HAL_OUT, &p.field_crc_hi);
+  b.pin(n + ".field-machine-id", TC_HAL_U32, TC_HAL_OUT, &p.field_machine);
+  b.pin(n + ".field-part-id", TC_HAL_U32, TC_HAL_OUT, &p.field_part);
+  b.pin(n + ".field-tool-set-id", TC_HAL_U32, TC_HAL_OUT, &p.field_tool_set);
 
   const rt::comp::CompLimits defaults;
   *p.max_correction = defaults.max_correction_mm;
   *p.max_rate = defaults.max_rate_mm_per_s;
   *p.fade_time = defaults.fade_time_s;
   *p.max_accel = rt::comp::kDefaultMaxAccelMmPerS2;
+  *p.max_jerk = rt::comp::kDefaultMaxJerkMmPerS3;
   if (mode == Mode::kTcp) {
     *p.axis_in[2] = 1.0;
   } else {

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "truecut/rt/core/correction_field.hpp"
 
@@ -86,8 +87,60 @@ void prefilter_line(Eigen::Vector4d* line, int64_t stride, int32_t n, LineScratc
   at(n)[3] = at(n - 1)[3];
 }
 
+// The vectors the B-spline interpolates: a valid node's own; an invalid
+// node's (weight 0: no data) is never used. It is replaced, in order of its
+// distance (in face steps) from the valid nodes, by the mean of its
+// neighbours one step nearer — so no invalid node's value enters the
+// interpolation of its neighbours, and the spline does not ring at the
+// edge of the data. A layer without valid nodes interpolates zeros.
+std::vector<Eigen::Vector3d> usable_vectors(const FieldGrid& grid,
+                                            const std::vector<FieldNode>& nodes) {
+  std::vector<Eigen::Vector3d> v(nodes.size(), Eigen::Vector3d::Zero());
+  std::vector<int32_t> step(nodes.size(), -1);  // face steps from the data; -1: not reached
+  std::vector<int64_t> frontier, next;
+  for (std::size_t n = 0; n < nodes.size(); ++n)
+    if (nodes[n].weight > 0.0) {
+      v[n] = {nodes[n].dx_mm, nodes[n].dy_mm, nodes[n].dz_mm};
+      step[n] = 0;
+      frontier.push_back(static_cast<int64_t>(n));
+    }
+  const int64_t sx = 1, sy = grid.dims[0], sz = int64_t{grid.dims[0]} * grid.dims[1];
+  auto for_neighbours = [&](int64_t n, auto&& fn) {
+    const int64_t i = n % sy, j = (n / sy) % grid.dims[1], k = n / sz;
+    const int64_t at[3] = {i, j, k}, stride[3] = {sx, sy, sz};
+    for (int a = 0; a < 3; ++a) {
+      if (at[a] > 0) fn(n - stride[a]);
+      if (at[a] < grid.dims[a] - 1) fn(n + stride[a]);
+    }
+  };
+  for (int32_t d = 1; !frontier.empty(); ++d) {
+    next.clear();
+    for (int64_t n : frontier)
+      for_neighbours(n, [&](int64_t m) {
+        if (step[m] == -1) {
+          step[m] = d;
+          next.push_back(m);
+        }
+      });
+    for (int64_t m : next) {
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      int count = 0;
+      for_neighbours(m, [&](int64_t q) {
+        if (step[q] == d - 1) {
+          sum += v[q];
+          ++count;
+        }
+      });
+      v[m] = sum / count;  // count >= 1: m was reached from one
+    }
+    std::swap(frontier, next);
+  }
+  return v;
+}
+
 std::vector<Eigen::Vector4d> make_coefficients(const FieldGrid& grid,
                                                const std::vector<FieldNode>& nodes) {
+  const std::vector<Eigen::Vector3d> vectors = usable_vectors(grid, nodes);
   const int32_t nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
   const int64_t px = nx + 2, py = ny + 2, pz = nz + 2;
   std::vector<Eigen::Vector4d> c(static_cast<std::size_t>(px * py * pz), Eigen::Vector4d::Zero());
@@ -95,8 +148,9 @@ std::vector<Eigen::Vector4d> make_coefficients(const FieldGrid& grid,
   for (int32_t k = 0; k < nz; ++k)
     for (int32_t j = 0; j < ny; ++j)
       for (int32_t i = 0; i < nx; ++i) {
-        const FieldNode& v = nodes[grid.index(i, j, k)];
-        *padded(i + 1, j + 1, k + 1) = {v.dx_mm, v.dy_mm, v.dz_mm, v.weight};
+        const int64_t n = grid.index(i, j, k);
+        const Eigen::Vector3d& v = vectors[static_cast<std::size_t>(n)];
+        *padded(i + 1, j + 1, k + 1) = {v.x(), v.y(), v.z(), nodes[n].weight};
       }
   // Separable: along x on the node lines, then along y (including the x
   // padding), then along z (including both paddings).

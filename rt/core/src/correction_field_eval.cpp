@@ -124,6 +124,37 @@ FieldSample CorrectionField::evaluate_tricubic(int32_t tool,
       d[2] += (by[j] * dbz[k]) * s;
     }
   }
+  // The weight: the node weights of the cell's 8 corners, blended with the
+  // smootherstep of the local coordinates (C2: its first and second
+  // derivatives vanish at the nodes). It equals the node weight at every
+  // node, so an invalid node (weight 0) gets weight 0, and it reaches no
+  // further than the cells around a node: validity fades by distance, within
+  // one spacing, and no node's weight is smoothed into its neighbours.
+  double s[3][2], ds[3][2];
+  for (int a = 0; a < 3; ++a) {
+    const double u = cell.u[a], g = u * u * u * (u * (u * 6.0 - 15.0) + 10.0);
+    const double dg = 30.0 * u * u * (1.0 - u) * (1.0 - u);
+    s[a][0] = 1.0 - g;
+    s[a][1] = g;
+    ds[a][0] = -dg;
+    ds[a][1] = dg;
+  }
+  double w = 0.0, dw[3] = {0.0, 0.0, 0.0};
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 2; ++i) {
+        const double nw = layer
+                              ->nodes[static_cast<std::size_t>(grid_.index(
+                                  cell.index[0] + i, cell.index[1] + j, cell.index[2] + k))]
+                              .weight;
+        w += s[0][i] * s[1][j] * s[2][k] * nw;
+        dw[0] += ds[0][i] * s[1][j] * s[2][k] * nw;
+        dw[1] += s[0][i] * ds[1][j] * s[2][k] * nw;
+        dw[2] += s[0][i] * s[1][j] * ds[2][k] * nw;
+      }
+  value[3] = w;
+  for (int a = 0; a < 3; ++a)
+    d[a][3] = dw[a];
   return finish(grid_, value, d);
 }
 

@@ -24,12 +24,24 @@ class FieldFileError : public std::runtime_error {
 struct FieldFileInfo {
   std::string created;  // ISO 8601; when writing, empty means "now" (UTC)
   std::string source;   // what produced the field; one line
+  // What the field was built for (one line each; empty: not named, and the
+  // key is not written, so such a file is byte for byte what it was before
+  // these keys existed).
+  std::string machine = {};
+  std::string part = {};
+  std::string tool_set = {};
 };
 
 struct LoadedField {
   FieldFileInfo info;
-  CorrectionField field;
+  CorrectionField field;  // its identity() set from the file
+  uint64_t crc64 = 0;     // the file's checksum
 };
+
+// The 32-bit id of a machine, part or tool-set name, as truecut_comp shows
+// and checks it: the low 32 bits of the CRC-64/XZ of the text, 0 for an
+// empty text (and 1 for a text whose low bits are 0).
+uint32_t field_identity_id(std::string_view text) noexcept;
 
 LoadedField read_field_file(const std::filesystem::path& path);
 // `name` is used in error messages in place of a path.

@@ -8,8 +8,8 @@
 //   3. evaluate the current and the outgoing source at the TCP
 //   4. fault handling: a failing source holds its last good correction
 //   5. advance the fades, cross-fade
-//   6. clamp the magnitude, then limit the velocity and acceleration, then
-//      the hard bound
+//   6. clamp the magnitude, then limit the velocity, acceleration and jerk,
+//      then the hard bound
 // Real-time safe: noexcept, no allocation, at most two field evaluations.
 #pragma once
 
@@ -35,6 +35,10 @@ enum class Fault : int32_t {
   kKinematics = 7,      // joint mode: joint A outside [a-min, a-max]
   kBoundStep = 8,       // max-correction was lowered below the output by more
                         // than the limits let it follow: the output stepped
+  kBoundClip = 9,       // the output reached max-correction faster than the
+                        // limits let it stop there: clipped, a limit exceeded
+  kWrongField = 10,     // the field names another machine, part or tool set
+                        // than the expected ids: not applied
 };
 
 inline const char* to_string(Fault f) noexcept {
@@ -57,6 +61,10 @@ inline const char* to_string(Fault f) noexcept {
       return "kinematics";
     case Fault::kBoundStep:
       return "bound-step";
+    case Fault::kBoundClip:
+      return "bound-clip";
+    case Fault::kWrongField:
+      return "wrong-field";
   }
   return "unknown";
 }
@@ -78,9 +86,12 @@ struct CompState {
   // replaced by it, and the correction fades to zero at these limits).
   CompLimits last_good;
   Vec3 velocity = Vec3::Zero();                 // of the output, mm/s
+  Vec3 accel = Vec3::Zero();                    // of the output, mm/s^2
   Vec3 target_prev = Vec3::Zero();              // last cycle's wanted (clamped) correction
+  Vec3 target_prev2 = Vec3::Zero();             // the cycle's before
   double bound_prev = kDefaultMaxCorrectionMm;  // last cycle's max-correction
   int32_t clamp_count = 0;
+  int32_t clip_cycles = 0;       // cycles still affected by the last bound-clip (reported)
   Fault latched = Fault::kNone;  // a latching fault, held until a rising `reset`
   bool reset_prev = false;       // cycles in which max-correction acted (wraps)
 };
@@ -96,6 +107,11 @@ struct CycleInput {
   const rt::CorrectionField* candidate = nullptr;
   bool swap_inhibit = false;  // keep a candidate that would replace a field waiting
   bool reset = false;         // rising edge: clear a latched fault whose cause is gone
+  // The ids of the machine, part and tool set the integrator expects a field
+  // to be built for (rt::FieldIdentity); 0: not checked.
+  uint32_t expect_machine = 0;
+  uint32_t expect_part = 0;
+  uint32_t expect_tool_set = 0;
 };
 
 struct CycleOutput {
@@ -121,6 +137,16 @@ inline bool latches(Fault f) noexcept {
 
 namespace detail {
 
+// Whether `field` was built for what `in` expects (every expected id that is
+// not 0 equals the field's).
+inline bool identity_ok(const rt::CorrectionField* field, const CycleInput& in) noexcept {
+  if (field == nullptr) return true;
+  const rt::FieldIdentity& id = field->identity();
+  return (in.expect_machine == 0 || in.expect_machine == id.machine) &&
+         (in.expect_part == 0 || in.expect_part == id.part) &&
+         (in.expect_tool_set == 0 || in.expect_tool_set == id.tool_set);
+}
+
 struct Evaluated {
   Vec3 value = Vec3::Zero();
   Fault fault = Fault::kNone;
@@ -140,9 +166,11 @@ inline Fault fault_of(rt::FieldStatus status) noexcept {
   return Fault::kFieldNotFinite;
 }
 
-inline Evaluated evaluate(const Channel& ch, const Vec3& tcp_mm, Fault input_fault) noexcept {
-  if (input_fault != Fault::kNone) return {ch.held, input_fault};
+inline Evaluated evaluate(const Channel& ch, const CycleInput& in) noexcept {
+  const Vec3& tcp_mm = in.tcp_mm;
+  if (in.input_fault != Fault::kNone) return {ch.held, in.input_fault};
   if (ch.field == nullptr) return {ch.held, Fault::kNoField};
+  if (!identity_ok(ch.field, in)) return {ch.held, Fault::kWrongField};
   const rt::FieldSample s = ch.field->evaluate(ch.tool, tcp_mm);
   const Fault f = fault_of(s.status);
   if (f != Fault::kNone) return {ch.held, f};
@@ -172,8 +200,11 @@ inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& ra
   // 2. A new field or tool starts a cross-fade from the current source; a
   // second change waits until the first cross-fade has finished.
   const bool outgoing_idle = s.outgoing.u <= 0.0;
-  const bool new_field =
-      in.candidate != nullptr && (!in.swap_inhibit || s.current.field == nullptr);
+  // A candidate built for another machine, part or tool set is refused
+  // (it waits, reported, until a matching one replaces it).
+  const bool candidate_wrong = !detail::identity_ok(in.candidate, in);
+  const bool new_field = in.candidate != nullptr && !candidate_wrong &&
+                         (!in.swap_inhibit || s.current.field == nullptr);
   const bool new_tool = in.tool != s.current.tool;
   if (outgoing_idle && (new_field || new_tool)) {
     if (s.current.u > 0.0)
@@ -189,7 +220,7 @@ inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& ra
 
   // 3./4. Evaluate. A current source that recovers from a failure while still
   // partly faded in cross-fades from its held value to its live value.
-  const detail::Evaluated cur = detail::evaluate(s.current, in.tcp_mm, in.input_fault);
+  const detail::Evaluated cur = detail::evaluate(s.current, in);
   if (s.current.frozen && cur.fault == Fault::kNone) {
     if (s.current.u <= 0.0) {
       s.current.frozen = false;
@@ -202,8 +233,7 @@ inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& ra
   const Vec3 v_cur = detail::channel_value(s.current, cur);
   Vec3 v_out = Vec3::Zero();
   if (s.outgoing.u > 0.0)
-    v_out =
-        detail::channel_value(s.outgoing, detail::evaluate(s.outgoing, in.tcp_mm, in.input_fault));
+    v_out = detail::channel_value(s.outgoing, detail::evaluate(s.outgoing, in));
 
   // 5. Fade and blend.
   const bool wanted = in.enable && limits_ok && s.latched == Fault::kNone && !s.current.frozen;
@@ -221,34 +251,65 @@ inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& ra
   // max-correction only when the bound was lowered below it; the bound wins,
   // and a step beyond the limits is a fault.
   const Limited m = limit_magnitude(blended, lim.max_correction_mm);
-  const Motion mo =
-      limit_motion(m.value, s.target_prev, s.output, s.velocity, lim.max_rate_mm_per_s,
-                   lim.max_accel_mm_per_s2, lim.max_correction_mm, dt_s);
+  Limited r;
+  Vec3 velocity, accel;
+  if (lim.max_jerk_mm_per_s3 > 0.0) {
+    const JerkMotion mo =
+        limit_motion_jerk(m.value, s.target_prev, s.target_prev2, s.output, s.velocity, s.accel,
+                          lim.max_rate_mm_per_s, lim.max_accel_mm_per_s2, lim.max_jerk_mm_per_s3,
+                          lim.max_correction_mm, dt_s);
+    r = {mo.position, mo.limited};
+    velocity = mo.velocity;
+    accel = mo.acceleration;
+  } else {
+    const Motion mo =
+        limit_motion(m.value, s.target_prev, s.output, s.velocity, lim.max_rate_mm_per_s,
+                     lim.max_accel_mm_per_s2, lim.max_correction_mm, dt_s);
+    r = {mo.position, mo.limited};
+    velocity = mo.velocity;
+    accel = (velocity - s.velocity) / dt_s;
+  }
+  s.target_prev2 = s.target_prev;
   s.target_prev = m.value;
-  Limited r{mo.position, mo.limited};
-  Vec3 velocity = mo.velocity;
-  if (!r.value.allFinite() || !velocity.allFinite()) {  // cannot happen; never pass NaN on
+  if (!r.value.allFinite() || !velocity.allFinite() || !accel.allFinite()) {
+    // cannot happen; never pass NaN on
     r = {s.output, true};
     velocity.setZero();
+    accel.setZero();
   }
   const Limited h = limit_magnitude_hard(r.value, lim.max_correction_mm);
-  bool bound_step = false;
+  bool bound_step = false, bound_clip = false;
   // (Rounding can put the output 1 ulp above the bound: the clamp removes
   // it, but that is no step.)
   if (h.limited && r.value.norm() - lim.max_correction_mm > 1e-12 * (1.0 + lim.max_correction_mm)) {
     const Vec3 v_new = (h.value - s.output) / dt_s;
+    const Vec3 a_new = (v_new - s.velocity) / dt_s;
     constexpr double kTol = 1.0 + 1e-9;
+    const bool beyond =
+        v_new.norm() > lim.max_rate_mm_per_s * kTol ||
+        (lim.max_accel_mm_per_s2 > 0.0 && a_new.norm() > lim.max_accel_mm_per_s2 * kTol) ||
+        (lim.max_jerk_mm_per_s3 > 0.0 &&
+         (a_new - s.accel).norm() > lim.max_jerk_mm_per_s3 * dt_s * kTol);
     // A step is a fault only in a cycle that lowered the bound; otherwise
-    // the clip is the output grazing the bound (reported on `limited`).
-    bound_step = lim.max_correction_mm < s.bound_prev &&
-                 (v_new.norm() > lim.max_rate_mm_per_s * kTol ||
-                  (lim.max_accel_mm_per_s2 > 0.0 &&
-                   (v_new - s.velocity).norm() > lim.max_accel_mm_per_s2 * dt_s * kTol));
-    // After a step the output starts from rest.
-    velocity = bound_step ? Vec3::Zero() : v_new;
+    // the clip is the output running into the bound (or along it, faster
+    // than the acceleration allows on its curvature): reported, not latched.
+    bound_step = beyond && lim.max_correction_mm < s.bound_prev;
+    bound_clip = beyond && !bound_step;
+    // After a step or a clip the output starts from rest.
+    velocity = beyond ? Vec3::Zero() : v_new;
+    accel = beyond ? Vec3::Zero() : a_new;
   }
+  // The two cycles after a clip still show it in their differences (rest
+  // after motion): reported too.
+  if (bound_clip)
+    s.clip_cycles = 3;
+  else if (bound_step)
+    s.clip_cycles = 0;
+  const bool clip_reported = s.clip_cycles > 0;
+  if (s.clip_cycles > 0) --s.clip_cycles;
   s.output = h.value;
   s.velocity = velocity;
+  s.accel = accel;
   s.bound_prev = lim.max_correction_mm;
   out.clamped = m.limited || h.limited;
   if (out.clamped) s.clamp_count = static_cast<int32_t>(static_cast<uint32_t>(s.clamp_count) + 1u);
@@ -260,6 +321,8 @@ inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& ra
   out.fault = in.input_fault != Fault::kNone ? in.input_fault
               : !limits_ok                   ? Fault::kBadParameter
               : bound_step                   ? Fault::kBoundStep
+              : clip_reported                ? Fault::kBoundClip
+              : candidate_wrong              ? Fault::kWrongField
                                              : cur.fault;
   // Latch even when an input fault hides the latching one on `fault`.
   if (s.latched == Fault::kNone)

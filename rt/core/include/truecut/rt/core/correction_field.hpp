@@ -4,14 +4,19 @@
 // Evaluation (real-time safe: noexcept, no allocation, fixed work):
 // - vector: interpolating tricubic B-spline. Grid values are node values, not
 //   control points; construction prefilters them into B-spline coefficients
-//   (natural end conditions), so the vector at a node equals the stored one.
-//   C2 inside the grid.
-// - weight: approximating tricubic B-spline whose control points are the node
-//   weights (edge nodes repeated outside the grid). It stays within [0, 1]
-//   without clamping, is C2, and equals the node weight wherever the weight is
-//   constant over the node's 3x3x3 neighbourhood. When the two outermost node
-//   layers have weight 0, weight and its gradient vanish on the grid boundary,
-//   so the correction joins the zero outside the grid C1-smoothly.
+//   (natural end conditions), so the vector at a valid node equals the stored
+//   one. C2 inside the grid. A node of weight 0 is invalid: its stored vector
+//   is not used (construction replaces it, in order of distance from the
+//   valid nodes, by the mean of its neighbours one face step nearer), so it
+//   never enters its neighbours' interpolation.
+// - weight: the node weights of the cell's 8 corners blended with the
+//   smootherstep of the local coordinates. C2 (its first and second
+//   derivatives vanish at the nodes), within [0, 1], equal to the node
+//   weight at every node (0 at an invalid node), and reaching only the cells
+//   around a node: validity fades by distance within one spacing. When the
+//   two outermost node layers have weight 0, weight and its gradient vanish
+//   on the grid boundary, so the correction joins the zero outside the grid
+//   C2-smoothly.
 // - correction = weight * vector.
 // A trilinear evaluation of the node values (C0, as in FANUC-style pitch and
 // 3-D error compensation tables) is available as a baseline.
@@ -75,6 +80,16 @@ struct FieldSample {
   Eigen::Matrix3d jacobian = Eigen::Matrix3d::Zero();
 };
 
+// What a field was built for, as the real-time side sees it: the CRC-64 of
+// its file and 32-bit ids of the machine, the part and the tool set it names
+// (0: not named). Set by the loader (field_file.hpp: field_identity_id()).
+struct FieldIdentity {
+  uint64_t crc64 = 0;
+  uint32_t machine = 0;
+  uint32_t part = 0;
+  uint32_t tool_set = 0;
+};
+
 // Immutable once built. Build it outside the real-time thread; publish it by
 // pointer.
 class CorrectionField {
@@ -100,12 +115,16 @@ class CorrectionField {
   // Node values of the layer for `tool`; empty when there is none.
   std::span<const FieldNode> nodes(int32_t tool) const noexcept;
   bool inside(const Eigen::Vector3d& position_mm) const noexcept;
+  const FieldIdentity& identity() const noexcept { return identity_; }
+  // Before publishing only (the field is immutable once shared).
+  void set_identity(const FieldIdentity& identity) noexcept { identity_ = identity; }
 
  private:
   struct Layer {
     std::vector<FieldNode> nodes;
     // (dims + 2)^3 padded coefficients: x, y, z = vector B-spline
-    // coefficients, w = node weight (edges repeated).
+    // coefficients, w = node weight (edges repeated; not used by the
+    // evaluation, which blends the node weights themselves).
     std::vector<Eigen::Vector4d> coefficients;
   };
   const Layer* find(int32_t tool) const noexcept;
@@ -114,6 +133,7 @@ class CorrectionField {
   FieldInterpolation interpolation_;
   std::vector<int32_t> tools_;
   std::vector<Layer> layers_;  // same order as tools_
+  FieldIdentity identity_;
 };
 
 }  // namespace truecut::rt
