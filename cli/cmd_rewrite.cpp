@@ -13,6 +13,7 @@
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/rewrite.hpp"
 #include "truecut/interp/sha256.hpp"
+#include "truecut/offline/field_outputs.hpp"
 #include "truecut/rt/atomic_write.hpp"
 #include "truecut/rt/field_file.hpp"
 #include "truecut/rt/input_file.hpp"
@@ -72,10 +73,14 @@ const char* kRewriteHelp =
     "                       5 in inch blocks)\n"
     "  --rewrite-all        densify every feed move of the operation, also those\n"
     "                       that get no compensation\n"
+    "  --max-correction MM  refuse (exit 1, nothing written) when the compensation\n"
+    "                       exceeds this (default 0.2, as truecut field)\n"
+    "  --force              write although it does (recorded in the audit)\n"
     "  --out FILE           the rewritten program\n"
     "  --help               this text\n"
     "\n"
-    "exit codes: 0 ok, 1 runtime failure, 2 usage or input error (nothing written)\n";
+    "exit codes: 0 ok, 1 refused (--max-correction) or runtime failure, 2 usage or\n"
+    "input error (nothing written on 1 or 2)\n";
 
 std::string read_bytes(const std::string& path, const char* what) {
   try {
@@ -130,24 +135,13 @@ struct Input {
 }  // namespace
 
 int cmd_rewrite(const std::vector<std::string>& argv) {
-  ParsedArgs a(argv, {{"matrix", true},
-                      {"field", true},
-                      {"operation", true},
-                      {"type", true},
-                      {"tool-radius", true},
-                      {"step", true},
-                      {"reach", true},
-                      {"surfaces", true},
-                      {"placement", true},
-                      {"smooth", true},
-                      {"raw-matrix", false},
-                      {"cutting-length", true},
-                      {"tools", true},
-                      {"machine", true},
-                      {"decimals", true},
-                      {"rewrite-all", false},
-                      {"out", true},
-                      {"help", false}});
+  ParsedArgs a(argv, {{"matrix", true},  {"field", true},          {"operation", true},
+                      {"type", true},    {"tool-radius", true},    {"step", true},
+                      {"reach", true},   {"surfaces", true},       {"placement", true},
+                      {"smooth", true},  {"raw-matrix", false},    {"max-correction", true},
+                      {"force", false},  {"cutting-length", true}, {"tools", true},
+                      {"machine", true}, {"decimals", true},       {"rewrite-all", false},
+                      {"out", true},     {"help", false}});
   if (a.flag("help")) {
     std::fputs(kRewriteHelp, stdout);
     return kExitOk;
@@ -253,6 +247,19 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
   }
 
   const interp::RewriteSummary& s = result.summary;
+  // A plausibility check of the compensation, as in truecut field: a
+  // correction this large on a finished part is a wrong input or unit.
+  const double max_correction_mm =
+      a.number("max-correction", offline::kFieldMaxCorrectionMm, 0.0, 100.0);
+  const bool forced = s.max_compensation_mm > max_correction_mm;
+  if (forced && !a.flag("force")) {
+    std::fprintf(stderr,
+                 "truecut rewrite: the compensation reaches %.4f mm, above --max-correction "
+                 "%.4g mm (a wrong matrix, field or unit?); nothing written (--force writes it and "
+                 "records that in the audit)\n",
+                 s.max_compensation_mm, max_correction_mm);
+    return kExitFailure;
+  }
   // The radius of the operation's tool(s), from the tool table.
   std::optional<double> radius_mm;
   bool one_radius = true;
@@ -288,7 +295,9 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
   for (size_t i = 0; i < o.surfaces.size(); ++i)
     j += (i ? ", " : "") + std::to_string(o.surfaces[i]);
   j += "], \"decimals\": " + std::to_string(o.decimals) +
-       ", \"rewrite_all\": " + (o.keep_unchanged_moves ? "false" : "true") + "},\n";
+       ", \"rewrite_all\": " + (o.keep_unchanged_moves ? "false" : "true") +
+       ", \"max_correction_mm\": " + rt::format_printf("%.17g", max_correction_mm) +
+       ", \"forced\": " + (forced ? "true" : "false") + "},\n";
   j += "  \"output\": {\"path\": " + json_string(*out_path) +
        ", \"bytes\": " + std::to_string(result.text.size()) +
        ", \"sha256\": " + json_string(interp::sha256_hex(result.text)) + "},\n";
@@ -306,6 +315,10 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
        ", \"lines_out\": " + std::to_string(s.lines_out) + ", \"tools\": [" + tools_json +
        "]}\n}\n";
 
+  if (forced)
+    std::fprintf(
+        stderr, "truecut rewrite: WARNING: compensation %.4f mm above %.4g mm, written (--force)\n",
+        s.max_compensation_mm, max_correction_mm);
   files->write(0, result.text);
   files->write(1, j);
   files->commit();

@@ -4,7 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
+#include <string>
+#include <vector>
 
 #include "run_process.hpp"
 #include "test_paths.hpp"
@@ -71,6 +74,51 @@ TEST(CliRewriteMatrix, RewriteAcceptsTheOfflineMatrix) {
   EXPECT_NE(test::read_file(dir / "o.ngc").find("X4.0000 Y0.0000 Z0.0100\nG0 X4 Y0 Z5\n"),
             std::string::npos)
       << test::read_file(dir / "o.ngc");
+}
+
+// A 5 mm compensation (a matrix in the wrong unit, say) was applied without
+// a word; above --max-correction (default 0.2 mm, as truecut field) it is
+// refused with exit 1 and nothing written, and --force writes it and says so.
+TEST(CliRewriteMatrix, ACompensationAboveMaxCorrectionIsRefusedUnlessForced) {
+  offline::CompensationMatrix m;
+  for (int i = -10; i <= 10; ++i)
+    for (int j = -4; j <= 4; ++j) {
+      m.positions_mm.emplace_back(0.5 * i, 0.5 * j, 0.0);
+      m.vectors_mm.emplace_back(0.0, 0.0, 5.0);
+      m.valid.push_back(1);
+      m.surface_ids.push_back(1);
+    }
+  const auto dir = test::scratch_dir();
+  offline::write_compensation_matrix(dir / "comp.csv", m, "5 mm: a unit mix-up");
+  std::ofstream(dir / "p.ngc") << "G21 G90 G94\n(OPERATION: FACE)\nT1 M6\nG43 H1\nG0 X-4 Y0 Z10\n"
+                                  "G1 Z0 F100\nG1 X4 F500\nG0 Z15\nM30\n";
+  std::ofstream(dir / "t.tbl") << "T1 P1 D2 Z30\n";
+  std::vector<std::string> args{test::cli_path().string(),
+                                "rewrite",
+                                "p.ngc",
+                                "--matrix",
+                                "comp.csv",
+                                "--operation",
+                                "FACE",
+                                "--type",
+                                "face",
+                                "--tools",
+                                "t.tbl",
+                                "--out",
+                                "o.ngc"};
+  auto r = test::run_process(args, dir);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("the compensation reaches 5.0000 mm, above --max-correction 0.2 mm"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "o.ngc"));
+  args.push_back("--force");
+  r = test::run_process(args, dir);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("WARNING: compensation 5.0000 mm above 0.2 mm, written (--force)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_TRUE(std::filesystem::exists(dir / "o.ngc"));
 }
 
 TEST(CliRewriteMatrix, FieldWithoutALayerForTheOperationsToolIsRefused) {
