@@ -51,14 +51,26 @@ void refine(const FitContext& ctx, ModelFit& fit) {
 
 void start_new_servo_loops(const FitContext& ctx, const std::vector<const Candidate*>& chosen,
                            const sim::MachineParams& before, sim::MachineParams& params) {
+  // The pair is scanned on the model before the round with only the new
+  // loops added: effects selected beside a loop in the same round were
+  // fitted against its linear signature (feed-forward 0) and may stand in
+  // for the loop's acceleration lag (a pitch or squareness term soaking up
+  // the lag of a circle), which would make the wrong pair look best. The
+  // other effects are kept for the fit that follows.
+  sim::MachineParams scan = before;
+  for (const auto* c : chosen)
+    if (c->effect == "servo_lag" && !before.effects.servo_lag.active(c->joint)) {
+      scan.effects.servo_lag.enabled = true;
+      scan.effects.servo_lag.axes[c->joint] = params.effects.servo_lag.axes[c->joint];
+    }
   for (const auto* c : chosen) {
     if (c->effect != "servo_lag" || before.effects.servo_lag.active(c->joint)) continue;
-    auto& a = *params.effects.servo_lag.axes[c->joint];
+    auto& a = *scan.effects.servo_lag.axes[c->joint];
     const double lag_s = (1.0 - a.ff1) / a.kv_per_s;
     sim::ServoLagAxis best = a;
-    double best_rss = weighted_residual(ctx, params).squaredNorm();
+    double best_rss = weighted_residual(ctx, scan).squaredNorm();
     for (double ff1 : {0.0, 0.5, 0.8, 0.9, 0.95, 0.98, 0.99}) {
-      sim::MachineParams p = params;
+      sim::MachineParams p = scan;
       auto& b = *p.effects.servo_lag.axes[c->joint];
       b.ff1 = ff1;
       b.kv_per_s = clamp_param("kv_per_s", (1.0 - ff1) / lag_s);
@@ -66,6 +78,7 @@ void start_new_servo_loops(const FitContext& ctx, const std::vector<const Candid
       if (rr < best_rss) best_rss = rr, best = b;
     }
     a = best;
+    *params.effects.servo_lag.axes[c->joint] = best;
   }
 }
 
