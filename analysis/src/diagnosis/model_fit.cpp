@@ -76,6 +76,7 @@ bool fit_round(const FitContext& ctx, const sim::MachineParams& base, int round,
   const double rss_before_round = r.squaredNorm();
   apply_selection(ctx, sel, have, fit);
   start_new_servo_loops(ctx, sel.chosen, before_round.params, fit.params);
+  restart_loops_with_friction(ctx, sel.chosen, base, fit.params);
 
   // Nonlinear fit of every selected parameter by re-simulation.
   refine(ctx, fit);
