@@ -108,6 +108,22 @@ TEST(DiagnosisPlanted, ThermalDriftUnderPitchAndServoLag) {
   expect_right(c);
 }
 
+// A small effect next to a large one: a
+// 25 µrad squareness (0.25 µm on the circle's radius) next to a 15 µm
+// backlash, on circles.
+TEST(DiagnosisPlanted, SmallSquarenessNextToLargeBacklash) {
+  Case c = base("square_backlash", PathKind::kCircleXY, 1);
+  c.plant.axes[0] = servo(40, 0.9);
+  c.plant.axes[1] = servo(35, 0.85);
+  c.plant.axes[0].backlash_mm = 0.015;
+  c.plant.xy_urad = 25;
+  expect_servo(c, "x", 40, 0.9);
+  expect_servo(c, "y", 35, 0.85);
+  c.expected.push_back({"backlash", "x", "play_mm", 0.015, 0.001});
+  c.expected.push_back({"squareness", "xy", "xy_urad", 25, 1.0});
+  expect_right(c);
+}
+
 // Pitch error alone (no servo) on the stepping, squareness alone on circles.
 TEST(DiagnosisPlanted, PitchErrorAlone) {
   Case c = base("pitch", PathKind::kIso230X, 4);

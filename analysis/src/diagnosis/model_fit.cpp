@@ -80,6 +80,7 @@ bool fit_round(const FitContext& ctx, const sim::MachineParams& base, int round,
 
   // Nonlinear fit of every selected parameter by re-simulation.
   refine(ctx, fit);
+  drop_slopes_taken_for_bows(ctx, base, fit);  // kept in `have`: not offered again
   const Eigen::Index m = Eigen::Index(keys_of(fit.selected).size());
   // Verified by re-simulation: the round's effects must pay for their
   // parameters in the real model too, not only in the linearisation.
