@@ -424,8 +424,14 @@ std::vector<Candidate> build_candidates(const FitContext& ctx, const sim::Machin
   const double sample_period_s = median_period(tr.t_s);
   for (int j : ctx.layout.axes) {
     const JointMotion m = joint_motion(S, j, sample_period_s);
-    if (m.v_max <= 0) continue;  // the joint never moves: nothing to tell apart
-    add_joint_candidates(S, m, span_t, out);
+    if (m.v_max > 0) {
+      add_joint_candidates(S, m, span_t, out);
+    } else if (tr.meas[j] && j < 3 && !S.base.effects.thermal_drift.active(j) && span_t > 0) {
+      // The joint never moves: only a drift of its measured position can
+      // show (a thermal growth does not need the axis to be commanded).
+      add_thermal_time_candidates(S, m, span_t, out);
+      add_thermal_power_candidates(S, m, span_t, out);
+    }
   }
   add_straightness_candidates(S, out);
   add_squareness_candidates(S, out);

@@ -21,6 +21,21 @@ namespace truecut::analysis::diagnosis {
 
 namespace {
 
+// The first row of joint j's measured target that the fit can use. Where
+// the gap of a backlash stands before the joint's first move is not
+// recorded (the model starts it centred; a real axis stands where its last
+// move, before the recording, left it): the leading standstill and the first
+// 0.1 mm (deg) of travel, which closes any gap, are left out of the fit. A
+// joint that never moves that far, or one compared on its encoder (which
+// never sees the gap), is fitted from its first row.
+std::size_t first_engaged_row(const Trace& tr, int j) {
+  if (!tr.meas[j] || tr.cmd[j].empty()) return 0;
+  const auto& c = tr.cmd[j];
+  for (std::size_t k = 0; k < c.size(); ++k)
+    if (std::abs(c[k] - c[0]) >= 0.1) return k;
+  return 0;
+}
+
 FitContext context(const Trace& tr, const std::vector<char>& use, const std::vector<double>& w,
                    const SampleWeights& sw, double delay_s, const DiagnosisOptions& o) {
   FitContext c;
@@ -32,10 +47,12 @@ FitContext context(const Trace& tr, const std::vector<char>& use, const std::vec
   c.delay_s = delay_s;
   c.layout.axes = tr.axes;
   for (std::size_t a = 0; a < tr.axes.size(); ++a) {
-    c.aligned[tr.axes[a]] = tr.target[tr.axes[a]];
+    const int j = tr.axes[a];
+    c.aligned[j] = tr.target[j];
+    const std::size_t first = first_engaged_row(tr, j);
     std::vector<std::size_t> ix;
     std::vector<double> f;
-    for (std::size_t k = 0; k < tr.rows(); ++k)
+    for (std::size_t k = first; k < tr.rows(); ++k)
       if (use[k]) ix.push_back(k), f.push_back(sw.empty() ? 1.0 : sw[a][k]);
     c.layout.index.push_back(std::move(ix));
     c.layout.weight.push_back(w[a]);

@@ -74,6 +74,21 @@ void refine(const FitContext& ctx, ModelFit& fit);
 void start_new_servo_loops(const FitContext& ctx, const std::vector<const Candidate*>& chosen,
                            const sim::MachineParams& before, sim::MachineParams& params);
 
+// A friction (reversal_spike) selected this round on a joint whose servo
+// loop the diagnosis found itself (absent in `base`): the loop's pair was
+// fitted without the friction and may have bent to mimic its spikes; the
+// pair is scanned again along the same steady lag with the friction
+// refitted at each, the best kept.
+void restart_loops_with_friction(const FitContext& ctx, const std::vector<const Candidate*>& chosen,
+                                 const sim::MachineParams& base, sim::MachineParams& params);
+
+// A straightness whose flat point the re-simulated fit moved outside the
+// candidate's range (the moving axis' travel ± its span) is a slope: a
+// squareness or alignment, not a bow. It is dropped (and the rest refitted)
+// so that a later round can offer the squareness; returns the groups.
+std::vector<std::string> drop_slopes_taken_for_bows(const FitContext& ctx,
+                                                    const sim::MachineParams& base, ModelFit& fit);
+
 // Pruning of fit.selected against `base`, each refitting the rest after a
 // drop: effects whose re-simulated ΔBIC is below the threshold (returns the
 // groups dropped), adjustments whose 95 % interval covers the believed

@@ -76,9 +76,11 @@ bool fit_round(const FitContext& ctx, const sim::MachineParams& base, int round,
   const double rss_before_round = r.squaredNorm();
   apply_selection(ctx, sel, have, fit);
   start_new_servo_loops(ctx, sel.chosen, before_round.params, fit.params);
+  restart_loops_with_friction(ctx, sel.chosen, base, fit.params);
 
   // Nonlinear fit of every selected parameter by re-simulation.
   refine(ctx, fit);
+  drop_slopes_taken_for_bows(ctx, base, fit);  // kept in `have`: not offered again
   const Eigen::Index m = Eigen::Index(keys_of(fit.selected).size());
   // Verified by re-simulation: the round's effects must pay for their
   // parameters in the real model too, not only in the linearisation.

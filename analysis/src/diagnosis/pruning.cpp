@@ -54,6 +54,34 @@ void drop_effect(const FitContext& ctx, const sim::MachineParams& base, std::siz
 
 }  // namespace
 
+std::vector<std::string> drop_slopes_taken_for_bows(const FitContext& ctx,
+                                                    const sim::MachineParams& base, ModelFit& fit) {
+  std::vector<std::string> dropped;
+  for (std::size_t e = 0; e < fit.selected.size();) {
+    const SelectedEffect& s = fit.selected[e];
+    int i = -1;
+    for (int c = 0; c < sim::kStraightnessCount && s.effect == "straightness"; ++c)
+      if (s.axis == sim::kStraightnessNames[c]) i = c;
+    const auto& comp = i >= 0 ? fit.params.effects.straightness.params.components[i] : std::nullopt;
+    const auto& cmd = i >= 0 ? ctx.trace->cmd[sim::kStraightnessMoving[i]] : std::vector<double>{};
+    if (!comp || cmd.empty()) {
+      ++e;
+      continue;
+    }
+    const auto [lo, hi] = std::minmax_element(cmd.begin(), cmd.end());
+    const double span = *hi - *lo;
+    if (comp->reference_mm >= *lo - span && comp->reference_mm <= *hi + span) {
+      ++e;
+      continue;
+    }
+    say(ctx,
+        "dropped " + s.group + ": its flat point went outside the travel (a slope, not a bow)");
+    dropped.push_back(s.group);
+    drop_effect(ctx, base, e, fit);
+  }
+  return dropped;
+}
+
 // Backward elimination: an effect selected on the linearisation that the
 // re-simulated model does not need any more (it stood in for a
 // linearisation error of another one) is dropped.

@@ -1,0 +1,67 @@
+// The full sweep of the independent planted cases (planted_cases.hpp):
+// every effect at three magnitudes over N seeds (default 20), a table per
+// effect and magnitude of the seeds passed and the worst relative error.
+// Not part of ctest (it takes minutes); run by hand:
+//   analysis_planted_sweep [SEEDS] [EFFECT-NAME] [-v]
+#include <cctype>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <string>
+
+#include "planted_cases.hpp"
+
+using namespace truecut::test::planted;
+
+int main(int argc, char** argv) {
+  int seeds = 20;
+  std::string only;
+  bool verbose = false;
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "-v") == 0)
+      verbose = true;
+    else if (std::isdigit(static_cast<unsigned char>(argv[i][0])))
+      seeds = std::atoi(argv[i]);
+    else
+      only = argv[i];
+  }
+  const auto dir = std::filesystem::temp_directory_path() / "truecut_planted_sweep";
+  std::filesystem::create_directories(dir);
+  int failed_total = 0;
+  std::printf("| effect | magnitude | seeds passed | worst error | first failure |\n");
+  std::printf("|---|---|---|---|---|\n");
+  for (Effect e : kSweepEffects) {
+    if (!only.empty() && only != effect_name(e)) continue;
+    for (int m = 0; m < 3; ++m) {
+      int passed = 0;
+      double worst = 0;
+      std::string first_failure;
+      for (int s = 1; s <= seeds; ++s) {
+        const Case c = sweep_case(e, m, unsigned(s));
+        const auto t0 = std::chrono::steady_clock::now();
+        const auto r = diagnose_case(c, dir);
+        const Verdict v = judge(c, r);
+        std::filesystem::remove(dir / (c.name + ".csv"));
+        worst = std::max(worst, v.worst_rel_error);
+        if (v.pass)
+          ++passed;
+        else if (first_failure.empty())
+          first_failure = "seed " + std::to_string(s) + ": " + v.why;
+        if (verbose) {
+          const double sec =
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+          std::fprintf(stderr, "%s %s (%.1f s) %s\n%s\n", c.name.c_str(), v.pass ? "pass" : "FAIL",
+                       sec, v.why.c_str(),
+                       truecut::analysis::diagnosis::diagnosis_summary(r).c_str());
+        }
+      }
+      failed_total += seeds - passed;
+      std::printf("| %s | %g | %d/%d | %.1f %% | %s |\n", effect_name(e), sweep_magnitude(e, m),
+                  passed, seeds, 100 * worst, first_failure.c_str());
+      std::fflush(stdout);
+    }
+  }
+  return failed_total == 0 ? 0 : 1;
+}
