@@ -11,6 +11,7 @@
 
 #include "test_truecut_comp_support.hpp"
 #include "truecut/rt/core/comp_math.hpp"
+#include "truecut/rt/core/joint_mode.hpp"
 #include "truecut/rt/core/kinematics_ac.hpp"
 #include "truecut/rt/executor.hpp"
 #include "truecut/rt/hal_file.hpp"
@@ -516,4 +517,72 @@ TEST(TruecutComp, SwapInhibitHoldsTheNewFieldBack) {
   EXPECT_EQ(2, gets32(r.hal, "c.field-generation"));
   r.run(20);
   EXPECT_EQ(make_field(b_spec).evaluate(1, Eigen::Vector3d::Zero()).correction_mm, r.corr());
+}
+
+TEST(TruecutComp, JointModeRespectsSoftLimitsAndPerJointLimits) {
+  FieldSpec spec;
+  spec.origin_mm = {-40.0, -40.0, -30.0};
+  spec.dims = {17, 17, 13};
+  spec.scale = 4.0;
+  const auto path = write_field(field_path(), spec);
+  Rig r("field=" + path.string() + " mode=joint",
+        "setp c.x-rot-point 5\nsetp c.y-rot-point -3\nsetp c.z-rot-point 20\n"
+        "setp c.z-offset -12\nsetp c.tool-offset 50\nsetp c.fade-time 0.2\nsetp c.tool 1\n");
+  for (const char* pin :
+       {"joint-x-max-correction", "joint-y-min-limit", "joint-z-max-limit", "joint-clip-count"})
+    EXPECT_TRUE(r.hal.has_pin(std::string("c.") + pin)) << pin;
+  EXPECT_FALSE(r.hal.has_pin("c.joint-a-max-limit"));
+  EXPECT_EQ(0.0, getf(r.hal, "c.joint-x-max-correction"));
+  EXPECT_EQ(-rt::comp::kNoSoftLimitMm, getf(r.hal, "c.joint-y-min-limit"));
+  EXPECT_EQ(rt::comp::kNoSoftLimitMm, getf(r.hal, "c.joint-z-max-limit"));
+  const double cmd[] = {3.0, -7.0, 60.0, 25.0, 40.0};
+  const char* names[] = {"joint-x", "joint-y", "joint-z", "joint-a", "joint-c"};
+  for (int i = 0; i < 5; ++i)
+    r.set(names[i], cmd[i]);
+  r.set("enable", 1.0);
+  r.run(1000);
+  ASSERT_EQ(0, r.fault());
+  EXPECT_EQ(0, gets32(r.hal, "c.joint-clip-count"));
+  const double dx = getf(r.hal, "c.joint-x-out") - cmd[0];
+  const double y_free = getf(r.hal, "c.joint-y-out");
+  const double dy = y_free - cmd[1];
+  ASSERT_GT(std::abs(dx), 0.05);
+  ASSERT_GT(std::abs(dy), 0.05);
+
+  // A soft limit halfway: X stops exactly on it, reported and counted.
+  const char* side = dx > 0.0 ? "joint-x-max-limit" : "joint-x-min-limit";
+  r.set(side, cmd[0] + 0.5 * dx);
+  const double limit = getf(r.hal, std::string("c.") + side);
+  r.run(500);
+  EXPECT_EQ(limit, getf(r.hal, "c.joint-x-out"));
+  EXPECT_EQ(11, r.fault());
+  EXPECT_NEAR(y_free, getf(r.hal, "c.joint-y-out"), 1e-9) << "Y keeps its correction";
+  const int32_t count = gets32(r.hal, "c.joint-clip-count");
+  EXPECT_GE(count, 490);
+  r.run(10);
+  EXPECT_EQ(count + 10, gets32(r.hal, "c.joint-clip-count"));
+  EXPECT_EQ(0, gets32(r.hal, "c.fault-latched")) << "does not latch";
+
+  // A per-joint limit below the field's correction on Y.
+  const double m = 0.3 * std::abs(dy);
+  r.set("joint-y-max-correction", m);
+  const double m_pin = getf(r.hal, "c.joint-y-max-correction");
+  for (int i = 0; i < 500; ++i) {
+    r.run(1);
+    const double y = getf(r.hal, "c.joint-y-out");
+    ASSERT_LE(y, cmd[1] + m_pin) << i;
+    ASSERT_GE(y, cmd[1] - m_pin) << i;
+  }
+  EXPECT_EQ(cmd[1] + std::copysign(m_pin, dy), getf(r.hal, "c.joint-y-out"));
+  EXPECT_EQ(limit, getf(r.hal, "c.joint-x-out"));
+  EXPECT_EQ(11, r.fault());
+  EXPECT_TRUE(all_outputs_finite(r.hal));
+
+  // Limits back to their defaults: the full correction returns, the report clears.
+  r.set(side, dx > 0.0 ? rt::comp::kNoSoftLimitMm : -rt::comp::kNoSoftLimitMm);
+  r.set("joint-y-max-correction", 0.0);
+  r.run(1000);
+  EXPECT_EQ(0, r.fault());
+  EXPECT_NEAR(cmd[0] + dx, getf(r.hal, "c.joint-x-out"), 1e-9);
+  EXPECT_NEAR(y_free, getf(r.hal, "c.joint-y-out"), 1e-9);
 }

@@ -1244,3 +1244,150 @@ TEST(CompCore, AFieldBuiltForAnotherMachinePartOrToolSetIsRefused) {
     ASSERT_EQ(Fault::kNone, d.cycle(in).fault);
   EXPECT_EQ(a.evaluate(1, in.tcp_mm).correction_mm, d.state.output);
 }
+
+namespace {
+
+// Joint mode through the core as truecut_comp runs it: joints -> TCP ->
+// step() with the joints' clip box -> corrected joints clamped to the
+// limits. The commanded joints move slowly along X; every cycle's
+// velocity, acceleration and jerk of the correction are checked (above a
+// limit only in a cycle that reports bound-clip or joint-limit).
+struct JointRig {
+  rt::CorrectionField field = make_field(with_scale(4.0));
+  rt::AcTrtParams k;
+  JointLimits limits;
+  JerkRig r{4.0, 0.05};
+  rt::AcJoints joints{2.0, -3.0, 4.0, 10.0, 30.0};
+  rt::AcJoints out;
+  CycleOutput o;
+  int unreported = 0;
+  JointRig() {
+    k.x_rot_point_mm = 1.0;
+    k.z_rot_point_mm = 2.0;
+    k.tool_length_mm = 5.0;
+    r.in.candidate = &field;
+  }
+  static FieldSpec with_scale(double scale) {
+    FieldSpec s;
+    s.scale = scale;
+    return s;
+  }
+  // The joint-space correction the field wants at the joints (unclipped).
+  Vec3 wanted() const {
+    const rt::ToolPose pose = rt::forward_ac(k, joints);
+    const JointClip jc = joint_clip(k, joints, pose, JointLimits{.max_correction = {1, 1, 1}});
+    return jc.to_workpiece.transpose() * field.evaluate(1, pose.tcp_mm).correction_mm;
+  }
+  void cycle() {
+    const rt::ToolPose pose = rt::forward_ac(k, joints);
+    r.in.tcp_mm = pose.tcp_mm;
+    r.in.joint_clip = joint_clip(k, joints, pose, limits);
+    o = r.d.cycle(r.in);
+    if (o.adopted) r.in.candidate = nullptr;
+    r.probe.add(o.correction_mm);
+    const CompLimits& l = r.d.limits;
+    const bool above = r.probe.v.norm() > l.max_rate_mm_per_s * (1 + 1e-9) ||
+                       r.probe.a.norm() > l.max_accel_mm_per_s2 * (1 + 1e-6) ||
+                       r.probe.j.norm() > l.max_jerk_mm_per_s3 * (1 + 1e-5);
+    unreported += above && o.fault != Fault::kJointLimit && o.fault != Fault::kBoundClip;
+    out = correct_joints(k, joints, pose, o.correction_mm);
+    if (r.in.joint_clip.active) clamp_joints(limits, joints, out);
+  }
+};
+
+}  // namespace
+
+TEST(CompJoint, DefaultJointLimitsLeaveTheCorrectionUntouched) {
+  JointRig a, b;
+  b.limits = JointLimits{};
+  for (int i = 0; i < 400; ++i) {
+    a.joints.x_mm = b.joints.x_mm = 2.0 + 0.001 * i;
+    a.r.in.tcp_mm = rt::forward_ac(a.k, a.joints).tcp_mm;
+    a.o = a.r.d.cycle(a.r.in);
+    if (a.o.adopted) a.r.in.candidate = nullptr;
+    b.cycle();
+    ASSERT_FALSE(b.r.in.joint_clip.active);
+    ASSERT_EQ(a.o.correction_mm, b.o.correction_mm) << i;
+    ASSERT_EQ(Fault::kNone, b.o.fault);
+  }
+  EXPECT_EQ(0, b.r.d.state.joint_clip_count);
+  EXPECT_GT(b.o.correction_mm.norm(), 0.1);
+}
+
+TEST(CompJoint, ASoftLimitClipsTheJointExactlyThereAndIsReported) {
+  JointRig t;
+  const Vec3 w = t.wanted();
+  ASSERT_GT(std::abs(w.x()), 0.05);
+  // X commanded 0.2 mm inside its soft limit, moving towards it at 1 mm/s;
+  // the field pushes it further: the limit wins, exactly.
+  const bool up = w.x() > 0.0;
+  const double limit = up ? t.joints.x_mm + 0.2 : t.joints.x_mm - 0.2;
+  (up ? t.limits.max_limit : t.limits.min_limit)[0] = limit;
+  int clipped = 0, reported = 0;
+  for (int i = 0; i < 600; ++i) {
+    if (i < 150) t.joints.x_mm += (up ? 1e-3 : -1e-3);  // ends 0.05 mm inside
+    t.cycle();
+    const int32_t before = clipped;
+    clipped += t.o.joint_clipped;
+    ASSERT_EQ(before + t.o.joint_clipped, t.r.d.state.joint_clip_count) << i;
+    reported += t.o.fault == Fault::kJointLimit;
+    if (t.o.joint_clipped) {
+      ASSERT_EQ(Fault::kJointLimit, t.o.fault) << i;
+      ASSERT_TRUE(t.o.limited);
+    }
+    ASSERT_TRUE(up ? t.out.x_mm <= limit : t.out.x_mm >= limit) << i;
+    ASSERT_LE(t.o.correction_mm.norm(), t.r.d.limits.max_correction_mm);
+  }
+  EXPECT_EQ(limit, t.out.x_mm) << "held exactly at the soft limit";
+  EXPECT_GT(clipped, 100);
+  EXPECT_GE(reported, clipped);
+  EXPECT_EQ(0, t.unreported);
+  EXPECT_EQ(Fault::kJointLimit, t.o.fault);
+  // Y and Z keep their full correction (the field's at the joints now).
+  const Vec3 w_end = t.wanted();
+  const rt::ToolPose pose = rt::forward_ac(t.k, t.joints);
+  const JointClip jc = joint_clip(t.k, t.joints, pose, t.limits);
+  const Vec3 d = jc.to_workpiece.transpose() * t.o.correction_mm;
+  EXPECT_NEAR(w_end.y(), d.y(), 1e-9);
+  EXPECT_NEAR(w_end.z(), d.z(), 1e-9);
+  EXPECT_NEAR(limit - t.joints.x_mm, d.x(), 1e-9);
+  // The limit raised: the correction moves on to the field's value within
+  // the limits, and the report clears.
+  (up ? t.limits.max_limit : t.limits.min_limit)[0] = up ? limit + 10.0 : limit - 10.0;
+  for (int i = 0; i < 600; ++i)
+    t.cycle();
+  EXPECT_EQ(Fault::kNone, t.o.fault);
+  EXPECT_NEAR(0.0, (t.wanted() - jc.to_workpiece.transpose() * t.o.correction_mm).norm(), 1e-9);
+  EXPECT_EQ(0, t.unreported);
+}
+
+TEST(CompJoint, APerJointMaxCorrectionBelowTheFieldsClipsThatJointOnly) {
+  JointRig t;
+  const Vec3 w = t.wanted();
+  ASSERT_GT(std::abs(w.y()), 0.05);
+  const double m = 0.3 * std::abs(w.y());
+  t.limits.max_correction[1] = m;
+  for (int i = 0; i < 800; ++i) {
+    t.cycle();
+    ASSERT_LE(t.out.y_mm, t.joints.y_mm + m) << i;
+    ASSERT_GE(t.out.y_mm, t.joints.y_mm - m) << i;
+  }
+  EXPECT_EQ(t.joints.y_mm + std::copysign(m, w.y()), t.out.y_mm) << "exactly at the limit";
+  EXPECT_TRUE(t.o.joint_clipped);
+  EXPECT_EQ(Fault::kJointLimit, t.o.fault);
+  EXPECT_GT(t.r.d.state.joint_clip_count, 500);
+  EXPECT_EQ(0, t.unreported);
+  const JointClip jc = joint_clip(t.k, t.joints, rt::forward_ac(t.k, t.joints), t.limits);
+  const Vec3 d = jc.to_workpiece.transpose() * t.o.correction_mm;
+  EXPECT_NEAR(w.x(), d.x(), 1e-9);
+  EXPECT_NEAR(w.z(), d.z(), 1e-9);
+  // An invalid per-joint limit (NaN, negative) leaves that joint uncorrected.
+  for (double bad : {kNaN, -1.0}) {
+    t.limits.max_correction[1] = bad;
+    for (int i = 0; i < 800; ++i)
+      t.cycle();
+    EXPECT_EQ(t.joints.y_mm, t.out.y_mm);
+    EXPECT_EQ(Fault::kJointLimit, t.o.fault);
+    EXPECT_EQ(0, t.unreported);
+  }
+}

@@ -49,6 +49,10 @@ struct Pins {
   bool* conventional_directions;
   double* a_min;  // deg
   double* a_max;
+  std::array<double*, 3> joint_max_correction;  // joint mode, X Y Z, mm
+  std::array<double*, 3> joint_min_limit;
+  std::array<double*, 3> joint_max_limit;
+  int32_t* joint_clip_count;
   std::array<double*, 3> tcp_out;
   std::array<double*, 3> axis_out;
   std::array<double*, 3> corr;  // mm, workpiece frame
@@ -142,6 +146,16 @@ rt::AcTrtParams kinematics(const Pins& p) noexcept {
   return k;
 }
 
+rt::comp::JointLimits joint_limits(const Pins& p) noexcept {
+  rt::comp::JointLimits l;
+  for (int i = 0; i < 3; ++i) {
+    l.max_correction[i] = *p.joint_max_correction[i];
+    l.min_limit[i] = *p.joint_min_limit[i];
+    l.max_limit[i] = *p.joint_max_limit[i];
+  }
+  return l;
+}
+
 void update(void* arg, long period_ns) {
   Instance& s = *static_cast<Instance*>(arg);
   const Pins& p = s.p;
@@ -166,6 +180,7 @@ void update(void* arg, long period_ns) {
 
   rt::AcTrtParams kins;
   rt::AcJoints joints;
+  rt::comp::JointLimits jlim;
   rt::ToolPose pose;
   if (s.mode == Mode::kTcp) {
     pose.tcp_mm = read3(p.tcp_in);
@@ -178,6 +193,8 @@ void update(void* arg, long period_ns) {
       in.input_fault = Fault::kInputNotFinite;
     } else {
       pose = rt::forward_ac(kins, joints);
+      jlim = joint_limits(p);
+      in.joint_clip = rt::comp::joint_clip(kins, joints, pose, jlim);
       // Outside the A travel the inverse kinematics refuses; correct_joints()
       // still maps the correction while it fades out.
       if (!(joints.a_deg >= kins.a_min_deg && joints.a_deg <= kins.a_max_deg))
@@ -211,12 +228,14 @@ void update(void* arg, long period_ns) {
   *p.field_machine = id.machine;
   *p.field_part = id.part;
   *p.field_tool_set = id.tool_set;
+  if (s.mode == Mode::kJoint) *p.joint_clip_count = s.core.joint_clip_count;
   // Position outputs hold their last value while the inputs are unusable.
   if (in.input_fault == Fault::kInputNotFinite) return;
   write3(p.tcp_out, pose.tcp_mm + out.correction_mm);
   write3(p.axis_out, pose.axis);
   if (s.mode == Mode::kJoint) {
-    const rt::AcJoints j = rt::comp::correct_joints(kins, joints, pose, out.correction_mm);
+    rt::AcJoints j = rt::comp::correct_joints(kins, joints, pose, out.correction_mm);
+    if (in.joint_clip.active) rt::comp::clamp_joints(jlim, joints, j);
     const double v[5] = {j.x_mm, j.y_mm, j.z_mm, j.a_deg, j.c_deg};
     for (int i = 0; i < 5; ++i)
       *p.joint_out[i] = v[i];
@@ -293,6 +312,13 @@ void make_pins(rt::hal::component::Builder& b, const std::string& n, Mode mode, 
     b.pin(n + ".conventional-directions", TC_HAL_BIT, TC_HAL_IN, &p.conventional_directions);
     in_f("a-min", &p.a_min);
     in_f("a-max", &p.a_max);
+    for (int i = 0; i < 3; ++i) {
+      const std::string j = std::string("joint-") + kJoints[i];
+      in_f((j + "-max-correction").c_str(), &p.joint_max_correction[i]);
+      in_f((j + "-min-limit").c_str(), &p.joint_min_limit[i]);
+      in_f((j + "-max-limit").c_str(), &p.joint_max_limit[i]);
+    }
+    b.pin(n + ".joint-clip-count", TC_HAL_S32, TC_HAL_OUT, &p.joint_clip_count);
   }
   for (int i = 0; i < 3; ++i) {
     out_f((std::string("tcp-") + kXyz[i] + "-out").c_str(), &p.tcp_out[i]);
@@ -328,6 +354,12 @@ void make_pins(rt::hal::component::Builder& b, const std::string& n, Mode mode, 
   } else {
     *p.a_min = -180.0;
     *p.a_max = 180.0;
+    const rt::comp::JointLimits jl;
+    for (int i = 0; i < 3; ++i) {
+      *p.joint_max_correction[i] = jl.max_correction[i];
+      *p.joint_min_limit[i] = jl.min_limit[i];
+      *p.joint_max_limit[i] = jl.max_limit[i];
+    }
   }
   *p.axis_out[2] = 1.0;
 }

@@ -39,6 +39,9 @@ enum class Fault : int32_t {
                         // limits let it stop there: clipped, a limit exceeded
   kWrongField = 10,     // the field names another machine, part or tool set
                         // than the expected ids: not applied
+  kJointLimit = 11,     // joint mode: the correction would have pushed a linear
+                        // joint past its soft limit or its own max-correction:
+                        // clipped there, reported (does not latch)
 };
 
 inline const char* to_string(Fault f) noexcept {
@@ -65,6 +68,8 @@ inline const char* to_string(Fault f) noexcept {
       return "bound-clip";
     case Fault::kWrongField:
       return "wrong-field";
+    case Fault::kJointLimit:
+      return "joint-limit";
   }
   return "unknown";
 }
@@ -91,9 +96,23 @@ struct CompState {
   Vec3 target_prev2 = Vec3::Zero();             // the cycle's before
   double bound_prev = kDefaultMaxCorrectionMm;  // last cycle's max-correction
   int32_t clamp_count = 0;
-  int32_t clip_cycles = 0;       // cycles still affected by the last bound-clip (reported)
-  Fault latched = Fault::kNone;  // a latching fault, held until a rising `reset`
-  bool reset_prev = false;       // cycles in which max-correction acted (wraps)
+  int32_t clip_cycles = 0;        // cycles still affected by the last bound-clip (reported)
+  Fault latched = Fault::kNone;   // a latching fault, held until a rising `reset`
+  bool reset_prev = false;        // cycles in which max-correction acted (wraps)
+  int32_t joint_clip_count = 0;   // cycles clipped by a joint's limits (wraps)
+  int32_t joint_clip_cycles = 0;  // cycles still showing the last joint clip (reported)
+};
+
+// Joint mode: the box the correction of the linear joints X Y Z must stay in
+// this cycle (from their soft limits and per-joint maximum corrections,
+// joint_clip() in joint_mode.hpp). The correction d in joint space is
+// to_workpiece^T c (the table rotation is orthonormal); it is clipped to
+// [lo, hi] (lo <= 0 <= hi) and mapped back.
+struct JointClip {
+  bool active = false;
+  Eigen::Matrix3d to_workpiece = Eigen::Matrix3d::Identity();  // column k: TCP per mm of joint k
+  Vec3 lo = Vec3::Zero();                                      // mm
+  Vec3 hi = Vec3::Zero();
 };
 
 struct CycleInput {
@@ -112,6 +131,7 @@ struct CycleInput {
   uint32_t expect_machine = 0;
   uint32_t expect_part = 0;
   uint32_t expect_tool_set = 0;
+  JointClip joint_clip;  // joint mode: the joints' limits (inactive: none)
 };
 
 struct CycleOutput {
@@ -119,6 +139,7 @@ struct CycleOutput {
   Fault fault = Fault::kNone;
   bool limited = false;          // the magnitude clamp or the rate limit acted
   bool clamped = false;          // max-correction acted (on the target or, hard, on the output)
+  bool joint_clipped = false;    // a joint's limit clipped the output this cycle
   bool active = false;           // a correction is applied or fading
   double fade = 0.0;             // gain of the current source, 0..1
   bool adopted = false;          // the candidate became the current field
@@ -183,6 +204,17 @@ inline Vec3 channel_value(Channel& ch, const Evaluated& e) noexcept {
   if (ch.frozen) return ch.held;
   ch.held = e.value;
   return e.value;
+}
+
+// `c` (workpiece frame) with its joint-space components clipped to the box
+// of `jc`, and no longer than `bound` (to the last ulp).
+inline Limited clip_to_joint_box(const JointClip& jc, const Vec3& c, double bound) noexcept {
+  const Vec3 d = jc.to_workpiece.transpose() * c;
+  const Vec3 dc = d.cwiseMax(jc.lo).cwiseMin(jc.hi);
+  if (dc == d) return {c, false};
+  Vec3 v = limit_magnitude_hard(jc.to_workpiece * dc, bound).value;
+  if (!v.allFinite()) v.setZero();  // cannot happen
+  return {v, true};
 }
 
 }  // namespace detail
@@ -250,7 +282,18 @@ inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& ra
   // cycle's output, then the hard bound: the limited output can be above
   // max-correction only when the bound was lowered below it; the bound wins,
   // and a step beyond the limits is a fault.
-  const Limited m = limit_magnitude(blended, lim.max_correction_mm);
+  Limited m = limit_magnitude(blended, lim.max_correction_mm);
+  // Joint mode: the wanted correction within the joints' box too, so that
+  // the motion follows it within the limits; the output is clipped to the
+  // box again below (as the hard bound).
+  bool joint_clipped = false;
+  if (in.joint_clip.active) {
+    const Limited b = detail::clip_to_joint_box(in.joint_clip, m.value, lim.max_correction_mm);
+    if (b.limited) {
+      m = {b.value, m.limited};
+      joint_clipped = true;
+    }
+  }
   Limited r;
   Vec3 velocity, accel;
   if (lim.max_jerk_mm_per_s3 > 0.0) {
@@ -278,18 +321,23 @@ inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& ra
     accel.setZero();
   }
   const Limited h = limit_magnitude_hard(r.value, lim.max_correction_mm);
+  // Whether moving the output to `p` this cycle exceeds a limit.
+  constexpr double kTol = 1.0 + 1e-9;
+  auto beyond_limits = [&](const Vec3& p) {
+    const Vec3 v_new = (p - s.output) / dt_s;
+    const Vec3 a_new = (v_new - s.velocity) / dt_s;
+    return v_new.norm() > lim.max_rate_mm_per_s * kTol ||
+           (lim.max_accel_mm_per_s2 > 0.0 && a_new.norm() > lim.max_accel_mm_per_s2 * kTol) ||
+           (lim.max_jerk_mm_per_s3 > 0.0 &&
+            (a_new - s.accel).norm() > lim.max_jerk_mm_per_s3 * dt_s * kTol);
+  };
   bool bound_step = false, bound_clip = false;
   // (Rounding can put the output 1 ulp above the bound: the clamp removes
   // it, but that is no step.)
   if (h.limited && r.value.norm() - lim.max_correction_mm > 1e-12 * (1.0 + lim.max_correction_mm)) {
     const Vec3 v_new = (h.value - s.output) / dt_s;
     const Vec3 a_new = (v_new - s.velocity) / dt_s;
-    constexpr double kTol = 1.0 + 1e-9;
-    const bool beyond =
-        v_new.norm() > lim.max_rate_mm_per_s * kTol ||
-        (lim.max_accel_mm_per_s2 > 0.0 && a_new.norm() > lim.max_accel_mm_per_s2 * kTol) ||
-        (lim.max_jerk_mm_per_s3 > 0.0 &&
-         (a_new - s.accel).norm() > lim.max_jerk_mm_per_s3 * dt_s * kTol);
+    const bool beyond = beyond_limits(h.value);
     // A step is a fault only in a cycle that lowered the bound; otherwise
     // the clip is the output running into the bound (or along it, faster
     // than the acceleration allows on its curvature): reported, not latched.
@@ -307,21 +355,48 @@ inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& ra
     s.clip_cycles = 0;
   const bool clip_reported = s.clip_cycles > 0;
   if (s.clip_cycles > 0) --s.clip_cycles;
-  s.output = h.value;
+  // Joint mode: the output within the joints' box (soft limits, per-joint
+  // bounds), as the hard bound: clip, and when the clip needs more than the
+  // limits allow, continue from rest. Reported in every cycle that clipped
+  // the target or the output (and the two after a clip beyond the limits,
+  // whose differences span it).
+  Vec3 applied = h.value;
+  if (in.joint_clip.active) {
+    const Limited b = detail::clip_to_joint_box(in.joint_clip, h.value, lim.max_correction_mm);
+    if (b.limited) {
+      applied = b.value;
+      const Vec3 v_new = (applied - s.output) / dt_s;
+      const Vec3 a_new = (v_new - s.velocity) / dt_s;
+      const bool beyond = beyond_limits(applied);
+      velocity = beyond ? Vec3::Zero() : v_new;
+      accel = beyond ? Vec3::Zero() : a_new;
+      s.joint_clip_cycles = std::max(s.joint_clip_cycles, beyond ? 3 : 1);
+      joint_clipped = true;
+    }
+  }
+  if (joint_clipped) {
+    s.joint_clip_cycles = std::max(s.joint_clip_cycles, 1);
+    s.joint_clip_count = static_cast<int32_t>(static_cast<uint32_t>(s.joint_clip_count) + 1u);
+  }
+  const bool joint_reported = s.joint_clip_cycles > 0;
+  if (s.joint_clip_cycles > 0) --s.joint_clip_cycles;
+  s.output = applied;
   s.velocity = velocity;
   s.accel = accel;
   s.bound_prev = lim.max_correction_mm;
   out.clamped = m.limited || h.limited;
   if (out.clamped) s.clamp_count = static_cast<int32_t>(static_cast<uint32_t>(s.clamp_count) + 1u);
 
-  out.correction_mm = h.value;
-  out.limited = m.limited || r.limited || h.limited;
+  out.correction_mm = applied;
+  out.joint_clipped = joint_clipped;
+  out.limited = m.limited || r.limited || h.limited || joint_clipped;
   out.fade = fade_gain(s.current.u);
   out.active = s.current.u > 0.0 || s.outgoing.u > 0.0 || !s.output.isZero(0.0);
   out.fault = in.input_fault != Fault::kNone ? in.input_fault
               : !limits_ok                   ? Fault::kBadParameter
               : bound_step                   ? Fault::kBoundStep
               : clip_reported                ? Fault::kBoundClip
+              : joint_reported               ? Fault::kJointLimit
               : candidate_wrong              ? Fault::kWrongField
                                              : cur.fault;
   // Latch even when an input fault hides the latching one on `fault`.
