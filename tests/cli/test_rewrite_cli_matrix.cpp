@@ -51,20 +51,27 @@ TEST(CliRewriteMatrix, OfflineWriterAndRewriteReaderAgreeBitForBit) {
   }
 }
 
-TEST(CliRewriteMatrix, RewriteAcceptsTheOfflineMatrix) {
+// A face 10 x 4 mm at z = 0 whose compensation is dz everywhere, a
+// face-milling operation across it at safe height z_safe, and a tool table.
+void write_flat_face_case(const std::filesystem::path& dir, double dz, int z_safe) {
   offline::CompensationMatrix m;
   for (int i = -10; i <= 10; ++i)
     for (int j = -4; j <= 4; ++j) {
       m.positions_mm.emplace_back(0.5 * i, 0.5 * j, 0.0);
-      m.vectors_mm.emplace_back(0.0, 0.0, 0.01);
+      m.vectors_mm.emplace_back(0.0, 0.0, dz);
       m.valid.push_back(1);
       m.surface_ids.push_back(1);
     }
-  const auto dir = test::scratch_dir();
   offline::write_compensation_matrix(dir / "comp.csv", m, "flat face");
-  std::ofstream(dir / "p.ngc") << "G21 G90 G94\n(OPERATION: FACE)\nT1 M6\nG43 H1\nG0 X-4 Y0 Z1\n"
-                                  "G1 Z0 F100\nG1 X4 F500\nG0 Z5\nM30\n";
+  std::ofstream(dir / "p.ngc") << "G21 G90 G94\n(OPERATION: FACE)\nT1 M6\nG43 H1\nG0 X-4 Y0 Z"
+                               << z_safe << "\nG1 Z0 F100\nG1 X4 F500\nG0 Z" << z_safe + 4
+                               << "\nM30\n";
   std::ofstream(dir / "t.tbl") << "T1 P1 D2 Z30\n";
+}
+
+TEST(CliRewriteMatrix, RewriteAcceptsTheOfflineMatrix) {
+  const auto dir = test::scratch_dir();
+  write_flat_face_case(dir, 0.01, 1);
   const auto r = test::run_process(
       {test::cli_path().string(), "rewrite", "p.ngc", "--matrix", "comp.csv", "--operation", "FACE",
        "--type", "face", "--tools", "t.tbl", "--out", "o.ngc"},
@@ -80,19 +87,8 @@ TEST(CliRewriteMatrix, RewriteAcceptsTheOfflineMatrix) {
 // a word; above --max-correction (default 0.2 mm, as truecut field) it is
 // refused with exit 1 and nothing written, and --force writes it and says so.
 TEST(CliRewriteMatrix, ACompensationAboveMaxCorrectionIsRefusedUnlessForced) {
-  offline::CompensationMatrix m;
-  for (int i = -10; i <= 10; ++i)
-    for (int j = -4; j <= 4; ++j) {
-      m.positions_mm.emplace_back(0.5 * i, 0.5 * j, 0.0);
-      m.vectors_mm.emplace_back(0.0, 0.0, 5.0);
-      m.valid.push_back(1);
-      m.surface_ids.push_back(1);
-    }
   const auto dir = test::scratch_dir();
-  offline::write_compensation_matrix(dir / "comp.csv", m, "5 mm: a unit mix-up");
-  std::ofstream(dir / "p.ngc") << "G21 G90 G94\n(OPERATION: FACE)\nT1 M6\nG43 H1\nG0 X-4 Y0 Z10\n"
-                                  "G1 Z0 F100\nG1 X4 F500\nG0 Z15\nM30\n";
-  std::ofstream(dir / "t.tbl") << "T1 P1 D2 Z30\n";
+  write_flat_face_case(dir, 5.0, 10);  // 5 mm: a unit mix-up
   std::vector<std::string> args{test::cli_path().string(),
                                 "rewrite",
                                 "p.ngc",
