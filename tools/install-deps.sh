@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Installs the Debian packages truecut builds and tests with, if any are
 # missing. The tests also compare against LinuxCNC's rs274 (linuxcnc-uspace),
-# headless Chromium and git (tests/support/oracle.hpp).
+# headless Chromium and git (tests/support/oracle.hpp); linuxcnc-uspace-dev
+# (halcompile and the HAL headers; the build does not use them yet).
 set -euo pipefail
 packages=(cmake g++ make pkg-config libeigen3-dev libembree-dev libboost-dev libtbb-dev
           libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev libssl-dev
-          libpng-dev chromium linuxcnc-uspace git)
+          libpng-dev chromium linuxcnc-uspace linuxcnc-uspace-dev git)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
