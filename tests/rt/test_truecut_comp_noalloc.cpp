@@ -148,54 +148,48 @@ TEST(CompNoAlloc, FaultLatchBoundStepsAndBadParametersAllocateNothing) {
   EXPECT_GT(h.get_pin_or_param("c.clamp-count").s, 0);
 }
 
-TEST(CompNoAlloc, JointModeCyclesAllocateNothing) {
+// A joint-mode truecut_comp on the wide field, X driven by siggen's cosine
+// and A by its sine, with `setp` lines of the test's own.
+void load_joint_mode_loop(Hal& h, const std::string& setp) {
   const auto file = scratch_dir() / "f.tcf";
   write_field(file, wide_field(1.0));
-  Hal h(hal_options());
   load_hal_text(h,
                 "loadrt threads name1=servo-thread period1=1000000\n"
                 "loadrt siggen names=path\n"
                 "loadrt truecut_comp names=c mode=joint field=" +
-                    file.string() +
-                    "\nsetp path.amplitude 20\nsetp c.enable 1\nsetp c.tool 2\n"
-                    "setp c.a-max 10\n"
+                    file.string() + "\nsetp path.amplitude 20\nsetp c.enable 1\nsetp c.tool 2\n" +
+                    setp +
                     "net x path.cosine => c.joint-x\nnet a path.sine => c.joint-a\n"
                     "addf path.update servo-thread\naddf c.update servo-thread\n",
                 "joint.hal");
+}
+
+// The allocations counted inside `cycles` simulated servo cycles.
+std::uint64_t allocations_in_cycles(Hal& h, std::uint64_t cycles) {
   rt::hal::Executor ex(h);
   rt::hal::RunLimits lim;
-  lim.max_cycles = 3000;  // A leaves its travel every cycle of the sine
+  lim.max_cycles = cycles;
   lim.cycle_probe = alloc_counting_probe;
   reset_alloc_counter();
   ex.run_simulated(lim);
-  EXPECT_EQ(0u, armed_allocations());
+  return armed_allocations();
+}
+
+TEST(CompNoAlloc, JointModeCyclesAllocateNothing) {
+  Hal h(hal_options());
+  load_joint_mode_loop(h, "setp c.a-max 10\n");
+  EXPECT_EQ(0u, allocations_in_cycles(h, 3000));  // A leaves its travel every cycle of the sine
 }
 
 TEST(CompNoAlloc, JointLimitClipsAllocateNothing) {
   // The joints' soft limits and per-joint bounds acting (and a command
   // beyond a soft limit) every cycle of the path.
-  const auto file = scratch_dir() / "f.tcf";
-  write_field(file, wide_field(1.0));
   Hal h(hal_options());
-  load_hal_text(h,
-                "loadrt threads name1=servo-thread period1=1000000\n"
-                "loadrt siggen names=path\n"
-                "loadrt truecut_comp names=c mode=joint field=" +
-                    file.string() +
-                    "\nsetp path.amplitude 20\nsetp c.enable 1\nsetp c.tool 2\n"
-                    "setp c.fade-time 0.1\nsetp c.joint-x-max-limit 5\n"
-                    "setp c.joint-x-min-limit -15\nsetp c.joint-y-max-correction 0.001\n"
-                    "setp c.joint-z-max-limit 0\n"
-                    "net x path.cosine => c.joint-x\nnet a path.sine => c.joint-a\n"
-                    "addf path.update servo-thread\naddf c.update servo-thread\n",
-                "joint.hal");
-  rt::hal::Executor ex(h);
-  rt::hal::RunLimits lim;
-  lim.max_cycles = 3000;
-  lim.cycle_probe = alloc_counting_probe;
-  reset_alloc_counter();
-  ex.run_simulated(lim);
-  EXPECT_EQ(0u, armed_allocations());
+  load_joint_mode_loop(h,
+                       "setp c.fade-time 0.1\nsetp c.joint-x-max-limit 5\n"
+                       "setp c.joint-x-min-limit -15\nsetp c.joint-y-max-correction 0.001\n"
+                       "setp c.joint-z-max-limit 0\n");
+  EXPECT_EQ(0u, allocations_in_cycles(h, 3000));
   EXPECT_GT(h.get_pin_or_param("c.joint-clip-count").s, 1000);
 }
 
