@@ -7,6 +7,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "truecut/rt/interrupt_cleanup.hpp"
 
 namespace {
 
@@ -23,6 +24,8 @@ void print_usage(std::FILE* to) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Ctrl-C or kill while an output is written leaves no NAME.tmp behind.
+  truecut::rt::remove_pending_files_on_signals();
   std::vector<std::string> args(argv + 1, argv + argc);
   if (args.empty()) {
     print_usage(stderr);

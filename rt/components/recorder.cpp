@@ -8,12 +8,16 @@
 // The servo function `<inst>.sample` copies the pins and the cycle time into
 // a lock-free queue every N-th cycle while `<inst>.enable` is true; a
 // non-real-time service drains it into `<file>.tmp`, which becomes `<file>`
-// (relative to the output folder) when the HAL shuts down; a device or FIFO
-// such as /dev/null is written directly. Samples that find
-// the queue full are dropped and counted on `<inst>.overruns`.
+// when the HAL shuts down. `file` is a name inside the output folder (no
+// absolute path, no '..'); /dev/null and FIFOs are written directly, from
+// anywhere. The temporary file is created at load time, so a file that
+// cannot be written fails the load. Samples that find the queue full are
+// dropped and counted on `<inst>.overruns`.
 #include <boost/lockfree/spsc_queue.hpp>
+#include <cerrno>
 #include <charconv>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -21,6 +25,7 @@
 
 #include "builtin_components.hpp"
 #include "truecut/rt/component_support.hpp"
+#include "truecut/rt/interrupt_cleanup.hpp"
 
 namespace truecut::rt::hal::builtin {
 namespace {
@@ -52,8 +57,10 @@ struct Recorder {
   int64_t t_ns = 0;
   uint64_t cycle = 0;
   // Service-side state.
+  std::unique_ptr<PendingFile> pending;  // the .tmp file, removed on SIGINT/SIGTERM
   std::FILE* out = nullptr;
-  bool direct = false;  // writing straight into a device or FIFO, no rename
+  bool direct = false;  // writing straight into /dev/null or a FIFO, no rename
+  bool header_written = false;
   bool write_failed = false;
   std::string line;
   const tc_hal_api_t* api = nullptr;
@@ -102,18 +109,19 @@ void drain(void* arg) {
   while (r.queue->pop(s)) {
     if (r.write_failed) continue;
     if (!r.out) {
-      // A device or FIFO (e.g. /dev/null) is written directly: renaming a
-      // temporary file over it would replace the device.
-      std::error_code ec;
-      auto st = std::filesystem::status(r.final_path, ec);
-      r.direct = !ec && std::filesystem::exists(st) && !std::filesystem::is_regular_file(st);
-      r.out = std::fopen(r.direct ? r.final_path.c_str() : r.tmp_path.c_str(), "wb");
+      // A FIFO is opened on first use: opening it waits for its reader.
+      r.out = std::fopen(r.final_path.c_str(), "wb");
       if (!r.out) {
         r.write_failed = true;
-        r.api->message(r.hal, TC_HAL_MSG_ERR,
-                       ("recorder: cannot create " + r.tmp_path.string()).c_str());
+        r.api->message(
+            r.hal, TC_HAL_MSG_ERR,
+            ("recorder: cannot open " + r.final_path.string() + ": " + std::strerror(errno))
+                .c_str());
         continue;
       }
+    }
+    if (!r.header_written) {
+      r.header_written = true;
       r.line = "t";
       for (const auto& c : r.columns)
         r.line += "," + c.name;
@@ -185,7 +193,22 @@ int recorder_init(const tc_hal_api_t* api, tc_hal_t* hal, int argc, const char* 
 
     auto r = std::make_unique<Recorder>();
     r->instance = names.at(0);
-    r->final_path = std::filesystem::path(api->output_dir(hal)) / *file;
+    // /dev/null and FIFOs are written directly: renaming a temporary file
+    // over one would replace it.
+    std::error_code ec;
+    const std::filesystem::path named(*file);
+    const auto named_status = std::filesystem::status(named, ec);
+    r->direct = named == "/dev/null" || std::filesystem::is_fifo(named_status);
+    bool outside = named.is_absolute();
+    for (const auto& part : named)
+      outside = outside || part == "..";
+    if (outside && !r->direct)
+      throw InitError("file=" + *file +
+                      ": outside the output folder; a recorder writes a name inside it (no "
+                      "absolute path, no '..'), /dev/null or a FIFO");
+    r->final_path =
+        named.is_absolute() ? named : std::filesystem::path(api->output_dir(hal)) / named;
+    r->direct = r->direct || std::filesystem::is_fifo(std::filesystem::status(r->final_path, ec));
     r->tmp_path = r->final_path;
     r->tmp_path += ".tmp";
     r->columns = parse_columns(*columns);
@@ -205,6 +228,14 @@ int recorder_init(const tc_hal_api_t* api, tc_hal_t* hal, int argc, const char* 
     *r->enable = true;
     b.funct(n + ".sample", sample, r.get());
     b.service(drain, r.get());
+    // Last in init: from here on recorder_exit removes it again.
+    if (!r->direct) {
+      r->pending = std::make_unique<PendingFile>(r->tmp_path);
+      r->out = std::fopen(r->tmp_path.c_str(), "wb");
+      if (!r->out)
+        throw InitError("file=" + *file + ": cannot create " + r->tmp_path.string() + ": " +
+                        std::strerror(errno));
+    }
     api->component_ready(hal, id);
     *state = r.release();
     return 0;
@@ -215,10 +246,17 @@ void recorder_exit(const tc_hal_api_t* api, tc_hal_t* hal, void* state) {
   std::unique_ptr<Recorder> r(static_cast<Recorder*>(state));
   if (!r) return;
   drain(r.get());
-  if (!r->out) return;  // never ran: no file at all
+  std::error_code ec;
+  if (!r->header_written) {  // no sample: no file at all
+    if (r->out) std::fclose(r->out);
+    if (!r->direct) std::filesystem::remove(r->tmp_path, ec);
+    if (r->write_failed)
+      api->message(hal, TC_HAL_MSG_ERR,
+                   ("recorder: " + r->final_path.string() + " not written").c_str());
+    return;
+  }
   bool ok = !r->write_failed;
   if (std::fclose(r->out) != 0) ok = false;
-  std::error_code ec;
   if (ok && !r->direct) std::filesystem::rename(r->tmp_path, r->final_path, ec);
   if (!ok || ec) {
     if (!r->direct) std::filesystem::remove(r->tmp_path, ec);

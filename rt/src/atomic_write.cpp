@@ -146,6 +146,8 @@ StagedFiles::StagedFiles(std::vector<fs::path> targets, std::string suffix)
     : targets_(std::move(targets)), suffix_(std::move(suffix)) {
   for (const fs::path& t : targets_)
     require_replaceable(t);
+  for (std::size_t i = 0; i < targets_.size(); ++i)
+    pending_.push_back(std::make_unique<PendingFile>(staged(i)));
 }
 
 StagedFiles::~StagedFiles() {

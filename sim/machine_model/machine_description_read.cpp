@@ -18,29 +18,70 @@ using detail::JsonNode;
 
 namespace {
 
-double positive(const JsonNode& n) {
-  const double v = n.number();
-  if (!(v > 0.0)) n.fail("must be > 0");
-  return v;
-}
-double non_negative(const JsonNode& n) {
-  const double v = n.number();
-  if (!(v >= 0.0)) n.fail("must be >= 0");
-  return v;
-}
 double in_range(const JsonNode& n, double lo, double hi) {
   const double v = n.number();
   if (!(v >= lo && v <= hi)) n.fail("must be in " + format_number(lo) + " .. " + format_number(hi));
   return v;
 }
 
+// Physical plausibility: a value outside these ranges is a unit mix-up or a
+// typo, not a machine, and further on it turns tool-centre points into inf
+// or NaN. Each range says why it is where it is.
+struct Plausible {
+  double lo, hi;
+  const char* unit;
+  const char* why;
+};
+constexpr Plausible kLength{-1e5, 1e5, "mm", "no machine is larger than 100 m"};
+constexpr Plausible kTravelDeg{-1e7, 1e7, "deg",
+                               "27,778 turns; give an endless axis a finite travel"};
+constexpr Plausible kErrorUm{-1e4, 1e4, "um", "an error over 10 mm is a setup error"};
+constexpr Plausible kAmplitudeUm{0.0, 1e4, "um", "an error over 10 mm is a setup error"};
+constexpr Plausible kPositiveLength{1e-3, 1e5, "mm", "from 1 um to 100 m"};
+constexpr Plausible kStickout{1e-3, 1000.0, "mm", "a tool longer than 1 m"};
+constexpr Plausible kErrorMm{-10.0, 10.0, "mm", "an error over 10 mm is a setup error"};
+constexpr Plausible kErrorUrad{-1e5, 1e5, "urad", "an angular error over 0.1 rad (5.7 deg)"};
+constexpr Plausible kPhaseDeg{-3600.0, 3600.0, "deg", "ten turns"};
+constexpr Plausible kScaleUmPerM{-1e4, 1e4, "um/m", "a scale error over 1 %"};
+constexpr Plausible kStraightness{-1e3, 1e3, "um/m^n", "1 mm over 1 m"};
+constexpr Plausible kPeriodMm{1e-3, 1e5, "mm", "a period from 1 um to 100 m"};
+constexpr Plausible kTauS{1e-3, 1e6, "s", "a time constant from 1 ms to 11.6 days"};
+constexpr Plausible kPowerKw{1e-3, 1e4, "kW", "a spindle from 1 W to 10 MW"};
+constexpr Plausible kPlay{0.0, 10.0, "mm or deg", "a play over 10 mm or 10 deg"};
+constexpr Plausible kFriction{0.0, 1e6, "N or N m (per mm/s or deg/s)", "1 MN of friction"};
+constexpr Plausible kIntegralTimeS{1e-5, 100.0, "s", "an integral time from 10 us to 100 s"};
+constexpr Plausible kInertia{1e-6, 1e6, "kg or kg m^2", "1000 t"};
+constexpr Plausible kAccel{1e-3, 1e7, "mm/s^2 or deg/s^2", "1000 g"};
+constexpr Plausible kEncoder{0.0, 1.0, "mm or deg", "a count of more than 1 mm or 1 deg"};
+constexpr Plausible kStiffness{1e-6, 1e6, "N/um", "stiffer than any machine structure"};
+constexpr Plausible kToolLength{0.0, 1000.0, "mm", "a tool longer than 1 m"};
+constexpr Plausible kToolRadius{0.0, 500.0, "mm", "a tool over 1 m in diameter"};
+
+double plausible(const JsonNode& n, const Plausible& r) {
+  const double v = n.number();
+  if (r.lo > 0.0 && !(v > 0.0)) n.fail("must be > 0");
+  if (r.lo == 0.0 && !(v >= 0.0)) n.fail("must be >= 0");
+  if (!(v >= r.lo && v <= r.hi))
+    n.fail(format_number(v) + " is outside " + format_number(r.lo) + " .. " + format_number(r.hi) +
+           " " + r.unit + " (" + r.why + "; check the unit)");
+  return v;
+}
+auto within(const Plausible& r) {
+  return [&r](const JsonNode& n) { return plausible(n, r); };
+}
+std::array<double, 3> plausible_vector3(const JsonNode& n, const Plausible& r) {
+  const std::array<double, 3> v = n.vector3();
+  for (int i = 0; i < 3; ++i)
+    if (!(v[i] >= r.lo && v[i] <= r.hi))
+      n.fail(std::string(1, "xyz"[i]) + " = " + format_number(v[i]) + " is outside " +
+             format_number(r.lo) + " .. " + format_number(r.hi) + " " + r.unit + " (" + r.why +
+             "; check the unit)");
+  return v;
+}
+
 template <class F>
 double optional(const JsonNode& obj, const std::string& key, double fallback, F&& read) {
   return obj.has(key) ? read(obj.child(key)) : fallback;
-}
-
-double any(const JsonNode& n) {
-  return n.number();
 }
 
 std::string unit(int joint) {
@@ -52,8 +93,9 @@ JointParams read_joint(const JsonNode& n, int j) {
   n.allow_only({"min_" + u, "max_" + u, "drive"}, "key");
   JointParams p;
   p.present = true;
-  p.min = n.child("min_" + u).number();
-  p.max = n.child("max_" + u).number();
+  const Plausible& travel = joint_kind(j) == JointKind::kLinear ? kLength : kTravelDeg;
+  p.min = plausible(n.child("min_" + u), travel);
+  p.max = plausible(n.child("max_" + u), travel);
   if (!(p.min < p.max))
     n.child("max_" + u).fail("must be greater than min_" + u + " (" + format_number(p.min) + ")");
   p.drive = default_drive(j);
@@ -64,10 +106,10 @@ JointParams read_joint(const JsonNode& n, int j) {
     DriveParams& dp = p.drive;
     dp.vel_bandwidth_hz = optional(d, keys[0], dp.vel_bandwidth_hz,
                                    [](const JsonNode& v) { return in_range(v, 0.1, 1000.0); });
-    dp.vel_integral_time_s = optional(d, keys[1], dp.vel_integral_time_s, positive);
-    dp.inertia = optional(d, keys[2], dp.inertia, positive);
-    dp.max_accel = optional(d, keys[3], dp.max_accel, positive);
-    dp.encoder_resolution = optional(d, keys[4], dp.encoder_resolution, non_negative);
+    dp.vel_integral_time_s = optional(d, keys[1], dp.vel_integral_time_s, within(kIntegralTimeS));
+    dp.inertia = optional(d, keys[2], dp.inertia, within(kInertia));
+    dp.max_accel = optional(d, keys[3], dp.max_accel, within(kAccel));
+    dp.encoder_resolution = optional(d, keys[4], dp.encoder_resolution, within(kEncoder));
   }
   return p;
 }
@@ -98,15 +140,15 @@ ServoLagAxis read_servo_lag(const JsonNode& n, int) {
 
 BacklashAxis read_backlash(const JsonNode& n, int j) {
   n.allow_only({"play_" + unit(j)}, "parameter");
-  return {non_negative(n.child("play_" + unit(j)))};
+  return {plausible(n.child("play_" + unit(j)), kPlay)};
 }
 
 ReversalSpikeAxis read_reversal_spike(const JsonNode& n, int j) {
   const auto keys = detail::friction_keys(j);
   n.allow_only({keys[0], keys[1]}, "parameter");
   ReversalSpikeAxis a;
-  a.coulomb = non_negative(n.child(keys[0]));
-  a.viscous = optional(n, keys[1], 0.0, non_negative);
+  a.coulomb = plausible(n.child(keys[0]), kFriction);
+  a.viscous = optional(n, keys[1], 0.0, within(kFriction));
   return a;
 }
 
@@ -115,20 +157,20 @@ PitchErrorAxis read_pitch_error(const JsonNode& n, int) {
                 "periodic_phase_deg"},
                "parameter");
   PitchErrorAxis a;
-  a.scale_um_per_m = optional(n, "scale_um_per_m", 0.0, any);
-  a.reference_mm = optional(n, "reference_mm", 0.0, any);
-  a.periodic_amplitude_um = optional(n, "periodic_amplitude_um", 0.0, non_negative);
+  a.scale_um_per_m = optional(n, "scale_um_per_m", 0.0, within(kScaleUmPerM));
+  a.reference_mm = optional(n, "reference_mm", 0.0, within(kLength));
+  a.periodic_amplitude_um = optional(n, "periodic_amplitude_um", 0.0, within(kAmplitudeUm));
   if (a.periodic_amplitude_um != 0.0 || n.has("periodic_period_mm"))
-    a.periodic_period_mm = positive(n.child("periodic_period_mm"));
-  a.periodic_phase_deg = optional(n, "periodic_phase_deg", 0.0, any);
+    a.periodic_period_mm = plausible(n.child("periodic_period_mm"), kPeriodMm);
+  a.periodic_phase_deg = optional(n, "periodic_phase_deg", 0.0, within(kPhaseDeg));
   return a;
 }
 
 ThermalDriftAxis read_thermal_drift(const JsonNode& n, int) {
   n.allow_only({"gain_mm", "tau_s", "driver", "reference_power_kw"}, "parameter");
   ThermalDriftAxis a;
-  a.gain_mm = n.child("gain_mm").number();
-  a.tau_s = positive(n.child("tau_s"));
+  a.gain_mm = plausible(n.child("gain_mm"), kErrorMm);
+  a.tau_s = plausible(n.child("tau_s"), kTauS);
   if (n.has("driver")) {
     const JsonNode d = n.child("driver");
     const std::string s = d.string();
@@ -140,7 +182,7 @@ ThermalDriftAxis read_thermal_drift(const JsonNode& n, int) {
       d.fail("unknown driver '" + s + "'; known: time, spindle_power");
   }
   if (a.driver == ThermalDriver::kSpindlePower || n.has("reference_power_kw"))
-    a.reference_power_kw = positive(n.child("reference_power_kw"));
+    a.reference_power_kw = plausible(n.child("reference_power_kw"), kPowerKw);
   return a;
 }
 
@@ -148,9 +190,9 @@ GlobalEffect<SquarenessParams> read_squareness(const JsonNode& n) {
   n.allow_only({"enabled", "xy_urad", "yz_urad", "zx_urad"}, "key");
   GlobalEffect<SquarenessParams> e;
   e.enabled = n.child("enabled").boolean();
-  e.params.xy_urad = optional(n, "xy_urad", 0.0, any);
-  e.params.yz_urad = optional(n, "yz_urad", 0.0, any);
-  e.params.zx_urad = optional(n, "zx_urad", 0.0, any);
+  e.params.xy_urad = optional(n, "xy_urad", 0.0, within(kErrorUrad));
+  e.params.yz_urad = optional(n, "yz_urad", 0.0, within(kErrorUrad));
+  e.params.zx_urad = optional(n, "zx_urad", 0.0, within(kErrorUrad));
   return e;
 }
 
@@ -165,9 +207,9 @@ GlobalEffect<StraightnessParams> read_straightness(const JsonNode& n) {
     const JsonNode c = n.child(kStraightnessNames[i]);
     c.allow_only({"quadratic_um_per_m2", "cubic_um_per_m3", "reference_mm"}, "parameter");
     StraightnessComponent s;
-    s.quadratic_um_per_m2 = optional(c, "quadratic_um_per_m2", 0.0, any);
-    s.cubic_um_per_m3 = optional(c, "cubic_um_per_m3", 0.0, any);
-    s.reference_mm = optional(c, "reference_mm", 0.0, any);
+    s.quadratic_um_per_m2 = optional(c, "quadratic_um_per_m2", 0.0, within(kStraightness));
+    s.cubic_um_per_m3 = optional(c, "cubic_um_per_m3", 0.0, within(kStraightness));
+    s.reference_mm = optional(c, "reference_mm", 0.0, within(kLength));
     e.params.components[i] = s;
   }
   return e;
@@ -181,21 +223,21 @@ GlobalEffect<RotaryLocationParams> read_rotary_location(const JsonNode& n) {
     const JsonNode a = n.child("a");
     a.allow_only({"e_y0a_um", "e_z0a_um", "e_b0a_urad", "e_c0a_urad", "e_a0a_urad"}, "parameter");
     RotaryLocationA& p = e.params.a;
-    p.e_y0a_um = optional(a, "e_y0a_um", 0.0, any);
-    p.e_z0a_um = optional(a, "e_z0a_um", 0.0, any);
-    p.e_b0a_urad = optional(a, "e_b0a_urad", 0.0, any);
-    p.e_c0a_urad = optional(a, "e_c0a_urad", 0.0, any);
-    p.e_a0a_urad = optional(a, "e_a0a_urad", 0.0, any);
+    p.e_y0a_um = optional(a, "e_y0a_um", 0.0, within(kErrorUm));
+    p.e_z0a_um = optional(a, "e_z0a_um", 0.0, within(kErrorUm));
+    p.e_b0a_urad = optional(a, "e_b0a_urad", 0.0, within(kErrorUrad));
+    p.e_c0a_urad = optional(a, "e_c0a_urad", 0.0, within(kErrorUrad));
+    p.e_a0a_urad = optional(a, "e_a0a_urad", 0.0, within(kErrorUrad));
   }
   if (n.has("c")) {
     const JsonNode c = n.child("c");
     c.allow_only({"e_x0c_um", "e_y0c_um", "e_a0c_urad", "e_b0c_urad", "e_c0c_urad"}, "parameter");
     RotaryLocationC& p = e.params.c;
-    p.e_x0c_um = optional(c, "e_x0c_um", 0.0, any);
-    p.e_y0c_um = optional(c, "e_y0c_um", 0.0, any);
-    p.e_a0c_urad = optional(c, "e_a0c_urad", 0.0, any);
-    p.e_b0c_urad = optional(c, "e_b0c_urad", 0.0, any);
-    p.e_c0c_urad = optional(c, "e_c0c_urad", 0.0, any);
+    p.e_x0c_um = optional(c, "e_x0c_um", 0.0, within(kErrorUm));
+    p.e_y0c_um = optional(c, "e_y0c_um", 0.0, within(kErrorUm));
+    p.e_a0c_urad = optional(c, "e_a0c_urad", 0.0, within(kErrorUrad));
+    p.e_b0c_urad = optional(c, "e_b0c_urad", 0.0, within(kErrorUrad));
+    p.e_c0c_urad = optional(c, "e_c0c_urad", 0.0, within(kErrorUrad));
   }
   return e;
 }
@@ -204,7 +246,7 @@ GlobalEffect<ToolLengthErrorParams> read_tool_length_error(const JsonNode& n) {
   n.allow_only({"enabled", "length_mm"}, "key");
   GlobalEffect<ToolLengthErrorParams> e;
   e.enabled = n.child("enabled").boolean();
-  e.params.length_mm = optional(n, "length_mm", 0.0, any);
+  e.params.length_mm = optional(n, "length_mm", 0.0, within(kErrorMm));
   return e;
 }
 
@@ -212,8 +254,8 @@ GlobalEffect<ToolRadiusErrorParams> read_tool_radius_error(const JsonNode& n) {
   n.allow_only({"enabled", "radius_mm", "corner_radius_mm"}, "key");
   GlobalEffect<ToolRadiusErrorParams> e;
   e.enabled = n.child("enabled").boolean();
-  e.params.radius_mm = optional(n, "radius_mm", 0.0, any);
-  e.params.corner_radius_mm = optional(n, "corner_radius_mm", 0.0, any);
+  e.params.radius_mm = optional(n, "radius_mm", 0.0, within(kErrorMm));
+  e.params.corner_radius_mm = optional(n, "corner_radius_mm", 0.0, within(kErrorMm));
   return e;
 }
 
@@ -221,8 +263,8 @@ GlobalEffect<ToolDeflectionParams> read_tool_deflection(const JsonNode& n) {
   n.allow_only({"enabled", "stiffness_n_per_um", "stickout_mm"}, "key");
   GlobalEffect<ToolDeflectionParams> e;
   e.enabled = n.child("enabled").boolean();
-  e.params.stiffness_n_per_um = positive(n.child("stiffness_n_per_um"));
-  if (n.has("stickout_mm")) e.params.stickout_mm = positive(n.child("stickout_mm"));
+  e.params.stiffness_n_per_um = plausible(n.child("stiffness_n_per_um"), kStiffness);
+  if (n.has("stickout_mm")) e.params.stickout_mm = plausible(n.child("stickout_mm"), kStickout);
   return e;
 }
 
@@ -232,12 +274,13 @@ GlobalEffect<WorkpieceDeflectionParams> read_workpiece_deflection(const JsonNode
   GlobalEffect<WorkpieceDeflectionParams> e;
   e.enabled = n.child("enabled").boolean();
   WorkpieceDeflectionParams& p = e.params;
-  p.stiffness_n_per_um = positive(n.child("stiffness_n_per_um"));
-  p.reference_length_mm = positive(n.child("reference_length_mm"));
-  if (n.has("clamp_point_mm")) p.clamp_point_mm = n.child("clamp_point_mm").vector3();
+  p.stiffness_n_per_um = plausible(n.child("stiffness_n_per_um"), kStiffness);
+  p.reference_length_mm = plausible(n.child("reference_length_mm"), kPositiveLength);
+  if (n.has("clamp_point_mm"))
+    p.clamp_point_mm = plausible_vector3(n.child("clamp_point_mm"), kLength);
   if (n.has("axis")) {
     const JsonNode a = n.child("axis");
-    p.axis = a.vector3();
+    p.axis = plausible_vector3(a, kLength);
     if (p.axis == std::array<double, 3>{}) a.fail("must not be [0, 0, 0]");
   }
   return e;
@@ -252,19 +295,19 @@ KinematicsParams read_kinematics(const JsonNode& n) {
   if (const std::string t = type.string(); t != "xyzac-trt")
     type.fail("unknown kinematics type '" + t + "'; known: xyzac-trt");
   k.type = KinematicsType::kXyzacTrt;
-  k.ac.x_rot_point_mm = optional(n, "x_rot_point_mm", 0.0, any);
-  k.ac.y_rot_point_mm = optional(n, "y_rot_point_mm", 0.0, any);
-  k.ac.z_rot_point_mm = optional(n, "z_rot_point_mm", 0.0, any);
-  k.ac.y_offset_mm = optional(n, "y_offset_mm", 0.0, any);
-  k.ac.z_offset_mm = optional(n, "z_offset_mm", 0.0, any);
+  k.ac.x_rot_point_mm = optional(n, "x_rot_point_mm", 0.0, within(kLength));
+  k.ac.y_rot_point_mm = optional(n, "y_rot_point_mm", 0.0, within(kLength));
+  k.ac.z_rot_point_mm = optional(n, "z_rot_point_mm", 0.0, within(kLength));
+  k.ac.y_offset_mm = optional(n, "y_offset_mm", 0.0, within(kLength));
+  k.ac.z_offset_mm = optional(n, "z_offset_mm", 0.0, within(kLength));
   if (n.has("conventional_directions"))
     k.ac.conventional_directions = n.child("conventional_directions").boolean();
   if (n.has("tool")) {
     const JsonNode t = n.child("tool");
     t.allow_only({"length_mm", "radius_mm", "corner_radius_mm"}, "parameter");
-    k.tool.length_mm = optional(t, "length_mm", 0.0, non_negative);
-    k.tool.radius_mm = optional(t, "radius_mm", 0.0, non_negative);
-    k.tool.corner_radius_mm = optional(t, "corner_radius_mm", 0.0, non_negative);
+    k.tool.length_mm = optional(t, "length_mm", 0.0, within(kToolLength));
+    k.tool.radius_mm = optional(t, "radius_mm", 0.0, within(kToolRadius));
+    k.tool.corner_radius_mm = optional(t, "corner_radius_mm", 0.0, within(kToolRadius));
     if (k.tool.corner_radius_mm > k.tool.radius_mm)
       t.child("corner_radius_mm")
           .fail("must not exceed radius_mm (" + format_number(k.tool.radius_mm) + ")");

@@ -98,3 +98,66 @@ TEST(CliRun, DryRunChecksWithoutRunning) {
   EXPECT_NE(std::string::npos, r.out.find("configuration loads without error"));
   EXPECT_TRUE(std::filesystem::is_empty(out));
 }
+
+namespace {
+// A one-thread HAL that records a siggen output into `file`.
+std::filesystem::path recorder_hal(const std::filesystem::path& dir, const std::string& file) {
+  const auto hal = dir / "rec.hal";
+  std::ofstream f(hal);
+  f << "loadrt threads name1=t period1=1000000\n"
+       "loadrt siggen\n"
+       "loadrt recorder file="
+    << file
+    << " columns=s\n"
+       "addf siggen.0.update t\n"
+       "addf recorder.0.sample t\n"
+       "net s siggen.0.sine => recorder.0.s\n";
+  return hal;
+}
+}  // namespace
+
+TEST(CliRun, ARecorderWritesOnlyInsideTheOutputFolder) {
+  // Issue 23: file=/abs/path and file=../x wrote outside --out, exit 0.
+  const auto dir = scratch_dir();
+  const auto out = dir / "out";
+  const std::string outside_abs = (dir / "abs.csv").string();
+  for (const std::string& file : {outside_abs, std::string("../escape.csv")}) {
+    auto r = run_truecut(
+        {"run", recorder_hal(dir, file).string(), "--time", "0.05", "--out", out.string()});
+    EXPECT_EQ(2, r.exit_code) << file << ": " << r.err;
+    EXPECT_NE(
+        std::string::npos,
+        r.err.find("rec.hal:3: loadrt recorder: initialisation failed (Invalid argument): file=" +
+                   file + ": outside the output folder"))
+        << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "abs.csv"));
+    EXPECT_FALSE(std::filesystem::exists(dir / "escape.csv"));
+    EXPECT_FALSE(std::filesystem::exists(dir / "escape.csv.tmp"));
+  }
+  // /dev/null is the one path outside the folder a recorder may name.
+  auto null = run_truecut(
+      {"run", recorder_hal(dir, "/dev/null").string(), "--time", "0.05", "--out", out.string()});
+  EXPECT_EQ(0, null.exit_code) << null.err;
+  // A sub-folder of the output folder is inside it.
+  std::filesystem::create_directories(out / "sub");
+  auto sub = run_truecut(
+      {"run", recorder_hal(dir, "sub/t.csv").string(), "--time", "0.05", "--out", out.string()});
+  EXPECT_EQ(0, sub.exit_code) << sub.err;
+  EXPECT_TRUE(std::filesystem::exists(out / "sub" / "t.csv"));
+}
+
+TEST(CliRun, ARecorderThatCannotCreateItsFileFailsTheLoad) {
+  // Issue 23: the recorder reported "cannot create" during the run and the
+  // run still exited 0 with no trace.
+  const auto dir = scratch_dir();
+  auto r = run_truecut({"run", recorder_hal(dir, "no_such_folder/t.csv").string(), "--time", "0.05",
+                        "--out", (dir / "out").string()});
+  EXPECT_EQ(2, r.exit_code) << r.err;
+  EXPECT_NE(std::string::npos,
+            r.err.find("rec.hal:3: loadrt recorder: initialisation failed (Invalid argument): "
+                       "file=no_such_folder/t.csv: cannot "
+                       "create "))
+      << r.err;
+  EXPECT_NE(std::string::npos, r.err.find("No such file or directory")) << r.err;
+  EXPECT_TRUE(std::filesystem::is_empty(dir / "out")) << "nothing half-written";
+}

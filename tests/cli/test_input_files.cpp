@@ -98,6 +98,40 @@ TEST(InputFiles, ARecordingWithOnlyAHeaderIsRefused) {
   }
 }
 
+TEST(InputFiles, ARecordingWithImpossibleValuesIsRefusedAtItsCell) {
+  // `truecut diagnose` ran on values of 1e154 (their squares overflow) and
+  // `iso230` took a target G of 1e30: both exited 0.
+  const fs::path out = scratch_dir();
+  struct Case {
+    const char* file;
+    const char* row;       // the 31st data row (line 32)
+    const char* expected;  // in the message
+  };
+  const Case cases[] = {
+      {"huge_x.csv", "0.03,0.5,1e154", "huge_x.csv:32: column 3 'x_act': 1e+154 mm is outside"},
+      {"target.csv", "0.03,1e30,0.5", "target.csv:32: column 2 'x_cmd': 1e+30 mm is outside"},
+      {"time.csv", "3e9,0.5,0.5", "time.csv:32: column 1 't': 3e+09 s is outside"},
+  };
+  for (const Case& c : cases) {
+    const fs::path file = out / c.file;
+    {
+      std::ofstream f(file);
+      f << "t,x_cmd,x_act\n";
+      for (int i = 0; i < 30; ++i)
+        f << i * 1e-3 << "," << (i % 10) * 0.1 << "," << (i % 10) * 0.1 << "\n";
+      f << c.row << "\n";
+      for (int i = 31; i < 60; ++i)
+        f << (i + 1) * 1e-3 << ",0.5,0.5\n";
+    }
+    for (const Reader& r : readers(out)) {
+      if (r.args[0] != "diagnose" && r.args[0] != "iso230") continue;
+      const ProcessResult p = run_with({}, r, file.string());
+      EXPECT_EQ(2, p.exit_code) << r.name << ": " << p.err;
+      EXPECT_NE(std::string::npos, p.err.find(c.expected)) << r.name << ": " << p.err;
+    }
+  }
+}
+
 TEST(InputFiles, AnOutputThatIsAnInputIsRefusedAndTheInputKept) {
   // Issue 23: an output path equal to an input path was accepted.
   const fs::path dir = scratch_dir();

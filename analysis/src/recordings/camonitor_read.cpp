@@ -15,6 +15,7 @@
 #include <sstream>
 #include <string_view>
 
+#include "channel_range.hpp"
 #include "line_reader.hpp"
 #include "truecut/analysis/recording.hpp"
 
@@ -169,8 +170,12 @@ Recording read_camonitor(const std::filesystem::path& file, const RecordingOptio
                            std::string(tok[2]) + "' (expected YYYY-MM-DD HH:MM:SS.ffffff)");
     if (!parse_number(tok[3], value))
       throw RecordingError(where() + ": value '" + std::string(tok[3]) + "' is not a number");
-    for (std::size_t c : it->second)
+    for (std::size_t c : it->second) {
+      if (const std::string bad = detail::implausible_value(channels[c], value * scales[c]);
+          !bad.empty())
+        throw RecordingError(where() + ": " + bad);
       events.push_back({time, c, value * scales[c]});
+    }
   }
 
   Recording rec;

@@ -6,6 +6,7 @@
 #include <map>
 #include <string_view>
 
+#include "channel_range.hpp"
 #include "line_reader.hpp"
 #include "truecut/analysis/recording.hpp"
 #include "truecut/rt/number_format.hpp"
@@ -199,6 +200,38 @@ std::vector<Binding> bind_channels(const std::string& at, const std::vector<std:
 
 }  // namespace
 
+namespace detail {
+
+namespace {
+// What a value of a channel may be, and why: beyond these a value is a unit
+// mix-up or a corrupt row, and the fits downstream overflow on it (1e154
+// squared is inf).
+struct ChannelRange {
+  double limit;  // |value| <= limit
+  const char* why;
+};
+ChannelRange plausible_range(const std::string& channel) {
+  const std::string unit = unit_of(channel);
+  if (unit == "s") return {1e9, "a recording of more than 31 years"};
+  if (unit == "deg") return {1e7, "more than 27,778 turns"};
+  if (unit == "mm") return {1e5, "no machine is larger than 100 m"};
+  if (unit == "mm/s") return {1e6, "a feed over 1 km/s"};
+  if (unit == "kW") return {1e4, "a spindle over 10 MW"};
+  return {1e9, "a line or tool number over 1e9"};
+}
+
+}  // namespace
+
+std::string implausible_value(const std::string& channel, double value) {
+  const ChannelRange r = plausible_range(channel);
+  if (std::fabs(value) <= r.limit) return "";
+  return rt::format_shortest(value) + " " + unit_of(channel) + " is outside -" +
+         rt::format_shortest(r.limit) + " .. " + rt::format_shortest(r.limit) + " (" + r.why +
+         "; check the unit or the --map factor)";
+}
+
+}  // namespace detail
+
 RecordingHeader stream_recording(const std::filesystem::path& path, const RecordingOptions& options,
                                  const RowSink& sink) {
   const std::string file = path.string();
@@ -263,6 +296,8 @@ RecordingHeader stream_recording(const std::filesystem::path& path, const Record
       if (!parse_number(*text, v))
         throw RecordingError(where() + ": '" + fields[b.column] + "' is not a finite number");
       row[k] = v * b.source.scale;
+      if (const std::string bad = detail::implausible_value(b.channel, row[k]); !bad.empty())
+        throw RecordingError(where() + ": " + bad);
     }
     const double t = row[0];
     if (index > 0 && !(t > last_t))

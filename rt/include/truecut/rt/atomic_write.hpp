@@ -22,11 +22,14 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <string_view>
 #include <utility>
 #include <vector>
+
+#include "truecut/rt/interrupt_cleanup.hpp"
 
 namespace truecut::rt {
 
@@ -53,7 +56,8 @@ void write_file_atomically(const std::filesystem::path& path, std::string_view b
 // the constructor refuses a PATH that is not replaceable and creates PATH.tmp
 // (a regular file, never through a symbolic link); write() appends;
 // commit() syncs it and renames it over PATH. Destroyed without commit (an
-// exception on the way), PATH.tmp is removed and PATH is as it was. Each
+// exception on the way), PATH.tmp is removed and PATH is as it was; so it is
+// when the process is interrupted (interrupt_cleanup.hpp). Each
 // write() is one system call or more: callers batch small pieces.
 class AtomicFileWriter {
  public:
@@ -69,6 +73,7 @@ class AtomicFileWriter {
 
  private:
   std::filesystem::path path_, tmp_path_;
+  PendingFile pending_{tmp_path_};
   int fd_ = -1;
   bool committed_ = false;
 };
@@ -79,7 +84,8 @@ void copy_file_atomically(const std::filesystem::path& from, const std::filesyst
 // Several files replaced together: each is first written to TARGET+suffix;
 // commit() renames them in order once all are written. Without commit (an
 // exception on the way) the destructor removes the staged files and no
-// target has changed. The renames are not one atomic step: if one of them
+// target has changed (nor after SIGINT or SIGTERM, when main() installed
+// remove_pending_files_on_signals()). The renames are not one atomic step: if one of them
 // fails (rare: same folder, same file system), the earlier ones stay done.
 class StagedFiles {
  public:
@@ -101,6 +107,7 @@ class StagedFiles {
  private:
   std::vector<std::filesystem::path> targets_;
   std::string suffix_;
+  std::vector<std::unique_ptr<PendingFile>> pending_;
   bool committed_ = false;
 };
 

@@ -1,0 +1,72 @@
+#include "truecut/rt/interrupt_cleanup.hpp"
+
+#include <signal.h>
+#include <unistd.h>
+
+#include <array>
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+
+namespace truecut::rt {
+namespace {
+
+enum SlotState : int { kFree = 0, kFilling = 1, kReady = 2 };
+
+struct Slot {
+  std::atomic<int> state{kFree};
+  char path[kMaxPendingPathBytes];
+};
+
+std::array<Slot, kMaxPendingFiles> g_slots;
+
+extern "C" void remove_pending_and_reraise(int sig) {
+  const int saved_errno = errno;
+  for (Slot& s : g_slots)
+    if (s.state.load(std::memory_order_acquire) == kReady) ::unlink(s.path);
+  errno = saved_errno;
+  // Back to the default action (also when the handler was re-installed by
+  // std::signal, without SA_RESETHAND), so the signal ends the process with
+  // the status a shell expects (130 for Ctrl-C).
+  ::signal(sig, SIG_DFL);
+  ::raise(sig);
+}
+
+}  // namespace
+
+PendingFile::PendingFile(const std::filesystem::path& path) noexcept {
+  const std::string& text = path.native();
+  if (text.size() + 1 > kMaxPendingPathBytes) return;
+  for (std::size_t i = 0; i < g_slots.size(); ++i) {
+    int expected = kFree;
+    if (!g_slots[i].state.compare_exchange_strong(expected, kFilling, std::memory_order_acq_rel))
+      continue;
+    std::memcpy(g_slots[i].path, text.c_str(), text.size() + 1);
+    g_slots[i].state.store(kReady, std::memory_order_release);
+    slot_ = static_cast<int>(i);
+    return;
+  }
+}
+
+PendingFile::~PendingFile() {
+  if (slot_ >= 0)
+    g_slots[static_cast<std::size_t>(slot_)].state.store(kFree, std::memory_order_release);
+}
+
+void remove_pending_files_on_signals() {
+  struct sigaction sa {};
+  sa.sa_handler = remove_pending_and_reraise;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESETHAND;
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP})
+    sigaction(sig, &sa, nullptr);
+}
+
+std::size_t pending_file_count() noexcept {
+  std::size_t n = 0;
+  for (const Slot& s : g_slots)
+    n += s.state.load(std::memory_order_acquire) == kReady;
+  return n;
+}
+
+}  // namespace truecut::rt
