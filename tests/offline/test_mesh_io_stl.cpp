@@ -214,5 +214,35 @@ TEST(MeshIoStl, BinaryHeaderMustNotStartWithSolidWhenWriting) {
   EXPECT_EQ(test_util::files_in(dir), 0u);
 }
 
+TEST(MeshIoStl, AMistypedAsciiHeaderIsNamedAsSuch) {
+  // Issue 23: "solud" was read as binary and reported 807,434,341 facets.
+  auto dir = test::scratch_dir();
+  const std::string body =
+      " facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n   vertex 1 0 0\n"
+      "   vertex 0 1 0\n  endloop\n endfacet\nendsolid x\n";
+  write_bytes(dir / "typo.stl", "solud x\n" + body);
+  expect_error([&] { read_stl(dir / "typo.stl"); },
+               {"typo.stl", "looks like an ASCII STL", "does not start with 'solid'",
+                "first line is 'solud x'"});
+  write_bytes(dir / "notes.stl", "these are my notes about the part\nnothing else\n");
+  expect_error([&] { read_stl(dir / "notes.stl"); },
+               {"notes.stl", "is text, not an STL", "'these are my notes about the part'"});
+}
+
+TEST(MeshIoStl, ACoordinateBeyondAnyPartIsRefusedNotCalledDegenerate) {
+  // Issue 23: a corner at 1e39 mm was reported as a degenerate facet.
+  auto dir = test::scratch_dir();
+  write_bytes(dir / "big.stl",
+              "solid x\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n"
+              "   vertex 1e39 0 0\n   vertex 0 1 0\n  endloop\n endfacet\nendsolid x\n");
+  expect_error([&] { read_stl(dir / "big.stl"); },
+               {"big.stl", "facet 0 corner 1 (1e+39, 0, 0) is outside", "check the unit"});
+  // 1 km is still a part (a bridge girder).
+  write_bytes(dir / "large.stl",
+              "solid x\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n"
+              "   vertex 999999 0 0\n   vertex 0 999999 0\n  endloop\n endfacet\nendsolid x\n");
+  EXPECT_EQ(1u, read_stl(dir / "large.stl").triangles.size());
+}
+
 }  // namespace
 }  // namespace truecut::offline

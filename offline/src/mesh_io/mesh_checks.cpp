@@ -51,6 +51,19 @@ void handle_degenerate_triangles(std::vector<Triangle>& triangles,
                                  std::string_view word, MeshReadReport& report) {
   const bool mapped = !source_face.empty();
   auto face_of = [&](std::size_t i) { return mapped ? std::size_t{source_face[i]} : i; };
+  // Before the area test: a corner at 1e39 mm makes any facet look like a
+  // sliver, and the message would blame its shape instead of its size.
+  for (std::size_t i = 0; i < triangles.size(); ++i) {
+    for (int corner = 0; corner < 3; ++corner) {
+      const Eigen::Vector3d& p = vertices[triangles[i][corner]];
+      if (p.cwiseAbs().maxCoeff() <= kMaxCoordinateMm) continue;
+      std::string msg = std::string(word) + " " + std::to_string(face_of(i)) + " corner " +
+                        std::to_string(corner) + " " + format_point(p) + " is outside ±";
+      append_double(msg, kMaxCoordinateMm);
+      msg += " mm (no part is larger than 1 km; check the unit)";
+      throw MeshIoError(file, msg);
+    }
+  }
   std::size_t kept = 0;
   for (std::size_t i = 0; i < triangles.size(); ++i) {
     const Triangle& t = triangles[i];

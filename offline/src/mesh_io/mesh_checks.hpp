@@ -30,7 +30,11 @@ void check_finite(const std::vector<Eigen::Vector3d>& points,
 bool is_degenerate(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
                    double tolerance);
 
-// Applies options.degenerate_faces. source_face[i] is the index in the file of
+// A mesh coordinate beyond this is a unit mix-up or a corrupt file.
+inline constexpr double kMaxCoordinateMm = 1e6;
+
+// Refuses a corner outside ±kMaxCoordinateMm, naming the face; then
+// applies options.degenerate_faces. source_face[i] is the index in the file of
 // the face triangle i came from (empty: i itself); faces with more than one
 // triangle are fan-triangulated polygons. `word` names faces in messages
 // ("facet", "face"). Records what it drops in report (count and list).

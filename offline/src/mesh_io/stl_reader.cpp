@@ -253,6 +253,24 @@ TriangleMesh read_stl(const std::filesystem::path& file, const MeshReadOptions& 
   MeshReadReport& rep = report ? *report : local;
   rep = MeshReadReport{};
   rep.format = MeshFormat::kStl;
+  // Text that is not a binary STL of the right size but does not start with
+  // 'solid' (a typo, another format): read as binary, its first bytes would
+  // give a nonsense facet count.
+  const std::string_view sniffed(head, sniff);
+  if (!ascii && looks_like_text(sniffed) && !binary_stl_size_matches(sniffed, in.file_size())) {
+    const std::size_t end = std::min(sniffed.find_first_of("\r\n"), std::size_t{40});
+    const std::string first(sniffed.substr(0, end));
+    if (sniffed.find("facet") != std::string_view::npos ||
+        sniffed.find("vertex") != std::string_view::npos)
+      throw MeshIoError(file,
+                        "looks like an ASCII STL (text with 'facet' and 'vertex') but does "
+                        "not start with 'solid': its first line is '" +
+                            first + "'");
+    throw MeshIoError(file,
+                      "is text, not an STL: an ASCII STL starts with 'solid', this file "
+                      "with '" +
+                          first + "'");
+  }
   TriangleMesh mesh = ascii ? read_ascii(in, options, rep) : read_binary(in, options, rep);
   std::vector<std::uint32_t> identity;
   handle_degenerate_triangles(mesh.triangles, identity, mesh.vertices_mm, options, file, "facet",
