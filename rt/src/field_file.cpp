@@ -319,7 +319,7 @@ class Decoder {
     s << (channel < 3 ? "non-finite value " : "weight outside [0, 1]: ") << value
       << " in payload: layer " << layer << " (tool " << tools[layer] << "), node (i, j, k) = (" << i
       << ", " << j << ", " << k << "), channel " << kChannelNames[channel]
-      << ", payload byte offset " << payload_offset - static_cast<std::ptrdiff_t>(sizeof(double));
+      << ", payload byte offset " << payload_offset;
     return s.str();
   }
 

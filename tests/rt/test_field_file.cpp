@@ -265,8 +265,10 @@ TEST(FieldFile, NonFinitePayloadValueNamesLayerNodeAndChannel) {
   const std::size_t at = payload_offset(bad) + (60 + node) * 32 + 1 * 8;  // tool 7, dy
   const double nan = std::nan("");
   std::memcpy(&bad[at], &nan, sizeof nan);  // NaN bytes are symmetric enough; endianness moot
-  expect_error(with_fresh_crc(bad), {"non-finite value nan", "layer 1 (tool 7)",
-                                     "node (i, j, k) = (2, 1, 4)", "channel dy"});
+  // The offset of the value itself (issue 23: the first value was reported at -8).
+  expect_error(with_fresh_crc(bad),
+               {"non-finite value nan", "layer 1 (tool 7)", "node (i, j, k) = (2, 1, 4)",
+                "channel dy", "payload byte offset " + std::to_string(at - payload_offset(bad))});
 
   std::string heavy = encode_field_file(field, kInfo);
   const double w = 1.25;
@@ -275,8 +277,9 @@ TEST(FieldFile, NonFinitePayloadValueNamesLayerNodeAndChannel) {
   const std::size_t wat = payload_offset(heavy) + 0 * 32 + 3 * 8;  // tool 2, node 0, weight
   for (int b = 0; b < 8; ++b, bits >>= 8)
     heavy[wat + b] = static_cast<char>(bits & 0xFF);
-  expect_error(with_fresh_crc(heavy), {"weight outside [0, 1]: 1.25", "layer 0 (tool 2)",
-                                       "node (i, j, k) = (0, 0, 0)", "channel weight"});
+  expect_error(with_fresh_crc(heavy),
+               {"weight outside [0, 1]: 1.25", "layer 0 (tool 2)", "node (i, j, k) = (0, 0, 0)",
+                "channel weight", "payload byte offset 24"});
 }
 
 TEST(FieldFile, ToleratesCarriageReturnsInTheHeader) {

@@ -25,8 +25,28 @@ struct Entry {
 
 void check_rewrite(const std::string& text, const CheckInput& in) {
   const CanonProgram out = Interpreter(in.options).run_text(text, in.name);
+  // A call of the original at its own file (the program or a subroutine file).
+  auto fail_at = [&](const CallContext& at, const std::string& what) {
+    const std::string& file = at.file > 0 && at.file < static_cast<int>(in.original.files.size())
+                                  ? in.original.files[static_cast<std::size_t>(at.file)]
+                                  : in.name;
+    throw GcodeError({file, at.line, 0}, "cannot be rewritten: " + what);
+  };
   auto fail = [&](int line, const std::string& what) {
-    throw GcodeError({in.name, line, 0}, "cannot be rewritten: " + what);
+    CallContext at;
+    at.line = line;
+    fail_at(at, what);
+  };
+  // Where a call of the new program comes from, in words that cannot be
+  // mistaken for a line of the original program.
+  auto where_new = [&](const CanonCall& c, bool mapped_to_original) -> std::string {
+    const std::string line = "line " + std::to_string(c.context.line);
+    if (c.context.file != 0)
+      return line + " of " +
+             (c.context.file < static_cast<int>(out.files.size())
+                  ? out.files[static_cast<std::size_t>(c.context.file)]
+                  : std::string("a subroutine file"));
+    return mapped_to_original ? line : line + " of the new program";
   };
 
   std::vector<Entry> kept_in, kept_out;
@@ -38,6 +58,7 @@ void check_rewrite(const std::string& text, const CheckInput& in) {
   }
   std::map<int, std::vector<const CanonCall*>> moves_out;  // by original line
   std::vector<CanonCall> mapped;
+  std::vector<std::string> where_out;  // per mapped call
   mapped.reserve(out.calls.size());
   feed = 0;
   std::vector<double> feeds;
@@ -45,6 +66,7 @@ void check_rewrite(const std::string& text, const CheckInput& in) {
     if (const auto* f = std::get_if<SetFeedRate>(&c.op)) feed = f->units_per_minute;
     if (c.context.file != 0 || c.context.line < 1 ||
         c.context.line > static_cast<int>(in.origin.size())) {
+      where_out.push_back(where_new(c, false));
       mapped.push_back(c);
       feeds.push_back(feed);
       continue;
@@ -53,6 +75,7 @@ void check_rewrite(const std::string& text, const CheckInput& in) {
     if (o.kind == OutputLine::kVerbatim) {
       CanonCall m = c;
       m.context.line = o.source_line;
+      where_out.push_back(where_new(m, true));
       mapped.push_back(std::move(m));
       feeds.push_back(feed);
     } else if (o.kind == OutputLine::kMove && is_motion(c.op)) {
@@ -61,6 +84,7 @@ void check_rewrite(const std::string& text, const CheckInput& in) {
   }
   for (size_t i = 0; i < mapped.size(); ++i)
     kept_out.push_back({&mapped[i], feeds[i]});
+  std::vector<std::string> kept_where = std::move(where_out);
 
   FormatOptions fmt;
   fmt.decimals = 9;
@@ -72,15 +96,15 @@ void check_rewrite(const std::string& text, const CheckInput& in) {
                       same_context(a.context, b.context) &&
                       (!is_motion(a.op) || kept_in[i].feed == kept_out[i].feed);
     if (!same)
-      fail(a.context.line, "the new program does not reproduce " + format_rs274(a.op, fmt) +
-                               " of this line (got " + format_rs274(b.op, fmt) + " at line " +
-                               std::to_string(b.context.line) +
-                               "); a modal state set by the rewritten moves differs");
+      fail_at(a.context, "the new program does not reproduce " + format_rs274(a.op, fmt) +
+                             " of this line (got " + format_rs274(b.op, fmt) + " at " +
+                             kept_where[i] + "); a modal state set by the rewritten moves differs");
   }
   if (kept_in.size() != kept_out.size())
-    fail(n < kept_in.size() ? kept_in[n].call->context.line : 0,
-         "the new program makes " + std::to_string(kept_out.size()) +
-             " calls outside the rewritten lines, the original " + std::to_string(kept_in.size()));
+    fail_at(n < kept_in.size() ? kept_in[n].call->context : CallContext{},
+            "the new program makes " + std::to_string(kept_out.size()) +
+                " calls outside the rewritten lines, the original " +
+                std::to_string(kept_in.size()));
 
   for (const auto& [line, rw] : in.rewritten) {
     const auto it = moves_out.find(line);
