@@ -182,6 +182,15 @@ int run_machine(const std::vector<std::string>& argv) {
           double(t.latency.max_ns()) * 1e-3, double(t.compute.percentile_ns(0.5)) * 1e-3,
           double(t.compute.max_ns()) * 1e-3);
   }
+  if (job.field)
+    std::printf("  correction  max %.4g mm: limited in %d cycles\n", job.max_correction_mm,
+                r.clamped_cycles);
+  if (r.clamped_cycles > 0)
+    std::fprintf(stderr,
+                 "truecut run: WARNING: --max-correction %.4g mm limited the field's correction "
+                 "in %d servo cycles: the part got less correction than %s asks for; raise "
+                 "--max-correction or check the field\n",
+                 job.max_correction_mm, r.clamped_cycles, job.field->string().c_str());
   std::printf("  output      %s/{machined.stl,machined.ply,trace.csv,soft_cnc.hal,run.ini}\n",
               job.out_dir.string().c_str());
   if (!measure_machined_part(measure, job.out_dir / "machined.stl")) return kExitFailure;

@@ -139,6 +139,7 @@ SoftCncResult run_soft_cnc(const SoftCncJob& given, const SoftCncProgress& progr
   result.limit_fault_line = hook.limit_fault_line;
   result.field_generation = h.get_pin_or_param("comp.field-generation").s;
   result.field_load_errors = h.get_pin_or_param("comp.load-errors").s;
+  result.clamped_cycles = h.get_pin_or_param("comp.clamp-count").s;
   result.output_errors = h.unload();  // the recorder and the cutting write their files
   return result;
 }

@@ -77,6 +77,9 @@ struct SoftCncResult {
   int32_t limit_fault_line = 0;  // program line at the service point (10 ms) that first saw it
   int32_t field_generation = 0;  // fields truecut_comp took into use
   int32_t field_load_errors = 0;
+  // Cycles in which max-correction limited the field's correction
+  // (comp.clamp-count): the part got less correction than the field asked.
+  int32_t clamped_cycles = 0;
   // Errors the components reported while writing their files at the end
   // (machined.stl, trace.csv: a full disk, a folder gone); messages on stderr.
   int32_t output_errors = 0;
