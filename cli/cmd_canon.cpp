@@ -1,5 +1,9 @@
 // truecut canon PROGRAM.ngc: print the canonical machining calls of a G-code
 // program in the layout of LinuxCNC's standalone interpreter `rs274`.
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -37,6 +41,7 @@ const char* kCanonHelp =
     "  --spline-report     for each BSPLINE/CSPLINE run: contour error Er against the\n"
     "                      programmed polyline before and after node insertion\n"
     "  --spline-tolerance MM  node insertion tolerance (default 0.025, the CAM tolerance)\n"
+    "  --quiet             no progress on stderr (shown only on a terminal, after 1 s)\n"
     "  --help              this text\n";
 
 std::string annotation(const interp::CanonProgram& prog, const interp::CanonCall& c) {
@@ -82,6 +87,7 @@ int cmd_canon(const std::vector<std::string>& argv) {
                       {"list-operations", false},
                       {"spline-report", false},
                       {"spline-tolerance", true},
+                      {"quiet", false},
                       {"help", false}});
   if (a.flag("help")) {
     std::fputs(kCanonHelp, stdout);
@@ -97,7 +103,26 @@ int cmd_canon(const std::vector<std::string>& argv) {
     if (auto t = a.value("tool-table")) options.tools = interp::ToolTable::load(*t);
     options.block_delete = a.flag("block-delete");
     options.has_b = a.flag("b-axis");
-    program = interp::Interpreter(std::move(options)).run_file(a.positionals()[0]);
+    // A long program shows the blocks it has run, on a terminal only, once
+    // it has taken a second.
+    const auto start = std::chrono::steady_clock::now();
+    bool shown = false;
+    if (!a.flag("quiet") && isatty(STDERR_FILENO))
+      options.progress = [&](std::int64_t blocks) {
+        const double s =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (s < 1.0) return;
+        std::fprintf(stderr, "\rcanon: %lld blocks interpreted (%.0f s)",
+                     static_cast<long long>(blocks), s);
+        shown = true;
+      };
+    try {
+      program = interp::Interpreter(std::move(options)).run_file(a.positionals()[0]);
+    } catch (...) {
+      if (shown) std::fputs("\n", stderr);
+      throw;
+    }
+    if (shown) std::fputs("\n", stderr);
   } catch (const interp::GcodeError& e) {
     std::fprintf(stderr, "%s\n", e.what());
     return kExitUsage;

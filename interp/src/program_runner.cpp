@@ -196,6 +196,9 @@ bool ProgramRunner::step() {
     fail(file.lines[frame.pc], 1,
          "more than " + std::to_string(options_.max_blocks) +
              " blocks executed: endless loop? (InterpreterOptions::max_blocks)");
+  if (options_.progress && options_.progress_every_blocks > 0 &&
+      blocks_ % options_.progress_every_blocks == 0)
+    options_.progress(blocks_);
   const LexedLine& line = file.lines[frame.pc];
   if (line.text.empty() && line.sinumerik.empty()) {
     ++frame.pc;

@@ -2,7 +2,9 @@
 // else, while, do-while, repeat, break, continue.
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <fstream>
+#include <vector>
 
 #include "interp_test_util.hpp"
 #include "test_paths.hpp"
@@ -91,6 +93,20 @@ TEST(ControlFlow, RunawayLoopIsStopped) {
   o.max_blocks = 1000;
   auto e = error_of("o1 while [1]\n G0 X1\no1 endwhile\nM2\n", o);
   EXPECT_NE(e.message().find("endless loop"), std::string::npos);
+}
+
+TEST(ControlFlow, ProgressIsReportedEveryNBlocks) {
+  // A loop of 3 blocks run 100 times plus the program's own blocks: the
+  // callback sees every 50th block, counting loops and subroutines too.
+  InterpreterOptions o;
+  std::vector<std::int64_t> seen;
+  o.progress = [&](std::int64_t blocks) { seen.push_back(blocks); };
+  o.progress_every_blocks = 50;
+  Interpreter(o).run_text(
+      "#1 = 0\no1 while [#1 LT 100]\n G0 X#1\n #1 = [#1 + 1]\no1 endwhile\nM2\n", "p.ngc");
+  ASSERT_GE(seen.size(), 6u);
+  for (std::size_t i = 0; i < seen.size(); ++i)
+    EXPECT_EQ(std::int64_t(50 * (i + 1)), seen[i]);
 }
 
 TEST(ControlFlow, Errors) {

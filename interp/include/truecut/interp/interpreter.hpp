@@ -27,6 +27,10 @@ struct InterpreterOptions {
   std::vector<std::filesystem::path> subroutine_path;
   // Guard against programs that never end (runaway while loops).
   std::int64_t max_blocks = 50'000'000;
+  // Called with the number of blocks executed so far after every
+  // progress_every_blocks blocks (a long program shows progress); unset: never.
+  std::function<void(std::int64_t blocks)> progress;
+  std::int64_t progress_every_blocks = 1 << 16;
 };
 
 class Interpreter {
