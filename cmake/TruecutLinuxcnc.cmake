@@ -41,13 +41,18 @@ if(CMAKE_SYSTEM_PROCESSOR MATCHES "x86_64|i.86")
   list(APPEND TRUECUT_LINUXCNC_FLAGS -mieee-fp)
 endif()
 
-# truecut_linuxcnc_module(<target> MODULE <name> LINUXCNC_SOURCES... [SOURCES...] [DEPS...])
+# truecut_linuxcnc_module(<target> MODULE <name> LINUXCNC_SOURCES... [SOURCES...] [DEPS...]
+#                         [OUTPUT_DIR dir] [NO_INSTALL])
 # A LinuxCNC module `<name>.so`: LINUXCNC_SOURCES include LinuxCNC's headers
 # and get its flags; SOURCES and DEPS are compiled as in the rest of the tree.
+# NO_INSTALL: a module for tests, never installed.
 # Only rtapi_app's entry points and module parameters are exported (the
 # version script; LinuxCNC's macros do not mark them visible).
 function(truecut_linuxcnc_module target)
-  cmake_parse_arguments(M "" "MODULE" "LINUXCNC_SOURCES;SOURCES;DEPS" ${ARGN})
+  cmake_parse_arguments(M "NO_INSTALL" "MODULE;OUTPUT_DIR" "LINUXCNC_SOURCES;SOURCES;DEPS" ${ARGN})
+  if(NOT M_OUTPUT_DIR)
+    set(M_OUTPUT_DIR ${TRUECUT_LINUXCNC_MODULE_BUILD_DIR})
+  endif()
   add_library(${target} MODULE ${M_LINUXCNC_SOURCES} ${M_SOURCES})
   set_source_files_properties(${M_LINUXCNC_SOURCES} TARGET_DIRECTORY ${target} PROPERTIES
                               COMPILE_OPTIONS "${TRUECUT_LINUXCNC_FLAGS}")
@@ -57,8 +62,10 @@ function(truecut_linuxcnc_module target)
                         -Wl,-Bsymbolic
                         -Wl,--version-script=${PROJECT_SOURCE_DIR}/rt/linuxcnc/module.ver)
   set_target_properties(${target} PROPERTIES PREFIX "" OUTPUT_NAME ${M_MODULE}
-                        LIBRARY_OUTPUT_DIRECTORY ${TRUECUT_LINUXCNC_MODULE_BUILD_DIR}
+                        LIBRARY_OUTPUT_DIRECTORY ${M_OUTPUT_DIR}
                         LINK_DEPENDS ${PROJECT_SOURCE_DIR}/rt/linuxcnc/module.ver)
-  install(TARGETS ${target} LIBRARY DESTINATION ${TRUECUT_LINUXCNC_MODULE_DIR}
-          COMPONENT linuxcnc EXCLUDE_FROM_ALL)
+  if(NOT M_NO_INSTALL)
+    install(TARGETS ${target} LIBRARY DESTINATION ${TRUECUT_LINUXCNC_MODULE_DIR}
+            COMPONENT linuxcnc EXCLUDE_FROM_ALL)
+  endif()
 endfunction()

@@ -1,0 +1,38 @@
+#!/bin/sh
+# halrun_private.sh MODULE_DIRS WORK_DIR HAL_FILE
+#
+# Runs LinuxCNC's `halrun -f HAL_FILE` with the modules (*.so) of
+# MODULE_DIRS (folders separated by ':') loadable by name, without touching the system: in a private mount and IPC
+# namespace (unshare -m -i), LinuxCNC's module folder is replaced by WORK_DIR/modules,
+# which holds links to the stock modules plus copies of MODULE_DIRS'; its own HAL
+# shared memory never meets another session's, so tests may run side by side.
+# rtapi_app refuses to run as root: halrun runs as the user `nobody`, with
+# HOME=WORK_DIR (which must be writable by nobody). Needs root (to mount).
+set -eu
+if [ "$#" -ne 3 ]; then
+  echo "usage: $0 MODULE_DIRS WORK_DIR HAL_FILE" >&2
+  exit 2
+fi
+if [ -z "${TRUECUT_HALRUN_PRIVATE_INSIDE:-}" ]; then
+  TRUECUT_HALRUN_PRIVATE_INSIDE=1 exec unshare --mount --ipc --propagation private sh "$0" "$@"
+fi
+module_dirs=$1 work=$2 hal_file=$3
+system_dir=$(dirname "$(command -v rtapi_app)")/../lib/linuxcnc/modules
+system_dir=$(cd "$system_dir" && pwd -P)
+mkdir -p "$work/stock" "$work/modules"
+mount --bind "$system_dir" "$work/stock"
+for m in "$work"/stock/*.so; do
+  ln -sf "$m" "$work/modules/"
+done
+old_ifs=$IFS
+IFS=:
+for d in $module_dirs; do
+  IFS=$old_ifs
+  for m in "$d"/*.so; do
+    [ -e "$m" ] && cp "$m" "$work/modules/"
+  done
+done
+IFS=$old_ifs
+mount --bind "$work/modules" "$system_dir"
+cd "$work"
+exec runuser -u nobody -- env HOME="$work" halrun -f "$hal_file"
