@@ -493,3 +493,39 @@ TEST(LinuxcncModule, TcpModeIsBitIdenticalToTheShim) {
               }};
   compare(sc);
 }
+
+// Joint mode (xyzac-trt kinematics): the A/C table turning under a moving
+// tool, fade in, a soft limit that clips X, a per-joint limit on Y, A
+// outside its travel (kinematics fault), non-finite input.
+TEST(LinuxcncModule, JointModeIsBitIdenticalToTheShim) {
+  if (const std::string missing = linuxcnc_missing(); !missing.empty())
+    TRUECUT_ORACLE_MISSING(missing);
+  FieldSpec spec;
+  spec.origin_mm = {-40.0, -40.0, -30.0};
+  spec.dims = {17, 17, 13};
+  spec.scale = 4.0;
+  const auto field = write_field(scratch_dir() / "field.tcf", spec);
+  Scenario sc{"joint", field.string(), [](const std::string& pin, int i, double fallback) {
+                const double t = i * kPeriodS;
+                if (pin == "enable") return i >= 100 ? 1.0 : 0.0;
+                if (pin == "tool") return 1.0;
+                if (pin == "fade-time") return 0.2;
+                if (pin == "x-rot-point") return 5.0;
+                if (pin == "y-rot-point") return -3.0;
+                if (pin == "z-rot-point") return 20.0;
+                if (pin == "z-offset") return -12.0;
+                if (pin == "tool-offset") return 50.0;
+                if (pin == "joint-x") return 3.0 + 5.0 * smooth(t, 0.5);
+                if (pin == "joint-y") return -7.0 + 5.0 * std::cos(M_PI * t);
+                if (pin == "joint-z") return 60.0 + 3.0 * smooth(t, 0.3);
+                if (pin == "joint-a") return 25.0 + 10.0 * smooth(t, 0.4);
+                if (pin == "joint-c")
+                  return i >= 2200 && i < 2204 ? std::numeric_limits<double>::infinity()
+                                               : 40.0 + 90.0 * t;
+                if (pin == "joint-x-max-limit" && i >= 300 && i < 700) return 6.0;
+                if (pin == "joint-y-max-correction" && i >= 1700 && i < 1900) return 0.05;
+                if (pin == "a-max" && i >= 2000 && i < 2100) return 10.0;
+                return fallback;
+              }};
+  compare(sc);
+}
