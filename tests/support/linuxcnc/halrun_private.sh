@@ -2,10 +2,13 @@
 # halrun_private.sh MODULE_DIRS WORK_DIR HAL_FILE
 #
 # Runs LinuxCNC's `halrun -f HAL_FILE` with the modules (*.so) of
-# MODULE_DIRS (folders separated by ':') loadable by name, without touching the system: in a private mount and IPC
-# namespace (unshare -m -i), LinuxCNC's module folder is replaced by WORK_DIR/modules,
-# which holds links to the stock modules plus copies of MODULE_DIRS'; its own HAL
-# shared memory never meets another session's, so tests may run side by side.
+# MODULE_DIRS (folders separated by ':') loadable by name, without touching
+# the system, in private namespaces (unshare):
+#   mount: LinuxCNC's module folder is replaced by WORK_DIR/modules, which
+#          holds links to the stock modules and copies of MODULE_DIRS' ones;
+#   ipc, net, pid: the session's HAL shared memory, rtapi_app's socket and
+#          halrun's "realtime already running" check (ps -C rtapi_app) never
+#          meet another session's, so tests may run side by side.
 # rtapi_app refuses to run as root: halrun runs as the user `nobody`, with
 # HOME=WORK_DIR (which must be writable by nobody). Needs root (to mount).
 set -eu
@@ -14,7 +17,8 @@ if [ "$#" -ne 3 ]; then
   exit 2
 fi
 if [ -z "${TRUECUT_HALRUN_PRIVATE_INSIDE:-}" ]; then
-  TRUECUT_HALRUN_PRIVATE_INSIDE=1 exec unshare --mount --ipc --propagation private sh "$0" "$@"
+  TRUECUT_HALRUN_PRIVATE_INSIDE=1 exec unshare --mount --ipc --net --pid --fork --mount-proc \
+    --propagation private sh "$0" "$@"
 fi
 module_dirs=$1 work=$2 hal_file=$3
 system_dir=$(dirname "$(command -v rtapi_app)")/../lib/linuxcnc/modules
