@@ -30,6 +30,7 @@
 #include <string>
 #include <vector>
 
+#include "linuxcnc_support.hpp"
 #include "oracle.hpp"
 #include "run_process.hpp"
 #include "test_truecut_comp_support.hpp"
@@ -53,21 +54,6 @@ constexpr long kPeriodNs = 500000;
 constexpr double kPeriodS = kPeriodNs * 1e-9;
 const std::string kThreads =
     "loadrt threads name1=servo-thread period1=" + std::to_string(kPeriodNs) + "\n";
-
-// What a test needs to run LinuxCNC; empty when everything is there.
-std::string linuxcnc_missing() {
-  if (std::string(TRUECUT_LINUXCNC_MODULE_DIR).empty())
-    return "LinuxCNC development files (the module was not built): install linuxcnc-uspace and "
-           "linuxcnc-uspace-dev (tools/install-deps.sh) and configure again";
-  for (const char* p : {"halrun", "halstreamer", "halsampler", "rtapi_app"})
-    if (!find_on_path(p)) return std::string("LinuxCNC's ") + p + ": install linuxcnc-uspace";
-  for (const char* p : {"unshare", "runuser", "mount"})
-    if (!find_on_path(p)) return std::string(p) + ": install util-linux";
-  if (::geteuid() != 0)
-    return "root, to run halrun in a private mount namespace with the modules built here "
-           "(tests/support/linuxcnc/halrun_private.sh)";
-  return {};
-}
 
 struct PinSpec {
   std::string name;  // without the instance prefix "c."
@@ -397,11 +383,7 @@ LinuxcncRun run_linuxcnc(const Scenario& sc, const PinLists& lists,
     }
     out << "stop\n";
   }
-  const std::string module_dirs =
-      std::string(TRUECUT_LINUXCNC_MODULE_DIR) + ":" + TRUECUT_LINUXCNC_TEST_MODULE_DIR;
-  const ProcessResult r =
-      run_process({"/bin/sh", TRUECUT_SOURCE_DIR "/tests/support/linuxcnc/halrun_private.sh",
-                   module_dirs, work.string(), hal_file.string()});
+  const ProcessResult r = run_linuxcnc_private(work, {"halrun", "-f", hal_file.string()});
   LinuxcncRun run;
   run.log =
       "halrun exit " + std::to_string(r.exit_code) + "\nstdout:\n" + r.out + "\nstderr:\n" + r.err;
