@@ -13,7 +13,9 @@ set(TRUECUT_LINUXCNC_MODULE_DIR /usr/lib/linuxcnc/modules
 set(TRUECUT_LINUXCNC_MODULE_BUILD_DIR ${CMAKE_BINARY_DIR}/linuxcnc)
 
 set(TRUECUT_HAVE_LINUXCNC OFF)
-if(NOT TRUECUT_LINUXCNC STREQUAL "OFF")
+if(TRUECUT_LINUXCNC STREQUAL "OFF")
+  message(STATUS "LinuxCNC HAL module: off (TRUECUT_LINUXCNC=OFF)")
+else()
   find_path(LINUXCNC_INCLUDE_DIR NAMES hal.h rtapi_app.h PATH_SUFFIXES linuxcnc
             DOC "LinuxCNC's HAL/RTAPI headers (Debian: linuxcnc-uspace-dev)")
   if(TRUECUT_SANITIZE)
