@@ -2,7 +2,8 @@
 # Installs the Debian packages truecut builds and tests with, if any are
 # missing. The tests also compare against LinuxCNC's rs274 (linuxcnc-uspace),
 # headless Chromium and git (tests/support/oracle.hpp); linuxcnc-uspace-dev
-# (halcompile and the HAL headers; the build does not use them yet).
+# (the HAL headers) lets the build make truecut_comp a LinuxCNC module,
+# which tests/rt/test_linuxcnc_module.cpp runs in halrun (docs/linuxcnc.md).
 set -euo pipefail
 packages=(cmake g++ make pkg-config libeigen3-dev libembree-dev libboost-dev libtbb-dev
           libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev libssl-dev

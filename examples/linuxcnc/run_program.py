@@ -1,0 +1,90 @@
+#!/usr/bin/python3
+"""Headless "display" for LinuxCNC (the INI's [DISPLAY]DISPLAY): machine on,
+home, run [DISPLAY]OPEN_FILE to the end, print what truecut_comp did, exit
+(LinuxCNC then shuts down). Exit status 0 when the program ran to the end
+without an error message, 1 otherwise.
+
+    linuxcnc xyzac-trt-truecut.ini
+"""
+import os
+import sys
+import time
+import traceback
+
+import hal
+import linuxcnc
+
+TIMEOUT_S = 120.0  # for the whole program; a stuck machine fails
+
+
+def main():
+    ini_path = sys.argv[sys.argv.index("-ini") + 1]
+    ini = linuxcnc.ini(ini_path)
+    program = os.path.join(os.path.dirname(os.path.abspath(ini_path)), ini.find("DISPLAY", "OPEN_FILE"))
+    stat, command, errors = linuxcnc.stat(), linuxcnc.command(), linuxcnc.error_channel()
+    watcher = hal.component("run-program")  # hal.get_value() needs a component
+    watcher.ready()
+    deadline = time.monotonic() + TIMEOUT_S
+    problems = []
+
+    def poll():
+        stat.poll()
+        e = errors.poll()
+        if e:
+            kind, text = e
+            if kind in (linuxcnc.NML_ERROR, linuxcnc.OPERATOR_ERROR):
+                problems.append(text)
+            print("linuxcnc: " + text, flush=True)
+        if time.monotonic() > deadline:
+            raise RuntimeError("timed out")
+
+    def wait_until(condition):
+        while True:
+            poll()
+            if condition():
+                return
+            time.sleep(0.01)
+
+    command.state(linuxcnc.STATE_ESTOP_RESET)
+    command.state(linuxcnc.STATE_ON)
+    wait_until(lambda: stat.task_state == linuxcnc.STATE_ON)
+    command.mode(linuxcnc.MODE_MANUAL)
+    command.home(-1)
+    wait_until(lambda: all(stat.homed[j] for j in range(stat.joints)))
+    command.mode(linuxcnc.MODE_AUTO)
+    wait_until(lambda: stat.task_mode == linuxcnc.MODE_AUTO)
+    command.program_open(program)
+    command.auto(linuxcnc.AUTO_RUN, 0)
+    wait_until(lambda: stat.interp_state != linuxcnc.INTERP_IDLE)
+    max_corr = 0.0
+    faults = set()
+    while True:
+        poll()
+        max_corr = max(max_corr, hal.get_value("tc.corr-mag"))
+        faults.add(hal.get_value("tc.fault"))
+        if stat.interp_state == linuxcnc.INTERP_IDLE:
+            break
+        time.sleep(0.005)
+    # To the end: the interpreter went idle with no error, and the machine
+    # stands where the program's last move left it ([TRUECUT]END_POSITION).
+    # stat.position: X Y Z A B C U V W.
+    end = {w[0].upper(): float(w[1:]) for w in (ini.find("TRUECUT", "END_POSITION") or "").split()}
+    at_end = all(abs(stat.position["XYZABCUVW".index(a)] - v) < 1e-6 for a, v in end.items())
+    finished = not problems and stat.state != linuxcnc.RCS_ERROR and at_end
+    print("program %s: %s at line %d (%s)" % (
+        program, "finished" if finished else "failed", stat.motion_line,
+        " ".join("%s%.6f" % (a, stat.position["XYZABCUVW".index(a)]) for a in "XYZAC")))
+    print("truecut_comp: field-generation %d, load-errors %d, max corr-mag %.6f mm, faults seen %s"
+          % (hal.get_value("tc.field-generation"), hal.get_value("tc.load-errors"), max_corr,
+             sorted(faults)), flush=True)
+    command.state(linuxcnc.STATE_OFF)
+    return 0 if finished else 1
+
+
+if __name__ == "__main__":
+    try:
+        sys.exit(main())
+    except Exception:  # noqa: BLE001 - report and fail
+        traceback.print_exc()
+        sys.stdout.flush()
+        sys.exit(1)

@@ -1,0 +1,44 @@
+// Running LinuxCNC from the tests (test_linuxcnc_*.cpp): what is needed, and
+// a LinuxCNC command run with the modules built here loadable by name
+// (tests/support/linuxcnc/halrun_private.sh; docs/linuxcnc.md).
+#pragma once
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "oracle.hpp"
+#include "run_process.hpp"
+
+namespace truecut::test {
+
+// What a test needs to run LinuxCNC; empty when everything is there.
+inline std::string linuxcnc_missing() {
+  if (std::string(TRUECUT_LINUXCNC_MODULE_DIR).empty())
+    return "LinuxCNC development files (the module was not built): install linuxcnc-uspace and "
+           "linuxcnc-uspace-dev (tools/install-deps.sh) and configure again";
+  for (const char* p : {"halrun", "halstreamer", "halsampler", "rtapi_app", "linuxcnc"})
+    if (!find_on_path(p)) return std::string("LinuxCNC's ") + p + ": install linuxcnc-uspace";
+  for (const char* p : {"unshare", "runuser", "mount"})
+    if (!find_on_path(p)) return std::string(p) + ": install util-linux";
+  if (::geteuid() != 0)
+    return "root, to run halrun in a private mount namespace with the modules built here "
+           "(tests/support/linuxcnc/halrun_private.sh)";
+  return {};
+}
+
+// Runs `command` in `work` (which nobody must be able to write) as the user
+// nobody, with the truecut modules in LinuxCNC's module folder.
+inline ProcessResult run_linuxcnc_private(const std::filesystem::path& work,
+                                          const std::vector<std::string>& command) {
+  std::vector<std::string> argv = {
+      "/bin/sh", TRUECUT_SOURCE_DIR "/tests/support/linuxcnc/halrun_private.sh",
+      std::string(TRUECUT_LINUXCNC_MODULE_DIR) + ":" + TRUECUT_LINUXCNC_TEST_MODULE_DIR,
+      work.string()};
+  argv.insert(argv.end(), command.begin(), command.end());
+  return run_process(argv);
+}
+
+}  // namespace truecut::test
