@@ -152,7 +152,7 @@ double ModelFit::bic() const {
 }
 
 Simulated simulate_aligned(const FitContext& ctx, const sim::MachineParams& params) {
-  Simulated sim = resimulate(params, *ctx.trace, ctx.max_period_s);
+  Simulated sim = resimulate(params, *ctx.trace, ctx.max_period_s, ctx.cache);
   delay_simulated(ctx.trace->t_s, sim, ctx.delay_s);
   return sim;
 }

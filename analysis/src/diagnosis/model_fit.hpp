@@ -62,6 +62,8 @@ struct FitContext {
   // lower their residual to be kept.
   const FitContext* heldout = nullptr;
   std::function<void(const std::string&)> progress;
+  // Re-simulations of *trace kept for reuse (null: none kept).
+  ResimCache* cache = nullptr;
 };
 
 // Re-simulation delayed by ctx.delay_s.
