@@ -82,34 +82,8 @@ void MachineModel::step(MachineState& st, const MachineInputs& in, double period
     st.started = true;
   }
 
-  for (int j = 0; j < kJointCount; ++j) {
-    ServoState& s = st.joints[j];
-    const ServoParams& sp = servo_[j];
-    const JointParams& jp = params_.joints[j];
-    if (!(cmd[j] >= jp.min && cmd[j] <= jp.max)) st.limit_fault = true;
-
-    if (dynamic(j)) {
-      const double enc = encoder_reading(sp, s.pos);
-      out.pos_act[j] = enc;
-      out.f_error[j] = cmd[j] - enc;
-      out.vel_act[j] = s.vel;
-    } else {
-      // Ideal drive: the motor is where it is told, at every instant.
-      s.vel = (cmd[j] - s.prev_cmd) / period_s;
-      s.pos = cmd[j];
-      s.prev_cmd = cmd[j];
-      s.table = sp.backlash_play > 0.0 ? backlash_table_position(s.table, s.pos, sp.backlash_play)
-                                       : s.pos;
-      out.pos_act[j] = cmd[j];
-      out.f_error[j] = 0.0;
-      out.vel_act[j] = s.vel;
-    }
-
-    double pos_true = s.table;
-    if (const auto* e = fx.pitch_error.active(j)) pos_true += pitch_error_mm(*e, s.pos);
-    if (fx.thermal_drift.active(j)) pos_true += st.thermal_mm[j];
-    out.pos_true[j] = pos_true;
-  }
+  for (int j = 0; j < kJointCount; ++j)
+    joint_outputs(j, st, cmd[j], period_s, out);
 
   out.xyz_true = apply_geometric_errors(fx.squareness.active(), fx.straightness.active(),
                                         {out.pos_true[kX], out.pos_true[kY], out.pos_true[kZ]});
@@ -150,12 +124,69 @@ void MachineModel::step(MachineState& st, const MachineInputs& in, double period
   out.workpiece_deflection_mm = arr(part_shift);
 
   // Advance to the end of the period.
-  for (int j = 0; j < kJointCount; ++j) {
-    if (dynamic(j)) servo_step(servo_[j], st.joints[j], cmd[j], period_s);
-    if (const auto* e = fx.thermal_drift.active(j))
-      st.thermal_mm[j] = thermal_drift_step(*e, st.thermal_mm[j],
-                                            thermal_drive(*e, st.spindle_power_kw), period_s);
+  for (int j = 0; j < kJointCount; ++j)
+    advance_joint(j, st, cmd[j], period_s);
+  ++st.cycles;
+  out.fault = st.fault;
+  out.limit_fault = st.limit_fault;
+}
+
+void MachineModel::joint_outputs(int j, MachineState& st, double cmd, double period_s,
+                                 MachineOutputs& out) const noexcept {
+  const Effects& fx = params_.effects;
+  ServoState& s = st.joints[j];
+  const ServoParams& sp = servo_[j];
+  const JointParams& jp = params_.joints[j];
+  if (!(cmd >= jp.min && cmd <= jp.max)) st.limit_fault = true;
+
+  if (dynamic(j)) {
+    const double enc = encoder_reading(sp, s.pos);
+    out.pos_act[j] = enc;
+    out.f_error[j] = cmd - enc;
+    out.vel_act[j] = s.vel;
+  } else {
+    // Ideal drive: the motor is where it is told, at every instant.
+    s.vel = (cmd - s.prev_cmd) / period_s;
+    s.pos = cmd;
+    s.prev_cmd = cmd;
+    s.table =
+        sp.backlash_play > 0.0 ? backlash_table_position(s.table, s.pos, sp.backlash_play) : s.pos;
+    out.pos_act[j] = cmd;
+    out.f_error[j] = 0.0;
+    out.vel_act[j] = s.vel;
   }
+
+  double pos_true = s.table;
+  if (const auto* e = fx.pitch_error.active(j)) pos_true += pitch_error_mm(*e, s.pos);
+  if (fx.thermal_drift.active(j)) pos_true += st.thermal_mm[j];
+  out.pos_true[j] = pos_true;
+}
+
+void MachineModel::advance_joint(int j, MachineState& st, double cmd,
+                                 double period_s) const noexcept {
+  if (dynamic(j)) servo_step(servo_[j], st.joints[j], cmd, period_s);
+  if (const auto* e = params_.effects.thermal_drift.active(j))
+    st.thermal_mm[j] =
+        thermal_drift_step(*e, st.thermal_mm[j], thermal_drive(*e, st.spindle_power_kw), period_s);
+}
+
+void MachineModel::step_joint(int j, MachineState& st, double pos_cmd, double spindle_power_kw,
+                              double period_s, MachineOutputs& out) const noexcept {
+  double cmd = pos_cmd;
+  if (!std::isfinite(cmd)) {
+    cmd = st.started ? st.joints[j].prev_cmd : 0.0;
+    st.fault = true;
+  }
+  if (std::isfinite(spindle_power_kw))
+    st.spindle_power_kw = spindle_power_kw;
+  else
+    st.fault = true;
+  if (!st.started) {
+    st.joints[j] = servo_start(cmd);
+    st.started = true;
+  }
+  joint_outputs(j, st, cmd, period_s, out);
+  advance_joint(j, st, cmd, period_s);
   ++st.cycles;
   out.fault = st.fault;
   out.limit_fault = st.limit_fault;

@@ -15,7 +15,9 @@
 #include "fit_steps.hpp"
 #include "surface_steps.hpp"
 #include "test_paths.hpp"
+#include "trace.hpp"
 #include "truecut/analysis/recording.hpp"
+#include "truecut/sim/machine_model.hpp"
 
 namespace truecut::analysis::diagnosis {
 namespace {
@@ -382,6 +384,129 @@ TEST(DiagnosisStages, SurfaceNoiseFloorPairsNeighboursOnTheSameSurfaceOnly) {
   const SurfaceNoise alone = surface_noise_floor(points, r, train);
   EXPECT_NEAR(alone.floor_mm, r.norm() / std::sqrt(double(r.size())), 1e-15);
   EXPECT_EQ(alone.sxx, 0.0);
+}
+
+// The re-simulation as it was before it went joint by joint: every joint
+// through sim::MachineModel::step at once.
+Simulated resimulate_by_step(const sim::MachineParams& params, const Trace& tr,
+                             double max_period_s) {
+  const sim::MachineModel model(params);
+  sim::MachineState state;
+  sim::MachineInputs in;
+  sim::MachineOutputs out;
+  Simulated sim;
+  const std::size_t n = tr.rows();
+  for (int j : tr.axes) {
+    sim.target[j].resize(n);
+    sim.motor[j].resize(n);
+  }
+  for (int j = 0; j < sim::kJointCount; ++j)
+    if (sim.motor[j].empty() && !tr.cmd[j].empty()) sim.motor[j].resize(n);
+  auto cmd_at = [&](int j, std::size_t k, std::size_t k1, double s, double dt) {
+    if (tr.cmd[j].empty()) return 0.0;
+    const double p0 = tr.cmd[j][k], p1 = tr.cmd[j][k1];
+    if (s == 0.0 || k1 == k) return p0;
+    if (tr.cmd_slope[j].empty()) return p0 + (p1 - p0) * s;
+    const double s2 = s * s, s3 = s2 * s;
+    return (2 * s3 - 3 * s2 + 1) * p0 + (s3 - 2 * s2 + s) * dt * tr.cmd_slope[j][k] +
+           (3 * s2 - 2 * s3) * p1 + (s3 - s2) * dt * tr.cmd_slope[j][k1];
+  };
+  const double nominal_dt = median_period(tr.t_s);
+  for (std::size_t k = 0; k < n; ++k) {
+    double dt = k + 1 < n ? tr.t_s[k + 1] - tr.t_s[k] : tr.t_s[k] - tr.t_s[k - 1];
+    if (std::abs(dt - nominal_dt) <= 1e-6 * nominal_dt) dt = nominal_dt;
+    const int sub = substeps_for(dt, max_period_s);
+    const std::size_t k1 = std::min(k + 1, n - 1);
+    for (int i = 0; i < sub; ++i) {
+      for (int j = 0; j < sim::kJointCount; ++j)
+        in.pos_cmd[j] = cmd_at(j, k, k1, double(i) / sub, dt);
+      in.spindle_power_kw = tr.spindle_power_kw.empty() ? 0.0 : tr.spindle_power_kw[k];
+      model.step(state, in, dt / sub, out);
+      if (i != 0) continue;
+      for (int j = 0; j < sim::kJointCount; ++j) {
+        if (!sim.motor[j].empty()) sim.motor[j][k] = out.pos_act[j];
+        if (sim.target[j].empty()) continue;
+        sim.target[j][k] =
+            !tr.meas[j] ? out.pos_act[j] : (j < 3 ? out.xyz_true[j] : out.pos_true[j]);
+      }
+    }
+  }
+  return sim;
+}
+
+void expect_same_bits(const Simulated& a, const Simulated& b) {
+  for (int j = 0; j < sim::kJointCount; ++j) {
+    ASSERT_EQ(a.target[j].size(), b.target[j].size()) << j;
+    ASSERT_EQ(a.motor[j].size(), b.motor[j].size()) << j;
+    for (std::size_t k = 0; k < a.target[j].size(); ++k)
+      ASSERT_EQ(a.target[j][k], b.target[j][k]) << "target of joint " << j << " at " << k;
+    for (std::size_t k = 0; k < a.motor[j].size(); ++k)
+      ASSERT_EQ(a.motor[j][k], b.motor[j][k]) << "motor of joint " << j << " at " << k;
+  }
+}
+
+// The re-simulation runs joint by joint (and reads back the joints a cache
+// has seen with the same parameters): the same numbers, bit for bit, as
+// the whole machine stepped at once, with every joint effect, geometric
+// errors coupling the recorded slides, an idle slide drifting, a rotary
+// joint and two servo periods per recorded interval.
+TEST(DiagnosisStages, ResimulationJointByJointIsTheMachineStepBitForBit) {
+  const std::size_t n = 3000;
+  Trace tr;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double t = 2e-3 * double(k);
+    tr.t_s.push_back(t);
+    tr.cmd[sim::kX].push_back(20 * std::cos(2.0 * t));
+    tr.cmd[sim::kZ].push_back(5 * std::sin(1.3 * t) + 0.3 * std::floor(t));
+    tr.cmd[sim::kA].push_back(30 * std::sin(0.7 * t));
+    tr.spindle_power_kw.push_back(t < 3 ? 4.0 : 1.0);
+  }
+  for (int j : {sim::kX, sim::kZ, sim::kA})
+    tr.cmd_slope[j] = command_slopes(tr.t_s, tr.cmd[j]);
+  // y idle and recorded, x and y on a measuring system, z on the encoder.
+  for (int j : {sim::kX, sim::kY, sim::kZ, sim::kA})
+    tr.target[j] = std::vector<double>(n, 0.0);
+  tr.cmd[sim::kY] = std::vector<double>(n, 0.0);
+  tr.axes = {sim::kX, sim::kY, sim::kZ, sim::kA};
+  tr.meas[sim::kX] = tr.meas[sim::kY] = tr.meas[sim::kA] = true;
+
+  sim::MachineParams p;
+  for (int j = 0; j < sim::kJointCount; ++j) {
+    p.joints[j].present = true;
+    p.joints[j].min = -1000, p.joints[j].max = 1000;
+    p.joints[j].drive = sim::default_drive(j);
+  }
+  auto& fx = p.effects;
+  fx.servo_lag.enabled = fx.backlash.enabled = fx.reversal_spike.enabled = true;
+  fx.pitch_error.enabled = fx.thermal_drift.enabled = true;
+  fx.servo_lag.axes[sim::kX] = sim::ServoLagAxis{40, 0.9};
+  fx.servo_lag.axes[sim::kZ] = sim::ServoLagAxis{35, 0.5};
+  fx.servo_lag.axes[sim::kA] = sim::ServoLagAxis{30, 0.8};
+  fx.backlash.axes[sim::kX] = sim::BacklashAxis{0.004};
+  fx.reversal_spike.axes[sim::kZ] = sim::ReversalSpikeAxis{150, 0.2};
+  fx.pitch_error.axes[sim::kX] = sim::PitchErrorAxis{40, 5, 2, 7, 30};
+  fx.thermal_drift.axes[sim::kY] = sim::ThermalDriftAxis{0.01, 2, sim::ThermalDriver::kTime, 10};
+  fx.thermal_drift.axes[sim::kZ] =
+      sim::ThermalDriftAxis{0.005, 1, sim::ThermalDriver::kSpindlePower, 5};
+  fx.squareness.enabled = true;
+  fx.squareness.params = {50, 20, -30};
+  fx.straightness.enabled = true;
+  fx.straightness.params.components[0] = sim::StraightnessComponent{80, 10, 3};
+
+  expect_same_bits(resimulate(p, tr, 1e-3), resimulate_by_step(p, tr, 1e-3));
+  ResimCache cache(2);
+  sim::MachineParams q = p;  // another x loop: the other joints read back
+  q.effects.servo_lag.axes[sim::kX]->kv_per_s = 45;
+  sim::MachineParams r = q;  // no squareness: every joint read back
+  r.effects.squareness.enabled = false;
+  sim::MachineParams u = p;  // the y drift off
+  u.effects.thermal_drift.axes[sim::kY].reset();
+  for (const auto* m : {&p, &q, &r, &p, &u, &q, &p})
+    expect_same_bits(resimulate(*m, tr, 1e-3, &cache), resimulate_by_step(*m, tr, 1e-3));
+  // Half a period more per interval: the cache is for one period only.
+  expect_same_bits(resimulate(q, tr, 0.7e-3, &cache), resimulate_by_step(q, tr, 0.7e-3));
+  EXPECT_EQ(joint_part(p, sim::kY), joint_part(q, sim::kY));
+  EXPECT_FALSE(joint_part(p, sim::kX) == joint_part(q, sim::kX));
 }
 
 }  // namespace

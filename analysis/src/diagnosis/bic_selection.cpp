@@ -34,15 +34,21 @@ double rms_on_support(const VectorXd& v, const Layout& layout) {
 namespace {
 
 using Groups = std::map<std::string, std::vector<const Candidate*>>;
+// Each candidate's rss_after(X, r) alone: the first step of the forward
+// selection and the confusions of a single chosen group fit the same
+// columns again (the same numbers, not computed twice).
+using AloneRss = std::map<const Candidate*, double>;
 
 // Each group's variant that alone fits r best.
-std::vector<const Candidate*> best_variants(const Groups& groups, const VectorXd& r) {
+std::vector<const Candidate*> best_variants(const Groups& groups, const VectorXd& r,
+                                            AloneRss& alone) {
   std::vector<const Candidate*> best_of;
   for (const auto& [g, vs] : groups) {
     const Candidate* best = nullptr;
     double best_rss = INFINITY;
     for (const auto* v : vs) {
       const double rss = rss_after(v->X, r);
+      alone[v] = rss;
       if (rss < best_rss) best_rss = rss, best = v;
     }
     best_of.push_back(best);
@@ -79,8 +85,8 @@ std::vector<const MatrixXd*> columns_of(const std::vector<const Candidate*>& cho
 // lowers the BIC most (below −threshold); null when none does.
 const Candidate* best_addition(const Groups& groups, const std::set<std::string>& skip,
                                const std::vector<const Candidate*>& chosen, const VectorXd& r,
-                               double rss, double threshold, double n_eff, double& best_dbic,
-                               double& best_rss) {
+                               double rss, double threshold, double n_eff, const AloneRss& alone,
+                               double& best_dbic, double& best_rss) {
   const Eigen::Index n = r.size();
   const Candidate* best = nullptr;
   best_dbic = -threshold, best_rss = rss;
@@ -88,9 +94,14 @@ const Candidate* best_addition(const Groups& groups, const std::set<std::string>
   for (const auto& [g, vs] : groups) {
     if (skip.count(g)) continue;
     for (const auto* v : vs) {
-      auto parts = cur;
-      parts.push_back(&v->X);
-      const double rss_new = rss_after(hcat(parts, n), r);
+      double rss_new;
+      if (cur.empty()) {
+        rss_new = alone.at(v);
+      } else {
+        auto parts = cur;
+        parts.push_back(&v->X);
+        rss_new = rss_after(hcat(parts, n), r);
+      }
       const double dbic =
           n_eff * std::log(std::max(rss_new, 1e-300) / rss) + double(v->X.cols()) * std::log(n_eff);
       if (dbic < best_dbic) best_dbic = dbic, best = v, best_rss = rss_new;
@@ -115,7 +126,7 @@ bool all_physical(const std::vector<const Candidate*>& next, const VectorXd& coe
 // Not identifiable: a chosen group that another group replaces almost as well.
 void find_confusions(const Groups& groups, const std::vector<const Candidate*>& best_of,
                      const std::set<std::string>& used, const VectorXd& r, double rss,
-                     double threshold, double n_eff, Selection& sel) {
+                     double threshold, double n_eff, const AloneRss& alone, Selection& sel) {
   const Eigen::Index n = r.size();
   const std::vector<const MatrixXd*> cur = columns_of(sel.chosen);
   Eigen::Index c0 = 0;
@@ -129,9 +140,14 @@ void find_confusions(const Groups& groups, const std::vector<const Candidate*>& 
       const Candidate* ob = nullptr;
       double ob_rss = INFINITY;
       for (const auto* v : groups.at(o->group)) {
-        auto parts = cur;
-        parts[i] = &v->X;
-        const double rr = rss_after(hcat(parts, n), r);
+        double rr;
+        if (cur.size() == 1) {
+          rr = alone.at(v);
+        } else {
+          auto parts = cur;
+          parts[i] = &v->X;
+          rr = rss_after(hcat(parts, n), r);
+        }
         if (rr < ob_rss) ob_rss = rr, ob = v;
       }
       const double d = n_eff * std::log(std::max(ob_rss, 1e-300) / std::max(rss, 1e-300)) +
@@ -160,7 +176,8 @@ Selection forward_select(const std::vector<Candidate>& cands, const VectorXd& r,
   Groups groups;
   for (const auto& c : cands)
     groups[c.group].push_back(&c);
-  const std::vector<const Candidate*> best_of = best_variants(groups, r);
+  AloneRss alone;
+  const std::vector<const Candidate*> best_of = best_variants(groups, r, alone);
   const double n_eff = selection_n_eff(best_of, r);
   n_eff_out = n_eff;
 
@@ -171,8 +188,8 @@ Selection forward_select(const std::vector<Candidate>& cands, const VectorXd& r,
     std::set<std::string> skip = used;
     skip.insert(rejected.begin(), rejected.end());
     double best_dbic = 0, best_rss = 0;
-    const Candidate* best =
-        best_addition(groups, skip, sel.chosen, r, rss, threshold, n_eff, best_dbic, best_rss);
+    const Candidate* best = best_addition(groups, skip, sel.chosen, r, rss, threshold, n_eff, alone,
+                                          best_dbic, best_rss);
     if (!best) break;
     auto parts = columns_of(sel.chosen);
     parts.push_back(&best->X);
@@ -195,7 +212,7 @@ Selection forward_select(const std::vector<Candidate>& cands, const VectorXd& r,
     used.insert(best->group);
     rss = best_rss;
   }
-  find_confusions(groups, best_of, used, r, rss, threshold, n_eff, sel);
+  find_confusions(groups, best_of, used, r, rss, threshold, n_eff, alone, sel);
   return sel;
 }
 

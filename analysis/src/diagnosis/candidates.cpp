@@ -50,7 +50,7 @@ struct SignatureBasis {
     sim::MachineParams p = p0;
     enable_effect(p, effect, joint);
     *param_ptr(p, effect, joint, key) += h;
-    VectorXd c = (L.stack(simulate_aligned(ctx, p).target) - s0) / h;
+    VectorXd c = (L.stack(simulate_aligned_targets(ctx, p)) - s0) / h;
     L.center(c);
     return c;
   }

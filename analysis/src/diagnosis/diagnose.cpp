@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <memory>
 #include <optional>
 
 #include "diagnose_steps.hpp"
@@ -463,6 +464,10 @@ struct Pipeline {
   std::optional<Trace> hold_tr;  // a hold-out recording
   Masks masks, hold_masks;
   double dt = 0, dmax = 0, holdout_fraction = 0;
+  // Re-simulations of tr and of *hold_tr kept for reuse (every hypothesis
+  // and stage re-simulates the same joints many times).
+  std::unique_ptr<ResimCache> cache = std::make_unique<ResimCache>();
+  std::unique_ptr<ResimCache> hold_cache = std::make_unique<ResimCache>();
   Pipeline(const DiagnosisOptions& options, const sim::MachineParams& believed)
       : o(options), base(believed) {}
   void say(const std::string& s) const {
@@ -520,11 +525,15 @@ Hypothesis fit_at_delay(const Pipeline& P, const NoiseFloors& nf, double d) {
   Hypothesis h;
   h.delay_s = d;
   FitContext ctx = context(P.tr, P.masks.train, nf.w, nf.sw, d, P.o);
+  ctx.cache = P.cache.get();
   FitContext held;
-  if (P.hold_tr)
+  if (P.hold_tr) {
     held = context(*P.hold_tr, P.hold_masks.train, nf.w, {}, d, P.o);
-  else if (P.holdout_fraction > 0)
+    held.cache = P.hold_cache.get();
+  } else if (P.holdout_fraction > 0) {
     held = context(P.tr, P.masks.heldout, nf.w, nf.sw, d, P.o);
+    held.cache = P.cache.get();
+  }
   if (held.layout.size() > 0) ctx.heldout = &held;
   h.fit = fit_model(ctx, P.base);
   return h;
@@ -548,12 +557,12 @@ std::vector<Hypothesis> fit_delay_hypotheses(const Pipeline& P, const NoiseFloor
   const Hypothesis h0 = hyps.back();
   if (std::abs(d_a) > small) {
     hyps.push_back(fit_at_delay(P, nf, d_a));
-    const Simulated s1 = resimulate(hyps.back().fit.params, tr, max_period);
+    const Simulated s1 = resimulate(hyps.back().fit.params, tr, max_period, P.cache.get());
     const double d_a2 =
         best_delay(tr, s1, train, nf.w, nf.sw, d_a - 2 * step, d_a + 2 * step, step / 8);
     if (std::abs(d_a2 - d_a) > 0.02 * dt) hyps.push_back(fit_at_delay(P, nf, d_a2));
   }
-  const Simulated s0f = resimulate(h0.fit.params, tr, max_period);
+  const Simulated s0f = resimulate(h0.fit.params, tr, max_period, P.cache.get());
   const double d0 = best_delay(tr, s0f, train, nf.w, nf.sw, -dmax, dmax, step);
   bool known = false;
   for (const auto& h : hyps)
@@ -757,11 +766,11 @@ void heldout_figures(const Pipeline& P, const Recording* holdout_rec, const Mode
     Masks hm = make_masks(ht, std::abs(delay_s), 0.0);
     for (const GlitchRow& g : P.hold_masks.glitch_rows)  // found before the repair
       hm.valid[g.row] = hm.train[g.row] = 0;
-    const Simulated hs0 = resimulate(P.base, ht, max_period);
+    const Simulated hs0 = resimulate(P.base, ht, max_period, P.hold_cache.get());
     const Residuals hb = residuals(ht, hs0, delay_s, hm.train, &before.offset);
     const Residuals hr = residuals(ht, hs0, 0.0, hm.train, &raw.offset);
-    const Residuals ha =
-        residuals(ht, resimulate(fit.params, ht, max_period), delay_s, hm.train, &after.offset);
+    const Residuals ha = residuals(ht, resimulate(fit.params, ht, max_period, P.hold_cache.get()),
+                                   delay_s, hm.train, &after.offset);
     figures(ht, hr, hb, ha, hm.valid, res.heldout);
     res.has_heldout = true;
     res.heldout_kind = "file";
@@ -800,7 +809,7 @@ Explanation explain_effect(const Pipeline& P, const ModelFit& fit, std::size_t i
     }
   }
   const Simulated sw =
-      resimulate(without_effect(fit.params, P.base, s), tr, P.o.max_servo_period_s);
+      resimulate(without_effect(fit.params, P.base, s), tr, P.o.max_servo_period_s, P.cache.get());
   double ss = 0;
   std::size_t n = 0;
   for (int j : tr.axes)
@@ -931,7 +940,7 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
 
   P.say("re-simulating " + std::to_string(tr.rows()) + " samples (" + std::to_string(res.substeps) +
         " servo periods per interval) with the believed model");
-  const Simulated sim0 = resimulate(P.base, tr, max_period);
+  const Simulated sim0 = resimulate(P.base, tr, max_period, P.cache.get());
   const InterpolationError interp =
       interpolation_error(tr, sim0, P.masks.train, P.base, max_period);
   NoiseFloors nf = estimate_noise_floors(tr, sim0, P.masks.train, P.base, interp);
@@ -942,7 +951,7 @@ DiagnosisResult diagnose(const Recording& train_rec, const Recording* holdout_re
   res.delay_s = H.delay_s;
   const ModelFit& fit = H.fit;
   take_fit(fit, train_rec, believed, res);
-  const Simulated simf = resimulate(fit.params, tr, max_period);
+  const Simulated simf = resimulate(fit.params, tr, max_period, P.cache.get());
   res.delay_ci95_s = delay_interval(P, nf, simf, H.delay_s, fit.n_eff);
 
   // Residuals before and after, offsets from the fitted block.

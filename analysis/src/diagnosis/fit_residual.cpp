@@ -152,14 +152,23 @@ double ModelFit::bic() const {
 }
 
 Simulated simulate_aligned(const FitContext& ctx, const sim::MachineParams& params) {
-  Simulated sim = resimulate(params, *ctx.trace, ctx.max_period_s);
+  Simulated sim = resimulate(params, *ctx.trace, ctx.max_period_s, ctx.cache);
   delay_simulated(ctx.trace->t_s, sim, ctx.delay_s);
   return sim;
 }
 
+std::array<std::vector<double>, sim::kJointCount> simulate_aligned_targets(
+    const FitContext& ctx, const sim::MachineParams& params) {
+  Simulated sim = resimulate(params, *ctx.trace, ctx.max_period_s, ctx.cache);
+  if (ctx.delay_s != 0.0)
+    for (auto& v : sim.target)
+      v = delayed(ctx.trace->t_s, v, ctx.delay_s);
+  return std::move(sim.target);
+}
+
 VectorXd weighted_residual(const FitContext& ctx, const sim::MachineParams& params) {
-  const Simulated sim = simulate_aligned(ctx, params);
-  VectorXd r = ctx.layout.stack(ctx.aligned) - ctx.layout.stack(sim.target);
+  VectorXd r =
+      ctx.layout.stack(ctx.aligned) - ctx.layout.stack(simulate_aligned_targets(ctx, params));
   ctx.layout.center(r);
   return r;
 }

@@ -8,8 +8,11 @@
 namespace truecut::analysis::diagnosis {
 
 double heldout_rss(const FitContext& ctx, const sim::MachineParams& p) {
-  const Simulated st = simulate_aligned(ctx, p);
-  const Simulated sh = ctx.heldout->trace == ctx.trace ? st : simulate_aligned(*ctx.heldout, p);
+  using Targets = std::array<std::vector<double>, sim::kJointCount>;
+  const Targets tt = simulate_aligned_targets(ctx, p);
+  const Targets th =
+      ctx.heldout->trace == ctx.trace ? Targets() : simulate_aligned_targets(*ctx.heldout, p);
+  const Targets& ht = ctx.heldout->trace == ctx.trace ? tt : th;
   const Layout& tl = ctx.layout;
   const Layout& hl = ctx.heldout->layout;
   double rss = 0;
@@ -19,12 +22,12 @@ double heldout_rss(const FitContext& ctx, const sim::MachineParams& p) {
     for (std::size_t i = 0; i < tl.index[a].size(); ++i) {
       const std::size_t k = tl.index[a][i];
       const double u2 = tl.w(a, i) * tl.w(a, i);
-      off += u2 * (ctx.aligned[j][k] - st.target[j][k]), uu += u2;
+      off += u2 * (ctx.aligned[j][k] - tt[j][k]), uu += u2;
     }
     off = uu > 0 ? off / uu : 0.0;
     for (std::size_t i = 0; i < hl.index[a].size(); ++i) {
       const std::size_t k = hl.index[a][i];
-      const double r = (ctx.heldout->aligned[j][k] - sh.target[j][k] - off) * hl.w(a, i);
+      const double r = (ctx.heldout->aligned[j][k] - ht[j][k] - off) * hl.w(a, i);
       rss += r * r;
     }
   }

@@ -62,10 +62,15 @@ struct FitContext {
   // lower their residual to be kept.
   const FitContext* heldout = nullptr;
   std::function<void(const std::string&)> progress;
+  // Re-simulations of *trace kept for reuse (null: none kept).
+  ResimCache* cache = nullptr;
 };
 
 // Re-simulation delayed by ctx.delay_s.
 Simulated simulate_aligned(const FitContext& ctx, const sim::MachineParams& params);
+// Its targets only (the motor positions not delayed).
+std::array<std::vector<double>, sim::kJointCount> simulate_aligned_targets(
+    const FitContext& ctx, const sim::MachineParams& params);
 Eigen::VectorXd weighted_residual(const FitContext& ctx, const sim::MachineParams& params);
 
 std::vector<Candidate> build_candidates(const FitContext& ctx, const sim::MachineParams& base);

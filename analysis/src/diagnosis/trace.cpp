@@ -77,11 +77,107 @@ int substeps_for(double dt_s, double max_period_s) {
   return std::clamp(int(std::ceil(dt_s / max_period_s - 1e-9)), 1, 100000);
 }
 
-Simulated resimulate(const sim::MachineParams& params, const Trace& tr, double max_period_s) {
-  const sim::MachineModel model(params);
+namespace {
+
+template <class Axis>
+void copy_joint(sim::PerAxisEffect<Axis>& to, const sim::PerAxisEffect<Axis>& from, int j) {
+  if (const Axis* a = from.active(j)) {
+    to.enabled = true;
+    to.axes[j] = *a;
+  }
+}
+
+}  // namespace
+
+sim::MachineParams joint_part(const sim::MachineParams& params, int j) {
+  sim::MachineParams p;
+  p.joints[j] = params.joints[j];
+  const sim::Effects& fx = params.effects;
+  copy_joint(p.effects.servo_lag, fx.servo_lag, j);
+  copy_joint(p.effects.backlash, fx.backlash, j);
+  copy_joint(p.effects.reversal_spike, fx.reversal_spike, j);
+  copy_joint(p.effects.pitch_error, fx.pitch_error, j);
+  copy_joint(p.effects.thermal_drift, fx.thermal_drift, j);
+  return p;
+}
+
+void ResimCache::bind(const Trace& trace, double max_period_s) {
+  if (trace_ == &trace && rows_ == trace.rows() && max_period_s_ == max_period_s) return;
+  trace_ = &trace;
+  rows_ = trace.rows();
+  max_period_s_ = max_period_s;
+  for (auto& r : runs_)
+    r.clear();
+}
+
+std::shared_ptr<const ResimCache::Run> ResimCache::find(const Trace& trace, double max_period_s,
+                                                        int j, const sim::MachineParams& key) {
+  const std::lock_guard lock(mutex_);
+  bind(trace, max_period_s);
+  auto& runs = runs_[std::size_t(j)];
+  for (auto it = runs.rbegin(); it != runs.rend(); ++it)
+    if ((*it)->key == key) {
+      auto run = *it;
+      runs.erase(std::next(it).base());
+      runs.push_back(run);
+      return run;
+    }
+  return nullptr;
+}
+
+void ResimCache::put(const Trace& trace, double max_period_s, int j,
+                     std::shared_ptr<const Run> run) {
+  const std::lock_guard lock(mutex_);
+  bind(trace, max_period_s);
+  auto& runs = runs_[std::size_t(j)];
+  if (runs.size() >= capacity_) runs.erase(runs.begin());
+  runs.push_back(std::move(run));
+}
+
+namespace {
+
+// Joint j through the model over the whole trace: the encoder (motor) and
+// the table-side (true) position at every sample.
+void simulate_joint(const sim::MachineModel& model, const Trace& tr, int j, double max_period_s,
+                    double nominal_dt, std::vector<double>& motor, std::vector<double>& truth) {
+  const std::size_t n = tr.rows();
+  motor.resize(n);
+  truth.resize(n);
   sim::MachineState state;
-  sim::MachineInputs in;
   sim::MachineOutputs out;
+  // The command of joint j at fraction s of the interval k → k1 of length dt.
+  auto cmd_at = [&](std::size_t k, std::size_t k1, double s, double dt) {
+    if (tr.cmd[j].empty()) return 0.0;
+    const double p0 = tr.cmd[j][k], p1 = tr.cmd[j][k1];
+    if (s == 0.0 || k1 == k) return p0;
+    if (tr.cmd_slope[j].empty()) return p0 + (p1 - p0) * s;
+    const double s2 = s * s, s3 = s2 * s;
+    return (2 * s3 - 3 * s2 + 1) * p0 + (s3 - 2 * s2 + s) * dt * tr.cmd_slope[j][k] +
+           (3 * s2 - 2 * s3) * p1 + (s3 - s2) * dt * tr.cmd_slope[j][k1];
+  };
+  for (std::size_t k = 0; k < n; ++k) {
+    double dt = k + 1 < n ? tr.t_s[k + 1] - tr.t_s[k] : (n > 1 ? tr.t_s[k] - tr.t_s[k - 1] : 1e-3);
+    // Time stamps printed or summed in floating point jitter by parts in
+    // 10⁹ about the recorder's period; the servo steps at the period itself.
+    if (std::abs(dt - nominal_dt) <= 1e-6 * nominal_dt) dt = nominal_dt;
+    const int sub = substeps_for(dt, max_period_s);
+    const std::size_t k1 = std::min(k + 1, n - 1);
+    const double power = tr.spindle_power_kw.empty() ? 0.0 : tr.spindle_power_kw[k];
+    for (int i = 0; i < sub; ++i) {
+      const double w = double(i) / sub;
+      model.step_joint(j, state, cmd_at(k, k1, w, dt), power, dt / sub, out);
+      if (i != 0) continue;
+      motor[k] = out.pos_act[j];
+      truth[k] = out.pos_true[j];
+    }
+  }
+}
+
+}  // namespace
+
+Simulated resimulate(const sim::MachineParams& params, const Trace& tr, double max_period_s,
+                     ResimCache* cache) {
+  const sim::MachineModel model(params);
   Simulated sim;
   const std::size_t n = tr.rows();
   for (int j : tr.axes) {
@@ -91,39 +187,44 @@ Simulated resimulate(const sim::MachineParams& params, const Trace& tr, double m
   // Joints without a target may still be needed (cross-axis signatures).
   for (int j = 0; j < sim::kJointCount; ++j)
     if (sim.motor[j].empty() && !tr.cmd[j].empty()) sim.motor[j].resize(n);
-  // The command of joint j at fraction s of the interval k → k1 of length dt.
-  auto cmd_at = [&](int j, std::size_t k, std::size_t k1, double s, double dt) {
-    if (tr.cmd[j].empty()) return 0.0;
-    const double p0 = tr.cmd[j][k], p1 = tr.cmd[j][k1];
-    if (s == 0.0 || k1 == k) return p0;
-    if (tr.cmd_slope[j].empty()) return p0 + (p1 - p0) * s;
-    const double s2 = s * s, s3 = s2 * s;
-    return (2 * s3 - 3 * s2 + 1) * p0 + (s3 - 2 * s2 + s) * dt * tr.cmd_slope[j][k] +
-           (3 * s2 - 2 * s3) * p1 + (s3 - s2) * dt * tr.cmd_slope[j][k1];
-  };
+  // The joints to run: those with an output, and every linear slide when a
+  // slide's true position is recorded (the geometric errors couple them).
+  std::array<bool, sim::kJointCount> need{};
+  bool slides = false;
+  for (int j = 0; j < sim::kJointCount; ++j) {
+    need[j] = !sim.motor[j].empty() || !sim.target[j].empty();
+    slides = slides || (j < 3 && !sim.target[j].empty() && tr.meas[j]);
+  }
+  if (slides) need[sim::kX] = need[sim::kY] = need[sim::kZ] = true;
   const double nominal_dt = median_period(tr.t_s);
-  for (std::size_t k = 0; k < n; ++k) {
-    double dt = k + 1 < n ? tr.t_s[k + 1] - tr.t_s[k] : (n > 1 ? tr.t_s[k] - tr.t_s[k - 1] : 1e-3);
-    // Time stamps printed or summed in floating point jitter by parts in
-    // 10⁹ about the recorder's period; the servo steps at the period itself.
-    if (std::abs(dt - nominal_dt) <= 1e-6 * nominal_dt) dt = nominal_dt;
-    const int sub = substeps_for(dt, max_period_s);
-    const std::size_t k1 = std::min(k + 1, n - 1);
-    for (int i = 0; i < sub; ++i) {
-      const double w = double(i) / sub;
-      for (int j = 0; j < sim::kJointCount; ++j)
-        in.pos_cmd[j] = cmd_at(j, k, k1, w, dt);
-      in.spindle_power_kw = tr.spindle_power_kw.empty() ? 0.0 : tr.spindle_power_kw[k];
-      model.step(state, in, dt / sub, out);
-      if (i != 0) continue;
-      for (int j = 0; j < sim::kJointCount; ++j) {
-        if (!sim.motor[j].empty()) sim.motor[j][k] = out.pos_act[j];
-        if (sim.target[j].empty()) continue;
-        if (!tr.meas[j])
-          sim.target[j][k] = out.pos_act[j];
-        else
-          sim.target[j][k] = j < 3 ? out.xyz_true[j] : out.pos_true[j];
-      }
+  std::array<std::shared_ptr<const ResimCache::Run>, sim::kJointCount> run;
+  for (int j = 0; j < sim::kJointCount; ++j) {
+    if (!need[j]) continue;
+    const sim::MachineParams key = cache ? joint_part(params, j) : sim::MachineParams{};
+    if (cache) run[j] = cache->find(tr, max_period_s, j, key);
+    if (run[j]) continue;
+    auto r = std::make_shared<ResimCache::Run>();
+    simulate_joint(model, tr, j, max_period_s, nominal_dt, r->motor, r->truth);
+    r->key = key;
+    if (cache) cache->put(tr, max_period_s, j, r);
+    run[j] = std::move(r);
+  }
+  const auto* squareness = params.effects.squareness.active();
+  const auto* straightness = params.effects.straightness.active();
+  for (int j = 0; j < sim::kJointCount; ++j) {
+    if (!sim.motor[j].empty()) sim.motor[j] = run[j]->motor;
+    if (sim.target[j].empty()) continue;
+    if (!tr.meas[j]) {
+      sim.target[j] = run[j]->motor;
+    } else if (j >= 3) {
+      sim.target[j] = run[j]->truth;
+    } else {
+      const auto& x = run[sim::kX]->truth;
+      const auto& y = run[sim::kY]->truth;
+      const auto& z = run[sim::kZ]->truth;
+      for (std::size_t k = 0; k < n; ++k)
+        sim.target[j][k] =
+            sim::apply_geometric_errors(squareness, straightness, {x[k], y[k], z[k]})[j];
     }
   }
   return sim;

@@ -4,6 +4,8 @@
 #pragma once
 
 #include <array>
+#include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -53,11 +55,49 @@ struct Simulated {
   std::array<std::vector<double>, sim::kJointCount> motor;   // encoder (motor-side) position
 };
 
+// Joint re-simulations of one trace kept for reuse. A joint's motion
+// depends only on its own parameters (sim::MachineModel::step_joint), so a
+// model that differs from an earlier one in another joint's effects (a
+// column of a Jacobian, a candidate) re-simulates only the joints that
+// changed; the rest is read back, bit for bit. The few most recent runs per
+// joint are kept. Safe to share between threads.
+class ResimCache {
+ public:
+  explicit ResimCache(std::size_t runs_per_joint = 6) : capacity_(runs_per_joint) {}
+  ResimCache(const ResimCache&) = delete;
+  ResimCache& operator=(const ResimCache&) = delete;
+
+  struct Run {
+    sim::MachineParams key;  // the joint's part of the parameters (joint_part)
+    std::vector<double> motor, truth;
+  };
+  // The run of joint j for `key` on (trace, max_period_s), or null.
+  std::shared_ptr<const Run> find(const Trace& trace, double max_period_s, int j,
+                                  const sim::MachineParams& key);
+  void put(const Trace& trace, double max_period_s, int j, std::shared_ptr<const Run> run);
+
+ private:
+  std::mutex mutex_;
+  const Trace* trace_ = nullptr;
+  std::size_t rows_ = 0;
+  double max_period_s_ = 0.0;
+  std::size_t capacity_;
+  std::array<std::vector<std::shared_ptr<const Run>>, sim::kJointCount> runs_;  // most recent last
+  void bind(const Trace& trace, double max_period_s);
+};
+
 // Each recorded interval dt is simulated in ceil(dt / max_period_s) equal
 // servo periods, the command interpolated between the samples (cubic Hermite
 // with trace.cmd_slope, else linear); the output of the first period of an
-// interval is the sample at its start.
-Simulated resimulate(const sim::MachineParams& params, const Trace& trace, double max_period_s);
+// interval is the sample at its start. Joint by joint (the linear slides'
+// geometric errors applied afterwards), as sim::MachineModel::step would;
+// with a cache, the joints whose parameters it has seen are read back.
+Simulated resimulate(const sim::MachineParams& params, const Trace& trace, double max_period_s,
+                     ResimCache* cache = nullptr);
+// The parameters joint j's motion depends on (its drive and its effects),
+// everything else at its default: equal for two models whose joint j moves
+// the same.
+sim::MachineParams joint_part(const sim::MachineParams& params, int j);
 int substeps_for(double dt_s, double max_period_s);
 
 // A simulated series read at t − delay (cubic Hermite with the slopes of

@@ -50,8 +50,9 @@ struct MachineOutputs {
   std::array<double, 3> tool_axis_true{};      // true tool axis, workpiece frame, TCP → spindle
   std::array<double, 3> tool_deflection_mm{};  // tool tip shift by tool_deflection (in tcp_true)
   std::array<double, 3> workpiece_deflection_mm{};
-  TrueTool tool_true;  // the real cutter in the spindle this cycle  // tool shift relative to the bent part
-  bool fault = false;        // latched: a non-finite input was seen (and held)
+  TrueTool tool_true;  // the real cutter in the spindle this cycle  // tool shift relative to the
+                       // bent part
+  bool fault = false;  // latched: a non-finite input was seen (and held)
   bool limit_fault = false;  // latched: a command left the joint's travel
 };
 
@@ -84,7 +85,21 @@ class MachineModel {
   void step(MachineState& state, const MachineInputs& in, double period_s,
             MachineOutputs& out) const noexcept;
 
+  // Joint j alone (its drive, backlash, pitch error and thermal drift), as
+  // step() advances it: a joint's motion depends on no other joint. Writes
+  // out.pos_act, pos_true, vel_act, f_error of joint j only (no geometric
+  // errors, no tool pose); `state` must be stepped for this joint only. The
+  // diagnosis re-simulates joint by joint with it, bit for bit as step().
+  void step_joint(int joint, MachineState& state, double pos_cmd, double spindle_power_kw,
+                  double period_s, MachineOutputs& out) const noexcept;
+
  private:
+  // The two halves of a joint's period in step(): its outputs at the start
+  // of the period, then the advance to the end.
+  void joint_outputs(int joint, MachineState& state, double cmd, double period_s,
+                     MachineOutputs& out) const noexcept;
+  void advance_joint(int joint, MachineState& state, double cmd, double period_s) const noexcept;
+
   MachineParams params_;
   std::array<ServoParams, kJointCount> servo_{};
   TrueKinematics kinematics_{};
