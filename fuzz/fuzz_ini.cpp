@@ -8,7 +8,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {
-    truecut::rt::Ini::parse(std::string(truecut::fuzz::as_text(data, size)), "fuzz.ini");
+    truecut::rt::hal::Ini::parse(std::string(truecut::fuzz::as_text(data, size)), "fuzz.ini");
   } catch (const std::runtime_error&) {
   }
   return 0;

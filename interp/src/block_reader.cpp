@@ -2,6 +2,7 @@
 
 #include <cctype>
 #include <cmath>
+#include "truecut/rt/number_format.hpp"
 
 namespace truecut::interp {
 
@@ -140,6 +141,8 @@ void read_word(Cursor& c, Block& b, const Parameters& params, bool has_b) {
     if (std::fabs(tenths - r) > 1e-3 || r < 0)
       c.fail_at(
           at, describe_letter(l) + " code must be a non-negative number with at most one decimal");
+    if (r > 1e6)  // would not fit the int below; no G or M code is that large
+      c.fail_at(at, describe_letter(l) + " code " + rt::format_shortest(v) + " does not exist");
     if (l == 'm' && static_cast<int>(r) % 10 != 0) c.fail_at(at, "M code must be an integer");
     (l == 'g' ? b.g : b.m).push_back({static_cast<int>(r), col});
     return;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <numbers>
+#include "truecut/rt/number_format.hpp"
 
 namespace truecut::interp {
 
@@ -369,6 +370,8 @@ int read_integer_value(Cursor& c, const Parameters& params) {
   double v = read_real_value(c, params);
   double r = std::round(v);
   if (std::fabs(v - r) > 1e-4) c.fail_at(at, "value must be an integer");
+  if (!(std::fabs(r) <= 2147483647.0))  // the int below; no parameter, L or P is that large
+    c.fail_at(at, "value " + rt::format_shortest(v) + " is too large");
   return static_cast<int>(r);
 }
 

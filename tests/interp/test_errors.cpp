@@ -49,6 +49,17 @@ INSTANTIATE_TEST_SUITE_P(Words, BadInput,
                                            Case{"G0 X1 Y2 % \nM2\n", 1, 10, "unknown character"}),
                          case_name);
 
+// Found by fuzz_gcode and fuzz_expression (tools/fuzz.sh): values too large
+// for an int were converted to one (undefined behaviour).
+INSTANTIATE_TEST_SUITE_P(FuzzFindings, BadInput,
+                         ::testing::Values(Case{"G21\nG2177777777777777777777 X1\nM2\n", 2, 1,
+                                                "G code 2177777777777777836032 does not exist"},
+                                           Case{"M99999999999999999999\nM2\n", 1, 1,
+                                                "does not exist"},
+                                           Case{"G0 Y[-#99999999999999999999999999999]\nM2\n", 1, 8,
+                                                "value 1e+29 is too large"}),
+                         case_name);
+
 INSTANTIATE_TEST_SUITE_P(
     ModalConflicts, BadInput,
     ::testing::Values(Case{"G0 G1 X1 F100\nM2\n", 1, 4, "same modal group on one line: G0 and G1"},

@@ -111,5 +111,15 @@ TEST(MeshIoPoints, MalformedLinesAreNamed) {
   check("comments.xyz", "# only\n\n# comments\n", {"empty file", "no points"});
 }
 
+TEST(MeshIoPoints, AnEmptyCloudCompareHeaderNamesNoColumn) {
+  // Found by fuzz_mesh (tools/fuzz.sh): a line "//" alone made the reader
+  // look at the first field of an empty list.
+  auto dir = test::scratch_dir();
+  write_bytes(dir / "cc.xyz", "//\n1 2 3\n4 5 6\n");
+  EXPECT_EQ(2u, read_point_text(dir / "cc.xyz").points_mm.size());
+  write_bytes(dir / "only.xyz", "//\n");
+  EXPECT_THROW(read_point_text(dir / "only.xyz"), MeshIoError);
+}
+
 }  // namespace
 }  // namespace truecut::offline

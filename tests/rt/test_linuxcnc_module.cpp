@@ -193,7 +193,7 @@ struct Scenario {
   // Field swaps: when set, `field` is a copy of `initial` when the component
   // loads, and is replaced by a copy of `after_load` right after (before the
   // first cycle), so a reload reads the second field.
-  std::filesystem::path initial, after_load;
+  std::filesystem::path initial = {}, after_load = {};
 };
 
 void copy_over(const std::filesystem::path& from, const std::string& to) {

@@ -99,7 +99,10 @@ PointCloud read_point_text(const std::filesystem::path& file, MeshReadReport* re
     if (line.empty()) continue;
     double value = 0;
     if (columns == 0 && !header) {
-      if (line.starts_with("//")) line.remove_prefix(2);  // CloudCompare's header
+      if (line.starts_with("//")) {  // CloudCompare's header
+        line = trim_blanks(line.substr(2));
+        if (line.empty()) continue;  // "//" alone names no column
+      }
       split_fields(line, fields);
       const char first = fields[0].empty() ? '\0' : fields[0][0];
       const bool names = std::isalpha(static_cast<unsigned char>(first)) || first == '"' ||

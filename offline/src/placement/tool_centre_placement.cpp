@@ -182,7 +182,11 @@ PlacementResult place_at_tool_centre(std::span<const Eigen::Vector3d> positions_
   const double min_cos = std::cos(options.max_normal_angle_deg * std::numbers::pi / 180.0);
   PlacementResult out;
   out.cut.assign(n, 0);
-  for (const auto& [tool, samples] : samples_of) {
+  for (const auto& entry : samples_of) {
+    // Named, not a structured binding: the lambdas below capture it (clang
+    // before 16 cannot capture a binding; the fuzz build uses clang).
+    const auto& tool = entry.first;
+    const auto& samples = entry.second;
     const ToolShape& shape = *shape_of.at(tool);
     const ToolIndex ix = build_index(shape, path, samples, tol);
     // Per point, the chosen samples (one, or one per generating pass).
