@@ -18,7 +18,7 @@ target=truecut_tests
 [ "${CI:-}" = true ] && target=all
 cmake --build "$dir" -j"$(nproc)" --target $target
 # The suite, then (normal build only) the diagnosis cases on recordings from
-# the independent planted generator, which take about 45 s on 2 cores on
+# the independent planted generator, which take about 22 s on 2 cores on
 # their own (docs/diagnosis.md, "Independent planted recordings").
 ctest --test-dir "$dir" --output-on-failure -j"$(nproc)" --timeout 600 -LE planted
 if [ "${1:-}" != "--sanitize" ]; then
