@@ -193,12 +193,14 @@ int recorder_init(const tc_hal_api_t* api, tc_hal_t* hal, int argc, const char* 
 
     auto r = std::make_unique<Recorder>();
     r->instance = names.at(0);
-    // /dev/null and FIFOs are written directly: renaming a temporary file
-    // over one would replace it.
-    std::error_code ec;
     const std::filesystem::path named(*file);
-    const auto named_status = std::filesystem::status(named, ec);
-    r->direct = named == "/dev/null" || std::filesystem::is_fifo(named_status);
+    r->final_path =
+        named.is_absolute() ? named : std::filesystem::path(api->output_dir(hal)) / named;
+    // /dev/null and FIFOs are written directly (renaming a temporary file
+    // over one would replace it), and may be named anywhere.
+    std::error_code ec;
+    r->direct = r->final_path == "/dev/null" ||
+                std::filesystem::is_fifo(std::filesystem::status(r->final_path, ec));
     bool outside = named.is_absolute();
     for (const auto& part : named)
       outside = outside || part == "..";
@@ -206,9 +208,6 @@ int recorder_init(const tc_hal_api_t* api, tc_hal_t* hal, int argc, const char* 
       throw InitError("file=" + *file +
                       ": outside the output folder; a recorder writes a name inside it (no "
                       "absolute path, no '..'), /dev/null or a FIFO");
-    r->final_path =
-        named.is_absolute() ? named : std::filesystem::path(api->output_dir(hal)) / named;
-    r->direct = r->direct || std::filesystem::is_fifo(std::filesystem::status(r->final_path, ec));
     r->tmp_path = r->final_path;
     r->tmp_path += ".tmp";
     r->columns = parse_columns(*columns);
