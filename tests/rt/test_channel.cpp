@@ -88,6 +88,7 @@ TEST(Handover, SwapsUnderConcurrentPublishingNeverTearOrLeak) {
   {
     Handover<Tracked, 4> h;
     std::atomic<bool> stop{false};
+    std::atomic<bool> rt_done{false};
     std::thread rt([&] {
       const Tracked* current = nullptr;
       int last = 0;
@@ -100,6 +101,7 @@ TEST(Handover, SwapsUnderConcurrentPublishingNeverTearOrLeak) {
       }
       while (!h.retire(current)) {
       }
+      rt_done = true;
     });
     for (int i = 1; i <= 5000; ++i) {
       std::unique_ptr<const Tracked> p = std::make_unique<Tracked>(i);
@@ -108,6 +110,10 @@ TEST(Handover, SwapsUnderConcurrentPublishingNeverTearOrLeak) {
       h.collect_retired();
     }
     stop = true;
+    // The servo side may still swap in what was waiting and fill the retire
+    // channel; its last retire needs the collector to keep going until then.
+    while (!rt_done.load())
+      h.collect_retired();
     rt.join();
     h.collect_retired();
   }
