@@ -57,10 +57,12 @@ def main():
     command.auto(linuxcnc.AUTO_RUN, 0)
     wait_until(lambda: stat.interp_state != linuxcnc.INTERP_IDLE)
     max_corr = 0.0
+    max_ferror = 0.0
     faults = set()
     while True:
         poll()
         max_corr = max(max_corr, hal.get_value("tc.corr-mag"))
+        max_ferror = max([max_ferror] + [abs(hal.get_value("joint.%d.f-error" % j)) for j in range(3)])
         faults.add(hal.get_value("tc.fault"))
         if stat.interp_state == linuxcnc.INTERP_IDLE:
             break
@@ -76,7 +78,8 @@ def main():
         " ".join("%s%.6f" % (a, stat.position["XYZABCUVW".index(a)]) for a in "XYZAC")))
     print("truecut_comp: field-generation %d, load-errors %d, max corr-mag %.6f mm, faults seen %s"
           % (hal.get_value("tc.field-generation"), hal.get_value("tc.load-errors"), max_corr,
-             sorted(faults)), flush=True)
+             sorted(faults)))
+    print("motion: max |f-error| of X, Y, Z %.6f mm" % max_ferror, flush=True)
     command.state(linuxcnc.STATE_OFF)
     return 0 if finished else 1
 

@@ -108,7 +108,7 @@ struct Executor::Impl {
       *static_cast<int32_t*>(f->time_pin) = dt;
       const bool increased = dt > f->tmax_ns;
       if (increased) f->tmax_ns = dt;
-      *static_cast<bool*>(f->tmax_increased_pin) = increased;
+      f->tmax_increased = increased;
       prev = t;
     }
     if (lim.cycle_probe) lim.cycle_probe(lim.cycle_probe_user, 1);

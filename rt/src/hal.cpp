@@ -159,7 +159,9 @@ bool Hal::is_loaded(const std::string& module) const {
 void Hal::load(const std::string& module, const std::vector<std::string>& args) {
   auto& st = *state_;
   if (module == "threads") {
-    // LinuxCNC's `loadrt threads name1=... period1=... fp1=...`.
+    // LinuxCNC's `loadrt threads name1=... period1=... fp1=...`, once per HAL
+    // like any module (more threads: name2=..., or newthread).
+    if (st.threads_loaded) throw HalError("module 'threads' is already loaded");
     for (int i = 1; i <= 9; ++i) {
       std::string name, period;
       bool fp = true;
@@ -178,6 +180,7 @@ void Hal::load(const std::string& module, const std::vector<std::string>& args) 
                        std::to_string(i) + "= and period" + std::to_string(i) + "=");
       new_thread(name, parse_value(Type::kS32, period).s, fp);
     }
+    st.threads_loaded = true;
     return;
   }
   if (is_loaded(module)) throw HalError("module " + q(module) + " is already loaded");

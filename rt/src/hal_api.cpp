@@ -112,12 +112,12 @@ int api_funct_new(tc_hal* hal, int comp_id, const char* name, tc_hal_funct_t fn,
     hal->functs.emplace(n, std::move(f));
     try {
       hal->add_pin(comp_id, n + ".time", Type::kS32, PinDir::kOut, &raw->time_pin);
-      hal->add_pin(comp_id, n + ".tmax-increased", Type::kBit, PinDir::kOut,
-                   &raw->tmax_increased_pin);
       hal->add_param(comp_id, n + ".tmax", Type::kS32, ParamDir::kRw, &raw->tmax_ns);
+      hal->add_param(comp_id, n + ".tmax-increased", Type::kBit, ParamDir::kRo,
+                     &raw->tmax_increased);
     } catch (...) {
       hal->pins.erase(n + ".time");
-      hal->pins.erase(n + ".tmax-increased");
+      hal->params.erase(n + ".tmax");
       hal->functs.erase(n);
       throw;
     }

@@ -58,10 +58,11 @@ struct Funct {
   void* arg;
   bool uses_fp;
   std::string thread;  // empty until addf
-  // Timing pins and parameter, like LinuxCNC's <funct>.time / .tmax. The
-  // pin pointers are aimed by the HAL like any component's.
-  void* time_pin = nullptr;            // s32, ns
-  void* tmax_increased_pin = nullptr;  // bit
+  // LinuxCNC 2.9's timing pin <funct>.time and parameters .tmax (rw) and
+  // .tmax-increased (ro). The pin pointer is aimed by the HAL like any
+  // component's.
+  void* time_pin = nullptr;  // s32, ns
+  bool tmax_increased = false;
   int32_t tmax_ns = 0;
 };
 
@@ -114,8 +115,9 @@ struct tc_hal {
   std::vector<truecut::rt::hal::detail::Module> modules;  // load order
   std::vector<std::unique_ptr<unsigned char[]>> allocations;
   std::atomic<bool> stop{false};
-  int error_messages = 0;  // api_message calls at TC_HAL_MSG_ERR
-  bool unloaded = false;   // the modules' exit functions have run
+  int error_messages = 0;       // api_message calls at TC_HAL_MSG_ERR
+  bool unloaded = false;        // the modules' exit functions have run
+  bool threads_loaded = false;  // `loadrt threads` ran (LinuxCNC loads it once)
 
   truecut::rt::hal::detail::Component* component(int id) const;
   truecut::rt::hal::detail::Thread* thread(const std::string& name) const;

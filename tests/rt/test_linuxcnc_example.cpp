@@ -56,4 +56,15 @@ TEST(LinuxcncExample, XyzacTrtRunsAPartProgramToTheEndWithTheFieldApplied) {
       << log;
   EXPECT_GT(max_corr, 0.01) << log;
   EXPECT_LE(max_corr, 0.5) << "max-correction in the HAL file\n" << log;
+
+  // The feedback wiring takes each joint's correction off the drive's
+  // position, so motion sees its own command come back: no following error
+  // from the correction (the simulated drive follows its command exactly).
+  const auto fe = r.out.find("motion: max |f-error| of X, Y, Z ");
+  ASSERT_NE(std::string::npos, fe) << log;
+  std::printf("%s\n", r.out.substr(fe, r.out.find('\n', fe) - fe).c_str());
+  double max_ferror = -1.0;
+  ASSERT_EQ(1, std::sscanf(r.out.c_str() + fe, "motion: max |f-error| of X, Y, Z %lf", &max_ferror))
+      << log;
+  EXPECT_LT(max_ferror, 1e-6) << log;
 }

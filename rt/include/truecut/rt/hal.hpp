@@ -41,7 +41,9 @@ struct Value {
   static Value of_s32(int32_t v);
   static Value of_u32(uint32_t v);
   double as_double() const;
-  std::string to_text() const;  // as halcmd's getp prints it
+  // As halcmd's getp prints it, except floats, which keep every digit
+  // (shortest round trip) where halcmd prints "%.7g".
+  std::string to_text() const;
 };
 
 // Parses `text` as a value of `type` the way halcmd's setp does (bit: 0, 1,
