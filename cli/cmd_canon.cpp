@@ -10,6 +10,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "output_spool.hpp"
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/interpreter.hpp"
 #include "truecut/interp/operations.hpp"
@@ -44,9 +45,9 @@ const char* kCanonHelp =
     "  --quiet             no progress on stderr (shown only on a terminal, after 1 s)\n"
     "  --help              this text\n";
 
-std::string annotation(const interp::CanonProgram& prog, const interp::CanonCall& c) {
+std::string annotation(const std::vector<std::string>& files, const interp::CanonCall& c) {
   const auto& x = c.context;
-  std::string s = "  ; " + prog.files[x.file] + ":" + std::to_string(x.line);
+  std::string s = "  ; " + files[x.file] + ":" + std::to_string(x.line);
   if (!x.operation.empty()) s += " op=" + x.operation;
   s += " tool=" + std::to_string(x.tool);
   if (x.feed_mode == interp::FeedMode::kInverseTime)
@@ -97,12 +98,32 @@ int cmd_canon(const std::vector<std::string>& argv) {
   interp::FormatOptions format;
   format.decimals = static_cast<int>(a.integer("decimals", 4, 0, 12));
 
+  // The calls are printed as they are made (into a spool, so a program
+  // with an error prints nothing but the error) unless a report needs the
+  // whole program: a program of any length in constant memory.
+  const bool whole_program = a.flag("list-operations") || a.flag("spline-report");
+  const auto only = a.value("operation");
+  const bool annotate = a.flag("annotate");
+  OutputSpool out;
+  int n = 0;
+  std::string line;
   interp::CanonProgram program;
   try {
     interp::InterpreterOptions options;
     if (auto t = a.value("tool-table")) options.tools = interp::ToolTable::load(*t);
     options.block_delete = a.flag("block-delete");
     options.has_b = a.flag("b-axis");
+    if (!whole_program)
+      options.on_call = [&](const interp::CanonCall& call, const std::vector<std::string>& files) {
+        if (only && (call.context.operation != *only || !interp::is_motion(call.op))) return;
+        char counter[32];
+        std::snprintf(counter, sizeof counter, "%5d N..... ", ++n);
+        line = counter;
+        line += interp::format_rs274(call.op, format);
+        if (annotate) line += annotation(files, call);
+        line += '\n';
+        out.append(line);
+      };
     // A long program shows the blocks it has run, on a terminal only, once
     // it has taken a second.
     const auto start = std::chrono::steady_clock::now();
@@ -134,20 +155,7 @@ int cmd_canon(const std::vector<std::string>& argv) {
     return kExitOk;
   }
   if (a.flag("spline-report")) return print_spline_report(program, a);
-  const auto only = a.value("operation");
-  const bool annotate = a.flag("annotate");
-  std::string out;
-  int n = 0;
-  for (const auto& call : program.calls) {
-    if (only && (call.context.operation != *only || !interp::is_motion(call.op))) continue;
-    char counter[32];
-    std::snprintf(counter, sizeof counter, "%5d N..... ", ++n);
-    out += counter;
-    out += interp::format_rs274(call.op, format);
-    if (annotate) out += annotation(program, call);
-    out += '\n';
-  }
-  std::fwrite(out.data(), 1, out.size(), stdout);
+  out.write_to(stdout);
   return kExitOk;
 }
 

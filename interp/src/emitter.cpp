@@ -17,7 +17,10 @@ void Emitter::emit(CanonOp op, double inverse_time_f) {
   call.context.g92_mm = state_.g92_mm;
   call.context.tool_offset_mm = state_.tool_offset_mm;
   call.op = std::move(op);
-  out_.calls.push_back(std::move(call));
+  if (sink_ != nullptr)
+    (*sink_)(call, out_.files);
+  else
+    out_.calls.push_back(std::move(call));
 }
 
 }  // namespace truecut::interp

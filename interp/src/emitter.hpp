@@ -8,7 +8,9 @@ namespace truecut::interp {
 
 class Emitter {
  public:
-  Emitter(CanonProgram& out, const InterpState& state) : out_(out), state_(state) {}
+  // `sink`: when set, each call goes there instead of into out.calls.
+  Emitter(CanonProgram& out, const InterpState& state, const CanonSink* sink = nullptr)
+      : out_(out), state_(state), sink_(sink != nullptr && *sink ? sink : nullptr) {}
   void set_location(int file, int line) {
     file_ = file;
     line_ = line;
@@ -18,6 +20,7 @@ class Emitter {
  private:
   CanonProgram& out_;
   const InterpState& state_;
+  const CanonSink* sink_;
   int file_ = 0;
   int line_ = 0;
 };

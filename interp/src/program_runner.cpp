@@ -66,7 +66,7 @@ std::string label_text(const std::string& label) {
 ProgramRunner::ProgramRunner(const InterpreterOptions& options, CanonProgram& out)
     : options_(options),
       out_(out),
-      emitter_(out, state_),
+      emitter_(out, state_, &options.on_call),
       executor_(state_, params_, options.tools, emitter_) {
   params_.set(kDebugSwitch, 1.0);
   params_.predefined = [this](std::string_view name) {

@@ -3,6 +3,7 @@
 // program end, handing every other block to the BlockExecutor.
 #pragma once
 
+#include <deque>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -57,7 +58,10 @@ class ProgramRunner {
   Parameters params_;
   Emitter emitter_;
   BlockExecutor executor_;
-  std::vector<File> files_;
+  // A deque: lexed lines point at their file's name, and the line being
+  // executed is referenced while a call loads another file, so a loaded
+  // file never moves.
+  std::deque<File> files_;
   std::vector<Frame> frames_;
   std::map<std::string, std::pair<int, size_t>> subs_;
   std::int64_t blocks_ = 0;

@@ -1,8 +1,11 @@
 // Bad input: every error names file:line:column and stops the program.
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "interp_test_util.hpp"
 #include "test_names.hpp"
+#include "test_paths.hpp"
 
 namespace truecut::interp::testing {
 namespace {
@@ -126,3 +129,19 @@ TEST(BadInput, NoPartialResult) {
 
 }  // namespace
 }  // namespace truecut::interp::testing
+
+// A subroutine file loaded by a call used to move the files read before it
+// in memory: an error on a later line of the main program then named its
+// file through a dangling pointer (garbage, or std::bad_alloc).
+TEST(BadInput, ErrorAfterASubroutineFileWasLoadedNamesTheMainProgram) {
+  const auto dir = truecut::test::scratch_dir();
+  std::ofstream(dir / "side.ngc") << "o<side> sub\n  G1 X1 F500\no<side> endsub\nM2\n";
+  std::ofstream(dir / "main.ngc") << "G0 X0 Y0\no<side> call\nG2 X0 Y5 I1 J0\nM2\n";
+  try {
+    truecut::interp::Interpreter().run_file(dir / "main.ngc");
+    FAIL() << "the arc's radii differ";
+  } catch (const truecut::interp::GcodeError& e) {
+    EXPECT_EQ((dir / "main.ngc").string(), e.where().file);
+    EXPECT_EQ(3, e.where().line);
+  }
+}

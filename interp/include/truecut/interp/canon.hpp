@@ -11,6 +11,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -174,6 +175,9 @@ struct CanonProgram {
   std::vector<std::string> files;  // main program first, then subroutine files
   std::vector<CanonCall> calls;
 };
+
+// Receives canonical calls one by one (InterpreterOptions::on_call).
+using CanonSink = std::function<void(const CanonCall& call, const std::vector<std::string>& files)>;
 
 // Name of the call as rs274 prints it (e.g. "STRAIGHT_FEED").
 const char* call_name(const CanonOp& op);

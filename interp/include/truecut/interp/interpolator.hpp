@@ -23,8 +23,8 @@ struct CycleOutput {
   std::array<double, 3> tcp_mm{};            // tool-centre point, workpiece frame
   std::array<double, 3> tool_axis{0, 0, 1};  // unit, TCP -> spindle, workpiece frame
   std::array<double, 5> joints{};            // x y z (mm) a c (deg), machine
-  double feed_mm_per_s = 0;  // speed of the TCP relative to the workpiece this cycle
-  double spindle_rpm = 0;    // commanded spindle speed, 0 while stopped
+  double feed_mm_per_s = 0;   // speed of the TCP relative to the workpiece this cycle
+  double spindle_rpm = 0;     // commanded spindle speed, 0 while stopped
   double tool_length_mm = 0;  // length offset in use (G43), as the kinematics see it
   std::int32_t line = 0;
   std::int32_t tool = 0;

@@ -31,6 +31,10 @@ struct InterpreterOptions {
   // progress_every_blocks blocks (a long program shows progress); unset: never.
   std::function<void(std::int64_t blocks)> progress;
   std::int64_t progress_every_blocks = 1 << 16;
+  // When set, every canonical call goes here as it is made, with the files
+  // named so far (CanonProgram::files), and CanonProgram::calls stays empty:
+  // a program of any length in constant memory.
+  CanonSink on_call;
 };
 
 class Interpreter {
