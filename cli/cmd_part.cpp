@@ -1,12 +1,16 @@
 // truecut part NAME --out DIR: write a benchmark part (nominal STL, CAM
 // program, tool table, metadata, the machine it is machined on).
+#include <unistd.h>
+
 #include <algorithm>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "stage_progress.hpp"
 #include "truecut/interp/interpreter.hpp"
 #include "truecut/rt/number_format.hpp"
 #include "truecut/sim/benchmark_parts.hpp"
@@ -37,6 +41,7 @@ const char* kPartHelp =
     "  --stepover MM        distance between passes (default 0.5)\n"
     "  --point-spacing MM   distance between points along a curved pass (default 0.5)\n"
     "  --step-down MM       axial depth per level (default 1.0)\n"
+    "  --quiet              no progress on stderr (shown only on a terminal, after 1 s)\n"
     "  --help               this text\n";
 
 }  // namespace
@@ -48,6 +53,7 @@ int cmd_part(const std::vector<std::string>& argv) {
                       {"stepover", true},
                       {"point-spacing", true},
                       {"step-down", true},
+                      {"quiet", false},
                       {"help", false}});
   if (a.flag("help")) {
     std::fputs(kPartHelp, stdout);
@@ -81,7 +87,11 @@ int cmd_part(const std::vector<std::string>& argv) {
           "--max-triangles %.0f; choose a larger --mesh-edge or raise --max-triangles",
           opt.mesh_edge_mm, estimate, estimate * 50e-9, max_triangles));
   }
+  std::optional<StageProgress> progress;
+  progress.emplace("truecut part", !a.flag("quiet") && isatty(STDERR_FILENO) != 0);
+  progress->stage("building the mesh and the program");
   const sim::BenchmarkPart part = sim::make_part(*id, opt);
+  progress->stage("checking the program against the travel");
   // The program must stay inside the travel of its machine; a part that does
   // not is a generator bug, reported before anything is written.
   interp::InterpreterOptions io;
@@ -91,10 +101,13 @@ int cmd_part(const std::vector<std::string>& argv) {
       sim::program_travel(interp::Interpreter(io).run_text(part.program, "program.ngc"),
                           machine.machine, "program.ngc");
   if (!travel.inside()) {
+    progress.reset();
     std::fprintf(stderr, "truecut part: %s\n", travel.first_excursion->message.c_str());
     return kExitFailure;
   }
+  progress->stage("writing the files");
   sim::write_part(part, *out);
+  progress.reset();
   std::printf(
       "%s: %zu triangles, %zu program lines -> "
       "%s/{nominal.stl,program.ngc,tools.tbl,part.json,machine.json,machine_ideal.json}\n",

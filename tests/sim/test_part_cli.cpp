@@ -1,6 +1,10 @@
 // `truecut part` writes a benchmark part that truecut's own interpreter reads.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <string>
+#include <vector>
+
 #include "run_process.hpp"
 #include "test_paths.hpp"
 #include "truecut/sim/machine_description.hpp"
@@ -52,4 +56,19 @@ TEST(PartCli, BadArgumentsAreUsageErrorsAndWriteNothing) {
                             "--stepover", "0"})
                    .exit_code);
   EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+// The six files are written all or none: when the last cannot be written,
+// the five before it are not left behind (they were, one by one).
+TEST(PartCli, AFileThatCannotBeWrittenLeavesNoneOfTheSet) {
+  const auto out = scratch_dir() / "implant";
+  std::filesystem::create_directories(out / "machine_ideal.json");  // a folder in its way
+  auto r = run_process(
+      {cli_path().string(), "part", "implant", "--out", out.string(), "--step-down", "4"});
+  EXPECT_NE(0, r.exit_code);
+  EXPECT_NE(std::string::npos, r.err.find("machine_ideal.json")) << r.err;
+  std::vector<std::string> left;
+  for (const auto& e : std::filesystem::directory_iterator(out))
+    left.push_back(e.path().filename().string());
+  EXPECT_EQ(std::vector<std::string>{"machine_ideal.json"}, left) << "only the folder in the way";
 }

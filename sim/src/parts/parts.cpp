@@ -150,13 +150,18 @@ std::string part_json(const BenchmarkPart& part) {
 
 void write_part(const BenchmarkPart& part, const std::filesystem::path& dir) {
   std::filesystem::create_directories(dir);
-  offline::write_stl(dir / "nominal.stl", part.mesh, offline::StlEncoding::kBinary,
+  // All six or none: staged beside their targets, renamed once all are
+  // written (an error or a signal on the way leaves the folder as it was).
+  rt::StagedFiles files({dir / "nominal.stl", dir / "program.ngc", dir / "tools.tbl",
+                         dir / "part.json", dir / "machine.json", dir / "machine_ideal.json"});
+  offline::write_stl(files.staged(0), part.mesh, offline::StlEncoding::kBinary,
                      "truecut nominal " + part.metadata.name + ", workpiece frame, mm");
-  rt::write_file_atomically(dir / "program.ngc", part.program);
-  rt::write_file_atomically(dir / "tools.tbl", tool_table_text(part.metadata));
-  rt::write_file_atomically(dir / "part.json", part_json(part));
-  write_machine_description(dir / "machine.json", part_machine(part));
-  write_machine_description(dir / "machine_ideal.json", part_machine_ideal(part));
+  files.write(1, part.program);
+  files.write(2, tool_table_text(part.metadata));
+  files.write(3, part_json(part));
+  write_machine_description(files.staged(4), part_machine(part));
+  write_machine_description(files.staged(5), part_machine_ideal(part));
+  files.commit();
 }
 
 double signed_volume_mm3(const offline::TriangleMesh& mesh) {
