@@ -32,7 +32,9 @@ const char* kCanonHelp =
     "printed on stdout for a program with an error.\n"
     "\n"
     "options:\n"
-    "  --tool-table FILE   tool table in LinuxCNC format (offsets in mm)\n"
+    "  --tool-table FILE   tool table in LinuxCNC format\n"
+    "  --tool-units mm|inch  units of the tool table's offsets and diameters (default mm;\n"
+    "                      LinuxCNC's are in [TRAJ]LINEAR_UNITS, rs274's without an INI in inch)\n"
     "  --block-delete      skip lines starting with '/' (switch on)\n"
     "  --b-axis            accept B words (default: the X Y Z A C machine rejects them)\n"
     "  --decimals N        digits after the point (default 4, as rs274)\n"
@@ -80,6 +82,7 @@ int print_spline_report(const interp::CanonProgram& program, const ParsedArgs& a
 
 int cmd_canon(const std::vector<std::string>& argv) {
   ParsedArgs a(argv, {{"tool-table", true},
+                      {"tool-units", true},
                       {"block-delete", false},
                       {"b-axis", false},
                       {"decimals", true},
@@ -95,6 +98,13 @@ int cmd_canon(const std::vector<std::string>& argv) {
     return kExitOk;
   }
   if (a.positionals().size() != 1) throw UsageError("expected one PROGRAM.ngc file");
+  interp::LengthUnits tool_units = interp::LengthUnits::kMm;
+  if (auto u = a.value("tool-units")) {
+    if (*u == "inch")
+      tool_units = interp::LengthUnits::kInch;
+    else if (*u != "mm")
+      throw UsageError("--tool-units must be mm or inch, not '" + *u + "'");
+  }
   interp::FormatOptions format;
   format.decimals = static_cast<int>(a.integer("decimals", 4, 0, 12));
 
@@ -110,7 +120,7 @@ int cmd_canon(const std::vector<std::string>& argv) {
   interp::CanonProgram program;
   try {
     interp::InterpreterOptions options;
-    if (auto t = a.value("tool-table")) options.tools = interp::ToolTable::load(*t);
+    if (auto t = a.value("tool-table")) options.tools = interp::ToolTable::load(*t, tool_units);
     options.block_delete = a.flag("block-delete");
     options.has_b = a.flag("b-axis");
     if (!whole_program)

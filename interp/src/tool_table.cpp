@@ -77,7 +77,9 @@ std::optional<int> ToolTable::slot_of(int number) const {
   return std::nullopt;
 }
 
-ToolTable ToolTable::parse(std::string_view text, const std::string& name) {
+ToolTable ToolTable::parse(std::string_view text, const std::string& name, LengthUnits units) {
+  // Lengths are checked in the table's units and stored in mm.
+  const double to_mm = units == LengthUnits::kInch ? 25.4 : 1.0;
   ToolTable table;
   const SourceFile src = source_from_text(text, name);
   for (size_t li = 0; li < src.lines.size(); ++li) {
@@ -101,6 +103,7 @@ ToolTable ToolTable::parse(std::string_view text, const std::string& name) {
         ++end;
       const char key = static_cast<char>(std::toupper(static_cast<unsigned char>(s[i])));
       const double v = parse_number(s, i, end, name, line);
+      const double v_mm = v * to_mm;
       switch (key) {
         case 'T':
           e.number = whole_number(v, "tool number T", name, line, i);
@@ -112,12 +115,12 @@ ToolTable ToolTable::parse(std::string_view text, const std::string& name) {
         case 'X':
         case 'Y':
         case 'Z': {
-          check_range(v, -kMaxOffsetMm, kMaxOffsetMm,
+          check_range(v, -kMaxOffsetMm / to_mm, kMaxOffsetMm / to_mm,
                       key == 'X'   ? "offset X"
                       : key == 'Y' ? "offset Y"
                                    : "offset Z (length)",
                       name, line, i);
-          (key == 'X' ? e.offset_mm.x : key == 'Y' ? e.offset_mm.y : e.offset_mm.z) = v;
+          (key == 'X' ? e.offset_mm.x : key == 'Y' ? e.offset_mm.y : e.offset_mm.z) = v_mm;
           break;
         }
         case 'A':
@@ -127,8 +130,8 @@ ToolTable ToolTable::parse(std::string_view text, const std::string& name) {
           (key == 'A' ? e.offset_mm.a : key == 'B' ? e.offset_mm.b : e.offset_mm.c) = v;
           break;
         case 'D':
-          check_range(v, 0.0, kMaxDiameterMm, "diameter D", name, line, i);
-          e.diameter_mm = v;
+          check_range(v, 0.0, kMaxDiameterMm / to_mm, "diameter D", name, line, i);
+          e.diameter_mm = v_mm;
           break;
         case 'U':
         case 'V':
@@ -154,14 +157,14 @@ ToolTable ToolTable::parse(std::string_view text, const std::string& name) {
   return table;
 }
 
-ToolTable ToolTable::load(const std::filesystem::path& file) {
+ToolTable ToolTable::load(const std::filesystem::path& file, LengthUnits units) {
   std::string text;
   try {
     text = rt::read_input_file(file, "tool table");
   } catch (const rt::InputFileError& e) {
     throw GcodeError({file.string(), 0, 0}, e.reason());
   }
-  return parse(text, file.string());
+  return parse(text, file.string(), units);
 }
 
 }  // namespace truecut::interp

@@ -78,17 +78,14 @@ const std::optional<Oracle>& oracle(std::string& why) {
     Oracle out{found->program, found->share,
                found->program.parent_path() / "work" / std::to_string(getpid())};
     fs::create_directories(out.work);
-    // The same tools twice: rs274 without an INI reads its table in inches,
-    // truecut's is in mm.
-    std::ofstream inch(out.work / "tools-inch.tbl"), mm(out.work / "tools-mm.tbl");
+    // One tool table for both, in inches: rs274 without an INI reads it so,
+    // truecut with --tool-units inch.
+    std::ofstream inch(out.work / "tools-inch.tbl");
     char line[160];
     for (int t : {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 99, 100}) {
       const double z = 0.1 * t, d = 0.0625 * (t <= 20 ? t : 1), x = t == 2 ? 0.05 : 0.0;
       std::snprintf(line, sizeof line, "T%d P%d X%.6f Z%.6f D%.6f ;tool %d\n", t, t, x, z, d, t);
       inch << line;
-      std::snprintf(line, sizeof line, "T%d P%d X%.6f Z%.6f D%.6f ;tool %d\n", t, t, x * 25.4,
-                    z * 25.4, d * 25.4, t);
-      mm << line;
     }
     return out;
   }();
@@ -134,9 +131,10 @@ Outcome run_both(const Oracle& o, const fs::path& original) {
                        dir);
   out.rs274_runs = r.exit_code == 0;
   out.rs274_error = r.err.substr(0, 400);
-  auto t = run_process({cli_path().string(), "canon", "--decimals", "8", "--b-axis", "--tool-table",
-                        (o.work / "tools-mm.tbl").string(), program.filename().string()},
-                       dir);
+  auto t = run_process(
+      {cli_path().string(), "canon", "--decimals", "8", "--b-axis", "--tool-units", "inch",
+       "--tool-table", (o.work / "tools-inch.tbl").string(), program.filename().string()},
+      dir);
   out.truecut_runs = t.exit_code == 0;
   if (!out.truecut_runs) {
     out.truecut_error = t.err;

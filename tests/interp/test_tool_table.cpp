@@ -80,6 +80,28 @@ TEST(ToolTable, ImplausibleEntriesAreRefusedAtTheirColumn) {
   EXPECT_EQ(t.find(99999)->diameter_mm, 1000.0);
 }
 
+// A table in inches (an inch machine's, or rs274's without an INI) is
+// stored in mm; its limits are checked in its own units. It was read as mm.
+TEST(ToolTable, InchTableIsReadInInchesAndStoredInMm) {
+  const ToolTable t =
+      ToolTable::parse("T1 P1 X0.05 Z1.5 D0.25 A10\n", "inch.tbl", LengthUnits::kInch);
+  const ToolEntry* e = t.find(1);
+  ASSERT_NE(nullptr, e);
+  EXPECT_DOUBLE_EQ(0.05 * 25.4, e->offset_mm.x);
+  EXPECT_DOUBLE_EQ(1.5 * 25.4, e->offset_mm.z);
+  EXPECT_DOUBLE_EQ(0.25 * 25.4, e->diameter_mm);
+  EXPECT_DOUBLE_EQ(10.0, e->offset_mm.a) << "angles are not lengths";
+  try {
+    ToolTable::parse("T1 P1 Z500\n", "inch.tbl", LengthUnits::kInch);  // 12.7 m
+    FAIL() << "a 500 inch tool";
+  } catch (const GcodeError& err) {
+    EXPECT_EQ(1, err.where().line);
+    EXPECT_NE(std::string::npos, std::string(err.what()).find("500 in tool table is outside"))
+        << err.what();
+  }
+  EXPECT_NO_THROW(ToolTable::parse("T1 P1 Z500\n", "mm.tbl")) << "500 mm is a tool";
+}
+
 TEST(ToolTable, LoadsFromFile) {
   const auto file = truecut::test::scratch_dir() / "tool.tbl";
   std::ofstream(file) << "T3 P3 Z7 D2\n";

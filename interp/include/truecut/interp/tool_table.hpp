@@ -1,7 +1,9 @@
 // Tool table in LinuxCNC's format: one tool per line,
 //   T<number> P<pocket> [X.. Y.. Z.. A.. B.. C.. U.. V.. W..] [D<diameter>]
 //   [I.. J.. Q..] [;comment]
-// Offsets and diameters are in machine units, which are mm in truecut.
+// Offsets and diameters are in the machine's length units (LinuxCNC: the
+// INI's [TRAJ]LINEAR_UNITS; rs274 without an INI: inch). They are read in
+// `units` and stored in mm.
 #pragma once
 
 #include <filesystem>
@@ -25,8 +27,9 @@ struct ToolEntry {
 class ToolTable {
  public:
   // Throws GcodeError with file:line:column on a malformed line.
-  static ToolTable load(const std::filesystem::path& file);
-  static ToolTable parse(std::string_view text, const std::string& name);
+  static ToolTable load(const std::filesystem::path& file, LengthUnits units = LengthUnits::kMm);
+  static ToolTable parse(std::string_view text, const std::string& name,
+                         LengthUnits units = LengthUnits::kMm);
 
   void add(ToolEntry entry);
   const std::vector<ToolEntry>& entries() const { return entries_; }
