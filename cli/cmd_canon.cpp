@@ -126,9 +126,16 @@ int cmd_canon(const std::vector<std::string>& argv) {
     if (!whole_program)
       options.on_call = [&](const interp::CanonCall& call, const std::vector<std::string>& files) {
         if (only && (call.context.operation != *only || !interp::is_motion(call.op))) return;
+        // rs274's columns: the call's number, then the block's N word as
+        // written, padded to six characters, or "N....." without one.
         char counter[32];
-        std::snprintf(counter, sizeof counter, "%5d N..... ", ++n);
+        std::snprintf(counter, sizeof counter, "%5d N", ++n);
         line = counter;
+        const std::string& digits = call.context.block_number;
+        if (digits.empty())
+          line += "..... ";
+        else
+          line += digits + std::string(digits.size() < 6 ? 6 - digits.size() : 0, ' ');
         line += interp::format_rs274(call.op, format);
         if (annotate) line += annotation(files, call);
         line += '\n';

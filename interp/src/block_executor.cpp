@@ -749,6 +749,7 @@ void BlockExecutor::end_program(bool pallet_shuttle) {
   if (pallet_shuttle) out_.emit(PalletShuttle{});
   out_.emit(ProgramEnd{});
   s_.operation.clear();
+  out_.clear_block_number();
   out_.emit(OnReset{});
   out_.emit(OnReset{});
 }

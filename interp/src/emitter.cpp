@@ -6,6 +6,7 @@ void Emitter::emit(CanonOp op, double inverse_time_f) {
   CanonCall call;
   call.context.file = file_;
   call.context.line = line_;
+  call.context.block_number = block_number_;
   call.context.operation = state_.operation;
   call.context.tool = state_.tool;
   call.context.units = state_.units;

@@ -1,6 +1,7 @@
 #include "program_runner.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 
 #include "system_parameters.hpp"
@@ -55,6 +56,18 @@ const char* keyword_name(OKeyword k) {
       return "continue";
   }
   return "";
+}
+
+// The digits of the line's N word as written (after an optional '/'), as
+// rs274 prints them; "" when the line has none.
+std::string block_number_of(const LexedLine& line) {
+  size_t k = 0;
+  if (k < line.text.size() && line.text[k] == '/') ++k;
+  if (k >= line.text.size() || line.text[k] != 'n') return {};
+  size_t end = ++k;
+  while (end < line.text.size() && std::isdigit(static_cast<unsigned char>(line.text[end])))
+    ++end;
+  return line.text.substr(k, end - k);
 }
 
 std::string label_text(const std::string& label) {
@@ -181,6 +194,7 @@ bool ProgramRunner::step() {
     if (file.end < file.source.lines.size() && frames_.size() == 1) {
       emitter_.set_location(frame.file, line + 1);
       emitter_.emit(Finish{});
+      emitter_.clear_block_number();
       emitter_.emit(OnReset{});
       emitter_.emit(OnReset{});
       return false;  // closing '%'
@@ -211,7 +225,7 @@ bool ProgramRunner::step() {
   if (!line.text.empty() && line.text[0] == '%')
     fail(line, line.column[0], "'%' is only allowed alone on the first and last program lines");
   sync_state_parameters(state_, params_);
-  emitter_.set_location(frame.file, line.line);
+  emitter_.set_location(frame.file, line.line, block_number_of(line));
   const Block block = read_block(line, params_, options_.has_b);
   assign(block, line);
   if (block.o) {

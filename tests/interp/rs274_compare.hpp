@@ -16,18 +16,21 @@ namespace truecut::interp::testing {
 struct ListedCall {
   std::string name;
   std::string args;
+  std::string block;  // the second column: "....." or the N word's digits
 };
 
-// The calls of a listing; lines that are not `<n> N... NAME(...)` are ignored
-// (rs274 prints (print,...) text and errors there).
+// The calls of a listing; lines that are not `<n> N<block> NAME(...)` are
+// ignored (rs274 prints (print,...) text and errors there). <block> is
+// "....." or the digits of the block's N word, padded to six characters (a
+// longer one runs into the name).
 inline std::vector<ListedCall> parse_listing(const std::string& text) {
-  static const std::regex line(R"(^\s*\d+\s+N\S*\s+([A-Z_0-9]+)\((.*)\)\s*$)");
+  static const std::regex line(R"(^\s*\d+ N(\.\.\.\.\.|\d+)\s*([A-Z_0-9]+)\((.*)\)\s*$)");
   std::vector<ListedCall> out;
   std::istringstream in(text);
   std::string s;
   std::smatch m;
   while (std::getline(in, s))
-    if (std::regex_match(s, m, line)) out.push_back({m[1], m[2]});
+    if (std::regex_match(s, m, line)) out.push_back({m[2], m[3], m[1]});
   return out;
 }
 
@@ -60,10 +63,10 @@ inline std::optional<std::string> compare_listings(const std::vector<ListedCall>
     const auto& e = expected[i];
     const auto& a = actual[i];
     auto where = [&] {
-      return "call " + std::to_string(i + 1) + ": rs274 " + e.name + "(" + e.args +
-             ") vs truecut " + a.name + "(" + a.args + ")";
+      return "call " + std::to_string(i + 1) + ": rs274 N" + e.block + " " + e.name + "(" + e.args +
+             ") vs truecut N" + a.block + " " + a.name + "(" + a.args + ")";
     };
-    if (e.name != a.name) return where();
+    if (e.name != a.name || e.block != a.block) return where();
     if (e.name == "COMMENT" || e.name == "MESSAGE") {
       if (e.args != a.args) return where();
       continue;

@@ -153,8 +153,11 @@ using CanonOp =
 
 // What was in force when a call was made.
 struct CallContext {
-  int file = 0;           // index into CanonProgram::files
-  int line = 0;           // 1-based line in that file
+  int file = 0;  // index into CanonProgram::files
+  int line = 0;  // 1-based line in that file
+  // The digits of the block's N word as written ("00010"), "" without one;
+  // rs274 prints them in its second column.
+  std::string block_number;
   std::string operation;  // CAM operation name, "" before the first marker
   int tool = 0;           // tool in the spindle
   LengthUnits units = LengthUnits::kMm;
