@@ -1,7 +1,8 @@
 // Cost of the compensation component, printed as percentiles and as a
 // fraction of a 125 us (8 kHz) and a 1 ms (1 kHz) servo period.
 //
-//   truecut_comp_bench [--calls N] [--cycles N] [--wall-seconds S] [--no-load] [--no-fifo]
+//   truecut_comp_bench [--calls N] [--cycles N] [--path-cycles N] [--wall-seconds S]
+//                      [--no-load] [--no-fifo]
 //
 // 1. The component's per-cycle logic alone (rt::comp::step(), the code
 //    truecut_comp.so runs between its pin reads and writes), with the field
@@ -16,11 +17,19 @@
 //    pos_loop joints, against the same chain without the component.
 // 3. The same chain on the wall clock at 8 kHz, servo thread on CPU 1 under
 //    SCHED_FIFO 80 (when permitted), a load on CPU 0.
+// 4. truecut_comp's servo function alone in the HAL shim (one Executor::step()
+//    of a thread that runs only the component: its update, the executor's
+//    call), on each path of issue 19 point 7 (tests/rt/comp_cycle_paths.hpp,
+//    the paths whose instructions rt_test_truecut_comp_callgrind counts):
+//    plain, cross-fade in progress, joint mode with A/C turning, fault
+//    (TCP outside the grid, fading out). Paths in interleaved blocks; the
+//    last row is the step of a thread without a function (the executor's share).
 #include <pthread.h>
 #include <sched.h>
 #include <x86intrin.h>
 
 #include <sys/mman.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <chrono>
@@ -28,10 +37,12 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "comp_cycle_paths.hpp"
 #include "truecut/rt/comp.hpp"
 #include "truecut/rt/duration_histogram.hpp"
 #include "truecut/rt/executor.hpp"
@@ -287,6 +298,76 @@ rt::hal::ThreadStats run_chain(const std::string& field_file, uint64_t cycles, i
   return r.threads.at(0);
 }
 
+// ---- 4. the servo function per path -----------------------------------------
+
+void bench_paths(uint64_t cycles) {
+  using truecut::test::comp::cycle_path_name;
+  using truecut::test::comp::CyclePath;
+  using truecut::test::comp::CyclePathRig;
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("truecut_comp_bench_paths-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  struct Path {
+    CyclePath path;
+    std::unique_ptr<CyclePathRig> rig;
+    rt::DurationHistogram h;
+  };
+  std::vector<Path> paths;
+  for (CyclePath p : truecut::test::comp::kAllCyclePaths) {
+    std::filesystem::create_directories(dir / cycle_path_name(p));
+    // The cross-fade and the fade-out last past the whole run (1 ms cycles).
+    const double fade_s = 2.0 * double(cycles) * 1e-3 + 10.0;
+    paths.push_back(
+        {p,
+         std::make_unique<CyclePathRig>(p, dir / cycle_path_name(p), fade_s, hal_options()),
+         {}});
+  }
+  // The executor's own share of a step: the same thread without a function.
+  rt::hal::Hal empty_hal(hal_options());
+  rt::hal::load_hal_text(empty_hal, "loadrt threads name1=servo-thread period1=1000000\n",
+                         "empty.hal");
+  rt::hal::Executor empty(empty_hal);
+  rt::DurationHistogram empty_h;
+  const uint64_t block = 10'000;
+  uint64_t n = 0;
+  for (uint64_t done = 0; done < cycles; done += block)
+    for (Path& x : paths) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(3));  // see bench_component()
+      for (uint64_t i = 0; i < block; ++i) {
+        x.rig->drive(n + i);
+        const uint64_t t0 = ticks();
+        x.rig->executor().step();
+        const uint64_t t1 = ticks();
+        x.h.add(static_cast<int64_t>(std::llround(double(t1 - t0) * g_ns_per_tick)));
+      }
+      n += block;
+    }
+  for (uint64_t done = 0; done < cycles; done += block) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(3));
+    for (uint64_t i = 0; i < block; ++i) {
+      const uint64_t t0 = ticks();
+      empty.step();
+      const uint64_t t1 = ticks();
+      empty_h.add(static_cast<int64_t>(std::llround(double(t1 - t0) * g_ns_per_tick)));
+    }
+  }
+  std::printf(
+      "\n4. truecut_comp's servo function per path (HAL shim, one executor step), %llu cycles "
+      "per path, interleaved blocks of %llu:\n",
+      static_cast<unsigned long long>(cycles), static_cast<unsigned long long>(block));
+  print_header();
+  for (Path& x : paths) {
+    const std::string why = x.rig->check();
+    print_row(
+        (std::string(cycle_path_name(x.path)) + (why.empty() ? "" : " (NOT IN ITS STATE)")).c_str(),
+        x.h);
+    if (!why.empty()) std::printf("    %s\n", why.c_str());
+  }
+  print_row("executor step without a function", empty_h);
+  paths.clear();
+  std::filesystem::remove_all(dir);
+}
+
 void load_cpu(int cpu, std::atomic<bool>& stop) {
   cpu_set_t set;
   CPU_ZERO(&set);
@@ -366,6 +447,7 @@ void bench_cycle(uint64_t cycles, double wall_seconds, bool load) {
 int main(int argc, char** argv) {
   std::size_t calls = 1'000'000;
   uint64_t cycles = 400'000;
+  uint64_t path_cycles = 1'000'000;
   double wall_seconds = 10.0;
   bool load = true, fifo = true;
   for (int i = 1; i < argc; ++i) {
@@ -374,6 +456,8 @@ int main(int argc, char** argv) {
       calls = std::strtoull(argv[++i], nullptr, 10);
     else if (a == "--cycles" && i + 1 < argc)
       cycles = std::strtoull(argv[++i], nullptr, 10);
+    else if (a == "--path-cycles" && i + 1 < argc)
+      path_cycles = std::strtoull(argv[++i], nullptr, 10);
     else if (a == "--wall-seconds" && i + 1 < argc)
       wall_seconds = std::atof(argv[++i]);
     else if (a == "--no-load")
@@ -382,8 +466,8 @@ int main(int argc, char** argv) {
       fifo = false;
     else {
       std::fprintf(stderr,
-                   "usage: truecut_comp_bench [--calls N] [--cycles N] [--wall-seconds S] "
-                   "[--no-load] [--no-fifo]\n");
+                   "usage: truecut_comp_bench [--calls N] [--cycles N] [--path-cycles N] "
+                   "[--wall-seconds S] [--no-load] [--no-fifo]\n");
       return 2;
     }
   }
@@ -408,6 +492,7 @@ int main(int argc, char** argv) {
     }
     bench_component(calls);
     bench_cycle(cycles, 0.0, false);
+    if (path_cycles > 0) bench_paths(path_cycles);
     if (fifo) munlockall();
   });
   measure.join();

@@ -3,11 +3,13 @@
 # missing. The tests also compare against LinuxCNC's rs274 (linuxcnc-uspace),
 # headless Chromium and git (tests/support/oracle.hpp); linuxcnc-uspace-dev
 # (the HAL headers) lets the build make truecut_comp a LinuxCNC module,
-# which tests/rt/test_linuxcnc_module.cpp runs in halrun (docs/linuxcnc.md).
+# which tests/rt/test_linuxcnc_module.cpp runs in halrun (docs/linuxcnc.md);
+# valgrind counts truecut_comp's instructions per servo cycle
+# (tests/rt/test_truecut_comp_callgrind.cpp, docs/performance.md).
 set -euo pipefail
 packages=(cmake g++ make pkg-config libeigen3-dev libembree-dev libboost-dev libtbb-dev
           libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev libssl-dev
-          libpng-dev chromium linuxcnc-uspace linuxcnc-uspace-dev git)
+          libpng-dev chromium linuxcnc-uspace linuxcnc-uspace-dev git valgrind)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -1,5 +1,9 @@
 #include "alloc_counter.hpp"
 
+#include <dlfcn.h>
+#include <pthread.h>
+#include <semaphore.h>
+
 #include <atomic>
 #include <cstdlib>
 #include <new>
@@ -14,9 +18,48 @@ void __libc_free(void*);
 
 namespace {
 std::atomic<uint64_t> g_count{0};
+std::atomic<uint64_t> g_frees{0};
+std::atomic<uint64_t> g_locks{0};
 thread_local bool t_armed = false;
 inline void note() noexcept {
   if (t_armed) g_count.fetch_add(1, std::memory_order_relaxed);
+}
+inline void note_lock() noexcept {
+  if (t_armed) g_locks.fetch_add(1, std::memory_order_relaxed);
+}
+
+// The C library's own lock functions, behind the counting ones below.
+template <typename F>
+F next_symbol(F& cache, const char* name) noexcept {
+  if (cache == nullptr) cache = reinterpret_cast<F>(::dlsym(RTLD_NEXT, name));
+  return cache;
+}
+using MutexFn = int (*)(pthread_mutex_t*);
+using MutexTimedFn = int (*)(pthread_mutex_t*, const timespec*);
+using RwlockFn = int (*)(pthread_rwlock_t*);
+using RwlockTimedFn = int (*)(pthread_rwlock_t*, const timespec*);
+using SemFn = int (*)(sem_t*);
+using SemTimedFn = int (*)(sem_t*, const timespec*);
+MutexFn g_mutex_lock, g_mutex_trylock;
+MutexTimedFn g_mutex_timedlock;
+RwlockFn g_rdlock, g_wrlock, g_tryrdlock, g_trywrlock;
+RwlockTimedFn g_timedrdlock, g_timedwrlock;
+SemFn g_sem_wait, g_sem_trywait;
+SemTimedFn g_sem_timedwait;
+// Resolved before main(), while one thread runs.
+[[gnu::constructor]] void resolve_lock_functions() noexcept {
+  next_symbol(g_mutex_lock, "pthread_mutex_lock");
+  next_symbol(g_mutex_trylock, "pthread_mutex_trylock");
+  next_symbol(g_mutex_timedlock, "pthread_mutex_timedlock");
+  next_symbol(g_rdlock, "pthread_rwlock_rdlock");
+  next_symbol(g_wrlock, "pthread_rwlock_wrlock");
+  next_symbol(g_tryrdlock, "pthread_rwlock_tryrdlock");
+  next_symbol(g_trywrlock, "pthread_rwlock_trywrlock");
+  next_symbol(g_timedrdlock, "pthread_rwlock_timedrdlock");
+  next_symbol(g_timedwrlock, "pthread_rwlock_timedwrlock");
+  next_symbol(g_sem_wait, "sem_wait");
+  next_symbol(g_sem_trywait, "sem_trywait");
+  next_symbol(g_sem_timedwait, "sem_timedwait");
 }
 }  // namespace
 
@@ -49,7 +92,59 @@ int posix_memalign(void** out, size_t a, size_t n) {
   return 0;
 }
 void free(void* p) {
+  if (p != nullptr && t_armed) g_frees.fetch_add(1, std::memory_order_relaxed);
   __libc_free(p);
+}
+
+// Every way to block on a mutex, a read-write lock or a semaphore (also
+// the try- variants: a real-time function may not take a lock at all).
+int pthread_mutex_lock(pthread_mutex_t* m) {
+  note_lock();
+  return next_symbol(g_mutex_lock, "pthread_mutex_lock")(m);
+}
+int pthread_mutex_trylock(pthread_mutex_t* m) {
+  note_lock();
+  return next_symbol(g_mutex_trylock, "pthread_mutex_trylock")(m);
+}
+int pthread_mutex_timedlock(pthread_mutex_t* m, const timespec* t) {
+  note_lock();
+  return next_symbol(g_mutex_timedlock, "pthread_mutex_timedlock")(m, t);
+}
+int pthread_rwlock_rdlock(pthread_rwlock_t* l) {
+  note_lock();
+  return next_symbol(g_rdlock, "pthread_rwlock_rdlock")(l);
+}
+int pthread_rwlock_wrlock(pthread_rwlock_t* l) {
+  note_lock();
+  return next_symbol(g_wrlock, "pthread_rwlock_wrlock")(l);
+}
+int pthread_rwlock_tryrdlock(pthread_rwlock_t* l) {
+  note_lock();
+  return next_symbol(g_tryrdlock, "pthread_rwlock_tryrdlock")(l);
+}
+int pthread_rwlock_trywrlock(pthread_rwlock_t* l) {
+  note_lock();
+  return next_symbol(g_trywrlock, "pthread_rwlock_trywrlock")(l);
+}
+int pthread_rwlock_timedrdlock(pthread_rwlock_t* l, const timespec* t) {
+  note_lock();
+  return next_symbol(g_timedrdlock, "pthread_rwlock_timedrdlock")(l, t);
+}
+int pthread_rwlock_timedwrlock(pthread_rwlock_t* l, const timespec* t) {
+  note_lock();
+  return next_symbol(g_timedwrlock, "pthread_rwlock_timedwrlock")(l, t);
+}
+int sem_wait(sem_t* s) {
+  note_lock();
+  return next_symbol(g_sem_wait, "sem_wait")(s);
+}
+int sem_trywait(sem_t* s) {
+  note_lock();
+  return next_symbol(g_sem_trywait, "sem_trywait")(s);
+}
+int sem_timedwait(sem_t* s, const timespec* t) {
+  note_lock();
+  return next_symbol(g_sem_timedwait, "sem_timedwait")(s, t);
 }
 }
 
@@ -112,8 +207,19 @@ void disarm_alloc_counter() noexcept {
 uint64_t armed_allocations() noexcept {
   return g_count.load();
 }
+uint64_t armed_frees() noexcept {
+  return g_frees.load();
+}
+uint64_t armed_locks() noexcept {
+  return g_locks.load();
+}
+RtViolations armed_violations() noexcept {
+  return {g_count.load(), g_frees.load(), g_locks.load()};
+}
 void reset_alloc_counter() noexcept {
   g_count.store(0);
+  g_frees.store(0);
+  g_locks.store(0);
 }
 
 uint64_t alloc_counter_self_test() {
