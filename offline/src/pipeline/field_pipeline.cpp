@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <stdexcept>
@@ -332,7 +333,8 @@ void check_budgets(const FieldPipelineInputs& in, const FieldPipelineOptions& op
   if (nodes > opt.max_grid_nodes)
     throw std::invalid_argument(rt::format_printf(
         "--resolution %g mm gives a field grid of about %.3g nodes per layer over the compensated "
-        "surfaces (%.4g x %.4g x %.4g mm plus a tool radius of %.4g mm), more than --max-grid-nodes "
+        "surfaces (%.4g x %.4g x %.4g mm plus a tool radius of %.4g mm), more than "
+        "--max-grid-nodes "
         "%.0f (about 135 bytes each while fitting); choose a coarser --resolution or raise "
         "--max-grid-nodes (a field file holds at most 2^26 nodes per layer)",
         h, nodes, extent.x(), extent.y(), extent.z(), reach_mm, opt.max_grid_nodes));
@@ -650,25 +652,53 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
   // Where a tool cuts the point, the matrix holds what the field applies
   // there: the mean of its correction (less the base field's) over the
   // passes that cut it, the scan's noise smoothed as in the field.
+  // The field is evaluated once per path sample (a sample cuts several
+  // points: its placements share the tool centre), in parallel; the sums
+  // are taken in the placements' order.
   {
     const std::size_t n = r.points.size();
     std::vector<Eigen::Vector3d> sum(n, Eigen::Vector3d::Zero());
     std::vector<int> count(n, 0);
-    for (const ToolPlacement& tp : r.placement.tools)
+    constexpr std::uint32_t kUnused = std::numeric_limits<std::uint32_t>::max();
+    std::vector<std::uint32_t> slot_of_sample(r.path.samples.size(), kUnused);
+    std::vector<const PointPlacement*> first;  // per slot: a placement at that sample
+    std::vector<std::uint8_t> ok;
+    std::vector<Eigen::Vector3d> value;
+    for (const ToolPlacement& tp : r.placement.tools) {
+      auto counted = [&](const PointPlacement& pp) {
+        return r.matrix.valid[pp.point] &&
+               r.significance.compensated(r.points.surface_ids[pp.point]);
+      };
+      first.clear();
       for (const PointPlacement& pp : tp.points) {
-        if (!r.matrix.valid[pp.point] ||
-            !r.significance.compensated(r.points.surface_ids[pp.point]))
-          continue;
-        const rt::FieldSample f = r.fit->field.evaluate(tp.tool, pp.tcp_mm);
-        if (f.status != rt::FieldStatus::kOk) continue;
+        if (!counted(pp) || slot_of_sample[pp.sample] != kUnused) continue;
+        slot_of_sample[pp.sample] = static_cast<std::uint32_t>(first.size());
+        first.push_back(&pp);
+      }
+      ok.assign(first.size(), 0);
+      value.assign(first.size(), Eigen::Vector3d::Zero());
+      tbb::parallel_for(std::size_t{0}, first.size(), [&](std::size_t k) {
+        const Eigen::Vector3d& tcp = first[k]->tcp_mm;
+        const rt::FieldSample f = r.fit->field.evaluate(tp.tool, tcp);
+        if (f.status != rt::FieldStatus::kOk) return;
         Eigen::Vector3d v = f.correction_mm;
         if (in.base_field) {
-          const rt::FieldSample b = in.base_field->evaluate(tp.tool, pp.tcp_mm);
+          const rt::FieldSample b = in.base_field->evaluate(tp.tool, tcp);
           if (b.status == rt::FieldStatus::kOk) v -= b.correction_mm;
         }
-        sum[pp.point] += v;
+        value[k] = v;
+        ok[k] = 1;
+      });
+      for (const PointPlacement& pp : tp.points) {
+        if (!counted(pp)) continue;
+        const std::uint32_t k = slot_of_sample[pp.sample];
+        if (!ok[k]) continue;
+        sum[pp.point] += value[k];
         ++count[pp.point];
       }
+      for (const PointPlacement* pp : first)
+        slot_of_sample[pp->sample] = kUnused;
+    }
     for (std::size_t i = 0; i < n; ++i)
       if (count[i] > 0) r.smoothed_matrix_mm[i] = sum[i] / count[i];
   }
