@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <map>
 #include <mutex>
@@ -13,6 +14,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 
+#include "spatial/shared_scan_tree.hpp"
 #include "truecut/offline/compensation_points.hpp"
 #include "truecut/offline/compensation_significance.hpp"
 #include "truecut/offline/ray_scene.hpp"
@@ -436,10 +438,18 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
   std::optional<RayScene> scene;
   std::optional<RayScene> expected_scene;  // the expected cut, workpiece frame
   std::vector<Eigen::Vector3d> cloud;      // sphere method: the registered scan points
+  // One k-d tree of the scan's points for the registration(s), the sphere
+  // method (on the scan left in place) and the significance test's noise
+  // (on a point cloud), built by the registration or when first needed.
+  std::optional<spatial::KdTree> scan_tree;
+  auto shared_scan_tree = [&]() -> const spatial::KdTree& {
+    if (!scan_tree) scan_tree.emplace(in.scan->vertices_mm);
+    return *scan_tree;
+  };
   auto registration = [&] {
     if (!opt.register_scan) return;
     const auto t0 = timer.now();
-    r.registration = register_scan(nominal, in.scan->vertices_mm, icp);
+    r.registration = register_scan(nominal, in.scan->vertices_mm, icp, shared_scan_tree());
     const IcpResult& g = *r.registration;
     timer.done(kRegistrationStage, t0, "registration",
                g.applied ? rt::format_printf("%d iterations, RMS %.4f -> %.4f mm", g.iterations,
@@ -474,7 +484,7 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
       scan_to_nominal = r.registration->scan_to_nominal;
       motion = scan_to_nominal;
     } else {
-      const IcpResult found = register_scan(nominal, in.scan->vertices_mm, icp);
+      const IcpResult found = register_scan(nominal, in.scan->vertices_mm, icp, shared_scan_tree());
       if (found.applied) motion = found.scan_to_nominal;
     }
     r.scan_check = check_scan(nominal, in.scan->vertices_mm, scan_to_nominal, motion,
@@ -504,6 +514,11 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
     auto measured_error_vectors = [&](const CompensationPoints& points) {
       if (opt.method == ErrorMethod::kRay)
         return error_vectors_by_rays(nominal, points, *scene, opt.ray);
+      // The scan left in place: its tree is the cloud's.
+      if (cloud.size() == in.scan->vertices_mm.size() &&
+          std::memcmp(cloud.data(), in.scan->vertices_mm.data(),
+                      cloud.size() * sizeof(Eigen::Vector3d)) == 0)
+        return error_vectors_by_spheres(nominal, points, cloud, opt.sphere, shared_scan_tree());
       return error_vectors_by_spheres(nominal, points, cloud, opt.sphere);
     };
     auto error_vectors = [&](const CompensationPoints& points) {
@@ -533,10 +548,14 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
         opt.method == ErrorMethod::kRay ? "error vectors (rays)" : "error vectors (spheres)",
         rt::format_printf("%zu of %zu valid", r.error_summary.valid, r.error_summary.points));
     const auto t_test = timer.now();
-    r.significance = test_compensation_significance(
-        r.points, r.errors, *in.scan,
-        r.registration ? r.registration->scan_to_nominal : Eigen::Isometry3d::Identity(),
-        opt.significance);
+    const Eigen::Isometry3d world_from_scan =
+        r.registration ? r.registration->scan_to_nominal : Eigen::Isometry3d::Identity();
+    r.significance =
+        in.scan->triangles.empty()
+            ? test_compensation_significance(r.points, r.errors, *in.scan, world_from_scan,
+                                             opt.significance, shared_scan_tree())
+            : test_compensation_significance(r.points, r.errors, *in.scan, world_from_scan,
+                                             opt.significance);
     std::size_t kept = 0;
     for (const SurfaceSignificance& s : r.significance.surfaces)
       kept += s.compensated ? 1 : 0;
