@@ -347,11 +347,12 @@ std::vector<Eigen::Vector3d> multilevel_bspline_nodes(const rt::FieldGrid& grid,
   for (std::size_t p = 0; p < positions.size(); ++p)
     residuals[p] -= affine(positions[p]);
   std::vector<Eigen::Vector3d> nodes(static_cast<std::size_t>(grid.node_count()));
-  for (int32_t k = 0; k < grid.dims[2]; ++k)
+  tbb::parallel_for(int32_t{0}, grid.dims[2], [&](int32_t k) {
     for (int32_t j = 0; j < grid.dims[1]; ++j)
       for (int32_t i = 0; i < grid.dims[0]; ++i)
         nodes[static_cast<std::size_t>(grid.index(i, j, k))] =
             affine(grid.node_position_mm(i, j, k));
+  });
   // Coarsest lattice: at most ~4 cells along the grid's longest axis.
   const int32_t longest = std::max({grid.dims[0], grid.dims[1], grid.dims[2]}) - 1;
   int32_t ratio = 1;
