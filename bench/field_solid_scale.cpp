@@ -6,16 +6,24 @@
 // and a ball-end ring program over wall and cap. Prints every stage's wall
 // time, the peak resident memory and the whole; asserts nothing.
 //
-//   build/field_solid_scale [FACETS ...]     default 10000 100000
+//   build/field_solid_scale [--sequential] [--threads N] [--digest] [FACETS ...]
+//
+// FACETS default to 10000 100000. --sequential runs the stages one after the
+// other (FieldPipelineOptions::concurrent_stages = false: every stage's own
+// time), --threads N limits TBB to N threads, --digest prints a hash of every
+// stage's result (to check that a change to the code leaves them unchanged).
 #include "truecut/interp/interpreter.hpp"
 #include "truecut/offline/field_pipeline.hpp"
 
 #include <sys/resource.h>
+#include <tbb/global_control.h>
 
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <memory>
 #include <numbers>
 #include <random>
 #include <string>
@@ -126,18 +134,103 @@ std::string ring_program() {
   return s + "G0 Z100\nM30\n";
 }
 
+double cpu_s() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+         1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
 double peak_rss_mb() {
   rusage u{};
   getrusage(RUSAGE_SELF, &u);
   return double(u.ru_maxrss) / 1024.0;
 }
 
+// FNV-1a over the bytes of the results, stage by stage.
+class Digest {
+ public:
+  template <class T>
+  Digest& add(const T* data, std::size_t n) {
+    const auto* b = reinterpret_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < n * sizeof(T); ++i)
+      h_ = (h_ ^ b[i]) * 0x100000001b3ull;
+    return *this;
+  }
+  template <class T>
+  Digest& add(const std::vector<T>& v) {
+    return add(v.data(), v.size());
+  }
+  std::uint64_t value() const { return h_; }
+
+ private:
+  std::uint64_t h_ = 0xcbf29ce484222325ull;
+};
+
+void print_digests(const FieldPipelineResult& r) {
+  Digest errors;
+  errors.add(r.errors.vectors_mm)
+      .add(r.errors.status)
+      .add(r.errors.normal_mm)
+      .add(r.errors.sphere_case)
+      .add(r.errors.points_in_sphere)
+      .add(r.errors.support_begin)
+      .add(r.errors.support_point)
+      .add(r.errors.support_weight);
+  Digest significance;
+  significance.add(&r.significance.pooled_noise_mm, 1);
+  for (const auto& s : r.significance.surfaces)
+    significance.add(&s.compensated, 1)
+        .add(&s.noise_mm, 1)
+        .add(&s.mean_normal_mm, 1)
+        .add(&s.scan_points, 1);
+  if (r.registration) significance.add(r.registration->scan_to_nominal.matrix().data(), 16);
+  Digest truss;
+  truss.add(r.truss.displacement_mm).add(r.truss.supported).add(r.adapted.vertices_mm);
+  Digest placement;
+  placement.add(r.placement.cut);
+  for (const ToolPlacement& tp : r.placement.tools)
+    for (const PointPlacement& pp : tp.points)
+      placement.add(&pp.point, 1)
+          .add(&pp.sample, 1)
+          .add(pp.tcp_mm.data(), 3)
+          .add(pp.axis.data(), 3)
+          .add(&pp.distance_mm, 1);
+  Digest fit;
+  for (const std::int32_t tool : r.fit->field.tools()) {
+    const auto nodes = r.fit->field.nodes(tool);
+    fit.add(nodes.data(), nodes.size());
+  }
+  for (const FieldFitLayerStats& s : r.fit->layers)
+    fit.add(&s.residual_rms_mm, 1).add(&s.residual_max_mm, 1).add(&s.unknown_nodes, 1);
+  Digest matrix;
+  matrix.add(r.smoothed_matrix_mm).add(r.field_vectors_mm);
+  std::printf(
+      "  digests: errors %016llx significance %016llx truss %016llx placement %016llx "
+      "fit %016llx matrix %016llx\n",
+      (unsigned long long)errors.value(), (unsigned long long)significance.value(),
+      (unsigned long long)truss.value(), (unsigned long long)placement.value(),
+      (unsigned long long)fit.value(), (unsigned long long)matrix.value());
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   std::vector<long> sizes;
-  for (int i = 1; i < argc; ++i)
-    sizes.push_back(std::atol(argv[i]));
+  bool sequential = false, digest = false;
+  std::unique_ptr<tbb::global_control> threads;
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--sequential") == 0) {
+      sequential = true;
+    } else if (std::strcmp(argv[i], "--digest") == 0) {
+      digest = true;
+    } else if (std::strcmp(argv[i], "--threads") == 0 && i + 1 < argc) {
+      threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                      std::size_t(std::atol(argv[++i])));
+    } else {
+      sizes.push_back(std::atol(argv[i]));
+    }
+  }
   if (sizes.empty()) sizes = {10000, 100000};
   interp::InterpreterOptions io;
   io.tools = interp::ToolTable::parse("T1 P1 D6 Z50\n", "tools.tbl");
@@ -161,17 +254,30 @@ int main(int argc, char** argv) {
     o.method = ErrorMethod::kSphere;
     o.sphere.radius_mm = 1.0;
     o.datum_surfaces = {3};
+    o.concurrent_stages = !sequential;
     std::printf("\n--- %zu facets, %zu scan points ---\n", solid.mesh.triangles.size(),
                 scan.vertices_mm.size());
     const auto t0 = std::chrono::steady_clock::now();
+    // With the stages one after the other, the process's CPU time between
+    // two reports is the later stage's (both threads).
+    double cpu_before = cpu_s();
+    const double cpu_start = cpu_before;
     const FieldPipelineResult r = run_field_pipeline(
-        in, o, [](const std::string& stage, double s, const std::string& detail) {
-          std::printf("  %-34s %8.3f s  %s\n", stage.c_str(), s, detail.c_str());
+        in, o, [&](const std::string& stage, double s, const std::string& detail) {
+          const double cpu = cpu_s();
+          if (sequential)
+            std::printf("  %-34s %8.3f s  cpu %7.3f s  %s\n", stage.c_str(), s, cpu - cpu_before,
+                        detail.c_str());
+          else
+            std::printf("  %-34s %8.3f s  %s\n", stage.c_str(), s, detail.c_str());
+          cpu_before = cpu;
           std::fflush(stdout);
         });
     const double total =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    std::printf("  whole pipeline %.3f s wall, peak resident %.0f MB; %zu points, %zu valid\n",
-                total, peak_rss_mb(), r.points.size(), r.error_statistics.valid);
+    std::printf(
+        "  whole pipeline %.3f s wall, cpu %.3f s, peak resident %.0f MB; %zu points, %zu valid\n",
+        total, cpu_s() - cpu_start, peak_rss_mb(), r.points.size(), r.error_statistics.valid);
+    if (digest) print_digests(r);
   }
 }

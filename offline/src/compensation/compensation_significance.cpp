@@ -14,6 +14,7 @@
 #include <unordered_set>
 
 #include "spatial/kd_tree.hpp"
+#include "spatial/shared_scan_tree.hpp"
 
 namespace truecut::offline {
 
@@ -41,9 +42,12 @@ class Neighbours {
  public:
   // Rings are gathered for the listed points only, in two passes over the
   // triangles (the points' triangles, then their neighbours' triangles).
-  Neighbours(const TriangleMesh& scan, std::span<const std::uint32_t> asked) : scan_(scan) {
+  // shared_tree: of scan.vertices_mm, or null (then built here if needed).
+  Neighbours(const TriangleMesh& scan, std::span<const std::uint32_t> asked,
+             const spatial::KdTree* shared_tree)
+      : scan_(scan) {
     if (scan.triangles.empty()) {
-      tree_.emplace(scan.vertices_mm);
+      tree_ = shared_tree ? shared_tree : &own_tree_.emplace(scan.vertices_mm);
       return;
     }
     std::vector<std::uint8_t> wanted(scan.vertices_mm.size(), 0);
@@ -121,7 +125,8 @@ class Neighbours {
   }
 
   const TriangleMesh& scan_;
-  std::optional<spatial::KdTree> tree_;
+  std::optional<spatial::KdTree> own_tree_;
+  const spatial::KdTree* tree_ = nullptr;
   std::unordered_map<std::uint32_t, std::vector<std::uint32_t>> triangles_of_;
   std::unordered_set<std::uint32_t> done_;
 };
@@ -165,11 +170,13 @@ bool SignificanceResult::compensated(std::int32_t surface) const {
   return true;
 }
 
-SignificanceResult test_compensation_significance(const CompensationPoints& points,
-                                                  const ErrorVectors& errors,
-                                                  const TriangleMesh& scan,
-                                                  const Eigen::Isometry3d& world_from_scan,
-                                                  const SignificanceOptions& o) {
+namespace {
+
+SignificanceResult test_significance(const CompensationPoints& points, const ErrorVectors& errors,
+                                     const TriangleMesh& scan,
+                                     const Eigen::Isometry3d& world_from_scan,
+                                     const SignificanceOptions& o,
+                                     const spatial::KdTree* scan_tree) {
   if (!(o.significance_level >= 0.0 && o.significance_level < 1.0) || !(o.patch_mm > 0.0) ||
       !(o.noise_mm >= 0.0) || !std::isfinite(o.patch_mm) || !std::isfinite(o.noise_mm))
     throw std::invalid_argument(
@@ -238,7 +245,7 @@ SignificanceResult test_compensation_significance(const CompensationPoints& poin
         which.push_back({k, idx});
       }
     }
-    const Neighbours neighbours(scan, asked);
+    const Neighbours neighbours(scan, asked, scan_tree);
     std::vector<double> residual(asked.size(), std::nan(""));
     tbb::parallel_for(std::size_t{0}, asked.size(), [&](std::size_t q) {
       const auto& [k, idx] = which[q];
@@ -334,6 +341,25 @@ SignificanceResult test_compensation_significance(const CompensationPoints& poin
     out.surfaces.push_back(s);
   }
   return out;
+}
+
+}  // namespace
+
+SignificanceResult test_compensation_significance(const CompensationPoints& points,
+                                                  const ErrorVectors& errors,
+                                                  const TriangleMesh& scan,
+                                                  const Eigen::Isometry3d& world_from_scan,
+                                                  const SignificanceOptions& o) {
+  return test_significance(points, errors, scan, world_from_scan, o, nullptr);
+}
+
+SignificanceResult test_compensation_significance(const CompensationPoints& points,
+                                                  const ErrorVectors& errors,
+                                                  const TriangleMesh& scan,
+                                                  const Eigen::Isometry3d& world_from_scan,
+                                                  const SignificanceOptions& o,
+                                                  const spatial::KdTree& scan_tree) {
+  return test_significance(points, errors, scan, world_from_scan, o, &scan_tree);
 }
 
 }  // namespace truecut::offline

@@ -1,4 +1,5 @@
 #include "spatial/kd_tree.hpp"
+#include "spatial/shared_scan_tree.hpp"
 #include "truecut/offline/error_vectors.hpp"
 #include "truecut/offline/mesh_geometry.hpp"
 
@@ -283,6 +284,13 @@ void one_point(const Context& c, const Eigen::Vector3d& P, const Eigen::Vector3d
 ErrorVectors error_vectors_by_spheres(const TriangleMesh& nominal, const CompensationPoints& points,
                                       std::span<const Eigen::Vector3d> cloud_mm,
                                       const SphereMethodOptions& options) {
+  return error_vectors_by_spheres(nominal, points, cloud_mm, options, spatial::KdTree(cloud_mm));
+}
+
+ErrorVectors error_vectors_by_spheres(const TriangleMesh& nominal, const CompensationPoints& points,
+                                      std::span<const Eigen::Vector3d> cloud_mm,
+                                      const SphereMethodOptions& options,
+                                      const spatial::KdTree& tree) {
   const std::size_t n = points.size();
   if (points.normals.size() != n) {
     throw std::invalid_argument("compensation points: positions and normals differ in number");
@@ -297,7 +305,6 @@ ErrorVectors error_vectors_by_spheres(const TriangleMesh& nominal, const Compens
 
   const std::vector<Eigen::Vector3d> fn = face_normals(nominal);
   const RayScene nominal_scene(nominal);
-  const spatial::KdTree tree(cloud_mm);
   const Context c{nominal,
                   fn,
                   nominal_scene,

@@ -4,6 +4,7 @@
 #include <Eigen/Sparse>
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <array>
@@ -270,14 +271,33 @@ FieldFitResult fit_correction_field(std::span<const ToolSamples> tools,
   rt::CorrectionField field(grid, std::move(layers));
   if (options.method == FieldFitMethod::kMultilevelBspline) {
     for (std::size_t t = 0; t < tools.size(); ++t) {
-      // Per sample in parallel, summed in order: the same on any thread count.
+      // Per sample in parallel, summed in order: the same on any thread
+      // count. The field is evaluated once per distinct position (a path
+      // sample cuts several points).
       const std::vector<FitSample>& samples = tools[t].samples;
+      std::vector<std::uint32_t> order;
+      for (std::size_t i = 0; i < samples.size(); ++i)
+        if (samples[i].valid) order.push_back(static_cast<std::uint32_t>(i));
+      tbb::parallel_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+        const Eigen::Vector3d &p = samples[a].position_mm, &q = samples[b].position_mm;
+        return p.x() != q.x() ? p.x() < q.x() : p.y() != q.y() ? p.y() < q.y() : p.z() < q.z();
+      });
+      std::vector<std::uint32_t> distinct, distinct_of(samples.size(), 0);
+      for (const std::uint32_t i : order) {
+        if (distinct.empty() || samples[i].position_mm != samples[distinct.back()].position_mm)
+          distinct.push_back(i);
+        distinct_of[i] = static_cast<std::uint32_t>(distinct.size() - 1);
+      }
+      std::vector<Eigen::Vector3d> value(distinct.size());
+      tbb::parallel_for(std::size_t{0}, distinct.size(), [&](std::size_t k) {
+        value[k] =
+            field.evaluate_tricubic(tools[t].tool, samples[distinct[k]].position_mm).vector_mm;
+      });
       std::vector<double> e2(samples.size(), 0.0);
       tbb::parallel_for(std::size_t{0}, samples.size(), [&](std::size_t i) {
         const FitSample& s = samples[i];
         if (!s.valid) return;
-        const Eigen::Vector3d d =
-            s.vector_mm - field.evaluate_tricubic(tools[t].tool, s.position_mm).vector_mm;
+        const Eigen::Vector3d d = s.vector_mm - value[distinct_of[i]];
         e2[i] = s.along_normal_only ? std::pow(s.normal.normalized().dot(d), 2) : d.squaredNorm();
       });
       double sum2 = 0.0, max2 = 0.0;

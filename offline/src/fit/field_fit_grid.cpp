@@ -47,6 +47,20 @@ std::vector<float> node_distances(const rt::FieldGrid& grid, std::span<const Fit
     const auto k = std::clamp(static_cast<int32_t>(std::floor(u[p].z())), 0, layers - 1);
     in_layer[static_cast<std::size_t>(k)].push_back(static_cast<std::uint32_t>(p));
   }
+  // Samples at the same position stamp the same values: one of them is
+  // enough (a path sample cuts several points: on a wall cut by a long flank
+  // most samples have a few twins).
+  tbb::parallel_for(std::size_t{0}, in_layer.size(), [&](std::size_t k) {
+    std::vector<std::uint32_t>& list = in_layer[k];
+    auto less = [&](std::uint32_t a, std::uint32_t b) {
+      const Eigen::Vector3d &p = u[a], &q = u[b];
+      return p.x() != q.x() ? p.x() < q.x() : p.y() != q.y() ? p.y() < q.y() : p.z() < q.z();
+    };
+    std::sort(list.begin(), list.end(), less);
+    list.erase(std::unique(list.begin(), list.end(),
+                           [&](std::uint32_t a, std::uint32_t b) { return u[a] == u[b]; }),
+               list.end());
+  });
   const double reach2 = reach_nodes * reach_nodes;
   const auto reach_layers = static_cast<int32_t>(std::ceil(reach_nodes)) + 1;
   // Every node gets min(its value, its exact squared distance to the

@@ -3,11 +3,13 @@
 #include <Eigen/Eigenvalues>
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <numeric>
 #include <optional>
 
 namespace truecut::offline::fit_detail {
@@ -345,11 +347,12 @@ std::vector<Eigen::Vector3d> multilevel_bspline_nodes(const rt::FieldGrid& grid,
   for (std::size_t p = 0; p < positions.size(); ++p)
     residuals[p] -= affine(positions[p]);
   std::vector<Eigen::Vector3d> nodes(static_cast<std::size_t>(grid.node_count()));
-  for (int32_t k = 0; k < grid.dims[2]; ++k)
+  tbb::parallel_for(int32_t{0}, grid.dims[2], [&](int32_t k) {
     for (int32_t j = 0; j < grid.dims[1]; ++j)
       for (int32_t i = 0; i < grid.dims[0]; ++i)
         nodes[static_cast<std::size_t>(grid.index(i, j, k))] =
             affine(grid.node_position_mm(i, j, k));
+  });
   // Coarsest lattice: at most ~4 cells along the grid's longest axis.
   const int32_t longest = std::max({grid.dims[0], grid.dims[1], grid.dims[2]}) - 1;
   int32_t ratio = 1;
@@ -364,6 +367,20 @@ std::vector<Eigen::Vector3d> multilevel_bspline_nodes(const rt::FieldGrid& grid,
     ratios.push_back(1);
   // The passes on the finest lattice are summed before they are evaluated
   // at the nodes (the evaluation is linear), the coarser levels one by one.
+  // Samples at the same position (a path sample cuts several points) get
+  // the same value of a lattice: it is evaluated once per distinct position.
+  std::vector<std::uint32_t> order(positions.size()), distinct_of_sample(positions.size());
+  std::iota(order.begin(), order.end(), std::uint32_t{0});
+  tbb::parallel_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+    const Eigen::Vector3d &p = positions[a], &q = positions[b];
+    return p.x() != q.x() ? p.x() < q.x() : p.y() != q.y() ? p.y() < q.y() : p.z() < q.z();
+  });
+  std::vector<std::uint32_t> distinct;  // a sample at each distinct position
+  for (const std::uint32_t p : order) {
+    if (distinct.empty() || positions[p] != positions[distinct.back()]) distinct.push_back(p);
+    distinct_of_sample[p] = static_cast<std::uint32_t>(distinct.size() - 1);
+  }
+  std::vector<Eigen::Vector3d> at_distinct(distinct.size());
   std::optional<Lattice> finest, pass;
   std::vector<Stencil> stencils(positions.size());
   int32_t stencil_ratio = 0;
@@ -377,8 +394,10 @@ std::vector<Eigen::Vector3d> multilevel_bspline_nodes(const rt::FieldGrid& grid,
       stencil_ratio = r;
     }
     fit_level(l, stencils, residuals, normal, any_normal_only, r == 1 ? o.smoothness : 0.0, sums);
+    tbb::parallel_for(std::size_t{0}, distinct.size(),
+                      [&](std::size_t d) { at_distinct[d] = evaluate(l, stencils[distinct[d]]); });
     tbb::parallel_for(std::size_t{0}, positions.size(),
-                      [&](std::size_t p) { residuals[p] -= evaluate(l, stencils[p]); });
+                      [&](std::size_t p) { residuals[p] -= at_distinct[distinct_of_sample[p]]; });
     if (r != 1) {
       add_at_nodes(grid, l, nodes);
     } else if (!finest) {

@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <stdexcept>
@@ -12,6 +14,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 
+#include "spatial/shared_scan_tree.hpp"
 #include "truecut/offline/compensation_points.hpp"
 #include "truecut/offline/compensation_significance.hpp"
 #include "truecut/offline/ray_scene.hpp"
@@ -332,7 +335,8 @@ void check_budgets(const FieldPipelineInputs& in, const FieldPipelineOptions& op
   if (nodes > opt.max_grid_nodes)
     throw std::invalid_argument(rt::format_printf(
         "--resolution %g mm gives a field grid of about %.3g nodes per layer over the compensated "
-        "surfaces (%.4g x %.4g x %.4g mm plus a tool radius of %.4g mm), more than --max-grid-nodes "
+        "surfaces (%.4g x %.4g x %.4g mm plus a tool radius of %.4g mm), more than "
+        "--max-grid-nodes "
         "%.0f (about 135 bytes each while fitting); choose a coarser --resolution or raise "
         "--max-grid-nodes (a field file holds at most 2^26 nodes per layer)",
         h, nodes, extent.x(), extent.y(), extent.z(), reach_mm, opt.max_grid_nodes));
@@ -434,10 +438,18 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
   std::optional<RayScene> scene;
   std::optional<RayScene> expected_scene;  // the expected cut, workpiece frame
   std::vector<Eigen::Vector3d> cloud;      // sphere method: the registered scan points
+  // One k-d tree of the scan's points for the registration(s), the sphere
+  // method (on the scan left in place) and the significance test's noise
+  // (on a point cloud), built by the registration or when first needed.
+  std::optional<spatial::KdTree> scan_tree;
+  auto shared_scan_tree = [&]() -> const spatial::KdTree& {
+    if (!scan_tree) scan_tree.emplace(in.scan->vertices_mm);
+    return *scan_tree;
+  };
   auto registration = [&] {
     if (!opt.register_scan) return;
     const auto t0 = timer.now();
-    r.registration = register_scan(nominal, in.scan->vertices_mm, icp);
+    r.registration = register_scan(nominal, in.scan->vertices_mm, icp, shared_scan_tree());
     const IcpResult& g = *r.registration;
     timer.done(kRegistrationStage, t0, "registration",
                g.applied ? rt::format_printf("%d iterations, RMS %.4f -> %.4f mm", g.iterations,
@@ -472,7 +484,7 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
       scan_to_nominal = r.registration->scan_to_nominal;
       motion = scan_to_nominal;
     } else {
-      const IcpResult found = register_scan(nominal, in.scan->vertices_mm, icp);
+      const IcpResult found = register_scan(nominal, in.scan->vertices_mm, icp, shared_scan_tree());
       if (found.applied) motion = found.scan_to_nominal;
     }
     r.scan_check = check_scan(nominal, in.scan->vertices_mm, scan_to_nominal, motion,
@@ -502,6 +514,11 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
     auto measured_error_vectors = [&](const CompensationPoints& points) {
       if (opt.method == ErrorMethod::kRay)
         return error_vectors_by_rays(nominal, points, *scene, opt.ray);
+      // The scan left in place: its tree is the cloud's.
+      if (cloud.size() == in.scan->vertices_mm.size() &&
+          std::memcmp(cloud.data(), in.scan->vertices_mm.data(),
+                      cloud.size() * sizeof(Eigen::Vector3d)) == 0)
+        return error_vectors_by_spheres(nominal, points, cloud, opt.sphere, shared_scan_tree());
       return error_vectors_by_spheres(nominal, points, cloud, opt.sphere);
     };
     auto error_vectors = [&](const CompensationPoints& points) {
@@ -531,10 +548,14 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
         opt.method == ErrorMethod::kRay ? "error vectors (rays)" : "error vectors (spheres)",
         rt::format_printf("%zu of %zu valid", r.error_summary.valid, r.error_summary.points));
     const auto t_test = timer.now();
-    r.significance = test_compensation_significance(
-        r.points, r.errors, *in.scan,
-        r.registration ? r.registration->scan_to_nominal : Eigen::Isometry3d::Identity(),
-        opt.significance);
+    const Eigen::Isometry3d world_from_scan =
+        r.registration ? r.registration->scan_to_nominal : Eigen::Isometry3d::Identity();
+    r.significance =
+        in.scan->triangles.empty()
+            ? test_compensation_significance(r.points, r.errors, *in.scan, world_from_scan,
+                                             opt.significance, shared_scan_tree())
+            : test_compensation_significance(r.points, r.errors, *in.scan, world_from_scan,
+                                             opt.significance);
     std::size_t kept = 0;
     for (const SurfaceSignificance& s : r.significance.surfaces)
       kept += s.compensated ? 1 : 0;
@@ -650,25 +671,53 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
   // Where a tool cuts the point, the matrix holds what the field applies
   // there: the mean of its correction (less the base field's) over the
   // passes that cut it, the scan's noise smoothed as in the field.
+  // The field is evaluated once per path sample (a sample cuts several
+  // points: its placements share the tool centre), in parallel; the sums
+  // are taken in the placements' order.
   {
     const std::size_t n = r.points.size();
     std::vector<Eigen::Vector3d> sum(n, Eigen::Vector3d::Zero());
     std::vector<int> count(n, 0);
-    for (const ToolPlacement& tp : r.placement.tools)
+    constexpr std::uint32_t kUnused = std::numeric_limits<std::uint32_t>::max();
+    std::vector<std::uint32_t> slot_of_sample(r.path.samples.size(), kUnused);
+    std::vector<const PointPlacement*> first;  // per slot: a placement at that sample
+    std::vector<std::uint8_t> ok;
+    std::vector<Eigen::Vector3d> value;
+    for (const ToolPlacement& tp : r.placement.tools) {
+      auto counted = [&](const PointPlacement& pp) {
+        return r.matrix.valid[pp.point] &&
+               r.significance.compensated(r.points.surface_ids[pp.point]);
+      };
+      first.clear();
       for (const PointPlacement& pp : tp.points) {
-        if (!r.matrix.valid[pp.point] ||
-            !r.significance.compensated(r.points.surface_ids[pp.point]))
-          continue;
-        const rt::FieldSample f = r.fit->field.evaluate(tp.tool, pp.tcp_mm);
-        if (f.status != rt::FieldStatus::kOk) continue;
+        if (!counted(pp) || slot_of_sample[pp.sample] != kUnused) continue;
+        slot_of_sample[pp.sample] = static_cast<std::uint32_t>(first.size());
+        first.push_back(&pp);
+      }
+      ok.assign(first.size(), 0);
+      value.assign(first.size(), Eigen::Vector3d::Zero());
+      tbb::parallel_for(std::size_t{0}, first.size(), [&](std::size_t k) {
+        const Eigen::Vector3d& tcp = first[k]->tcp_mm;
+        const rt::FieldSample f = r.fit->field.evaluate(tp.tool, tcp);
+        if (f.status != rt::FieldStatus::kOk) return;
         Eigen::Vector3d v = f.correction_mm;
         if (in.base_field) {
-          const rt::FieldSample b = in.base_field->evaluate(tp.tool, pp.tcp_mm);
+          const rt::FieldSample b = in.base_field->evaluate(tp.tool, tcp);
           if (b.status == rt::FieldStatus::kOk) v -= b.correction_mm;
         }
-        sum[pp.point] += v;
+        value[k] = v;
+        ok[k] = 1;
+      });
+      for (const PointPlacement& pp : tp.points) {
+        if (!counted(pp)) continue;
+        const std::uint32_t k = slot_of_sample[pp.sample];
+        if (!ok[k]) continue;
+        sum[pp.point] += value[k];
         ++count[pp.point];
       }
+      for (const PointPlacement* pp : first)
+        slot_of_sample[pp->sample] = kUnused;
+    }
     for (std::size_t i = 0; i < n; ++i)
       if (count[i] > 0) r.smoothed_matrix_mm[i] = sum[i] / count[i];
   }

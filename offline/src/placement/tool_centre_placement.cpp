@@ -1,6 +1,7 @@
 #include "truecut/offline/tool_centre_placement.hpp"
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <Eigen/Geometry>
 
@@ -82,33 +83,65 @@ ToolIndex build_index(const ToolShape& shape, const ToolPath& path,
 
 }  // namespace
 
+namespace {
+
+// hypot(x, y) for x, y >= 0: hypot(x, ±0) is x exactly (C Annex F), so the
+// call (the costly part of a distance) is skipped where the point faces the
+// flank or the bottom of the core.
+double hypot_non_negative(double x, double y) {
+  if (y == 0.0) return x;
+  if (x == 0.0) return y;
+  return std::hypot(x, y);
+}
+
+// The core in the (ρ, h) half-plane: |ρ| ≤ R − r, r ≤ h ≤ L. (qx, qy): how
+// far P lies beyond it radially and axially.
+struct CorePosition {
+  double qx = 0.0, qy = 0.0, side = 0.0;
+};
+
+CorePosition core_position(const ToolShape& shape, double rho, double h) {
+  const double r = shape.corner_radius_mm;
+  const double hc = 0.5 * (r + shape.cutting_length_mm);
+  const double hh = 0.5 * (shape.cutting_length_mm - r);
+  return {rho - (shape.radius_mm - r), std::abs(h - hc) - hh, h >= hc ? 1.0 : -1.0};
+}
+
+double distance_from_core(const ToolShape& shape, const CorePosition& c) {
+  if (c.qx > 0.0 || c.qy > 0.0)
+    return hypot_non_negative(std::max(c.qx, 0.0), std::max(c.qy, 0.0)) - shape.corner_radius_mm;
+  return std::max(c.qx, c.qy) - shape.corner_radius_mm;
+}
+
+// cutter_distance(...).distance_mm, without the normal.
+double cutter_signed_distance(const ToolShape& shape, const Eigen::Vector3d& tip_mm,
+                              const Eigen::Vector3d& axis, const Eigen::Vector3d& p_mm) {
+  const Eigen::Vector3d d = p_mm - tip_mm;
+  const double h = d.dot(axis);
+  const Eigen::Vector3d w = d - h * axis;
+  return distance_from_core(shape, core_position(shape, w.norm(), h));
+}
+
+}  // namespace
+
 CutterDistance cutter_distance(const ToolShape& shape, const Eigen::Vector3d& tip_mm,
                                const Eigen::Vector3d& axis, const Eigen::Vector3d& p_mm) {
-  const double r = shape.corner_radius_mm;
   const Eigen::Vector3d d = p_mm - tip_mm;
   const double h = d.dot(axis);
   const Eigen::Vector3d w = d - h * axis;
   const double rho = w.norm();
-  // The core in the (ρ, h) half-plane: |ρ| ≤ R − r, r ≤ h ≤ L.
-  const double hc = 0.5 * (r + shape.cutting_length_mm);
-  const double hh = 0.5 * (shape.cutting_length_mm - r);
-  const double qx = rho - (shape.radius_mm - r);
-  const double qy = std::abs(h - hc) - hh;
-  const double side = h >= hc ? 1.0 : -1.0;
-  double nx = 0.0, ny = 0.0, dist = 0.0;
-  if (qx > 0.0 || qy > 0.0) {
-    const double ox = std::max(qx, 0.0), oy = std::max(qy, 0.0);
-    const double len = std::hypot(ox, oy);
+  const CorePosition c = core_position(shape, rho, h);
+  const double dist = distance_from_core(shape, c);
+  double nx = 0.0, ny = 0.0;
+  if (c.qx > 0.0 || c.qy > 0.0) {
+    const double ox = std::max(c.qx, 0.0), oy = std::max(c.qy, 0.0);
+    const double len = hypot_non_negative(ox, oy);
     nx = ox / len;
-    ny = side * oy / len;
-    dist = len - r;
+    ny = c.side * oy / len;
+  } else if (c.qx > c.qy) {
+    nx = 1.0;
   } else {
-    if (qx > qy) {
-      nx = 1.0;
-    } else {
-      ny = side;
-    }
-    dist = std::max(qx, qy) - r;
+    ny = c.side;
   }
   Eigen::Vector3d radial;
   if (rho > 1e-12) {
@@ -192,11 +225,17 @@ PlacementResult place_at_tool_centre(std::span<const Eigen::Vector3d> positions_
     // Per point, the chosen samples (one, or one per generating pass).
     std::vector<std::vector<std::pair<std::uint32_t, double>>> chosen(n);
     const double reach2 = (shape.radius_mm + tol) * (shape.radius_mm + tol);
+    // Per thread: the last point each chunk came up for.
+    const std::size_t chunks = ix.chunk_begin.size() - 1;
+    tbb::enumerable_thread_specific<std::vector<std::uint32_t>> last_point([&] {
+      return std::vector<std::uint32_t>(chunks, std::numeric_limits<std::uint32_t>::max());
+    });
     tbb::parallel_for(
         tbb::blocked_range<std::size_t>(0, n, 256),
         [&](const tbb::blocked_range<std::size_t>& range) {
           std::vector<std::uint32_t> near, cand;
           std::vector<double> dist;
+          std::vector<std::uint32_t>& seen = last_point.local();
           for (std::size_t p = range.begin(); p != range.end(); ++p) {
             near.clear();
             ix.tree.within(positions_mm[p], ix.query_radius, near);
@@ -204,11 +243,17 @@ PlacementResult place_at_tool_centre(std::span<const Eigen::Vector3d> positions_
             dist.clear();
             double best = std::numeric_limits<double>::infinity();
             const Eigen::Vector3d inside = positions_mm[p] - 0.5 * tol * normals[p];
-            // A chunk comes up once per probe near P: test it once.
-            for (std::uint32_t& q : near)
-              q = ix.probe_chunk[q];
-            std::sort(near.begin(), near.end());
-            near.erase(std::unique(near.begin(), near.end()), near.end());
+            // A chunk comes up once per probe near P: test it once. (The
+            // order the candidates are found in does not matter: they are
+            // chosen in sample order, see choose_samples.)
+            std::size_t kept = 0;
+            for (const std::uint32_t q : near) {
+              const std::uint32_t chunk = ix.probe_chunk[q];
+              if (seen[chunk] == static_cast<std::uint32_t>(p)) continue;
+              seen[chunk] = static_cast<std::uint32_t>(p);
+              near[kept++] = chunk;
+            }
+            near.resize(kept);
             for (std::uint32_t chunk : near) {
               for (std::uint32_t m = ix.chunk_begin[chunk]; m < ix.chunk_begin[chunk + 1]; ++m) {
                 const std::uint32_t sample = samples[m];
@@ -219,15 +264,16 @@ PlacementResult place_at_tool_centre(std::span<const Eigen::Vector3d> positions_
                 const double h =
                     std::clamp(d.dot(s.axis), shape.corner_radius_mm, shape.cutting_length_mm);
                 if ((d - h * s.axis).squaredNorm() > reach2) continue;
-                const CutterDistance cd = cutter_distance(shape, s.tip_mm, s.axis, positions_mm[p]);
-                if (std::abs(cd.distance_mm) > tol) continue;
+                const double distance =
+                    cutter_signed_distance(shape, s.tip_mm, s.axis, positions_mm[p]);
+                if (std::abs(distance) > tol) continue;
                 // The cutter normal just inside the material: unambiguous where P lies
                 // on the rim of a flat end mill, where its bottom meets its flank.
                 const CutterDistance ci = cutter_distance(shape, s.tip_mm, s.axis, inside);
                 if (-ci.normal.dot(normals[p]) < min_cos) continue;
                 cand.push_back(sample);
-                dist.push_back(cd.distance_mm);
-                best = std::min(best, std::abs(cd.distance_mm));
+                dist.push_back(distance);
+                best = std::min(best, std::abs(distance));
               }
             }
             choose_samples(cand, dist, best, positions_mm[p], path, options, chosen[p]);

@@ -1,6 +1,7 @@
 #include "geometry/sharp_edges.hpp"
 #include "registration/least_squares6.hpp"
 #include "spatial/kd_tree.hpp"
+#include "spatial/shared_scan_tree.hpp"
 #include "truecut/offline/compensation_significance.hpp"
 #include "truecut/offline/mesh_geometry.hpp"
 #include "truecut/offline/registration.hpp"
@@ -205,6 +206,12 @@ double weight(RobustKernel kernel, double r, double sigma) {
 IcpResult register_scan(const TriangleMesh& nominal, std::span<const Eigen::Vector3d> scan,
                         const IcpOptions& options) {
   if (scan.empty()) throw std::invalid_argument("registration: the scan has no points");
+  return register_scan(nominal, scan, options, spatial::KdTree(scan));
+}
+
+IcpResult register_scan(const TriangleMesh& nominal, std::span<const Eigen::Vector3d> scan,
+                        const IcpOptions& options, const spatial::KdTree& tree) {
+  if (scan.empty()) throw std::invalid_argument("registration: the scan has no points");
   std::vector<std::uint32_t> datum = options.datum_triangles;
   if (datum.empty()) {
     datum.resize(nominal.triangles.size());
@@ -225,7 +232,6 @@ IcpResult register_scan(const TriangleMesh& nominal, std::span<const Eigen::Vect
     });
   }
   if (samples.empty()) throw std::invalid_argument("registration: the datum surface has no area");
-  const spatial::KdTree tree(scan);
 
   IcpResult result;
   result.samples = samples.size();
