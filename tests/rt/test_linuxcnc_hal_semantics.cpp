@@ -87,13 +87,21 @@ Transcript run_shim(const std::string& script) {
   return t;
 }
 
-Transcript run_linuxcnc(const std::string& name, const std::string& script) {
+// Runs `script` as case.hal in `halrun` (as nobody, in a folder of its own
+// named `name`); `keep_going`: halcmd's -k, on past an error.
+ProcessResult halrun(const std::string& name, const std::string& script, bool keep_going) {
   const auto work = scratch_dir() / name;
   std::filesystem::create_directories(work);
   ::chmod(work.c_str(), 0777);
   const auto file = work / "case.hal";
   std::ofstream(file) << script;
-  const ProcessResult r = run_linuxcnc_private(work, {"halrun", "-k", "-f", file.string()});
+  std::vector<std::string> command = {"halrun", "-f", file.string()};
+  if (keep_going) command.insert(command.begin() + 1, "-k");
+  return run_linuxcnc_private(work, command);
+}
+
+Transcript run_linuxcnc(const std::string& name, const std::string& script) {
+  const ProcessResult r = halrun(name, script, true);
   Transcript t;
   t.log =
       "halrun exit " + std::to_string(r.exit_code) + "\nstdout:\n" + r.out + "\nstderr:\n" + r.err;
@@ -325,12 +333,7 @@ std::set<std::string> listing_of(const Hal& hal) {
 // threads have two pins more, `.overruns` and `.cycles`.
 TEST_F(LinuxcncHal, PinsAndParametersListAsHalcmdShows) {
   const std::string script = loads(field) + "addf c.update t\nshow pin\nshow param\n";
-  const auto work = scratch_dir() / "listing";
-  std::filesystem::create_directories(work);
-  ::chmod(work.c_str(), 0777);
-  std::ofstream(work / "case.hal") << script;
-  const ProcessResult r =
-      run_linuxcnc_private(work, {"halrun", "-f", (work / "case.hal").string()});
+  const ProcessResult r = halrun("listing", script, false);
   ASSERT_EQ(0, r.exit_code) << r.out << r.err;
   std::set<std::string> lc;
   std::string section;
