@@ -170,6 +170,12 @@ int api_service_new(tc_hal_t* hal, int, tc_hal_service_t service, void* arg) {
   return 0;
 }
 
+// LinuxCNC plans motion in its own real-time module, not in this one's
+// service thread: background services share that thread with the others.
+int api_background_service_new(tc_hal_t* hal, int comp_id, tc_hal_service_t service, void* arg) {
+  return api_service_new(hal, comp_id, service, arg);
+}
+
 void api_request_stop(tc_hal_t*) {
   // LinuxCNC's threads run until `stop` or unload: nothing to ask for.
 }
@@ -201,10 +207,13 @@ const char* api_output_dir(tc_hal_t*) {
 }
 
 const tc_hal_api_t kApi = {
-    TC_HAL_ABI_VERSION, sizeof(tc_hal_api_t), api_component_new, api_component_ready,
-    api_alloc,          api_pin_new,          api_param_new,     api_funct_new,
-    api_service_new,    api_request_stop,     api_message,       api_set_error,
-    api_output_dir,
+    TC_HAL_ABI_VERSION, sizeof(tc_hal_api_t),
+    api_component_new,  api_component_ready,
+    api_alloc,          api_pin_new,
+    api_param_new,      api_funct_new,
+    api_service_new,    api_request_stop,
+    api_message,        api_set_error,
+    api_output_dir,     api_background_service_new,
 };
 
 void run_services(tc_hal_t* hal) {

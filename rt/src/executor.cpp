@@ -237,14 +237,28 @@ RunReport Executor::run_wall_clock(const RunLimits& limits, const WallClockOptio
   });
 
   const int64_t service_period = std::max<int64_t>(limits.service_period_ns, 100'000);
+  // Background services (a field being read and checked) get a thread of
+  // their own, so a long one never holds up the others, the planner's
+  // refill among them. In simulated time they run with the others instead.
+  std::thread background;
+  if (im.hal.service_count(Hal::Services::kBackground) > 0)
+    background = std::thread([&] {
+      int64_t next_bg = mono_ns();
+      while (!done.load(std::memory_order_acquire)) {
+        im.hal.run_services(Hal::Services::kBackground);
+        next_bg = std::max(next_bg + service_period, mono_ns());
+        sleep_until_ns(next_bg);
+      }
+    });
   int64_t next = mono_ns();
   while (!done.load(std::memory_order_acquire)) {
-    im.hal.run_services();
+    im.hal.run_services(Hal::Services::kForeground);
     if (limits.progress) limits.progress(limits.progress_user, mono_ns() - wall0);
     next += service_period;
     sleep_until_ns(next);
   }
   servo.join();
+  if (background.joinable()) background.join();
   im.hal.run_services();
   if (locked) munlockall();
   RunReport r = im.report(true, double(mono_ns() - wall0) * 1e-9);

@@ -454,9 +454,21 @@ void Hal::clear_stop() noexcept {
   state_->stop.store(false, std::memory_order_relaxed);
 }
 
-void Hal::run_services() {
+namespace {
+bool selected(const Service& s, Hal::Services which) {
+  return which == Hal::Services::kAll || s.background == (which == Hal::Services::kBackground);
+}
+}  // namespace
+
+void Hal::run_services(Services which) {
   for (const Service& s : state_->services)
-    s.fn(s.arg);
+    if (selected(s, which)) s.fn(s.arg);
+}
+
+std::size_t Hal::service_count(Services which) const {
+  return static_cast<std::size_t>(
+      std::count_if(state_->services.begin(), state_->services.end(),
+                    [&](const Service& s) { return selected(s, which); }));
 }
 
 }  // namespace truecut::rt::hal

@@ -125,13 +125,21 @@ int api_funct_new(tc_hal* hal, int comp_id, const char* name, tc_hal_funct_t fn,
   });
 }
 
-int api_service_new(tc_hal* hal, int comp_id, tc_hal_service_t fn, void* arg) {
+int add_service(tc_hal* hal, int comp_id, tc_hal_service_t fn, void* arg, bool background) {
   return guarded(hal, [&] {
     if (!fn) throw HalError("service: NULL function pointer");
     if (!hal->component(comp_id)) throw HalError("service: no such component");
-    hal->services.push_back({comp_id, fn, arg});
+    hal->services.push_back({comp_id, fn, arg, background});
     return 0;
   });
+}
+
+int api_service_new(tc_hal* hal, int comp_id, tc_hal_service_t fn, void* arg) {
+  return add_service(hal, comp_id, fn, arg, false);
+}
+
+int api_background_service_new(tc_hal* hal, int comp_id, tc_hal_service_t fn, void* arg) {
+  return add_service(hal, comp_id, fn, arg, true);
 }
 
 void api_request_stop(tc_hal* hal) {
@@ -157,10 +165,13 @@ const char* api_output_dir(tc_hal* hal) {
 }
 
 const tc_hal_api_t kApi = {
-    TC_HAL_ABI_VERSION, sizeof(tc_hal_api_t), api_component_new, api_component_ready,
-    api_alloc,          api_pin_new,          api_param_new,     api_funct_new,
-    api_service_new,    api_request_stop,     api_message,       api_set_error,
-    api_output_dir,
+    TC_HAL_ABI_VERSION, sizeof(tc_hal_api_t),
+    api_component_new,  api_component_ready,
+    api_alloc,          api_pin_new,
+    api_param_new,      api_funct_new,
+    api_service_new,    api_request_stop,
+    api_message,        api_set_error,
+    api_output_dir,     api_background_service_new,
 };
 
 }  // namespace

@@ -88,6 +88,7 @@ struct Service {
   int comp_id;
   tc_hal_service_t fn;
   void* arg;
+  bool background = false;  // background_service_new: its own thread on the wall clock
 };
 
 struct Module {
@@ -115,9 +116,9 @@ struct tc_hal {
   std::vector<truecut::rt::hal::detail::Module> modules;  // load order
   std::vector<std::unique_ptr<unsigned char[]>> allocations;
   std::atomic<bool> stop{false};
-  int error_messages = 0;       // api_message calls at TC_HAL_MSG_ERR
-  bool unloaded = false;        // the modules' exit functions have run
-  bool threads_loaded = false;  // `loadrt threads` ran (LinuxCNC loads it once)
+  std::atomic<int> error_messages{0};  // api_message calls at TC_HAL_MSG_ERR (any thread)
+  bool unloaded = false;               // the modules' exit functions have run
+  bool threads_loaded = false;         // `loadrt threads` ran (LinuxCNC loads it once)
 
   truecut::rt::hal::detail::Component* component(int id) const;
   truecut::rt::hal::detail::Thread* thread(const std::string& name) const;

@@ -7,7 +7,8 @@
 // Pins, fault codes and the hand-over protocol: docs/compensation.md. This
 // file is the HAL edge only: it reads pins, calls rt::comp::step() (truecut/rt/comp.hpp)
 // and writes pins; the field is loaded and freed by field_source.cpp in the
-// component's non-real-time service.
+// component's background service (its own thread on the wall clock, so a
+// large field never holds up the planner's refill).
 #include <array>
 #include <memory>
 #include <string>
@@ -395,7 +396,7 @@ extern "C" TC_COMPONENT_EXPORT int truecut_component_init(const tc_hal_api_t* ap
       Builder b(api, hal, id);
       make_pins(b, n, mode, inst->p);
       b.funct(n + ".update", update, inst.get());
-      b.service(service, inst.get());
+      b.background_service(service, inst.get());
       api->component_ready(hal, id);
       module->instances.push_back(std::move(inst));
     }

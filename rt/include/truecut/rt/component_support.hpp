@@ -146,6 +146,14 @@ class Builder {
   void service(tc_hal_service_t fn, void* arg) {
     if (api_->service_new(hal_, comp_, fn, arg) != 0) throw HalRefused("service");
   }
+  // Work that may take long (reading a file): its own thread on the wall
+  // clock (hal_abi.h). A host whose table predates it runs it as a service.
+  void background_service(tc_hal_service_t fn, void* arg) {
+    const int r = TC_HAL_API_HAS(api_, background_service_new)
+                      ? api_->background_service_new(hal_, comp_, fn, arg)
+                      : api_->service_new(hal_, comp_, fn, arg);
+    if (r != 0) throw HalRefused("background service");
+  }
   template <class T>
   T* alloc() {
     void* p = api_->alloc(hal_, sizeof(T));

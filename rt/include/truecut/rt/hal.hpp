@@ -153,8 +153,12 @@ class Hal {
   bool stop_requested() const noexcept;
   void clear_stop() noexcept;
 
-  // Runs every component's non-real-time service once.
-  void run_services();
+  // Runs the components' non-real-time services once, in registration order:
+  // all of them (simulated time, set-up, tests), or only the ordinary ones or
+  // only the background ones (the wall clock runs these in their own thread).
+  enum class Services { kAll, kForeground, kBackground };
+  void run_services(Services which = Services::kAll);
+  std::size_t service_count(Services which = Services::kAll) const;
 
   const HalOptions& options() const;
   // The C function table handed to components.

@@ -87,7 +87,21 @@ typedef struct tc_hal_api {
   void (*set_error)(tc_hal_t* hal, const char* text);
   /* Folder where components write their output files (exists, never NULL). */
   const char* (*output_dir)(tc_hal_t* hal);
+
+  /* Added after the table's first layout: present when api->struct_size
+   * covers it (TC_HAL_API_HAS(api, background_service_new)).
+   * A service for work that may take long, such as reading and checking a
+   * file. In simulated time it runs with the other services, so a run stays
+   * repeatable bit for bit; on the wall clock it runs in a thread of its own,
+   * so it never delays the other services (the planner's refill among them);
+   * under LinuxCNC in the module's non-real-time thread. A background service
+   * never runs concurrently with itself. */
+  int (*background_service_new)(tc_hal_t* hal, int comp_id, tc_hal_service_t service, void* arg);
 } tc_hal_api_t;
+
+/* True when the host's function table has the member `field`. */
+#define TC_HAL_API_HAS(api, field) \
+  ((api)->struct_size >= offsetof(tc_hal_api_t, field) + sizeof((api)->field))
 
 typedef int (*tc_component_init_fn)(const tc_hal_api_t* api, tc_hal_t* hal, int argc,
                                     const char* const* argv, void** module_state);
