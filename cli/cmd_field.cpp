@@ -80,6 +80,10 @@ const char* kFieldHelp =
     "                        from the scan)\n"
     "  --kb-kc X             truss smoothing kb/kc (default 1, times (noise / 20 um)^2\n"
     "                        for scans noisier than 20 um; given: used as is)\n"
+    "  --truss springs|bars  truss stiffness: springs (default) resist every component\n"
+    "                        of the difference between neighbours; bars resist only a\n"
+    "                        change of their length, as in the model-adaptation source\n"
+    "                        (Sortino et al.): nothing smooths the normal of a flat face\n"
     "  --resolution MM       field grid spacing (default 1)\n"
     "  --smoothness X        field fit regularisation lambda (default 0.1)\n"
     "  --path-step MM        tool path sampling step (default 0.1)\n"
@@ -350,6 +354,11 @@ offline::FieldPipelineOptions pipeline_options(const ParsedArgs& a, const Inputs
   o.truss.kb_over_kc = a.number("kb-kc", o.truss.kb_over_kc, 0.0, 1e6);
   // A kb/kc given is used as given; the default scales with the scan's noise.
   if (a.value("kb-kc")) o.truss_reference_noise_mm = 0.0;
+  const std::string truss = a.value("truss").value_or("springs");
+  if (truss != "springs" && truss != "bars")
+    throw UsageError("--truss must be springs or bars, not '" + truss + "'");
+  o.truss.stiffness = truss == "bars" ? offline::TrussStiffness::kAxialBars
+                                      : offline::TrussStiffness::kZeroLengthSprings;
   o.fit.spacing_mm = a.number("resolution", o.fit.spacing_mm, 0.05, 100.0);
   o.fit.smoothness = a.number("smoothness", o.fit.smoothness, 0.0, 1e6);
   o.max_compensation_points = a.number("max-points", o.max_compensation_points, 1.0, 1e12);
@@ -519,6 +528,7 @@ int cmd_field(const std::vector<std::string>& argv) {
                       {"sphere-radius", true},
                       {"max-distance", true},
                       {"kb-kc", true},
+                      {"truss", true},
                       {"significance", true},
                       {"scan-noise", true},
                       {"expected", true},

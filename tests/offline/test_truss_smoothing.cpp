@@ -2,8 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
 #include <cmath>
 #include <cstdio>
+
 #include <random>
 
 namespace truecut::offline {
@@ -222,6 +224,108 @@ TEST(TrussSmoothing, StifferTrussSmoothsMore) {
     EXPECT_LT(e, previous) << "kb/kc " << ratio;
     previous = e;
   }
+}
+
+// The axial-bar truss (the source's) against its definition as a least-
+// squares problem, written independently of the stiffness assembly: minimise
+// Σ_bars kb/kc · (e_ab · (d_b − d_a))² + Σ_valid |d_i − v_i|², rows stacked
+// and solved by a dense QR. A bent, irregular patch so every bar has its own
+// direction.
+TEST(TrussSmoothingAxialBars, MatchesTheEnergyMinimumOfAxialBars) {
+  TriangleMesh m = plate(5, 1.3);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> jitter(-0.3, 0.3);
+  for (auto& p : m.vertices_mm)
+    p += Eigen::Vector3d(jitter(rng), jitter(rng), 0.2 * p.x() * p.x() + jitter(rng));
+  std::normal_distribution<double> noise(0.0, 0.02);
+  std::vector<Eigen::Vector3d> v;
+  for (std::size_t i = 0; i < m.vertices_mm.size(); ++i)
+    v.emplace_back(noise(rng), noise(rng), noise(rng));
+  const std::vector<std::uint8_t> valid = all_valid(m);
+  const double ratio = 0.7;
+  TrussOptions o{ratio};
+  o.stiffness = TrussStiffness::kAxialBars;
+  const TrussResult r = smooth_truss(m.vertices_mm, m.triangles, v, valid, o);
+
+  const auto bars = truss_bars(m.triangles);
+  const auto n = static_cast<Eigen::Index>(v.size());
+  Eigen::MatrixXd rows =
+      Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(bars.size()) + 3 * n, 3 * n);
+  Eigen::VectorXd target = Eigen::VectorXd::Zero(rows.rows());
+  Eigen::Index row = 0;
+  for (const auto& b : bars) {
+    const Eigen::Vector3d e = (m.vertices_mm[b[1]] - m.vertices_mm[b[0]]).normalized();
+    rows.block<1, 3>(row, 3 * b[1]) = std::sqrt(ratio) * e.transpose();
+    rows.block<1, 3>(row, 3 * b[0]) = -std::sqrt(ratio) * e.transpose();
+    ++row;
+  }
+  for (Eigen::Index i = 0; i < n; ++i) {
+    for (int c = 0; c < 3; ++c) {
+      rows(row, 3 * i + c) = 1.0;
+      target(row++) = v[static_cast<std::size_t>(i)](c);
+    }
+  }
+  const Eigen::VectorXd reference = rows.colPivHouseholderQr().solve(target);
+  for (Eigen::Index i = 0; i < n; ++i)
+    EXPECT_LT((r.displacement_mm[static_cast<std::size_t>(i)] - reference.segment<3>(3 * i)).norm(),
+              1e-12)
+        << "vertex " << i;
+}
+
+// A small rigid rotation strains no bar: it passes unchanged, the border
+// included (zero-length springs pull the border of a linear field inward).
+TEST(TrussSmoothingAxialBars, ASmallRigidRotationPassesUnchanged) {
+  const TriangleMesh m = plate(15, 1.0);
+  const Eigen::Vector3d omega(2e-4, -1e-4, 3e-4);  // rad
+  std::vector<Eigen::Vector3d> v;
+  for (const auto& p : m.vertices_mm)
+    v.push_back(omega.cross(p) + Eigen::Vector3d(0.01, 0.02, -0.03));
+  TrussOptions o{5.0};
+  o.stiffness = TrussStiffness::kAxialBars;
+  const TrussResult axial = smooth_truss(m.vertices_mm, m.triangles, v, all_valid(m), o);
+  const TrussResult springs = smooth_truss(m.vertices_mm, m.triangles, v, all_valid(m), {5.0});
+  EXPECT_LT(rms_difference(axial.displacement_mm, v), 1e-12);
+  EXPECT_GT(rms_difference(springs.displacement_mm, v), 1e-4);
+}
+
+// On a flat face every bar lies in the face: a displacement along the normal
+// strains none of them, so normal noise is not smoothed at all, while the
+// zero-length springs remove most of it. In-plane noise is smoothed.
+TEST(TrussSmoothingAxialBars, OnAFlatFaceTheNormalComponentIsNotSmoothed) {
+  const TriangleMesh m = plate(41, 1.0);
+  const NoisyCase c = noisy_plate(m, 0.02, 5);
+  TrussOptions o{1.0};
+  o.stiffness = TrussStiffness::kAxialBars;
+  const TrussResult axial = smooth_truss(m.vertices_mm, m.triangles, c.measured, all_valid(m), o);
+  EXPECT_LT(rms_difference(axial.displacement_mm, c.measured), 1e-12);
+
+  std::mt19937 rng(9);
+  std::normal_distribution<double> noise(0.0, 0.02);
+  std::vector<Eigen::Vector3d> in_plane;
+  for (std::size_t i = 0; i < m.vertices_mm.size(); ++i)
+    in_plane.emplace_back(noise(rng), noise(rng), 0.0);
+  const std::vector<Eigen::Vector3d> zero(in_plane.size(), Eigen::Vector3d::Zero());
+  const TrussResult smoothed = smooth_truss(m.vertices_mm, m.triangles, in_plane, all_valid(m), o);
+  EXPECT_LT(rms_difference(smoothed.displacement_mm, zero), 0.8 * rms_difference(in_plane, zero));
+}
+
+// An invalid vertex on a flat face: its in-plane displacement comes from the
+// bars, its normal one (a mechanism) is 0; an isolated invalid component is
+// unsupported and 0.
+TEST(TrussSmoothingAxialBars, InvalidVerticesFollowTheBarsOnlyWhereBarsHoldThem) {
+  const TriangleMesh m = plate(9, 1.0);
+  const std::vector<Eigen::Vector3d> v(m.vertices_mm.size(), Eigen::Vector3d(0.01, -0.02, 0.03));
+  std::vector<std::uint8_t> valid = all_valid(m);
+  const std::size_t centre = 4 + 9 * 4;
+  valid[centre] = 0;
+  TrussOptions o{1.0};
+  o.stiffness = TrussStiffness::kAxialBars;
+  const TrussResult r = smooth_truss(m.vertices_mm, m.triangles, v, valid, o);
+  EXPECT_EQ(0, r.unsupported_count);
+  EXPECT_NEAR(0.01, r.displacement_mm[centre].x(), 1e-9);
+  EXPECT_NEAR(-0.02, r.displacement_mm[centre].y(), 1e-9);
+  EXPECT_NEAR(0.0, r.displacement_mm[centre].z(), 1e-9);
+  EXPECT_THROW(smooth_truss({}, m.triangles, v, valid, o), std::invalid_argument);
 }
 
 TEST(TrussSmoothing, RejectsBadInput) {

@@ -77,6 +77,9 @@ void check_inputs(std::span<const Eigen::Vector3d> vertices_mm, std::span<const 
   if (options.edge_weight == TrussEdgeWeight::kInverseLength && vertices_mm.size() != n) {
     throw std::invalid_argument("smooth_truss: inverse_length needs one vertex per vector");
   }
+  if (options.stiffness == TrussStiffness::kAxialBars && vertices_mm.size() != n) {
+    throw std::invalid_argument("smooth_truss: axial bars need one vertex per vector");
+  }
   if (!std::isfinite(options.kb_over_kc) || options.kb_over_kc < 0.0) {
     throw std::invalid_argument("smooth_truss: kb_over_kc must be finite and >= 0");
   }
@@ -114,6 +117,65 @@ std::vector<Edge> truss_bars(std::span<const Triangle> triangles) {
   return edges;
 }
 
+namespace {
+
+// Axial bars (the source's truss): a 3n × 3n system, x, y, z coupled
+// through each bar's direction. Solved by a sparse LDLᵀ factorisation: the
+// spring that removes mechanisms makes it far too ill-conditioned for
+// conjugate gradients.
+Eigen::MatrixX3d solve_axial_bars(std::span<const Eigen::Vector3d> vertices_mm,
+                                  std::span<const Edge> edges, std::span<const double> k,
+                                  std::span<const Eigen::Vector3d> vectors_mm,
+                                  std::span<const std::uint8_t> valid, TrussResult& result) {
+  const std::size_t n = vectors_mm.size();
+  const auto dim = static_cast<Eigen::Index>(3 * n);
+  const double k_max = k.empty() ? 0.0 : *std::max_element(k.begin(), k.end());
+  const double mechanism_spring = 1e-9 * std::max(k_max, 1.0);
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(3 * n + 36 * edges.size());
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(dim);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double c = valid[i] || !result.supported[i] ? 1.0 : mechanism_spring;
+    if (!valid[i] && !result.supported[i]) ++result.unsupported_count;
+    for (int r = 0; r < 3; ++r) {
+      const auto row = static_cast<Eigen::Index>(3 * i + r);
+      triplets.emplace_back(row, row, c);
+      if (valid[i]) rhs(row) = vectors_mm[i](r);
+    }
+  }
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    const Eigen::Vector3d along = vertices_mm[edges[e][1]] - vertices_mm[edges[e][0]];
+    const double length_mm = along.norm();
+    if (!(length_mm > 0.0)) continue;  // coincident vertices: no direction, no bar
+    const Eigen::Matrix3d block = k[e] * (along / length_mm) * (along / length_mm).transpose();
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) {
+        const auto ar = static_cast<Eigen::Index>(3 * edges[e][0] + r);
+        const auto ac = static_cast<Eigen::Index>(3 * edges[e][0] + c);
+        const auto br = static_cast<Eigen::Index>(3 * edges[e][1] + r);
+        const auto bc = static_cast<Eigen::Index>(3 * edges[e][1] + c);
+        triplets.emplace_back(ar, ac, block(r, c));
+        triplets.emplace_back(br, bc, block(r, c));
+        triplets.emplace_back(ar, bc, -block(r, c));
+        triplets.emplace_back(br, ac, -block(r, c));
+      }
+    }
+  }
+  Eigen::SparseMatrix<double> a(dim, dim);
+  a.setFromTriplets(triplets.begin(), triplets.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(a);
+  if (solver.info() != Eigen::Success) {
+    throw std::runtime_error("smooth_truss: factorisation of the axial-bar truss failed");
+  }
+  const Eigen::VectorXd d = solver.solve(rhs);
+  Eigen::MatrixX3d out(static_cast<Eigen::Index>(n), 3);
+  for (std::size_t i = 0; i < n; ++i)
+    out.row(static_cast<Eigen::Index>(i)) = d.segment<3>(static_cast<Eigen::Index>(3 * i));
+  return out;
+}
+
+}  // namespace
+
 TrussResult smooth_truss(std::span<const Eigen::Vector3d> vertices_mm,
                          std::span<const Triangle> triangles,
                          std::span<const Eigen::Vector3d> vectors_mm,
@@ -128,6 +190,12 @@ TrussResult smooth_truss(std::span<const Eigen::Vector3d> vertices_mm,
   result.supported = supported_vertices(n, edges, valid);
   result.displacement_mm.assign(n, Eigen::Vector3d::Zero());
   if (n == 0) return result;
+  if (options.stiffness == TrussStiffness::kAxialBars) {
+    const Eigen::MatrixX3d d = solve_axial_bars(vertices_mm, edges, k, vectors_mm, valid, result);
+    for (std::size_t i = 0; i < n; ++i)
+      result.displacement_mm[i] = d.row(static_cast<Eigen::Index>(i)).transpose();
+    return result;
+  }
 
   // Unsupported vertices keep c_i = 1 and v_i = 0: their block solves to
   // d = 0 exactly and the whole matrix stays positive definite.

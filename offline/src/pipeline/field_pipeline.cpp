@@ -290,8 +290,10 @@ void smooth_and_adapt(const TriangleMesh& nominal, const FieldPipelineOptions& o
       r.field_vectors_mm[i].setZero();
   }
   timer.done(kTrussStage, started, "truss smoothing and adapted mesh",
-             rt::format_printf("kb/kc %.3g, %lld bars", opt.truss.kb_over_kc,
-                               static_cast<long long>(r.truss.edge_count)));
+             rt::format_printf(opt.truss.stiffness == TrussStiffness::kAxialBars
+                                   ? "kb/kc %.3g, %lld axial bars"
+                                   : "kb/kc %.3g, %lld bars",
+                               opt.truss.kb_over_kc, static_cast<long long>(r.truss.edge_count)));
 }
 
 // What spacing and resolution would cost, from the nominal alone.
