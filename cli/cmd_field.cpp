@@ -71,6 +71,9 @@ const char* kFieldHelp =
     "                        registration (default 20)\n"
     "  --remove-rbm          remove the rigid-body motion left in the error vectors\n"
     "  --sphere-radius MM    sphere method radius Rs (default 1.5)\n"
+    "  --plane-fit tilted|parallel  sphere method planes: tilted (default) fits each\n"
+    "                        plane's orientation too; parallel keeps the nominal's and\n"
+    "                        fits only the offset, as the model-adaptation source does\n"
     "  --max-distance MM     ray method search distance each way (default 1)\n"
     "  --significance P      compensate a surface only when a surface cut exactly\n"
     "                        right would show its measured error with probability\n"
@@ -347,6 +350,10 @@ offline::FieldPipelineOptions pipeline_options(const ParsedArgs& a, const Inputs
       a.number("max-scan-outliers", o.scan_check.max_off_percent, 0.0, 100.0);
   o.remove_rigid_body_motion = a.flag("remove-rbm");
   o.sphere.radius_mm = a.number("sphere-radius", o.sphere.radius_mm, 0.01, 100.0);
+  const std::string plane_fit = a.value("plane-fit").value_or("tilted");
+  if (plane_fit != "tilted" && plane_fit != "parallel")
+    throw UsageError("--plane-fit must be tilted or parallel, not '" + plane_fit + "'");
+  o.sphere.tilted_planes = plane_fit == "tilted";
   o.ray.max_distance_mm = a.number("max-distance", o.ray.max_distance_mm, 0.001, 100.0);
   o.significance.significance_level =
       a.number("significance", o.significance.significance_level, 0.0, 0.5);
@@ -526,6 +533,7 @@ int cmd_field(const std::vector<std::string>& argv) {
                       {"max-grid-nodes", true},
                       {"max-scan-outliers", true},
                       {"sphere-radius", true},
+                      {"plane-fit", true},
                       {"max-distance", true},
                       {"kb-kc", true},
                       {"truss", true},

@@ -170,6 +170,37 @@ TEST(SphereMethodLimits, DisplacementBeyondSevenTenthsOfTheRadiusIsInvalid) {
   }
 }
 
+// The source's plane fit keeps the nominal orientation and fits only the
+// offset: the mean distance of the points along the normal. A tilted scan
+// plane seen on one side of the point tells the two apart: the tilted fit
+// evaluates the plane at the point, the parallel one gives the points' mean.
+TEST(SphereMethodLimits, ParallelPlanesFitTheMeanOffsetTiltedPlanesThePlane) {
+  const double slope = 0.02, lift = 0.05;
+  std::vector<Eigen::Vector3d> cloud;
+  double sum = 0.0;
+  for (int i = 0; i <= 15; ++i)
+    for (int j = -10; j <= 10; ++j) {
+      const double x = 10.0 + 0.1 * i, y = 10.0 + 0.1 * j;
+      cloud.emplace_back(x, y, 20.0 + lift + slope * (x - 10.0));
+      sum += lift + slope * (x - 10.0);
+    }
+  const double mean_offset = sum / static_cast<double>(cloud.size());
+  SphereMethodOptions o;
+  o.radius_mm = kRs;
+  const ErrorVectors tilted =
+      error_vectors_by_spheres(nominal(), one_point({10, 10, 20}), cloud, o);
+  o.tilted_planes = false;
+  const ErrorVectors parallel =
+      error_vectors_by_spheres(nominal(), one_point({10, 10, 20}), cloud, o);
+  ASSERT_EQ(tilted.status[0], ErrorStatus::kValid);
+  ASSERT_EQ(parallel.status[0], ErrorStatus::kValid);
+  EXPECT_NEAR(parallel.normal_mm[0], mean_offset, 1e-9);
+  // The tilted plane's displacement of the point is perpendicular to that
+  // plane; its component along the nominal normal is lift · cos² θ.
+  EXPECT_NEAR(tilted.normal_mm[0], lift / (1.0 + slope * slope), 1e-9);
+  EXPECT_GT(mean_offset - lift, 0.01);  // the two differ by the slope's lever
+}
+
 TEST(SphereMethodLimits, DensityIsReported) {
   const auto cloud = test_geo::sample_surface(nominal(), 12.0, kSigma, 10);
   SphereMethodOptions o;

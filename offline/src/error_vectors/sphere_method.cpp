@@ -114,6 +114,10 @@ void fit_planes(const Context& c, Scratch& s) {
     Plane& p = s.planes[j];
     p.fitted = p.count >= 3;
     if (!p.fitted) continue;
+    if (!c.options.tilted_planes) {  // parallel to the nominal, through the points' centroid
+      p.normal = p.nominal_normal;
+      continue;
+    }
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov[j]);
     p.normal = eig.eigenvectors().col(0);  // smallest eigenvalue
     if (p.normal.dot(p.nominal_normal) < 0.0) p.normal = -p.normal;

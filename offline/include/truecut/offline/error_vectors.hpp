@@ -98,6 +98,11 @@ struct SphereMethodOptions {
   double plane_angle_deg = 30.0;
   // The source's reach limit: d ≤ 0.7·Rs.
   double max_displacement_ratio = 0.7;
+  // true (this project's default): each plane is fitted to its points with
+  // its own orientation (a total least-squares plane). false (the source):
+  // the plane keeps the nominal orientation and only its offset along the
+  // normal is fitted (the mean distance of its points).
+  bool tilted_planes = true;
 };
 
 // The source's density requirement (points per mm²); reported, not enforced.
