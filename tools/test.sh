@@ -12,10 +12,10 @@ if [ "${1:-}" = "--sanitize" ]; then
   export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 fi
 dir=$(tools/configure.sh "$@")
-# The tests and what they run (truecut_tests); in CI the whole tree, so the
-# benchmarks keep compiling too.
+# The tests and what they run (truecut_tests); in CI's normal half the whole
+# tree, so the benchmarks keep compiling too.
 target=truecut_tests
-[ "${CI:-}" = true ] && target=all
+[ "${CI:-}" = true ] && [ "${1:-}" != "--sanitize" ] && target=all
 cmake --build "$dir" -j"$(nproc)" --target $target
 # The suite, then (normal build only) the comparisons with LinuxCNC itself,
 # which run LinuxCNC in real time (about 15 s on 2 cores on their own,
@@ -26,4 +26,14 @@ ctest --test-dir "$dir" --output-on-failure -j"$(nproc)" --timeout 600 -LE "plan
 if [ "${1:-}" != "--sanitize" ]; then
   ctest --test-dir "$dir" --output-on-failure -j"$(nproc)" --timeout 600 -L linuxcnc
   ctest --test-dir "$dir" --output-on-failure -j"$(nproc)" --timeout 900 -L planted
+fi
+# Sanitizer half: a short fuzzing run of every reader (docs/reliability.md,
+# "Fuzzing"), about 10 minutes with its own clang build on 2 cores. A crash,
+# a sanitizer report, a leak or a timeout fails the run.
+if [ "${1:-}" = "--sanitize" ]; then
+  if command -v clang++ >/dev/null; then
+    tools/fuzz.sh 10
+  else
+    echo "test.sh: fuzzing smoke run skipped: clang++ is not installed (apt install clang libclang-rt-14-dev)" >&2
+  fi
 fi
