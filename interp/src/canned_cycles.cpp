@@ -20,6 +20,13 @@ std::string upper(char c) {
   return std::string(1, static_cast<char>(std::toupper(static_cast<unsigned char>(c))));
 }
 
+// The current position comes back from machine millimetres (offsets, inch):
+// equal heights can differ in the last bits, where rs274 keeps the program
+// numbers exactly. Heights this close count as equal.
+bool same_height(double a, double b) {
+  return std::abs(a - b) <= 1e-9 * std::max({1.0, std::abs(a), std::abs(b)});
+}
+
 std::string number(double v) {
   char buf[48];
   std::snprintf(buf, sizeof buf, "%g", v);
@@ -127,7 +134,7 @@ void BlockExecutor::canned_cycle(int code, int column) {
   };
 
   // Below the R plane: straight up to it first.
-  if (level < r) {
+  if (level < r && !same_height(level, r)) {
     move(true, at[ia], at[ib], r);
     level = r;
   }
@@ -142,9 +149,9 @@ void BlockExecutor::canned_cycle(int code, int column) {
     b += b_step;
     // Over the hole at the current height or the clearance height,
     // whichever is higher, then down to R.
-    const double over = std::max(at[ic], clear);
+    const double over = at[ic] > clear && !same_height(at[ic], clear) ? at[ic] : clear;
     move(true, a, b, over);
-    if (over != r) move(true, a, b, r);
+    if (!same_height(over, r)) move(true, a, b, r);
     switch (code) {
       case 810:
         move(false, a, b, bottom);
