@@ -350,6 +350,8 @@ void BlockExecutor::modal_settings() {
       if (p < 0) fail(column_of('p'), "G64 P (blend tolerance) must not be negative");
       if (q < 0) fail(column_of('q'), "G64 Q (naive CAM tolerance) must not be negative");
       s_.path = PathMode::kContinuous;
+      s_.blend_tolerance = p;
+      s_.naive_tolerance = q;
       out_.emit(SetMotionControlMode{s_.path, p});
       out_.emit(SetNaivecamTolerance{q});
       break;
@@ -567,17 +569,28 @@ void BlockExecutor::check_feed(int column) const {
 
 void BlockExecutor::check_unused_words(int motion_code) const {
   const bool arc = motion_code == 20 || motion_code == 30;
+  const bool cycle = is_canned_cycle(motion_code);
+  const bool dwell_cycle =
+      motion_code == 820 || motion_code == 860 || motion_code == 880 || motion_code == 890;
+  const bool peck_cycle = motion_code == 730 || motion_code == 830;
   const int nm = codes_.g[0];
   for (char l : {'i', 'j', 'k', 'r'})
-    if (b_->has(l) && !arc && !(l == 'r' && nm == 100))
+    if (b_->has(l) && !arc && !(l == 'r' && (nm == 100 || cycle))) {
+      if (cycle)
+        fail(column_of(l), std::string(1, static_cast<char>(std::toupper(l))) +
+                               " word in a canned cycle (only G87 uses I, J, K)");
       fail(column_of(l),
            std::string(1, static_cast<char>(std::toupper(l))) + " word with no G2 or G3 to use it");
-  if (b_->has('p') && !arc && nm != 40 && nm != 100 && codes_.g[group(GGroup::kPathControl)] != 640)
-    fail(column_of('p'), "P word with no G code that uses it (G4, G10, G64, G2/G3)");
-  if (b_->has('q') && codes_.g[group(GGroup::kPathControl)] != 640 &&
+    }
+  if (b_->has('p') && !arc && !dwell_cycle && nm != 40 && nm != 100 &&
+      codes_.g[group(GGroup::kPathControl)] != 640)
+    fail(column_of('p'),
+         "P word with no G code that uses it (G4, G10, G64, G2/G3, G82/G86/G88/G89)");
+  if (b_->has('q') && !peck_cycle && codes_.g[group(GGroup::kPathControl)] != 640 &&
       codes_.m[group(MGroup::kToolChange)] != 610)
-    fail(column_of('q'), "Q word with no code that uses it (G64, M61)");
-  if (b_->has('l') && nm != 100) fail(column_of('l'), "L word with no G10 to use it");
+    fail(column_of('q'), "Q word with no code that uses it (G64, M61, G73/G83)");
+  if (b_->has('l') && nm != 100 && !cycle)
+    fail(column_of('l'), "L word with no G10 or canned cycle to use it");
 }
 
 void BlockExecutor::motion() {
@@ -598,6 +611,12 @@ void BlockExecutor::motion() {
                                                 : SplineMode::kNone;
     if (s_.spline != before) out_.emit(SetSplineMode{s_.spline});
     if (explicit_code == 800) out_.emit(Comment{"interpreter: motion mode set to none"});
+    if (!is_canned_cycle(explicit_code)) {
+      // Any other motion mode ends the run of cycles: the next cycle starts
+      // afresh (needs R and Z again, takes a new initial level).
+      s_.cycle.last_code = -1;
+      s_.cycle.level_set = false;
+    }
   }
   const int code = (explicit_code >= 0 || (axis_words && !axes_used_)) ? s_.motion : -1;
   check_unused_words(code);
@@ -613,6 +632,10 @@ void BlockExecutor::motion() {
     return;
   }
   const int motion_column = explicit_code >= 0 ? codes_.g_column[kMotion] : first_axis_column;
+  if (is_canned_cycle(code)) {
+    canned_cycle(code, motion_column ? motion_column : 1);
+    return;
+  }
   if (code == 20 || code == 30) {
     arc(code == 20, target_position(false));
     return;
@@ -738,6 +761,7 @@ void BlockExecutor::end_program(bool pallet_shuttle) {
   if (s_.flood) out_.emit(Coolant{Coolant::kFlood, false});
   s_.mist = s_.flood = false;
   s_.motion = 10;
+  s_.cycle = CycleState{};
   if (s_.spline != SplineMode::kNone) {
     s_.spline = SplineMode::kNone;
     out_.emit(SetSplineMode{s_.spline});

@@ -44,6 +44,7 @@ class BlockExecutor {
   Axes6 target_position(bool machine_coords) const;
   void straight(bool rapid, const Axes6& target);
   void arc(bool clockwise, const Axes6& target);
+  void canned_cycle(int code, int column);  // canned_cycles.cpp
   void check_feed(int column) const;
   void check_unused_words(int motion_code) const;
   void emit_offsets();

@@ -10,6 +10,14 @@ namespace truecut::interp {
 
 constexpr double kMmPerInch = 25.4;
 
+// The canned cycles' memory between blocks (G73, G81-G83, G85, G86, G88, G89).
+struct CycleState {
+  int last_code = -1;      // the cycle of the last cycle block, -1 after any other motion
+  bool level_set = false;  // `level` holds the initial level of this run of cycles
+  double level = 0;        // program units, along the axis normal to the plane
+  double r = 0, bottom = 0, p = 0, q = 0;  // sticky R, Z (X, Y), P, Q words as written
+};
+
 struct InterpState {
   int motion = 800;  // active motion code x10 (G80: none), or a spline code
   Plane plane = Plane::kXY;
@@ -18,9 +26,11 @@ struct InterpState {
   bool arc_absolute = false;  // G90.1
   FeedMode feed_mode = FeedMode::kUnitsPerMinute;
   PathMode path = PathMode::kContinuous;
-  double feed = 0;   // program units per minute (G94)
-  double speed = 0;  // rpm
-  int spindle = 0;   // 1 cw, -1 ccw, 0 stopped
+  double blend_tolerance = 0;  // the last G64 P
+  double naive_tolerance = 0;  // the last G64 Q
+  double feed = 0;             // program units per minute (G94)
+  double speed = 0;            // rpm
+  int spindle = 0;             // 1 cw, -1 ccw, 0 stopped
   bool mist = false, flood = false;
   int tool = 0;           // in the spindle
   int selected_tool = 0;  // by the last T word
@@ -28,7 +38,8 @@ struct InterpState {
   Axes6 g5x_mm, g92_mm, tool_offset_mm;
   Axes6 position_mm;           // controlled point in machine coordinates
   bool retract_old_z = false;  // G98 (else G99)
-  int line = 0;                // source line being executed
+  CycleState cycle;
+  int line = 0;  // source line being executed
   bool tcp = false;
   SplineMode spline = SplineMode::kNone;
   std::string operation;

@@ -43,7 +43,8 @@ INSTANTIATE_TEST_SUITE_P(Words, BadInput,
                                            Case{"M123\nM2\n", 1, 1, "M123 is not supported"},
                                            Case{"G0 X1 X2\nM2\n", 1, 7, "two X words"},
                                            Case{"G41 X1\nM2\n", 1, 1, "not supported"},
-                                           Case{"G81 X1 Z-1 R1\nM2\n", 1, 1, "canned cycles"},
+                                           Case{"G87 X1 Z-1 R1 I1 J0 K1\nM2\n", 1, 1,
+                                                "back boring canned cycle"},
                                            Case{"G0 X1 D3\nM2\n", 1, 7, "word D"},
                                            Case{"G1.3 X1\nM2\n", 1, 1, "unknown G code"},
                                            Case{"G0 X\nM2\n", 1, 4, "has no value"},
@@ -90,6 +91,38 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{"G0 X1\nG3 X0 Y1 I-1\nM2\n", 2, 1, "zero feed rate"},
                       Case{"G93 G1 X1 F10\nG1 X2\nM2\n", 2, 1, "needs an F word"},
                       Case{"G1 X1 F-5\nM2\n", 1, 7, "negative feed"}),
+    case_name);
+
+// Canned cycles (docs/gcode.md "Canned cycles"): the errors LinuxCNC's
+// rs274 reports for the same programs, located at the word or the cycle.
+INSTANTIATE_TEST_SUITE_P(
+    CannedCycles, BadInput,
+    ::testing::Values(
+        Case{"G0 Z10\nG81 X1 Z-1 F100\nM2\n", 2, 1, "G81 needs R (the retract plane)"},
+        Case{"G0 Z10\nG81 X1 R2 F100\nM2\n", 2, 1, "G81 needs Z (the hole bottom)"},
+        Case{"G0 Z10\nG18 G81 X1 Z1 R2 F100\nM2\n", 2, 5, "G81 needs Y (the hole bottom)"},
+        Case{"G0 Z10\nG81 X1 Z3 R2 F100\nM2\n", 2, 11,
+             "R (the retract plane, 2) is below the hole bottom Z (3)"},
+        Case{"G0 Z10\nG83 X1 Z-3 R2 F100\nM2\n", 2, 1, "G83 needs Q (the peck depth)"},
+        Case{"G0 Z10\nG73 X1 Z-3 R2 F100\nM2\n", 2, 1, "G73 needs Q (the peck depth)"},
+        Case{"G0 Z10\nG83 X1 Z-3 R2 Q0 F100\nM2\n", 2, 15, "Q (the peck depth) must be greater"},
+        Case{"G0 Z10\nG82 X1 Z-3 R2 F100\nM2\n", 2, 1, "G82 needs P (the dwell in seconds)"},
+        Case{"G0 Z10\nG81 X1 Z-3 R2 L0 F100\nM2\n", 2, 15, "L (repeats of the canned cycle)"},
+        Case{"G0 Z10\nG81 X1 Z-3 R2 L1.5 F100\nM2\n", 2, 15, "must be a whole number >= 1"},
+        Case{"G0 Z10\nG81 X1 Z-3 R2 A5 F100\nM2\n", 2, 15, "A word in canned cycle G81"},
+        Case{"G0 Z10\nG81 X1 Z-3 R2\nM2\n", 2, 1, "G81 with a zero feed rate"},
+        Case{"G0 Z10\nG93 G81 X1 Z-3 R2 F10\nM2\n", 2, 5, "inverse-time feed (G93)"},
+        Case{"G0 Z10\nG86 X1 Z-3 R2 P1 F100\nM2\n", 2, 1, "G86 needs the spindle turning"},
+        Case{"M3 S100\nG0 Z10\nG88 X1 Z-3 R2 P1 F100\nM5\nX2\nM2\n", 5, 1,
+             "G88 needs the spindle turning"},
+        Case{"G0 Z10\nG81 X1 Z-3 R2 Q1 F100\nM2\n", 2, 15, "Q word with no code that uses it"},
+        Case{"G0 Z10\nG81 X1 Z-3 R2 P1 F100\nM2\n", 2, 15, "P word with no G code"},
+        Case{"G0 Z10\nG81 X1 Z-3 R2 I1 F100\nM2\n", 2, 15, "I word in a canned cycle"},
+        // The sticky R and Z belong to the cycle that set them.
+        Case{"G0 Z10\nG81 X1 Z-3 R2 F100\nG82 X2 P1\nM2\n", 3, 1, "G82 needs R"},
+        Case{"G0 Z10\nG81 X1 Z-3 R2 F100\nG0 X0\nG81 X2\nM2\n", 4, 1, "G81 needs R"},
+        Case{"G0 Z10\nG84 X1 Z-3 R2 F100\nM2\n", 2, 1, "G84 right-hand tapping canned cycle"},
+        Case{"G0 Z10\nG74 X1 Z-3 R2 F100\nM2\n", 2, 1, "G74 left-hand tapping canned cycle"}),
     case_name);
 
 INSTANTIATE_TEST_SUITE_P(

@@ -173,5 +173,28 @@ TEST(PlannerPaths, DwellHoldsStill) {
   EXPECT_LE(longest, 252);
 }
 
+// Canned cycles expand into traverses, feeds, dwells and spindle calls: the
+// planner runs them like any other moves, to every hole bottom and back.
+TEST(PlannerPaths, CannedCyclesReachEveryHoleBottom) {
+  const CanonProgram program =
+      run("G21 G90 G98\nS1000 M3\nG0 X0 Y0 Z10\nG83 X10 Y5 Z-3 R2 Q1.2 F600\n"
+          "G81 X20 Z-2 R2\nG91 G82 X5 Z-4 R-8 P0.2 L2\nG90 G86 X40 Z-1 R1 P0.1\nG80\nM2\n");
+  const auto s = sample_plan(plan_program(program, {}), 0.001);
+  ASSERT_FALSE(s.empty());
+  EXPECT_TRUE(s.back().done);
+  EXPECT_TRUE(check_limits(s, PlannerOptions{}.limits, 0.001).ok());
+  const P3 bottoms[] = {{10, 5, -3}, {20, 5, -2}, {25, 5, -2}, {30, 5, -2}, {40, 5, -1}};
+  for (const P3& b : bottoms) {
+    double closest = 1e300;
+    for (const auto& c : s)
+      closest =
+          std::min(closest, std::hypot(c.tcp_mm[0] - b[0], c.tcp_mm[1] - b[1], c.tcp_mm[2] - b[2]));
+    EXPECT_LT(closest, 1e-6) << "hole bottom " << b[0] << " " << b[1] << " " << b[2];
+  }
+  // G98: back to the initial level Z10 after the last hole.
+  EXPECT_NEAR(s.back().tcp_mm[0], 40, 1e-9);
+  EXPECT_NEAR(s.back().tcp_mm[2], 10, 1e-9);
+}
+
 }  // namespace
 }  // namespace truecut::interp::testing

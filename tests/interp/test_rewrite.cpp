@@ -542,6 +542,33 @@ TEST(Rewrite, BadInputIsRefusedWithAClearMessage) {
   EXPECT_NE(g91.find("G91"), std::string::npos) << g91;
 }
 
+// A canned cycle expands into several moves on its line: the rewrite cannot
+// keep the cycle word, so a cycle line in the operation is refused by name
+// (also a modal cycle line without the G word); cycles outside the
+// operation are copied as written.
+TEST(Rewrite, CannedCycleInTheOperationIsRefusedByName) {
+  RewriteOptions o = options("FACE", CutType::kFace);
+  o.reach_mm = 100;
+  const std::string head = "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X0 Y0 Z1\n";
+  EXPECT_EQ(error_of<GcodeError>(head + "G98 G81 X1 Y1 Z-0.5 R0.5 F100\nX2\nG80\nM30\n", o),
+            "bad.ngc:6: canned cycle G81 makes several moves on one line: it cannot be "
+            "rewritten; program the holes as G0/G1 moves or keep them outside the operation");
+  const std::string modal =
+      "G21 G90 G94\nT2 M6\nG43 H2\nG0 X0 Y0 Z1\nG83 X1 Y1 Z-0.5 R0.5 Q0.2 F100\n"
+      "(OPERATION: FACE)\nX2\nG80\nM30\n";
+  EXPECT_EQ(error_of<GcodeError>(modal, o),
+            "bad.ngc:7: canned cycle G83 (from line 5) makes several moves on one line: it "
+            "cannot be rewritten; program the holes as G0/G1 moves or keep them outside the "
+            "operation");
+  const std::string outside =
+      "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X0 Y0 Z1\nG1 Z0 F100\nX2\n"
+      "G0 Z1\n(OPERATION: DRILL)\nG81 X1 Y1 Z-0.5 R0.5 F100\nX2\nG80\nM30\n";
+  const auto m = plane_matrix(-10, 10, -4, 4, 0, 0.5, V(0, 0, 0.01));
+  const RewriteResult r = rewrite_program(outside, "drill.ngc", m, o);
+  EXPECT_NE(r.text.find("\nG81 X1 Y1 Z-0.5 R0.5 F100\nX2\nG80\n"), std::string::npos) << r.text;
+  EXPECT_GT(r.summary.moves_rewritten, 0) << r.text;  // the FACE moves were compensated
+}
+
 // The cutter radius is D / 2 of the tool in the spindle: giving the same
 // radius by hand changes nothing, a tool of another diameter changes the
 // densification of the ball's turn (R per radian of the axis).

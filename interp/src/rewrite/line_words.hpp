@@ -26,4 +26,8 @@ struct LineWords {
 // M30 M60 and unknown words.
 LineWords split_move_line(const std::string& source, const std::string& file, int line);
 
+// The motion-group G code (x10: G0 G1 G2 G3 G73 G80-G89) written on a line,
+// -1 without one or when the line cannot be read. Never throws.
+int motion_code_of_line(const std::string& source);
+
 }  // namespace truecut::interp::rewrite

@@ -216,6 +216,24 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
   radii.erase(std::unique(radii.begin(), radii.end()), radii.end());
   const double reach_mm = prepare(radii);
   const std::vector<RawLine> raw = split_raw_lines(text);
+  // A canned cycle (G73, G81-G89) expands into several moves on one line:
+  // the rewrite cannot keep the cycle word and refuses it by name. The
+  // motion mode of a line is followed through the source text in order.
+  auto refuse_canned_cycle = [&](const std::string& file, int line) {
+    int mode = -1, mode_line = 0;
+    for (int i = 1; i <= line && i <= static_cast<int>(raw.size()); ++i) {
+      const int code = motion_code_of_line(raw[i - 1].content);
+      if (code >= 0) mode = code, mode_line = i;
+    }
+    if (mode != 730 && !(mode >= 810 && mode <= 890)) return;
+    const std::string g = "G" + std::to_string(mode / 10);
+    throw GcodeError(
+        {file, line, 0},
+        "canned cycle " + g +
+            (mode_line == line ? std::string() : " (from line " + std::to_string(mode_line) + ")") +
+            " makes several moves on one line: it cannot be rewritten; program "
+            "the holes as G0/G1 moves or keep them outside the operation");
+  };
 
   // Motion calls per line of the main file: a rewritten line must make one.
   std::map<int, int> motions_per_line;
@@ -261,6 +279,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     if (in_op && !feed && displaced) {
       // A rapid after a compensated point: written with all of X Y Z, so
       // the axes it does not name come back to the original position.
+      if (ctx.file == 0 && motions_per_line[ctx.line] != 1) refuse_canned_cycle(file, ctx.line);
       if (ctx.file != 0 || motions_per_line[ctx.line] != 1)
         throw GcodeError({file, ctx.line, 0},
                          "rapid after a compensated move makes several moves (loop, subroutine "
@@ -306,10 +325,12 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     if (ctx.spline != SplineMode::kNone)
       throw GcodeError({file, ctx.line, 0},
                        "BSPLINE/CSPLINE point: spline moves cannot be rewritten as G1 moves");
-    if (motions_per_line[ctx.line] != 1)
+    if (motions_per_line[ctx.line] != 1) {
+      refuse_canned_cycle(file, ctx.line);
       throw GcodeError({file, ctx.line, 0},
                        "line makes several moves (loop, subroutine or G28/G30): it cannot be "
                        "rewritten");
+    }
 
     // Densify and compensate.
     const double radius_mm = radius_by_tool.at(ctx.tool);

@@ -1,0 +1,219 @@
+// The canned cycles G73, G81-G83, G85, G86, G88 and G89 as LinuxCNC 2.9's
+// interpreter runs them (docs/gcode.md, "Canned cycles"): each block expands
+// into rapids, feeds, dwells and spindle calls in the selected plane.
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "block_executor.hpp"
+#include "truecut/interp/path_geometry.hpp"
+
+namespace truecut::interp {
+
+namespace {
+
+constexpr char kLetters[6] = {'x', 'y', 'z', 'a', 'b', 'c'};
+
+std::string upper(char c) {
+  return std::string(1, static_cast<char>(std::toupper(static_cast<unsigned char>(c))));
+}
+
+// The current position comes back from machine millimetres (offsets, inch):
+// equal heights can differ in the last bits, where rs274 keeps the program
+// numbers exactly. Heights this close count as equal.
+bool same_height(double a, double b) {
+  return std::abs(a - b) <= 1e-9 * std::max({1.0, std::abs(a), std::abs(b)});
+}
+
+std::string number(double v) {
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
+}  // namespace
+
+void BlockExecutor::canned_cycle(int code, int column) {
+  const std::string name = "G" + std::to_string(code / 10);
+  if (s_.feed_mode == FeedMode::kInverseTime)
+    fail(column, "canned cycle " + name + " with inverse-time feed (G93): program G94");
+  if (s_.feed <= 0)
+    fail(column,
+         "canned cycle " + name + " with a zero feed rate: program F before or on this line");
+  for (char l : {'a', 'b', 'c'})
+    if (b_->has(l))
+      fail(column_of(l),
+           upper(l) + " word in canned cycle " + name + ": rotary axes do not move in a cycle");
+
+  // The plane's first and second axes locate the hole; the normal axis
+  // (Z in G17, Y in G18, X in G19) drills it.
+  const path_geometry::PlaneAxes ax = path_geometry::plane_axes(s_.plane);
+  const int ia = ax.first, ib = ax.second, ic = ax.normal;
+  const char la = kLetters[ia], lb = kLetters[ib], lc = kLetters[ic];
+  CycleState& cy = s_.cycle;
+  // R, the normal-axis word, P and Q carry over from the previous block
+  // only while the same cycle continues.
+  const bool same = cy.last_code == code;
+
+  double r_word = cy.r;
+  if (b_->has('r'))
+    r_word = b_->value('r');
+  else if (!same)
+    fail(column, name + " needs R (the retract plane) on its first block");
+  int repeats = 1;
+  if (b_->has('l')) {
+    const double l = b_->value('l');
+    if (l < 1 || l != std::floor(l))
+      fail(column_of('l'), "L (repeats of the canned cycle) must be a whole number >= 1");
+    repeats = static_cast<int>(l);
+  }
+  double bottom_word = cy.bottom;
+  if (b_->has(lc))
+    bottom_word = b_->value(lc);
+  else if (!same)
+    fail(column, name + " needs " + upper(lc) + " (the hole bottom) on its first block");
+
+  const bool dwells = code == 820 || code == 860 || code == 880 || code == 890;
+  const bool pecks = code == 730 || code == 830;
+  double dwell = cy.p, peck = cy.q;
+  if (dwells) {
+    if (b_->has('p'))
+      dwell = b_->value('p');
+    else if (!same)
+      fail(column, name + " needs P (the dwell in seconds)");
+    if (dwell < 0) fail(column_of('p'), "dwell time P must not be negative");
+  }
+  if (pecks) {
+    if (b_->has('q'))
+      peck = b_->value('q');
+    else if (!same)
+      fail(column, name + " needs Q (the peck depth)");
+    if (peck <= 0)
+      fail(b_->has('q') ? column_of('q') : column, "Q (the peck depth) must be greater than zero");
+  }
+  if ((code == 860 || code == 880) && s_.spindle == 0)
+    fail(column, name + " needs the spindle turning (M3 or M4)");
+
+  Axes6 at = s_.program_position();
+  // The initial level: where the normal axis was when this run of cycles
+  // began (G98 returns there).
+  if (!cy.level_set) {
+    cy.level = at[ic];
+    cy.level_set = true;
+  }
+  double level = cy.level;
+  double a = at[ia], b = at[ib], a_step = 0, b_step = 0, r = 0, bottom = 0;
+  if (s_.incremental) {
+    // X, Y (in-plane) step from the current point; R from the initial
+    // level; the hole bottom from R.
+    if (b_->has(la)) a_step = b_->value(la);
+    if (b_->has(lb)) b_step = b_->value(lb);
+    r = r_word + level;
+    bottom = r + bottom_word;
+  } else {
+    if (b_->has(la)) a = b_->value(la);
+    if (b_->has(lb)) b = b_->value(lb);
+    r = r_word;
+    bottom = bottom_word;
+  }
+  if (r < bottom)
+    fail(b_->has('r') ? column_of('r') : column,
+         "R (the retract plane, " + number(r) + ") is below the hole bottom " + upper(lc) + " (" +
+             number(bottom) + ") in canned cycle " + name);
+
+  auto move = [&](bool rapid, double pa, double pb, double pc) {
+    at[ia] = pa;
+    at[ib] = pb;
+    at[ic] = pc;
+    Axes6 target = s_.position_mm;
+    for (int i = 0; i < 3; ++i)
+      target[i] = s_.to_machine(i, at[i]) + s_.g5x_mm[i] + s_.g92_mm[i] + s_.tool_offset_mm[i];
+    straight(rapid, target);
+  };
+
+  // Below the R plane: straight up to it first.
+  if (level < r && !same_height(level, r)) {
+    move(true, at[ia], at[ib], r);
+    level = r;
+  }
+  const double clear = s_.retract_old_z ? level : r;
+  const bool exact = s_.path == PathMode::kExactPath;
+  if (!exact) out_.emit(SetMotionControlMode{PathMode::kExactPath, 0});
+  // The chip-breaking back-off of G73 and the approach gap of G83: 0.010 in.
+  const double backoff = s_.units == LengthUnits::kMm ? 0.010 * kMmPerInch : 0.010;
+
+  for (int rep = 0; rep < repeats; ++rep) {
+    a += a_step;
+    b += b_step;
+    // Over the hole at the current height or the clearance height,
+    // whichever is higher, then down to R.
+    const double over = at[ic] > clear && !same_height(at[ic], clear) ? at[ic] : clear;
+    move(true, a, b, over);
+    if (!same_height(over, r)) move(true, a, b, r);
+    switch (code) {
+      case 810:
+        move(false, a, b, bottom);
+        move(true, a, b, clear);
+        break;
+      case 820:
+        move(false, a, b, bottom);
+        out_.emit(Dwell{dwell});
+        move(true, a, b, clear);
+        break;
+      case 730:
+      case 830:
+        for (double depth = r - peck; depth > bottom; depth -= peck) {
+          move(false, a, b, depth);
+          if (code == 830) move(true, a, b, r);
+          move(true, a, b, depth + backoff);
+        }
+        move(false, a, b, bottom);
+        move(true, a, b, clear);
+        break;
+      case 850:
+        move(false, a, b, bottom);
+        move(false, a, b, r);
+        move(true, a, b, clear);
+        break;
+      case 860:
+        move(false, a, b, bottom);
+        out_.emit(Dwell{dwell});
+        out_.emit(StopSpindle{});
+        move(true, a, b, clear);
+        out_.emit(StartSpindle{s_.spindle > 0});
+        break;
+      case 880:
+        // The operator retracts by hand; the interpreter carries on as if
+        // the tool were at the clearance height.
+        move(false, a, b, bottom);
+        out_.emit(Dwell{dwell});
+        out_.emit(StopSpindle{});
+        out_.emit(ProgramStop{false});
+        out_.emit(StartSpindle{s_.spindle > 0});
+        at[ic] = clear;
+        s_.position_mm[ic] =
+            s_.to_machine(ic, clear) + s_.g5x_mm[ic] + s_.g92_mm[ic] + s_.tool_offset_mm[ic];
+        break;
+      case 890:
+        move(false, a, b, bottom);
+        out_.emit(Dwell{dwell});
+        move(false, a, b, clear);
+        break;
+      default:
+        break;
+    }
+  }
+  if (!exact) {
+    out_.emit(SetMotionControlMode{s_.path, s_.blend_tolerance});
+    out_.emit(SetNaivecamTolerance{s_.naive_tolerance});
+  }
+  cy.last_code = code;
+  cy.r = r_word;
+  cy.bottom = bottom_word;
+  if (dwells) cy.p = dwell;
+  if (pecks) cy.q = peck;
+}
+
+}  // namespace truecut::interp
