@@ -15,6 +15,9 @@ namespace truecut::interp {
 namespace {
 
 constexpr char kLetters[6] = {'x', 'y', 'z', 'a', 'b', 'c'};
+// At most this many holes (L) and pecks × holes in one cycle block: no
+// legitimate program comes near, a mistyped L or Q does.
+constexpr double kMaxCycleMoves = 1e7;
 
 std::string upper(char c) {
   return std::string(1, static_cast<char>(std::toupper(static_cast<unsigned char>(c))));
@@ -67,6 +70,9 @@ void BlockExecutor::canned_cycle(int code, int column) {
     const double l = b_->value('l');
     if (l < 1 || l != std::floor(l))
       fail(column_of('l'), "L (repeats of the canned cycle) must be a whole number >= 1");
+    if (l > kMaxCycleMoves)
+      fail(column_of('l'), "L " + number(l) + ": more than " + number(kMaxCycleMoves) +
+                               " repeats of a canned cycle on one line (the cycle budget)");
     repeats = static_cast<int>(l);
   }
   double bottom_word = cy.bottom;
@@ -122,6 +128,14 @@ void BlockExecutor::canned_cycle(int code, int column) {
     fail(b_->has('r') ? column_of('r') : column,
          "R (the retract plane, " + number(r) + ") is below the hole bottom " + upper(lc) + " (" +
              number(bottom) + ") in canned cycle " + name);
+  if (pecks) {
+    // Pecks per hole times holes: a tiny Q or a huge L must not run away.
+    const double per_hole = std::ceil((r - bottom) / peck) + 4.0;
+    if (!(per_hole * repeats <= kMaxCycleMoves))
+      fail(b_->has('q') ? column_of('q') : column,
+           "Q " + number(peck) + " makes more than " + number(kMaxCycleMoves) +
+               " moves of canned cycle " + name + " on one line (the cycle budget)");
+  }
 
   auto move = [&](bool rapid, double pa, double pb, double pc) {
     at[ia] = pa;
