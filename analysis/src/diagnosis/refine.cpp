@@ -1,8 +1,6 @@
 // The nonlinear fit: the selected effects' parameters by re-simulation.
 #include <algorithm>
 #include <cmath>
-#include <functional>
-#include <iterator>
 
 #include "effect_params.hpp"
 #include "fit_steps.hpp"
@@ -80,59 +78,6 @@ VectorXd away_from_reversals(const FitContext& ctx, int j) {
   return m;
 }
 
-// The feed-forward of a loop along its steady lag (1 − ff1)/Kv: the grid
-// ff1 ∈ {0, 0.5, 0.8, 0.9, 0.95, 0.98, 0.99} (1 − ff1 about evenly spaced in
-// its logarithm), then a golden-section search of ln(1 − ff1) between the
-// best grid point's neighbours, so that a loop whose ff1 lies between two
-// grid points (0.97) starts near its own pair and not at the neighbour's,
-// where the rest of the round's effects can hold the fit in another minimum.
-// rss(ff1): the criterion at that ff1 (and Kv from the lag); returns the
-// best ff1, or a negative value when no ff1 beats `rss_now`.
-double scan_ff1_along_lag(const std::function<double(double)>& rss, double rss_now,
-                          bool refine_between = true) {
-  static constexpr double kGrid[] = {0.0, 0.5, 0.8, 0.9, 0.95, 0.98, 0.99};
-  constexpr int kN = int(std::size(kGrid));
-  double val[kN];
-  int best = -1;
-  double best_rss = rss_now;
-  for (int i = 0; i < kN; ++i) {
-    val[i] = rss(kGrid[i]);
-    if (val[i] < best_rss) best_rss = val[i], best = i;
-  }
-  if (best < 0) return -1.0;
-  double best_ff1 = kGrid[best];
-  if (!refine_between) return best_ff1;
-  // ln(1 − ff1) of the bracket; the last grid point (0.99) is bracketed by
-  // 0.995 above it.
-  auto u_of = [](double ff1) { return std::log(1.0 - ff1); };
-  const double a0 = u_of(best > 0 ? kGrid[best - 1] : kGrid[0]);
-  const double b0 = best + 1 < kN ? u_of(kGrid[best + 1]) : u_of(0.995);
-  double a = a0, b = b0;
-  const double g = (std::sqrt(5.0) - 1) / 2;
-  double c = b - g * (b - a), d = a + g * (b - a);
-  auto at = [&](double u) {
-    const double ff1 = 1.0 - std::exp(u);
-    const double r = rss(ff1);
-    if (r < best_rss) best_rss = r, best_ff1 = ff1;
-    return r;
-  };
-  double fc = at(c), fd = at(d);
-  // Eight evaluations narrow the bracket to about 3 % of its width (0.05 in ln(1 − ff1) for
-  // the widest, 0.95 … 0.99).
-  for (int it = 0; it < 6; ++it) {
-    if (fc < fd) {
-      b = d, d = c, fd = fc;
-      c = b - g * (b - a);
-      fc = at(c);
-    } else {
-      a = c, c = d, fc = fd;
-      d = a + g * (b - a);
-      fd = at(d);
-    }
-  }
-  return best_ff1;
-}
-
 }  // namespace
 
 void start_new_servo_loops(const FitContext& ctx, const std::vector<const Candidate*>& chosen,
@@ -156,18 +101,18 @@ void start_new_servo_loops(const FitContext& ctx, const std::vector<const Candid
     const VectorXd keep = away_from_reversals(ctx, c->joint);
     auto& a = *scan.effects.servo_lag.axes[c->joint];
     const double lag_s = (1.0 - a.ff1) / a.kv_per_s;
-    auto pair_at = [&](double ff1) {
-      return sim::ServoLagAxis{clamp_param("kv_per_s", (1.0 - ff1) / lag_s), ff1};
-    };
-    auto rss = [&](double ff1) {
+    sim::ServoLagAxis best = a;
+    double best_rss = weighted_residual(ctx, scan).cwiseProduct(keep).squaredNorm();
+    for (double ff1 : {0.0, 0.5, 0.8, 0.9, 0.95, 0.98, 0.99}) {
       sim::MachineParams p = scan;
-      *p.effects.servo_lag.axes[c->joint] = pair_at(ff1);
-      return weighted_residual(ctx, p).cwiseProduct(keep).squaredNorm();
-    };
-    const double ff1 =
-        scan_ff1_along_lag(rss, weighted_residual(ctx, scan).cwiseProduct(keep).squaredNorm());
-    if (ff1 >= 0) a = pair_at(ff1);
-    *params.effects.servo_lag.axes[c->joint] = a;
+      auto& b = *p.effects.servo_lag.axes[c->joint];
+      b.ff1 = ff1;
+      b.kv_per_s = clamp_param("kv_per_s", (1.0 - ff1) / lag_s);
+      const double rr = weighted_residual(ctx, p).cwiseProduct(keep).squaredNorm();
+      if (rr < best_rss) best_rss = rr, best = b;
+    }
+    a = best;
+    *params.effects.servo_lag.axes[c->joint] = best;
   }
 }
 
@@ -181,13 +126,14 @@ void restart_loops_with_friction(const FitContext& ctx, const std::vector<const 
     const std::string key = coulomb_key(j);
     const double lag_s =
         (1.0 - params.effects.servo_lag.axes[j]->ff1) / params.effects.servo_lag.axes[j]->kv_per_s;
-    // At one ff1 (Kv from the lag): the friction refitted at this pair by
-    // one Gauss-Newton step on F_c; the model in *out.
-    auto at_pair = [&](double ff1, sim::MachineParams* out) {
+    sim::MachineParams best = params;
+    double best_rss = weighted_residual(ctx, params).squaredNorm();
+    for (double ff1 : {0.0, 0.5, 0.8, 0.9, 0.95, 0.98, 0.99}) {
       sim::MachineParams p = params;
       auto& b = *p.effects.servo_lag.axes[j];
       b.ff1 = ff1;
       b.kv_per_s = clamp_param("kv_per_s", (1.0 - ff1) / lag_s);
+      // The friction refitted at this pair: one Gauss-Newton step on F_c.
       double* f = param_ptr(p, "reversal_spike", j, key);
       const double f0 = *f, h = std::max(0.1 * f0, 1.0);
       const VectorXd r0 = weighted_residual(ctx, p);
@@ -197,15 +143,9 @@ void restart_loops_with_friction(const FitContext& ctx, const std::vector<const 
       *f = cc > 0 ? std::max(f0 - col.dot(r0) / cc, 0.0) : f0;
       double rr = weighted_residual(ctx, p).squaredNorm();
       if (!(rr < r0.squaredNorm())) *f = f0, rr = r0.squaredNorm();
-      if (out) *out = p;
-      return rr;
-    };
-    // The grid only: the friction is refitted by one step at each pair, and
-    // between the grid points that step's error decides more than the data
-    // (a refinement there moved Kv 40 to 42–45 with 100 N).
-    const double ff1 = scan_ff1_along_lag([&](double x) { return at_pair(x, nullptr); },
-                                          weighted_residual(ctx, params).squaredNorm(), false);
-    if (ff1 >= 0) at_pair(ff1, &params);
+      if (rr < best_rss) best_rss = rr, best = p;
+    }
+    params = best;
   }
 }
 
