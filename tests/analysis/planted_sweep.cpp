@@ -2,7 +2,9 @@
 // every effect at three magnitudes over N seeds (default 20), a table per
 // effect and magnitude of the seeds passed and the worst relative error.
 // Not part of ctest (it takes minutes); run by hand:
-//   analysis_planted_sweep [SEEDS] [EFFECT-NAME] [-v]
+//   analysis_planted_sweep [SEEDS] [EFFECT-NAME] [-v] [-m MAGNITUDE-INDEX] [-s FIRST-SEED]
+// (-m 0|1|2: one magnitude only; -s: seeds FIRST-SEED … FIRST-SEED + SEEDS − 1;
+// TRUECUT_DIAGNOSIS_VERBOSE=1 prints the diagnosis' progress lines).
 #include <cctype>
 #include <chrono>
 #include <cstdio>
@@ -19,9 +21,14 @@ int main(int argc, char** argv) {
   int seeds = 20;
   std::string only;
   bool verbose = false;
+  int only_magnitude = -1, first_seed = 1;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "-v") == 0)
       verbose = true;
+    else if (std::strcmp(argv[i], "-m") == 0 && i + 1 < argc)
+      only_magnitude = std::atoi(argv[++i]);
+    else if (std::strcmp(argv[i], "-s") == 0 && i + 1 < argc)
+      first_seed = std::atoi(argv[++i]);
     else if (std::isdigit(static_cast<unsigned char>(argv[i][0])))
       seeds = std::atoi(argv[i]);
     else
@@ -35,10 +42,11 @@ int main(int argc, char** argv) {
   for (Effect e : kSweepEffects) {
     if (!only.empty() && only != effect_name(e)) continue;
     for (int m = 0; m < 3; ++m) {
+      if (only_magnitude >= 0 && m != only_magnitude) continue;
       int passed = 0;
       double worst = 0;
       std::string first_failure;
-      for (int s = 1; s <= seeds; ++s) {
+      for (int s = first_seed; s < first_seed + seeds; ++s) {
         const Case c = sweep_case(e, m, unsigned(s));
         const auto t0 = std::chrono::steady_clock::now();
         const auto r = diagnose_case(c, dir);

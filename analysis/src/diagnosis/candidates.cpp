@@ -123,7 +123,12 @@ Candidate servo_lag_candidate(const SignatureBasis& S, const JointMotion& m) {
       const double lag_s = coef[0];  // (1 − ff1) / Kv
       if (!(lag_s > 1e-4)) return false;
       enable_effect(p, "servo_lag", j);
-      p.effects.servo_lag.axes[j] = sim::ServoLagAxis{clamp_param("kv_per_s", 1.0 / lag_s), 0.0};
+      // The pair carries the lag: Kv = 1/lag with ff1 0 where Kv stays
+      // within its range, else the largest Kv with the feed-forward that
+      // gives the lag (a lag of 0.3 ms, Kv 100 with ff1 0.97, was put in as
+      // Kv 1000 clamped, a lag of 1 ms, and the split scanned along that).
+      const double kv = clamp_param("kv_per_s", 1.0 / lag_s);
+      p.effects.servo_lag.axes[j] = sim::ServoLagAxis{kv, clamp_param("ff1", 1.0 - kv * lag_s)};
       return true;
     };
   } else {
@@ -308,6 +313,13 @@ void add_joint_candidates(const SignatureBasis& S, const JointMotion& m, double 
   }
 }
 
+// A squareness candidate of the model moves axis `dir` with the position of
+// axis `moving`: xy (x with y), yz (y with z), zx (x with z).
+bool squareness_pair(int dir, int moving) {
+  return (dir == sim::kX && moving == sim::kY) || (dir == sim::kY && moving == sim::kZ) ||
+         (dir == sim::kX && moving == sim::kZ);
+}
+
 // straightness: the bow of a moving axis' path seen in another axis: its
 // quadratic term and where the bow is flat (reference_mm; a description's
 // reference need not be the middle of the travel recorded, and a
@@ -339,7 +351,18 @@ void add_straightness_candidates(const SignatureBasis& S, std::vector<Candidate>
                                : nullptr;
     const bool has = believed && *believed;
     const double ref = has ? (*believed)->reference_mm : std::round((*lo + *hi) / 2 * 1000) / 1000;
-    const bool move_ref = !has || (*believed)->cubic_um_per_m3 == 0.0;
+    // Where a squareness moves the same axis with the same moving axis
+    // (exy: x with y as squareness xy, exz as zx, eyz as yz), a bow whose
+    // flat point may move is the same family of curves as a bow about a
+    // fixed point plus that squareness, q (s − r)² = q (s − r₀)² − 2q(r − r₀) s
+    // + const: the data cannot tell them apart, and a flat point fitted
+    // from the slope goes anywhere (a small squareness on circles was named
+    // a straightness with its flat point inside, or 62 m outside, the
+    // travel). There the slope is the squareness's and the bow keeps its
+    // reference; the flat point moves only where nothing else carries a
+    // slope of that pair.
+    const bool slope_is_squareness = squareness_pair(dir, moving);
+    const bool move_ref = (!has || (*believed)->cubic_um_per_m3 == 0.0) && !slope_is_squareness;
     const std::string name = sim::kStraightnessNames[i];
     Candidate c;
     c.effect = "straightness";

@@ -782,6 +782,13 @@ void heldout_figures(const Pipeline& P, const Recording* holdout_rec, const Mode
   }
 }
 
+// The accuracy the diagnosis claims for a shape parameter (±15 %, issue
+// 18), and the standard errors it must hold (three: an interval of 95 %
+// estimated from the same noisy data is itself uncertain, and a τ whose
+// estimate came out low looks better determined than it is).
+constexpr double kShapeClaimedAccuracy = 0.15;
+constexpr double kShapeStandardErrors = 3.0;
+
 // One selected effect as an explanation: its parameters (with a scanned
 // variant as a fixed one) and its contribution on the fitted block.
 Explanation explain_effect(const Pipeline& P, const ModelFit& fit, std::size_t i,
@@ -791,7 +798,20 @@ Explanation explain_effect(const Pipeline& P, const ModelFit& fit, std::size_t i
   Explanation e;
   e.effect = s.effect;
   e.axis = s.axis;
-  e.parameters = fit.per_effect[i];
+  // A shape parameter is claimed only when the data pin it down: a time
+  // constant or a period whose three standard errors exceed ±15 % of its
+  // value (e.g. τ of a drift of 1.5 µm under a noise of 1 µm: one standard
+  // error is 8–9 %) is reported as not determined, with its interval; the
+  // amplitude beside it is what the data show.
+  for (const Parameter& p : fit.per_effect[i]) {
+    const bool shape = p.name == "tau_s" || p.name == "periodic_period_mm";
+    const double se = (p.ci95_hi - p.ci95_lo) / (2 * 1.96);
+    if (shape && !p.fixed &&
+        !(kShapeStandardErrors * se <= kShapeClaimedAccuracy * std::abs(p.value)))
+      e.undetermined.push_back(p);
+    else
+      e.parameters.push_back(p);
+  }
   e.delta_bic = s.delta_bic;
   if (!s.variant.empty()) {
     // The scanned variant (a period, a start time constant) is part of the answer.

@@ -89,6 +89,17 @@ void restart_loops_with_friction(const FitContext& ctx, const std::vector<const 
 std::vector<std::string> drop_slopes_taken_for_bows(const FitContext& ctx,
                                                     const sim::MachineParams& base, ModelFit& fit);
 
+// A thermal drift driven by time whose time constant the re-simulated fit
+// drove below a third of the time to the joint's first fitted sample has
+// risen by 95 % before the data begin: an offset of the axis, which is
+// profiled out, not a drift — except that it shifts the position that a
+// straightness or squareness of another axis reads (with a bow of x over y
+// it made a slope: a squareness). It is dropped (the rest refitted);
+// returns the groups.
+std::vector<std::string> drop_offsets_taken_for_drifts(const FitContext& ctx,
+                                                       const sim::MachineParams& base,
+                                                       ModelFit& fit);
+
 // Pruning of fit.selected against `base`, each refitting the rest after a
 // drop: effects whose re-simulated ΔBIC is below the threshold (returns the
 // groups dropped), adjustments whose 95 % interval covers the believed

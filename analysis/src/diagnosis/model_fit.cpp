@@ -81,6 +81,7 @@ bool fit_round(const FitContext& ctx, const sim::MachineParams& base, int round,
   // Nonlinear fit of every selected parameter by re-simulation.
   refine(ctx, fit);
   drop_slopes_taken_for_bows(ctx, base, fit);  // kept in `have`: not offered again
+  drop_offsets_taken_for_drifts(ctx, base, fit);
   const Eigen::Index m = Eigen::Index(keys_of(fit.selected).size());
   // Verified by re-simulation: the round's effects must pay for their
   // parameters in the real model too, not only in the linearisation.
@@ -91,6 +92,10 @@ bool fit_round(const FitContext& ctx, const sim::MachineParams& base, int round,
                std::to_string(round + 1) + " (ΔBIC " + fmt4g(gain) + ")");
   for (const auto& g : drop_unneeded(ctx, base, n_eff, fit))
     have.erase(g);
+  // The refits of the backward elimination move the others' parameters:
+  // the slope and offset rules hold on the model that stays.
+  drop_slopes_taken_for_bows(ctx, base, fit);
+  drop_offsets_taken_for_drifts(ctx, base, fit);
   if (gain > -ctx.bic_threshold || fit.selected.empty()) {
     say(ctx, "re-simulation does not confirm the round's effects; dropped");
     auto tested = fit.tested;
@@ -115,6 +120,8 @@ ModelFit fit_model(const FitContext& ctx, const sim::MachineParams& base) {
   drop_believed_within_interval(ctx, base, fit);
   drop_too_small(ctx, base, fit);
   confirm_on_heldout(ctx, base, fit);
+  drop_slopes_taken_for_bows(ctx, base, fit);
+  drop_offsets_taken_for_drifts(ctx, base, fit);
   // Confusions found on the linearisation count only for effects that stayed.
   std::erase_if(fit.not_identifiable, [&](const NotIdentifiable& ni) {
     return std::none_of(fit.selected.begin(), fit.selected.end(),

@@ -82,6 +82,32 @@ std::vector<std::string> drop_slopes_taken_for_bows(const FitContext& ctx,
   return dropped;
 }
 
+std::vector<std::string> drop_offsets_taken_for_drifts(const FitContext& ctx,
+                                                       const sim::MachineParams& base,
+                                                       ModelFit& fit) {
+  std::vector<std::string> dropped;
+  const Trace& tr = *ctx.trace;
+  for (std::size_t e = 0; e < fit.selected.size();) {
+    const SelectedEffect& s = fit.selected[e];
+    const auto* th =
+        s.effect == "thermal_drift" ? fit.params.effects.thermal_drift.active(s.joint) : nullptr;
+    double t_first = INFINITY;
+    for (std::size_t a = 0; a < ctx.layout.axes.size(); ++a)
+      if (ctx.layout.axes[a] == s.joint && !ctx.layout.index[a].empty())
+        t_first = tr.t_s[ctx.layout.index[a].front()] - tr.t_s.front();
+    if (!th || th->driver != sim::ThermalDriver::kTime || !(th->tau_s < t_first / 3)) {
+      ++e;
+      continue;
+    }
+    say(ctx, "dropped " + s.group +
+                 ": its time constant went below a third of the time to the "
+                 "first fitted sample (an offset, not a drift)");
+    dropped.push_back(s.group);
+    drop_effect(ctx, base, e, fit);
+  }
+  return dropped;
+}
+
 // Backward elimination: an effect selected on the linearisation that the
 // re-simulated model does not need any more (it stood in for a
 // linearisation error of another one) is dropped.

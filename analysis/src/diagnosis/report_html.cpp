@@ -136,6 +136,9 @@ std::string diagnosis_html(const DiagnosisResult& r) {
               (p.fixed ? " (scanned)"
                        : " [" + f(p.ci95_lo, "%.4g") + ", " + f(p.ci95_hi, "%.4g") + "]") +
               "<br>";
+      for (const auto& p : e.undetermined)
+        ps += esc(p.name) + " not determined: " + f(p.value, "%.5g") + " [" + f(p.ci95_lo, "%.4g") +
+              ", " + f(p.ci95_hi, "%.4g") + "]<br>";
       s += "<tr><td class=\"l\">" + esc(e.effect) + "</td><td class=\"l\">" + esc(e.axis) +
            "</td><td class=\"l\">" + ps + "</td><td>" + f(e.delta_bic, "%.1f") + "</td><td>" +
            f(e.rms_effect_mm * 1e3, "%.3g") + " µm</td></tr>";

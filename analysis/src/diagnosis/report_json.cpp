@@ -85,18 +85,23 @@ std::string diagnosis_json(const DiagnosisResult& r) {
                              {"ratio_to_floor", num(m.ratio_to_floor)}});
   j["explanations"] = json::array();
   for (const auto& e : r.explanations) {
-    json params = json::object(), ci = json::object(), fixed = json::array();
+    json params = json::object(), ci = json::object(), fixed = json::array(),
+         undetermined = json::object();
     for (const auto& p : e.parameters) {
       params[p.name] = num(p.value);
       ci[p.name] = json::array({num(p.ci95_lo), num(p.ci95_hi)});
       if (p.fixed) fixed.push_back(p.name);
     }
+    for (const auto& p : e.undetermined)
+      undetermined[p.name] = {{"value", num(p.value)},
+                              {"ci95", json::array({num(p.ci95_lo), num(p.ci95_hi)})}};
     j["explanations"].push_back(
         {{"effect", e.effect},
          {"axis", e.axis},
          {"parameters", params},
          {"ci95", ci},
          {"fixed", fixed},
+         {"undetermined", undetermined},
          {"score", {{"delta_bic", num(e.delta_bic)}, {"rms_effect_mm", num(e.rms_effect_mm)}}},
          {"note", e.note}});
   }
@@ -192,6 +197,10 @@ std::string diagnosis_summary(const DiagnosisResult& r) {
            (p.fixed ? ""
                     : " [" + rt::format_printf("%.4g", p.ci95_lo) + ", " +
                           rt::format_printf("%.4g", p.ci95_hi) + "]");
+    for (const auto& p : e.undetermined)
+      s += " " + p.name + " not determined (" + rt::format_printf("%.4g", p.value) + ", 95 % " +
+           rt::format_printf("%.4g", p.ci95_lo) + " .. " + rt::format_printf("%.4g", p.ci95_hi) +
+           ")";
     s += " (ΔBIC " + rt::format_printf("%.1f", e.delta_bic) + ")\n";
   }
   for (const auto& n : r.not_identifiable)

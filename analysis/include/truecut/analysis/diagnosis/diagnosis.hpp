@@ -83,6 +83,10 @@ struct Explanation {
   std::string effect;  // machine-description effect name
   std::string axis;    // joint or plane ("xy"), empty for global effects
   std::vector<Parameter> parameters;
+  // Shape parameters (a thermal time constant, a pitch period) fitted but
+  // not claimed: three of their standard errors exceed ±15 % of the value
+  // (the fitted description carries the estimate).
+  std::vector<Parameter> undetermined;
   double delta_bic = 0.0;      // BIC gain when the effect was selected (negative = better)
   double rms_effect_mm = 0.0;  // RMS of the effect's signature over the fitted data
   std::string note;
