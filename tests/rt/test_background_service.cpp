@@ -89,6 +89,18 @@ void load_probe(Hal& hal) {
                 "probe.hal");
 }
 
+// Runs on the wall clock, services every 1 ms, until a component asks to
+// stop (the minute is a bound for a failing run, never reached).
+void run_on_the_wall_clock_until_stopped(Hal& hal) {
+  rt::hal::Executor ex(hal);
+  rt::hal::RunLimits limits;
+  limits.service_period_ns = 1'000'000;
+  limits.duration_ns = 60'000'000'000;
+  rt::hal::WallClockOptions wall;
+  wall.lock_memory = false;
+  ex.run_wall_clock(limits, wall);
+}
+
 TEST(BackgroundService, OnTheWallClockALongOneDoesNotHoldUpTheOthers) {
   ServiceProbe probe;
   probe.block_background = true;
@@ -97,13 +109,7 @@ TEST(BackgroundService, OnTheWallClockALongOneDoesNotHoldUpTheOthers) {
   load_probe(hal);
   EXPECT_EQ(1u, hal.service_count(Hal::Services::kForeground));
   EXPECT_EQ(1u, hal.service_count(Hal::Services::kBackground));
-  rt::hal::Executor ex(hal);
-  rt::hal::RunLimits limits;
-  limits.service_period_ns = 1'000'000;
-  limits.duration_ns = 60'000'000'000;  // a bound for a failing run, never reached
-  rt::hal::WallClockOptions wall;
-  wall.lock_memory = false;
-  ex.run_wall_clock(limits, wall);
+  run_on_the_wall_clock_until_stopped(hal);
   EXPECT_TRUE(probe.released_by_foreground)
       << "the ordinary services did not run while the background one was busy";
   EXPECT_TRUE(probe.background_done.load());
@@ -190,13 +196,7 @@ TEST(BackgroundService, TruecutCompReloadsOnTheWallClock) {
                     "addf rl.cycle servo-thread\n"
                     "addf c.update servo-thread\n",
                 "reload.hal");
-  rt::hal::Executor ex(hal);
-  rt::hal::RunLimits limits;
-  limits.service_period_ns = 1'000'000;
-  limits.duration_ns = 60'000'000'000;  // a bound for a failing run, never reached
-  rt::hal::WallClockOptions wall;
-  wall.lock_memory = false;
-  ex.run_wall_clock(limits, wall);
+  run_on_the_wall_clock_until_stopped(hal);
   EXPECT_EQ(probe.start_generation + 1, gets32(hal, "c.field-generation"));
   EXPECT_EQ(0, gets32(hal, "c.load-errors"));
   g_reload = nullptr;
