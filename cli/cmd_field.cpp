@@ -2,6 +2,9 @@
 // the offline chain from a scan to a correction field (docs/offline.md,
 // "truecut field").
 
+#include <unistd.h>
+
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -11,6 +14,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "stage_progress.hpp"
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/interpreter.hpp"
 #include "truecut/offline/field_outputs.hpp"
@@ -108,7 +112,12 @@ const char* kFieldHelp =
     "  --strict-mesh         refuse a mesh with degenerate (zero-area) facets or facets\n"
     "                        wound against their neighbours, instead of dropping or\n"
     "                        turning them round (listed on stderr and in audit.json)\n"
-    "  --quiet               no progress on stderr\n"
+    "  --verbose             each stage on stderr as it ends: its wall time, what it\n"
+    "                        found and the process's peak memory so far (also in\n"
+    "                        audit.json, \"stages\")\n"
+    "  --quiet               nothing on stderr but warnings and errors (default: the\n"
+    "                        current stage on a terminal after a second, and one\n"
+    "                        line of totals)\n"
     "  --help                this text\n";
 
 // An input error: exit 2 with the message (which names the file).
@@ -258,6 +267,15 @@ std::string topology_message(const offline::MeshInputAudit& m) {
 }
 
 // "scan.stl: dropped 2 degenerate facets of 113906: #48211 (area 3e-12 mm²), ..."
+// One line instead of a line per stage (those come with --verbose).
+std::string totals_message(const offline::FieldPipelineResult& r) {
+  double peak_mb = 0.0;
+  for (const offline::StageTime& s : r.stages)
+    peak_mb = std::max(peak_mb, s.peak_rss_mb);
+  return rt::format_printf("%zu stages in %.3f s wall, peak memory %.0f MB (--verbose: each stage)",
+                           r.stages.size(), r.total_wall_s, peak_mb);
+}
+
 std::string dropped_message(const offline::MeshInputAudit& m) {
   const std::size_t n = m.dropped.size();
   std::string s = m.file.filename().string() + ": dropped " + std::to_string(n) +
@@ -444,6 +462,11 @@ int run_field(const ParsedArgs& a, const std::vector<std::string>& argv) {
   const double max_correction =
       a.number("max-correction", offline::kFieldMaxCorrectionMm, 0.0, 100.0);
   const bool quiet = a.flag("quiet");
+  const bool verbose = a.flag("verbose") && !quiet;
+  if (a.flag("verbose") && quiet) throw UsageError("--verbose and --quiet exclude each other");
+  std::optional<StageProgress> shown;
+  shown.emplace("truecut field", !quiet && isatty(STDERR_FILENO) != 0);
+  shown->stage("reading the inputs");
 
   Inputs in = read_inputs(a, *program, *tools);
   const offline::FieldPipelineOptions options = pipeline_options(a, in);
@@ -468,8 +491,10 @@ int run_field(const ParsedArgs& a, const std::vector<std::string>& argv) {
                        " triangles in " + a.positionals()[0]);
     pin.triangle_surface_ids = in.part->triangle_surface_ids;
   }
-  auto progress = [quiet](const std::string& stage, double s, const std::string& detail) {
-    if (!quiet)
+  // Stages of the two chains end concurrently; the pipeline serialises the calls.
+  auto progress = [verbose, &shown](const std::string& stage, double s, const std::string& detail) {
+    shown->stage(stage + " done");
+    if (verbose)
       std::fprintf(stderr, "field: %-34s %8.3f s  %s\n", stage.c_str(), s, detail.c_str());
   };
   for (const offline::MeshInputAudit& m : in.meshes) {
@@ -488,6 +513,8 @@ int run_field(const ParsedArgs& a, const std::vector<std::string>& argv) {
   } catch (const offline::ScanMismatchError& e) {
     throw InputError(a.positionals()[1] + ": " + e.what() + "; nothing written");
   }
+  shown.reset();
+  if (!quiet) std::fprintf(stderr, "field: %s\n", totals_message(result).c_str());
 
   const bool exceeded = result.max_correction_mm > max_correction;
   if (exceeded && !a.flag("force")) {
@@ -553,6 +580,7 @@ int cmd_field(const std::vector<std::string>& argv) {
                       {"force", false},
                       {"base", true},
                       {"quiet", false},
+                      {"verbose", false},
                       {"strict-mesh", false},
                       {"help", false}});
   if (a.flag("help")) {

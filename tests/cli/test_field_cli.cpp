@@ -92,10 +92,13 @@ TEST(FieldCli, WritesOutputsWithAuditHashes) {
   const fs::path root = scratch_dir();
   const Part p = make_part_and_scan(root, 0.05);
   const fs::path out = root / "out";
-  const ProcessResult r = truecut(field_args(p, out));
+  std::vector<std::string> args = field_args(p, out);
+  args.push_back("--verbose");
+  const ProcessResult r = truecut(args);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("field: registration"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("field: field fit"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("[peak "), std::string::npos) << r.err;
   EXPECT_NE(r.out.find("layer T1"), std::string::npos) << r.out;
   EXPECT_EQ(listing(out), (std::set<std::string>{"adapted.stl", "audit.json",
                                                  "compensation_matrix.csv", "field.tcf"}));
@@ -129,6 +132,40 @@ TEST(FieldCli, WritesOutputsWithAuditHashes) {
   // Binary STL of the nominal's size.
   EXPECT_EQ(fs::file_size(out / "adapted.stl"), fs::file_size(p.nominal));
   EXPECT_EQ(read_file(out / "field.tcf").rfind("TRUECUT-FIELD 1\n", 0), 0u);
+}
+
+// Issue 20: the stage lines come with --verbose; by default one line of
+// totals (stderr is not a terminal here, so no progress line), and the
+// stages' times and memory are in audit.json either way.
+TEST(FieldCli, StageLinesOnlyWithVerboseTotalsAlwaysStagesInAudit) {
+  const fs::path root = scratch_dir();
+  const Part p = make_part_and_scan(root, 0.05);
+  const ProcessResult r = truecut(field_args(p, root / "out"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("field: registration"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find('\r'), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(" stages in "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("peak memory "), std::string::npos) << r.err;
+  const nlohmann::json audit = nlohmann::json::parse(read_file(root / "out" / "audit.json"));
+  ASSERT_FALSE(audit["stages"].empty());
+  for (const auto& s : audit["stages"]) {
+    EXPECT_GE(s["wall_s"].get<double>(), 0.0) << s;
+    EXPECT_GT(s["peak_rss_mb"].get<double>(), 0.0) << s;
+  }
+
+  std::vector<std::string> quiet = field_args(p, root / "quiet");
+  quiet.push_back("--quiet");
+  const ProcessResult q = truecut(quiet);
+  ASSERT_EQ(q.exit_code, 0) << q.err;
+  EXPECT_EQ(q.err, "");
+
+  std::vector<std::string> both = field_args(p, root / "both");
+  both.push_back("--quiet");
+  both.push_back("--verbose");
+  const ProcessResult b = truecut(both);
+  EXPECT_EQ(b.exit_code, 2) << b.err;
+  EXPECT_NE(b.err.find("--verbose and --quiet"), std::string::npos) << b.err;
+  EXPECT_FALSE(fs::exists(root / "both"));
 }
 
 TEST(FieldCli, RefusesAboveMaxCorrectionUnlessForced) {
