@@ -569,6 +569,56 @@ TEST(Rewrite, CannedCycleInTheOperationIsRefusedByName) {
   EXPECT_GT(r.summary.moves_rewritten, 0) << r.text;  // the FACE moves were compensated
 }
 
+// Polar words (@ ^) end a move like X Y: a rewritten polar move is written
+// as X Y Z (the same end in G90), kept lines keep their polar words, and
+// the moves land where the polar original would have gone, shifted.
+// M70/M72 around the operation are copied as written.
+TEST(Rewrite, PolarMovesAreWrittenAsXYAtTheirEnd) {
+  const V offset(0, 0, 0.01);
+  const auto m = plane_matrix(-10, 10, -10, 10, 0, 0.5, offset);
+  RewriteOptions o = options("FACE", CutType::kFace);
+  o.reach_mm = 100;
+  o.decimals = 6;
+  const std::string program =
+      "G21 G90 G94\nT2 M6\nG43 H2\nG0 X0 Y0 Z1\nM70\nG20\nM72\n(OPERATION: FACE)\n"
+      "G0 @5 ^0 Z1\nG1 Z0 F100\nG1 @5 ^90 (quarter)\n^180\nG0 Z1\n(OPERATION: LAST)\n"
+      "G0 @2 ^45\nM30\n";
+  const RewriteResult r = rewrite_program(program, "polar.ngc", m, o);
+  // The feeds of FACE, shifted back, lie on the original polyline
+  // (5,0,1) -> (5,0,0) -> (0,5,0) -> (-5,0,0).
+  const std::vector<V> path = {V(5, 0, 1), V(5, 0, 0), V(0, 5, 0), V(-5, 0, 0)};
+  const auto pts = feeds_of(r.text, "FACE");
+  ASSERT_GT(pts.size(), 3u) << r.text;
+  for (const Axes6& p : pts) {
+    const V back = V(p.x, p.y, p.z) - offset;
+    double best = 1e9;
+    for (size_t k = 1; k < path.size(); ++k)
+      best = std::min(best, distance_to_segment(back, path[k - 1], path[k]));
+    EXPECT_LE(best, 1e-6) << p.x << " " << p.y << " " << p.z;
+  }
+  EXPECT_NEAR(pts.back().x, -5, 1e-6);
+  EXPECT_NEAR(pts.back().y, 0, 1e-6);
+  // The rewritten lines carry no polar word; the line comment stays.
+  const size_t face = r.text.find("(OPERATION: FACE)");
+  const size_t last = r.text.find("(OPERATION: LAST)");
+  ASSERT_NE(face, std::string::npos);
+  ASSERT_NE(last, std::string::npos);
+  const std::string rewritten = r.text.substr(face, last - face);
+  EXPECT_EQ(rewritten.find("@5 ^90"), std::string::npos) << rewritten;
+  EXPECT_EQ(rewritten.find("\n^180"), std::string::npos) << rewritten;
+  EXPECT_NE(rewritten.find("(quarter)"), std::string::npos) << rewritten;
+  // Lines before the operation (M70 G20 M72) and after it are byte for byte.
+  EXPECT_EQ(r.text.substr(0, face), program.substr(0, program.find("(OPERATION: FACE)")));
+  EXPECT_EQ(r.text.substr(last), program.substr(program.find("(OPERATION: LAST)")));
+  EXPECT_GT(r.summary.moves_rewritten, 0);
+  // A polar word from a parameter cannot be rewritten: refused with its line.
+  const std::string expr =
+      "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X0 Y0 Z0\nG1 @5 ^[45] F100\nM30\n";
+  EXPECT_EQ(error_of<GcodeError>(expr, o),
+            "bad.ngc:6:7: polar coordinate ^ with a parameter or expression: this move cannot "
+            "be rewritten");
+}
+
 // The cutter radius is D / 2 of the tool in the spindle: giving the same
 // radius by hand changes nothing, a tool of another diameter changes the
 // densification of the ball's turn (R per radian of the axis).
