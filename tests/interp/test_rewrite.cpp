@@ -6,6 +6,7 @@
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <set>
 
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/operations.hpp"
@@ -617,6 +618,43 @@ TEST(Rewrite, PolarMovesAreWrittenAsXYAtTheirEnd) {
   EXPECT_EQ(error_of<GcodeError>(expr, o),
             "bad.ngc:6:7: polar coordinate ^ with a parameter or expression: this move cannot "
             "be rewritten");
+}
+
+// M70/M72 inside the operation are copied as written: the rewritten lines
+// run under the state M72 restores (here the feed), as the originals did.
+// G5.1 (refused by the interpreter) is refused by name at its line.
+TEST(Rewrite, ModalStateLinesAreCopiedAndG5SplinesRefusedByName) {
+  RewriteOptions o = options("FACE", CutType::kFace);
+  o.reach_mm = 100;
+  const auto m = plane_matrix(-10, 10, -4, 4, 0, 0.5, V(0, 0, 0.01));
+  const std::string program =
+      "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X-4 Y0 Z1\nG1 Z0 F100\nM70\n"
+      "G1 X0 F40\nM72\nG1 X4\nG0 Z1\nM30\n";
+  const RewriteResult r = rewrite_program(program, "m70.ngc", m, o);
+  EXPECT_NE(r.text.find("\nM70\n"), std::string::npos) << r.text;
+  EXPECT_NE(r.text.find("\nM72\n"), std::string::npos) << r.text;
+  EXPECT_GT(r.summary.moves_rewritten, 0);
+  // The feed of every feed move of the output is the original's.
+  InterpreterOptions io;
+  io.tools = ToolTable::parse(kTools, "tools.tbl");
+  auto feeds = [&](const std::string& text) {
+    std::vector<double> out;
+    double f = 0;
+    for (const auto& c : Interpreter(io).run_text(text, "f.ngc").calls) {
+      if (const auto* s = std::get_if<SetFeedRate>(&c.op)) f = s->units_per_minute;
+      if (std::holds_alternative<StraightFeed>(c.op)) out.push_back(f);
+    }
+    return out;
+  };
+  const auto before = feeds(program), after = feeds(r.text);
+  ASSERT_GT(after.size(), before.size());
+  EXPECT_EQ(before, (std::vector<double>{100, 40, 100}));
+  EXPECT_EQ(after.back(), 100);  // restored by M72 for the last pass
+  EXPECT_EQ(std::set<double>(after.begin(), after.end()), (std::set<double>{40, 100}));
+  const std::string spline =
+      "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X0 Y0 Z0\nG5.1 X4 Y0 I2 J2 F100\nM30\n";
+  EXPECT_EQ(error_of<GcodeError>(spline, o),
+            "bad.ngc:6:1: G5.1 quadratic B-spline (G5.1) is not supported");
 }
 
 // The cutter radius is D / 2 of the tool in the spindle: giving the same
