@@ -599,6 +599,8 @@ void BlockExecutor::polar_point(double& x, double& y) const {
   }
   x = radius * std::cos(angle);
   y = radius * std::sin(angle);
+  if (!std::isfinite(x) || !std::isfinite(y))
+    fail(col, "the polar point overflows: its X or Y is not a finite number");
 }
 
 void BlockExecutor::check_feed(int column) const {

@@ -154,7 +154,8 @@ INSTANTIATE_TEST_SUITE_P(
         Case{"G0 @\nM2\n", 1, 4, "word @ has no value"},
         Case{"G0 X5 Z5\nG18 G81 @1 ^0 R1 F10\nM2\n", 2, 9,
              "polar coordinates (@ ^) in canned cycle G81 outside the XY plane"},
-        Case{"G2 @1 ^1 F10\nM2\n", 1, 1, "missing arc data"}),
+        Case{"G2 @1 ^1 F10\nM2\n", 1, 1, "missing arc data"},
+        Case{"G0 X1\nG91 G0 @[10 ** 308]\n@[10 ** 308]\nM2\n", 3, 1, "the polar point overflows"}),
     case_name);
 
 // M70-M73 (docs/gcode.md "Modal state"): M72 needs a state saved at its
