@@ -67,6 +67,8 @@ struct Block {
   std::vector<CodeWord> g;
   std::vector<CodeWord> m;
   std::array<std::optional<Word>, 26> letter;  // other words, by 'a'..'z'
+  // Polar coordinates: @ (radius) and ^ (angle, degrees) in the XY plane.
+  std::optional<Word> polar_radius, polar_angle;
   std::vector<CommentText> comments;
   std::vector<Assignment> assignments;
   std::vector<LexedLine::Keyword> sinumerik;
@@ -76,6 +78,8 @@ struct Block {
   double value(char c) const { return letter[c - 'a']->value; }
   bool has_g(int code) const;
   bool has_m(int code) const;
+  bool has_polar() const { return polar_radius || polar_angle; }
+  int polar_column() const { return polar_radius ? polar_radius->column : polar_angle->column; }
 };
 
 // Reads a lexed line. Words are evaluated with the parameters as they were

@@ -91,6 +91,7 @@ bool BlockExecutor::execute(const Block& block, const LexedLine& line) {
   codes_ = check_codes(block, line);
   s_.line = line.line;
   axes_used_ = false;
+  if (block.has_polar()) check_polar(s_.plane);
   comments();
   for (const auto& k : block.sinumerik) {
     if (k.word == SinumerikWord::kTraori || k.word == SinumerikWord::kTrafoof) {
@@ -100,6 +101,7 @@ bool BlockExecutor::execute(const Block& block, const LexedLine& line) {
   }
   feed_and_speed();
   tool_words();
+  modal_state_codes();
   spindle_and_coolant();
   if (codes_.g[group(GGroup::kNonModal)] == 40) {
     if (!block.has('p')) fail(codes_.g_column[0], "G4 (dwell) needs P (seconds)");
@@ -415,6 +417,7 @@ void BlockExecutor::select_coord_system(int index) {
 void BlockExecutor::tool_length_offset() {
   const int code = codes_.g[group(GGroup::kToolLength)];
   if (code == 490) {
+    s_.tool_length_code = 490;
     s_.tool_offset_mm = Axes6{};
     out_.emit(UseToolLengthOffset{Axes6{}});
     return;
@@ -438,6 +441,7 @@ void BlockExecutor::tool_length_offset() {
     offset = e->offset_mm;
   }
   s_.tool_offset_mm = offset;
+  s_.tool_length_code = 430;
   out_.emit(UseToolLengthOffset{s_.to_program(offset)});
 }
 
@@ -558,6 +562,47 @@ Axes6 BlockExecutor::target_position(bool machine_coords) const {
   return t;
 }
 
+void BlockExecutor::check_polar(Plane plane_before) const {
+  const int col = b_->polar_column();
+  // LinuxCNC checks the plane in force before the line.
+  if (plane_before != Plane::kXY)
+    fail(col, std::string("polar coordinates (@ ^) only in the XY plane: the plane before this "
+                          "line is ") +
+                  plane_name(plane_before) + " (program G17 on an earlier line)");
+  for (char l : {'x', 'y'})
+    if (b_->has(l))
+      fail(column_of(l), std::string("polar coordinates (@ ^) and the ") +
+                             static_cast<char>(std::toupper(l)) +
+                             " word on one line: use one form");
+  const int nm = codes_.g[group(GGroup::kNonModal)];
+  if (nm == 100 || nm == 280 || nm == 300 || nm == 920)
+    fail(col, "polar coordinates (@ ^) are for motion only, not for G10, G28, G30 or G92");
+  if (b_->has_g(530)) fail(col, "polar coordinates (@ ^) with G53");
+}
+
+void BlockExecutor::polar_point(double& x, double& y) const {
+  const int col = b_->polar_column();
+  constexpr double kDeg = 3.14159265358979323846 / 180.0;
+  double radius = std::hypot(x, y), angle = std::atan2(y, x);
+  // rs274 keeps program numbers; truecut's come back from machine millimetres.
+  const bool at_origin = std::abs(x) < 1e-12 && std::abs(y) < 1e-12;
+  if (!s_.incremental) {
+    if (b_->polar_radius && !b_->polar_angle && at_origin)
+      fail(col, "@ without ^ at the origin: the angle is undefined (give ^)");
+    if (b_->polar_radius) radius = b_->polar_radius->value;
+    if (b_->polar_angle) angle = b_->polar_angle->value * kDeg;
+  } else {
+    if (at_origin)
+      fail(col, "incremental polar coordinates (G91 @ ^) at the origin: the angle is undefined");
+    if (b_->polar_radius) radius += b_->polar_radius->value;
+    if (b_->polar_angle) angle += b_->polar_angle->value * kDeg;
+  }
+  x = radius * std::cos(angle);
+  y = radius * std::sin(angle);
+  if (!std::isfinite(x) || !std::isfinite(y))
+    fail(col, "the polar point overflows: its X or Y is not a finite number");
+}
+
 void BlockExecutor::check_feed(int column) const {
   if (s_.feed_mode == FeedMode::kInverseTime) {
     if (!b_->has('f')) fail(column, "inverse-time feed (G93) needs an F word on every feed move");
@@ -603,6 +648,10 @@ void BlockExecutor::motion() {
       axis_words = true;
       if (!first_axis_column) first_axis_column = column_of(l);
     }
+  if (b_->has_polar()) {  // @ ^ count as axis words
+    axis_words = true;
+    if (!first_axis_column) first_axis_column = b_->polar_column();
+  }
   if (explicit_code >= 0) {
     const SplineMode before = s_.spline;
     s_.motion = explicit_code;
@@ -636,13 +685,20 @@ void BlockExecutor::motion() {
     canned_cycle(code, motion_column ? motion_column : 1);
     return;
   }
+  Axes6 target = target_position(g53);
+  if (b_->has_polar()) {
+    const Axes6 here = s_.program_position();
+    double x = here[0], y = here[1];
+    polar_point(x, y);
+    target[0] = s_.to_machine(0, x) + s_.g5x_mm[0] + s_.g92_mm[0] + s_.tool_offset_mm[0];
+    target[1] = s_.to_machine(1, y) + s_.g5x_mm[1] + s_.g92_mm[1] + s_.tool_offset_mm[1];
+  }
   if (code == 20 || code == 30) {
-    arc(code == 20, target_position(false));
+    arc(code == 20, target);
     return;
   }
   // An explicit G0/G1 without axis words is a move to where the tool is.
   if (!axis_words && (code == kBsplineCode || code == kCsplineCode)) return;
-  const Axes6 target = target_position(g53);
   if (code != 0) check_feed(motion_column);
   straight(code == 0, target);
 }

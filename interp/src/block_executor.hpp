@@ -4,6 +4,9 @@
 // distance mode, G10/G28/G30/G92, motion, stop) and emits the canonical calls.
 #pragma once
 
+#include <optional>
+#include <vector>
+
 #include "block.hpp"
 #include "emitter.hpp"
 #include "interp_state.hpp"
@@ -24,6 +27,9 @@ class BlockExecutor {
   bool execute(const Block& block, const LexedLine& line);
   // The program-end sequence (M2/M30).
   void end_program(bool pallet_shuttle);
+  // A subroutine at call level `level` returns: its M73 state is restored
+  // and its saved state forgotten (modal_state.cpp).
+  void return_from_call(int level);
 
  private:
   [[noreturn]] void fail(int column, const std::string& message) const;
@@ -32,6 +38,7 @@ class BlockExecutor {
   void feed_and_speed();
   void tool_words();
   void spindle_and_coolant();
+  void modal_state_codes();  // M70-M73 (modal_state.cpp)
   void modal_settings();
   void set_units(LengthUnits units);
   void select_coord_system(int index);
@@ -42,6 +49,11 @@ class BlockExecutor {
   void go_home(int code);
   void motion();
   Axes6 target_position(bool machine_coords) const;
+  void check_polar(Plane plane_before) const;
+  // The XY end of the block's polar words (@ ^) from the program point
+  // (x, y): G90 about the origin, G91 added to the point's own radius and
+  // angle, as LinuxCNC does.
+  void polar_point(double& x, double& y) const;
   void straight(bool rapid, const Axes6& target);
   void arc(bool clockwise, const Axes6& target);
   void canned_cycle(int code, int column);  // canned_cycles.cpp
@@ -50,6 +62,27 @@ class BlockExecutor {
   void emit_offsets();
   std::string substitute_parameters(const std::string& text) const;
 
+  // The modal state M70/M73 save (LinuxCNC 2.9's list) and M72 restores.
+  struct ModalSnapshot {
+    LengthUnits units;
+    FeedMode feed_mode;
+    double feed, speed;
+    int spindle;
+    bool mist, flood;
+    Plane plane;
+    int tool_length_code;
+    int coord_index;
+    PathMode path;
+    double blend_tolerance, naive_tolerance;
+    bool incremental, arc_absolute, retract_old_z;
+  };
+  struct SavedModal {
+    std::optional<ModalSnapshot> state;
+    bool autorestore = false;  // M73: restore when the subroutine returns
+  };
+  ModalSnapshot snapshot() const;
+  void restore(const ModalSnapshot& saved);
+
   InterpState& s_;
   Parameters& params_;
   const ToolTable& tools_;
@@ -57,8 +90,9 @@ class BlockExecutor {
   const Block* b_ = nullptr;
   const LexedLine* line_ = nullptr;
   ModalCodes codes_;
-  bool axes_used_ = false;       // axis words consumed by G10/G28/G30/G92
-  Axes6 last_program_position_;  // end of the last move as emitted
+  bool axes_used_ = false;               // axis words consumed by G10/G28/G30/G92
+  Axes6 last_program_position_;          // end of the last move as emitted
+  std::vector<SavedModal> saved_modal_;  // by call level
 };
 
 }  // namespace truecut::interp

@@ -107,6 +107,17 @@ void read_word(Cursor& c, Block& b, const Parameters& params, bool has_b) {
   const size_t at = c.pos;
   const char l = c.peek();
   const int col = c.column_at(at);
+  if (l == '@' || l == '^') {  // polar radius and angle (LinuxCNC)
+    ++c.pos;
+    if (c.at_end() || c.peek() == '(' || c.peek() == ';')
+      c.fail_at(at, std::string("word ") + l + " has no value");
+    const double v = read_real_value(c, params);
+    auto& slot = l == '@' ? b.polar_radius : b.polar_angle;
+    // LinuxCNC takes the last of two; truecut refuses them like two X words.
+    if (slot) c.fail_at(at, std::string("two ") + l + " words on one line");
+    slot = Word{v, col};
+    return;
+  }
   if (!std::isalpha(static_cast<unsigned char>(l))) {
     if (l == '#') c.fail("parameter setting needs '=': #n = value");
     if (l == ']') c.fail("unbalanced brackets: ']' without '['");

@@ -55,6 +55,11 @@ void BlockExecutor::canned_cycle(int code, int column) {
   const path_geometry::PlaneAxes ax = path_geometry::plane_axes(s_.plane);
   const int ia = ax.first, ib = ax.second, ic = ax.normal;
   const char la = kLetters[ia], lb = kLetters[ib], lc = kLetters[ic];
+  // Polar words (@ ^) locate the hole in X Y: only when those are the
+  // plane's first axes (rs274 would mix them with the drilling axis).
+  if (b_->has_polar() && s_.plane != Plane::kXY)
+    fail(b_->polar_column(),
+         "polar coordinates (@ ^) in canned cycle " + name + " outside the XY plane (G17)");
   CycleState& cy = s_.cycle;
   // R, the normal-axis word, P and Q carry over from the previous block
   // only while the same cycle continues.
@@ -158,9 +163,14 @@ void BlockExecutor::canned_cycle(int code, int column) {
   // The chip-breaking back-off of G73 and the approach gap of G83: 0.010 in.
   const double backoff = s_.units == LengthUnits::kMm ? 0.010 * kMmPerInch : 0.010;
 
+  // G90: the polar point is computed once from where the block starts.
+  if (b_->has_polar() && !s_.incremental) polar_point(a, b);
   for (int rep = 0; rep < repeats; ++rep) {
     a += a_step;
     b += b_step;
+    // G91: like rs274, each repeat adds @ and ^ to the last hole's radius
+    // and angle.
+    if (b_->has_polar() && s_.incremental) polar_point(a, b);
     // Over the hole at the current height or the clearance height,
     // whichever is higher, then down to R.
     const double over = at[ic] > clear && !same_height(at[ic], clear) ? at[ic] : clear;

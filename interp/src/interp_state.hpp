@@ -32,9 +32,10 @@ struct InterpState {
   double speed = 0;            // rpm
   int spindle = 0;             // 1 cw, -1 ccw, 0 stopped
   bool mist = false, flood = false;
-  int tool = 0;           // in the spindle
-  int selected_tool = 0;  // by the last T word
-  int coord_index = 1;    // 1 = G54 ... 9 = G59.3
+  int tool = 0;                // in the spindle
+  int selected_tool = 0;       // by the last T word
+  int coord_index = 1;         // 1 = G54 ... 9 = G59.3
+  int tool_length_code = 490;  // G43 (430) or G49 (490) in force
   Axes6 g5x_mm, g92_mm, tool_offset_mm;
   Axes6 position_mm;           // controlled point in machine coordinates
   bool retract_old_z = false;  // G98 (else G99)

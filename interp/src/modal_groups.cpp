@@ -133,10 +133,11 @@ constexpr MInfo kMCodes[] = {{0, MGroup::kStop, nullptr},
                              {660, MGroup::kUser, "wait on input (M66)"},
                              {670, MGroup::kUser, "analog output (M67)"},
                              {680, MGroup::kUser, "analog output (M68)"},
-                             {700, MGroup::kUser, "modal state save (M70)"},
-                             {710, MGroup::kUser, "modal state (M71)"},
-                             {720, MGroup::kUser, "modal state restore (M72)"},
-                             {730, MGroup::kUser, "modal state autorestore (M73)"}};
+                             // M70-M73 share the spindle's group, as in LinuxCNC 2.9
+                             {700, MGroup::kSpindle, nullptr},
+                             {710, MGroup::kSpindle, nullptr},
+                             {720, MGroup::kSpindle, nullptr},
+                             {730, MGroup::kSpindle, nullptr}};
 
 std::string code_text(char letter, int code) {
   char buf[32];

@@ -266,6 +266,7 @@ void ProgramRunner::control(const OWord& o, const LexedLine& line) {
       if (frames_.size() == 1)
         fail(line, o.column,
              label_text(o.label) + " " + keyword_name(o.keyword) + " outside a subroutine call");
+      executor_.return_from_call(params_.call_level());  // M73
       params_.pop_call();
       frames_.pop_back();
       params_.set_named("_value", o.condition.value_or(0.0));

@@ -131,6 +131,51 @@ INSTANTIATE_TEST_SUITE_P(
         Case{"G0 Z10\nG74 X1 Z-3 R2 F100\nM2\n", 2, 1, "G74 left-hand tapping canned cycle"}),
     case_name);
 
+// Polar coordinates (docs/gcode.md "Polar coordinates"): the programs
+// LinuxCNC's rs274 refuses, and the two truecut refuses where rs274 would
+// take the last word or mix the polar point with the drilling axis.
+INSTANTIATE_TEST_SUITE_P(
+    Polar, BadInput,
+    ::testing::Values(
+        Case{"G18\nG0 ^10\nM2\n", 2, 4, "only in the XY plane: the plane before this line is XZ"},
+        Case{"G18\nG17 G0 @1 ^10\nM2\n", 2, 8, "only in the XY plane"},
+        Case{"G1 @10 X5 F100\nM2\n", 1, 8, "polar coordinates (@ ^) and the X word"},
+        Case{"G1 Y1 ^10 F100\nM2\n", 1, 4, "polar coordinates (@ ^) and the Y word"},
+        Case{"G0 @5\nM2\n", 1, 4, "@ without ^ at the origin"},
+        Case{"G0 X3 Y4\nG0 @0\nG0 @5\nM2\n", 3, 4, "@ without ^ at the origin"},
+        Case{"G91 G0 @1 ^1\nM2\n", 1, 8, "incremental polar coordinates (G91 @ ^) at the origin"},
+        Case{"G91 G0 ^90\nM2\n", 1, 8, "incremental polar coordinates"},
+        Case{"G92 @1\nM2\n", 1, 5, "for motion only"},
+        Case{"G10 L2 P1 ^1\nM2\n", 1, 11, "for motion only"},
+        Case{"G28 @1\nM2\n", 1, 5, "for motion only"}, Case{"G53 G0 @1 ^0\nM2\n", 1, 8, "with G53"},
+        Case{"@5 ^1\nM2\n", 1, 1, "no motion mode"},
+        Case{"G0 @1 @2\nM2\n", 1, 7, "two @ words on one line"},
+        Case{"G0 ^1 ^2\nM2\n", 1, 7, "two ^ words on one line"},
+        Case{"G0 @\nM2\n", 1, 4, "word @ has no value"},
+        Case{"G0 X5 Z5\nG18 G81 @1 ^0 R1 F10\nM2\n", 2, 9,
+             "polar coordinates (@ ^) in canned cycle G81 outside the XY plane"},
+        Case{"G2 @1 ^1 F10\nM2\n", 1, 1, "missing arc data"},
+        Case{"G0 X1\nG91 G0 @[10 ** 308]\n@[10 ** 308]\nM2\n", 3, 1, "the polar point overflows"}),
+    case_name);
+
+// M70-M73 (docs/gcode.md "Modal state"): M72 needs a state saved at its
+// call level; M70-M73 share the spindle's modal group, as in LinuxCNC.
+INSTANTIATE_TEST_SUITE_P(
+    ModalState, BadInput,
+    ::testing::Values(
+        Case{"M72\nM2\n", 1, 1, "M72 with no modal state saved at this call level"},
+        Case{"M70\nM71\nM72\nM2\n", 3, 1, "M72 with no modal state saved"},
+        Case{"o1 sub\nM72\no1 endsub\nM70\no1 call\nM2\n", 2, 1, "M72 with no modal state saved"},
+        Case{"o1 sub\nM70\no1 endsub\no1 call\nM72\nM2\n", 5, 1, "M72 with no modal state saved"},
+        Case{"o1 sub\nM70\no1 endsub\no1 call\no2 sub\nM72\no2 endsub\no1 call\no2 call\nM2\n", 6,
+             1, "M72 with no modal state saved"},
+        Case{"M70 M3\nM2\n", 1, 5, "same modal group on one line: M70 and M3"},
+        Case{"M70 M72\nM2\n", 1, 5, "same modal group on one line: M70 and M72"},
+        Case{"M70\nM72 G0 X1\nM2\n", 2, 1, "M72 with G codes, axis words"},
+        Case{"M70\nM72 M8\nM2\n", 2, 1, "put M72 on a line of its own"},
+        Case{"M70\nM72 M2\n", 2, 1, "put M72 on a line of its own"}),
+    case_name);
+
 INSTANTIATE_TEST_SUITE_P(
     Expressions, BadInput,
     ::testing::Values(Case{"G0 X[1 + [2]\nM2\n", 1, 5, "unbalanced brackets"},

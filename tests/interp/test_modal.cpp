@@ -2,6 +2,8 @@
 // mode, spindle, coolant, tools and tool length offsets, stops and the end.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "interp_test_util.hpp"
 
 namespace truecut::interp::testing {
@@ -75,6 +77,63 @@ TEST(Modal, M30AddsPalletShuttleAndM2ResetsPlane) {
   EXPECT_NE(std::find(c.begin(), c.end(), "SELECT_PLANE(CANON_PLANE_XY)"), c.end());
   EXPECT_NE(std::find(c.begin(), c.end(), "FLOOD_OFF()"), c.end());
   EXPECT_NE(std::find(c.begin(), c.end(), "PALLET_SHUTTLE()"), c.end());
+}
+
+// M70 saves, M72 restores only what differs (units first, then the rest in
+// the order of a block), M73 restores when its subroutine returns; the
+// motion mode is not part of the state.
+TEST(ModalState, RestoreEmitsOnlyTheDifferencesInLinuxCncOrder) {
+  auto p =
+      run("G64 P0.01 F100 S1000 M3 M8\nG1 X1\nM70\n"
+          "G20 G18 G91 G61 G55 G98 M4 S500 M7 F3\nG0 X1\nM72\nX2\nM2\n");
+  const auto c = calls(p);
+  // G0 X1 under G91 G20: 1 mm + 1 inch.
+  const auto m72 = std::find(c.begin(), c.end(),
+                             "STRAIGHT_TRAVERSE(1.0394, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)");
+  ASSERT_NE(m72, c.end());
+  const std::vector<std::string> restored(m72 + 1, m72 + 13);
+  EXPECT_EQ(restored,
+            (std::vector<std::string>{
+                "USE_LENGTH_UNITS(CANON_UNITS_MM)", "SET_FEED_RATE(100.0000)",
+                "SET_SPINDLE_SPEED(0, 1000.0000)", "START_SPINDLE_CLOCKWISE(0)",
+                "SELECT_PLANE(CANON_PLANE_XY)",
+                "SET_G5X_OFFSET(1, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+                "SET_G92_OFFSET(0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+                "SET_XY_ROTATION(0.0000)", "SET_MOTION_CONTROL_MODE(CANON_CONTINUOUS, 0.010000)",
+                "SET_NAIVECAM_TOLERANCE(0.0100)",
+                "COMMENT(\"interpreter: distance mode changed to absolute\")",
+                "COMMENT(\"interpreter: retract mode set to r_plane\")"}));
+  // The mist stays on (the saved state had flood only), G0 stays the motion.
+  EXPECT_EQ(*(m72 + 13), "STRAIGHT_TRAVERSE(2.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)");
+  // Nothing differs: nothing is emitted.
+  auto same = run("M70\nM72\nM2\n");
+  auto plain = run("M2\n");
+  EXPECT_EQ(calls(same), calls(plain));
+}
+
+TEST(ModalState, M73RestoresWhenTheSubroutineReturns) {
+  auto p =
+      run("o1 sub\nM73\nG20 G91 M3 S10 F3\no2 if [1]\no1 return\no2 endif\nG18\n"
+          "o1 endsub\no1 call\nG0 X1\nM2\n");
+  const auto c = calls(p);
+  const std::vector<std::string> expected = {
+      "SET_FEED_RATE(3.0000)",
+      "SET_SPINDLE_SPEED(0, 10.0000)",
+      "START_SPINDLE_CLOCKWISE(0)",
+      "USE_LENGTH_UNITS(CANON_UNITS_INCHES)",
+      "COMMENT(\"interpreter: distance mode changed to incremental\")",
+      "USE_LENGTH_UNITS(CANON_UNITS_MM)",
+      "SET_FEED_RATE(0.0000)",
+      "SET_SPINDLE_SPEED(0, 0.0000)",
+      "STOP_SPINDLE_TURNING(0)",
+      "COMMENT(\"interpreter: distance mode changed to absolute\")",
+      "STRAIGHT_TRAVERSE(1.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)"};
+  ASSERT_GE(c.size(), expected.size());
+  EXPECT_EQ(std::vector<std::string>(c.begin(), c.begin() + expected.size()), expected);
+  // M71 forgets: no restore on return.
+  auto forgotten = run("o1 sub\nM73\nG20\nM71\no1 endsub\no1 call\nG0 X1\nM2\n");
+  EXPECT_EQ(calls_named(forgotten, {"USE_LENGTH_UNITS"}),
+            (std::vector<std::string>{"USE_LENGTH_UNITS(CANON_UNITS_INCHES)"}));
 }
 
 TEST(Tools, ToolChangeUsesTheTableRow) {

@@ -30,6 +30,37 @@ TEST(Motion, ExplicitMotionCodeWithoutAxesMovesToWhereTheToolIs) {
   EXPECT_EQ(moves(p).back(), "STRAIGHT_FEED(1.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)");
 }
 
+// Polar coordinates, as LinuxCNC's rs274 runs them: G90 about the program
+// origin (a missing word keeps the current point's radius or angle), G91
+// added to the current point's radius and angle.
+TEST(Polar, AbsoluteAboutTheOriginIncrementalAddedToRadiusAndAngle) {
+  auto p = run("G0 X10 Y5\nG1 @10 ^30 F100\n@5\n^90\nG91\nG1 @2 ^0\n@2 ^90\n@3\nM2\n");
+  EXPECT_EQ(moves(p), (std::vector<std::string>{
+                          "STRAIGHT_TRAVERSE(10.0000, 5.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+                          "STRAIGHT_FEED(8.6603, 5.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+                          "STRAIGHT_FEED(4.3301, 2.5000, 0.0000, 0.0000, 0.0000, 0.0000)",
+                          "STRAIGHT_FEED(0.0000, 5.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+                          "STRAIGHT_FEED(0.0000, 7.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+                          "STRAIGHT_FEED(-9.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+                          "STRAIGHT_FEED(-12.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)"}));
+}
+
+TEST(Polar, ArcsOffsetsAndCannedCycles) {
+  // An arc to a polar end; the origin of a G92-shifted program.
+  auto p = run("G0 @10 ^45 Z3\nG2 @10 ^0 R10 F10\nG0 X3 Y4\nG92 X0 Y0\nG0 @1 ^0\nM2\n");
+  auto m = moves(p);
+  ASSERT_EQ(m.size(), 4u);
+  EXPECT_EQ(m[0], "STRAIGHT_TRAVERSE(7.0711, 7.0711, 3.0000, 0.0000, 0.0000, 0.0000)");
+  EXPECT_EQ(m[1], "ARC_FEED(10.0000, 0.0000, 0.0000, -0.0000, -1, 3.0000, 0.0000, 0.0000, 0.0000)");
+  EXPECT_EQ(m[3], "STRAIGHT_TRAVERSE(1.0000, 0.0000, 3.0000, 0.0000, 0.0000, 0.0000)");
+  // G91 canned cycle: each repeat turns the last hole by ^ about the origin.
+  auto c = run("G0 X3 Y4 Z2\nG91 G81 ^90 R1 Z-1 L2 F10\nM2\n");
+  auto holes = calls_named(c, {"STRAIGHT_FEED"});
+  EXPECT_EQ(holes, (std::vector<std::string>{
+                       "STRAIGHT_FEED(-4.0000, 3.0000, 2.0000, 0.0000, 0.0000, 0.0000)",
+                       "STRAIGHT_FEED(-3.0000, -4.0000, 2.0000, 0.0000, 0.0000, 0.0000)"}));
+}
+
 TEST(Arcs, CentreFormInXY) {
   auto p = run("F100\nG2 X10 Y10 I10 J0\nG3 X0 Y20 I-10 J0\nM2\n");
   EXPECT_EQ(moves(p), (std::vector<std::string>{

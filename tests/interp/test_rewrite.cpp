@@ -6,6 +6,7 @@
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <set>
 
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/operations.hpp"
@@ -567,6 +568,93 @@ TEST(Rewrite, CannedCycleInTheOperationIsRefusedByName) {
   const RewriteResult r = rewrite_program(outside, "drill.ngc", m, o);
   EXPECT_NE(r.text.find("\nG81 X1 Y1 Z-0.5 R0.5 F100\nX2\nG80\n"), std::string::npos) << r.text;
   EXPECT_GT(r.summary.moves_rewritten, 0) << r.text;  // the FACE moves were compensated
+}
+
+// Polar words (@ ^) end a move like X Y: a rewritten polar move is written
+// as X Y Z (the same end in G90), kept lines keep their polar words, and
+// the moves land where the polar original would have gone, shifted.
+// M70/M72 around the operation are copied as written.
+TEST(Rewrite, PolarMovesAreWrittenAsXYAtTheirEnd) {
+  const V offset(0, 0, 0.01);
+  const auto m = plane_matrix(-10, 10, -10, 10, 0, 0.5, offset);
+  RewriteOptions o = options("FACE", CutType::kFace);
+  o.reach_mm = 100;
+  o.decimals = 6;
+  const std::string program =
+      "G21 G90 G94\nT2 M6\nG43 H2\nG0 X0 Y0 Z1\nM70\nG20\nM72\n(OPERATION: FACE)\n"
+      "G0 @5 ^0 Z1\nG1 Z0 F100\nG1 @5 ^90 (quarter)\n^180\nG0 Z1\n(OPERATION: LAST)\n"
+      "G0 @2 ^45\nM30\n";
+  const RewriteResult r = rewrite_program(program, "polar.ngc", m, o);
+  // The feeds of FACE, shifted back, lie on the original polyline
+  // (5,0,1) -> (5,0,0) -> (0,5,0) -> (-5,0,0).
+  const std::vector<V> path = {V(5, 0, 1), V(5, 0, 0), V(0, 5, 0), V(-5, 0, 0)};
+  const auto pts = feeds_of(r.text, "FACE");
+  ASSERT_GT(pts.size(), 3u) << r.text;
+  for (const Axes6& p : pts) {
+    const V back = V(p.x, p.y, p.z) - offset;
+    double best = 1e9;
+    for (size_t k = 1; k < path.size(); ++k)
+      best = std::min(best, distance_to_segment(back, path[k - 1], path[k]));
+    EXPECT_LE(best, 1e-6) << p.x << " " << p.y << " " << p.z;
+  }
+  EXPECT_NEAR(pts.back().x, -5, 1e-6);
+  EXPECT_NEAR(pts.back().y, 0, 1e-6);
+  // The rewritten lines carry no polar word; the line comment stays.
+  const size_t face = r.text.find("(OPERATION: FACE)");
+  const size_t last = r.text.find("(OPERATION: LAST)");
+  ASSERT_NE(face, std::string::npos);
+  ASSERT_NE(last, std::string::npos);
+  const std::string rewritten = r.text.substr(face, last - face);
+  EXPECT_EQ(rewritten.find("@5 ^90"), std::string::npos) << rewritten;
+  EXPECT_EQ(rewritten.find("\n^180"), std::string::npos) << rewritten;
+  EXPECT_NE(rewritten.find("(quarter)"), std::string::npos) << rewritten;
+  // Lines before the operation (M70 G20 M72) and after it are byte for byte.
+  EXPECT_EQ(r.text.substr(0, face), program.substr(0, program.find("(OPERATION: FACE)")));
+  EXPECT_EQ(r.text.substr(last), program.substr(program.find("(OPERATION: LAST)")));
+  EXPECT_GT(r.summary.moves_rewritten, 0);
+  // A polar word from a parameter cannot be rewritten: refused with its line.
+  const std::string expr =
+      "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X0 Y0 Z0\nG1 @5 ^[45] F100\nM30\n";
+  EXPECT_EQ(error_of<GcodeError>(expr, o),
+            "bad.ngc:6:7: polar coordinate ^ with a parameter or expression: this move cannot "
+            "be rewritten");
+}
+
+// M70/M72 inside the operation are copied as written: the rewritten lines
+// run under the state M72 restores (here the feed), as the originals did.
+// G5.1 (refused by the interpreter) is refused by name at its line.
+TEST(Rewrite, ModalStateLinesAreCopiedAndG5SplinesRefusedByName) {
+  RewriteOptions o = options("FACE", CutType::kFace);
+  o.reach_mm = 100;
+  const auto m = plane_matrix(-10, 10, -4, 4, 0, 0.5, V(0, 0, 0.01));
+  const std::string program =
+      "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X-4 Y0 Z1\nG1 Z0 F100\nM70\n"
+      "G1 X0 F40\nM72\nG1 X4\nG0 Z1\nM30\n";
+  const RewriteResult r = rewrite_program(program, "m70.ngc", m, o);
+  EXPECT_NE(r.text.find("\nM70\n"), std::string::npos) << r.text;
+  EXPECT_NE(r.text.find("\nM72\n"), std::string::npos) << r.text;
+  EXPECT_GT(r.summary.moves_rewritten, 0);
+  // The feed of every feed move of the output is the original's.
+  InterpreterOptions io;
+  io.tools = ToolTable::parse(kTools, "tools.tbl");
+  auto feeds = [&](const std::string& text) {
+    std::vector<double> out;
+    double f = 0;
+    for (const auto& c : Interpreter(io).run_text(text, "f.ngc").calls) {
+      if (const auto* s = std::get_if<SetFeedRate>(&c.op)) f = s->units_per_minute;
+      if (std::holds_alternative<StraightFeed>(c.op)) out.push_back(f);
+    }
+    return out;
+  };
+  const auto before = feeds(program), after = feeds(r.text);
+  ASSERT_GT(after.size(), before.size());
+  EXPECT_EQ(before, (std::vector<double>{100, 40, 100}));
+  EXPECT_EQ(after.back(), 100);  // restored by M72 for the last pass
+  EXPECT_EQ(std::set<double>(after.begin(), after.end()), (std::set<double>{40, 100}));
+  const std::string spline =
+      "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X0 Y0 Z0\nG5.1 X4 Y0 I2 J2 F100\nM30\n";
+  EXPECT_EQ(error_of<GcodeError>(spline, o),
+            "bad.ngc:6:1: G5.1 quadratic B-spline (G5.1) is not supported");
 }
 
 // The cutter radius is D / 2 of the tool in the spindle: giving the same

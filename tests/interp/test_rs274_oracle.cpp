@@ -49,16 +49,10 @@ const std::map<std::string, std::string>& out_of_scope() {
       {"ncfiles/gridprobe.ngc", "probing G38.x"},
       {"ncfiles/smartprobe.ngc", "probing G38.x"},
       {"ncfiles/x-trim.ngc", "probing G38.x (in the touchoff subroutine)"},
-      {"ncfiles/hole-circle.ngc", "polar coordinates (@ ^)"},
-      {"ncfiles/spiral.ngc", "polar coordinates (@ ^)"},
       {"ncfiles/mmount.ngc", "cutter radius compensation G41 (its canned cycles before it match)"},
-      {"ncfiles/polar.ngc", "polar coordinates (@ ^)"},
       {"ncfiles/systems.ngc", "quadratic B-spline G5.1"},
       {"nc_files/tcdemo.ngc", "quadratic B-spline G5.1"},
-      {"ncfiles/threading.ngc", "spindle-synchronized motion G33"},
-      {"ncfiles/m70m72-demo.ngc", "modal state save/restore M70-M73"},
-      {"ncfiles/m73-demo.ngc", "modal state save/restore M70-M73"},
-      {"ncfiles/toplevel.ngc", "modal state save/restore M70-M73"}};
+      {"ncfiles/threading.ngc", "spindle-synchronized motion G33"}};
   return kList;
 }
 

@@ -54,7 +54,9 @@ LineWords split_move_line(const std::string& source, const std::string& file, in
       continue;
     }
     if (ch == ';') break;
-    if (!std::isalpha(static_cast<unsigned char>(ch))) fail(pos, "parameter setting or expression");
+    const bool polar = ch == '@' || ch == '^';  // polar radius and angle
+    if (!polar && !std::isalpha(static_cast<unsigned char>(ch)))
+      fail(pos, "parameter setting or expression");
     const size_t begin = pos++;
     while (pos < t.size() && (t[pos] == '+' || t[pos] == '-'))
       ++pos;
@@ -62,8 +64,8 @@ LineWords split_move_line(const std::string& source, const std::string& file, in
     while (pos < t.size() && (std::isdigit(static_cast<unsigned char>(t[pos])) || t[pos] == '.'))
       ++pos;
     if (pos == num || (pos < t.size() && (t[pos] == '#' || t[pos] == '[')))
-      fail(begin, std::string("word ") + static_cast<char>(std::toupper(ch)) +
-                      " with a parameter or expression");
+      fail(begin, std::string(polar ? "polar coordinate " : "word ") +
+                      static_cast<char>(std::toupper(ch)) + " with a parameter or expression");
     int code = 0;
     if (ch == 'g' || ch == 'm')
       code = static_cast<int>(
@@ -93,6 +95,10 @@ LineWords split_move_line(const std::string& source, const std::string& file, in
       case 'm':
         if (!keep_m(w.code)) fail(w.begin, code_name('M', w.code) + " beside a move");
         break;
+      // The move's end is written as X Y Z: polar words (the same end in
+      // G90) go with the other axis words.
+      case '@':
+      case '^':
       case 'x':
       case 'y':
       case 'z':

@@ -14,7 +14,7 @@ struct LineWords {
   bool block_delete = false;     // the line starts with '/'
   bool explicit_motion = false;  // G0 G1 G2 G3 on the line
   // The source line without the words of the move (G0..G3, X Y Z A C,
-  // I J K R, P of an arc, F), trailing blanks removed; empty when nothing
+  // polar @ ^, I J K R, P of an arc, F), trailing blanks removed; empty when nothing
   // but an N number would remain.
   std::string residual;
   bool has_a = false, has_c = false;  // A or C word on the line
