@@ -129,6 +129,7 @@ ModelFit fit_model(const FitContext& ctx, const sim::MachineParams& base) {
                         [&](const SelectedEffect& s) { return s.group == ni.first; });
   });
   report_intervals(ctx, fit);
+  widen_split_intervals(ctx, fit);
   return fit;
 }
 

@@ -230,6 +230,69 @@ bool refine_servo_splits(const FitContext& ctx, ModelFit& fit) {
   return moved;
 }
 
+void widen_split_intervals(const FitContext& ctx, ModelFit& fit) {
+  const auto keys = keys_of(fit.selected);
+  const VectorXd r0 = weighted_residual(ctx, fit.params);
+  const double rho = std::clamp(ctx.layout.lag1(r0), 0.0, 0.99);
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    if (keys[i].effect != "servo_lag" || keys[i].key != "ff1") continue;
+    const int j = keys[i].joint;
+    std::size_t ikv = keys.size();
+    for (std::size_t k = 0; k < keys.size(); ++k)
+      if (keys[k].effect == "servo_lag" && keys[k].joint == j && keys[k].key == "kv_per_s") ikv = k;
+    if (ikv == keys.size() || !fit.params.effects.servo_lag.active(j)) continue;
+    const SplitProfile prof(ctx, fit, i);
+    const double f0 = prof.ff1(), rss_min = prof.rss(f0);
+    double used = 0;
+    for (const auto& ix : ctx.layout.index)
+      used += double(ix.size());
+    const double var = rss_min / std::max(1.0, used - double(keys.size())) * (1 + rho) / (1 - rho);
+    auto chi2 = [&](double f) { return (prof.rss(f) - rss_min) / var; };
+    // The ff1 on one side where the profile rises by 3.84 (95 %), or the
+    // end of the range.
+    auto edge = [&](double dir) {
+      const double end = dir < 0 ? 0.0 : 0.999;
+      double in = f0, out = f0;
+      bool found = false;
+      for (double d = 1e-3; !found; d *= 2) {
+        out = std::clamp(f0 + dir * d, 0.0, 0.999);
+        if (chi2(out) > 3.84)
+          found = true;
+        else
+          in = out;
+        if (out == end) break;
+      }
+      if (!found) return end;
+      for (int it = 0; it < 8; ++it) {
+        const double m = (in + out) / 2;
+        (chi2(m) > 3.84 ? out : in) = m;
+      }
+      return (in + out) / 2;
+    };
+    const double lo = edge(-1), hi = edge(+1);
+    const double kv_hi = (1.0 - lo) / prof.lag_s(), kv_lo = (1.0 - hi) / prof.lag_s();
+    auto widen = [&](std::size_t k, double a, double b) {
+      Parameter& p = fit.parameters[k];
+      p.ci95_lo = std::min(p.ci95_lo, a);
+      p.ci95_hi = std::max(p.ci95_hi, b);
+    };
+    if (fit.parameters.size() != keys.size()) continue;
+    widen(i, lo, hi);
+    widen(ikv, kv_lo, kv_hi);
+    // The per-effect copy.
+    std::size_t k = 0;
+    for (auto& e : fit.per_effect)
+      for (auto& p : e) {
+        if (k == i || k == ikv) p = fit.parameters[k];
+        ++k;
+      }
+    if (ctx.progress)
+      ctx.progress("servo loop " + std::string(sim::kJointNames[j]) +
+                   ": split along its steady lag within ff1 " + fmt4g(lo) + " .. " + fmt4g(hi) +
+                   ", Kv " + fmt4g(kv_lo) + " .. " + fmt4g(kv_hi) + " (profile, 95 %)");
+  }
+}
+
 void start_new_servo_loops(const FitContext& ctx, const std::vector<const Candidate*>& chosen,
                            const sim::MachineParams& before, sim::MachineParams& params) {
   // The pair is scanned on the model before the round with only the new
