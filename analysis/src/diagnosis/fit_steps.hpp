@@ -68,6 +68,23 @@ Selection forward_select(const std::vector<Candidate>& cands, const Eigen::Vecto
 // (numeric Jacobian, at most 12 iterations); updates fit.params and fit.rss.
 void refine(const FitContext& ctx, ModelFit& fit);
 
+// Each selected servo loop's split (Kv, ff1) moved along its valley of
+// equal steady lag (1 − ff1)/Kv to the best of the profile in which every
+// other fitted parameter follows by a linear step: Levenberg–Marquardt
+// does not travel that valley from a grid point of the start, and other
+// terms (a pitch scale) take up what the split leaves. Runs after the
+// round's other effects are in (so that none missing pulls the split);
+// the move is kept when the refit lowers the residual. True when a loop moved.
+bool refine_servo_splits(const FitContext& ctx, ModelFit& fit);
+
+// The 95 % intervals of each selected loop's Kv and ff1 widened to the
+// profile along its valley of equal lag (where the profile of
+// refine_servo_splits rises by 3.84 residual variances, inflated for
+// correlated residuals): the Jacobian's interval at the estimate holds for
+// a quadratic valley only, and the split is often far less determined than
+// it says.
+void widen_split_intervals(const FitContext& ctx, ModelFit& fit);
+
 // A servo loop new to the model (selected this round, absent in `before`):
 // the linear signature gives only the steady lag (1 − ff1)/Kv; the pair
 // (Kv, ff1) with that lag that fits best by re-simulation is kept.

@@ -80,6 +80,7 @@ bool fit_round(const FitContext& ctx, const sim::MachineParams& base, int round,
 
   // Nonlinear fit of every selected parameter by re-simulation.
   refine(ctx, fit);
+  refine_servo_splits(ctx, fit);
   drop_slopes_taken_for_bows(ctx, base, fit);  // kept in `have`: not offered again
   drop_offsets_taken_for_drifts(ctx, base, fit);
   const Eigen::Index m = Eigen::Index(keys_of(fit.selected).size());
@@ -128,6 +129,7 @@ ModelFit fit_model(const FitContext& ctx, const sim::MachineParams& base) {
                         [&](const SelectedEffect& s) { return s.group == ni.first; });
   });
   report_intervals(ctx, fit);
+  widen_split_intervals(ctx, fit);
   return fit;
 }
 
