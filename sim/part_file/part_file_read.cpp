@@ -270,6 +270,10 @@ PartFile parse_part_file(std::string_view text, const std::string& name, unsigne
     j = Json::parse(text);
   } catch (const Json::parse_error& e) {
     r.fail("", "not valid JSON (byte " + std::to_string(e.byte) + ")");
+  } catch (const Json::exception& e) {  // a number beyond a double (found by fuzz_part_json)
+    std::string what = e.what();
+    if (const auto pos = what.find("] "); pos != std::string::npos) what = what.substr(pos + 2);
+    r.fail("", "not valid JSON: " + what);
   }
   if (!j.is_object()) r.fail("", "not a JSON object");
   const auto need = [&](unsigned key) { return (required & key) != 0; };

@@ -106,6 +106,9 @@ std::string error_of(const std::string& text, unsigned required = kPartAllKeys) 
 
 TEST(PartFile, ErrorsNameTheFileAndTheKey) {
   EXPECT_EQ("p.json: not valid JSON (byte 2)", error_of("{,"));
+  // fuzz_part_json's finding: a number beyond a double ended the process.
+  EXPECT_EQ("p.json: not valid JSON: number overflow parsing '772e680'",
+            error_of("[\"772e680\", 772e680]"));
   EXPECT_EQ("p.json: not a JSON object", error_of("[1]"));
   EXPECT_EQ("p.json: key 'truecut_part': missing", error_of("{}"));
   EXPECT_EQ("p.json: key 'stock': missing", error_of("{}", kPartStock));
