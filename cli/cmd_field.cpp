@@ -75,6 +75,10 @@ const char* kFieldHelp =
     "                        registration (default 20)\n"
     "  --remove-rbm          remove the rigid-body motion left in the error vectors\n"
     "  --sphere-radius MM    sphere method radius Rs (default 1.5)\n"
+    "  --sphere-max-points N  sphere method: where the median sphere holds more scan\n"
+    "                        points than N, fit on a fixed subset of the scan of\n"
+    "                        about N per sphere (default 256; 0: every point, as the\n"
+    "                        model-adaptation source does)\n"
     "  --plane-fit tilted|parallel  sphere method planes: tilted (default) fits each\n"
     "                        plane's orientation too; parallel keeps the nominal's and\n"
     "                        fits only the offset, as the model-adaptation source does\n"
@@ -368,6 +372,8 @@ offline::FieldPipelineOptions pipeline_options(const ParsedArgs& a, const Inputs
       a.number("max-scan-outliers", o.scan_check.max_off_percent, 0.0, 100.0);
   o.remove_rigid_body_motion = a.flag("remove-rbm");
   o.sphere.radius_mm = a.number("sphere-radius", o.sphere.radius_mm, 0.01, 100.0);
+  o.sphere.max_points_per_sphere = static_cast<std::size_t>(a.integer(
+      "sphere-max-points", static_cast<long>(o.sphere.max_points_per_sphere), 0, 100000000));
   const std::string plane_fit = a.value("plane-fit").value_or("tilted");
   if (plane_fit != "tilted" && plane_fit != "parallel")
     throw UsageError("--plane-fit must be tilted or parallel, not '" + plane_fit + "'");
@@ -560,6 +566,7 @@ int cmd_field(const std::vector<std::string>& argv) {
                       {"max-grid-nodes", true},
                       {"max-scan-outliers", true},
                       {"sphere-radius", true},
+                      {"sphere-max-points", true},
                       {"plane-fit", true},
                       {"max-distance", true},
                       {"kb-kc", true},

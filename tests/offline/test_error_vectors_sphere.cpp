@@ -8,7 +8,10 @@
 
 #include <gtest/gtest.h>
 
+#include <tbb/global_control.h>
+
 #include <cmath>
+#include <random>
 
 namespace truecut::offline {
 namespace {
@@ -93,7 +96,9 @@ TEST_P(SphereMethod, SurfaceEdgeAndCornerDisplacementsAreRecovered) {
     const ErrorVectors e = error_vectors_by_spheres(nominal(), pts, cloud, o);
     // Each plane holds ~density·π·Rs²·fraction points; the bound is 4× the
     // expected RMS error.
-    const double n_plane = density * M_PI * kRs * kRs * c.plane_fraction;
+    // (Of the points the fits used: a dense scan is thinned, see
+    // SphereMethodThinning.)
+    const double n_plane = density * M_PI * kRs * kRs * c.plane_fraction * e.scan_fraction;
     const double tolerance = 4.0 * c.rms_factor * kSigma / std::sqrt(n_plane);
     for (std::size_t i = 0; i < c.at.size(); ++i) {
       // Below the source's 20 pt/mm² a corner displaced far keeps only a few
@@ -187,6 +192,7 @@ TEST(SphereMethodLimits, ParallelPlanesFitTheMeanOffsetTiltedPlanesThePlane) {
   const double mean_offset = sum / static_cast<double>(cloud.size());
   SphereMethodOptions o;
   o.radius_mm = kRs;
+  o.max_points_per_sphere = 0;  // all 336 points: the exact mean below
   const ErrorVectors tilted =
       error_vectors_by_spheres(nominal(), one_point({10, 10, 20}), cloud, o);
   o.tilted_planes = false;
@@ -217,6 +223,99 @@ TEST(SphereMethodLimits, DensityIsReported) {
   EXPECT_NEAR(s.median_density_per_mm2, 12.0, 12.0 * 0.25);  // Poisson scatter of ~150 points
   EXPECT_EQ(s.below_recommended_density, 5u);                // 12 < 20 pt/mm²
   EXPECT_EQ(s.by_case[static_cast<int>(SphereCase::kSurface)], 5u);
+}
+
+// A patch of the top face (z = 20) lifted by `lift_mm`, `density` points per
+// mm² uniformly at random with σ = kSigma along z.
+std::vector<Eigen::Vector3d> dense_patch(double density, double lift_mm, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(4.0, 16.0);
+  std::normal_distribution<double> noise(0.0, kSigma);
+  std::vector<Eigen::Vector3d> cloud(static_cast<std::size_t>(density * 12.0 * 12.0));
+  for (Eigen::Vector3d& p : cloud) {
+    const double x = u(rng), y = u(rng);
+    p = {x, y, 20.0 + lift_mm + noise(rng)};
+  }
+  return cloud;
+}
+
+CompensationPoints patch_points() {
+  CompensationPoints pts;
+  for (double x : {8.0, 10.0, 12.0})
+    for (double y : {8.0, 10.0, 12.0}) {
+      pts.positions_mm.emplace_back(x, y, 20);
+      pts.normals.push_back(Eigen::Vector3d::UnitZ());
+      pts.surface_ids.push_back(0);
+      pts.triangles.push_back(0);
+    }
+  return pts;
+}
+
+// A scan so dense that each sphere holds ~2,500 points: with the default
+// bound the fits use a fixed subset of about 256 per sphere, keep their
+// accuracy for that many points, report the scan's true density, and name
+// the scan's own points as their support.
+TEST(SphereMethodThinning, DenseScanIsFittedOnASubsetOfAboutTheBound) {
+  constexpr double kDensity = 200.0, kLift = 0.05;
+  const std::vector<Eigen::Vector3d> cloud = dense_patch(kDensity, kLift, 21);
+  const CompensationPoints pts = patch_points();
+  SphereMethodOptions o;
+  o.radius_mm = kRs;
+  ASSERT_EQ(o.max_points_per_sphere, 256u);
+  const ErrorVectors e = error_vectors_by_spheres(nominal(), pts, cloud, o);
+  const double per_sphere = kDensity * M_PI * kRs * kRs;  // 2,513
+  EXPECT_NEAR(e.scan_fraction, 256.0 / per_sphere, 0.1 * 256.0 / per_sphere);
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    ASSERT_EQ(e.status[i], ErrorStatus::kValid) << to_string(e.status[i]);
+    // Poisson scatter of ~256 points: 4 standard deviations.
+    EXPECT_NEAR(e.points_in_sphere[i], 256.0, 4.0 * 16.0);
+    EXPECT_NEAR(e.normal_mm[i], kLift, 4.0 * kSigma / std::sqrt(e.points_in_sphere[i]));
+    ASSERT_EQ(e.support_begin[i + 1] - e.support_begin[i], e.points_in_sphere[i]);
+    for (std::uint32_t k = e.support_begin[i]; k < e.support_begin[i + 1]; ++k) {
+      ASSERT_LT(e.support_point[k], cloud.size());
+      EXPECT_LE((cloud[e.support_point[k]] - pts.positions_mm[i]).norm(), kRs);
+    }
+  }
+  const ErrorVectorSummary s = summarize(e, o.radius_mm);
+  EXPECT_NEAR(s.median_density_per_mm2, kDensity, 0.1 * kDensity);
+
+  o.max_points_per_sphere = 0;  // every point, as the source
+  const ErrorVectors all = error_vectors_by_spheres(nominal(), pts, cloud, o);
+  EXPECT_EQ(all.scan_fraction, 1.0);
+  EXPECT_NEAR(all.points_in_sphere[4], per_sphere, 4.0 * std::sqrt(per_sphere));
+  EXPECT_NEAR(all.normal_mm[4], kLift, 4.0 * kSigma / std::sqrt(all.points_in_sphere[4]));
+}
+
+TEST(SphereMethodThinning, TheSubsetDoesNotDependOnTheThreadCount) {
+  const std::vector<Eigen::Vector3d> cloud = dense_patch(200.0, 0.05, 22);
+  const CompensationPoints pts = patch_points();
+  SphereMethodOptions o;
+  o.radius_mm = kRs;
+  ErrorVectors one;
+  {
+    const tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+    one = error_vectors_by_spheres(nominal(), pts, cloud, o);
+  }
+  const ErrorVectors any = error_vectors_by_spheres(nominal(), pts, cloud, o);
+  ASSERT_LT(one.scan_fraction, 1.0);
+  EXPECT_EQ(one.vectors_mm, any.vectors_mm);
+  EXPECT_EQ(one.support_point, any.support_point);
+  EXPECT_EQ(one.support_weight, any.support_weight);
+}
+
+// Below the bound nothing changes: the same result, bit for bit, as with
+// every point.
+TEST(SphereMethodThinning, ScanBelowTheBoundIsUsedWhole) {
+  const std::vector<Eigen::Vector3d> cloud = dense_patch(15.0, 0.05, 23);  // ~190 per sphere
+  const CompensationPoints pts = patch_points();
+  SphereMethodOptions o;
+  o.radius_mm = kRs;
+  const ErrorVectors bounded = error_vectors_by_spheres(nominal(), pts, cloud, o);
+  o.max_points_per_sphere = 0;
+  const ErrorVectors all = error_vectors_by_spheres(nominal(), pts, cloud, o);
+  EXPECT_EQ(bounded.scan_fraction, 1.0);
+  EXPECT_EQ(bounded.vectors_mm, all.vectors_mm);
+  EXPECT_EQ(bounded.support_point, all.support_point);
 }
 
 }  // namespace

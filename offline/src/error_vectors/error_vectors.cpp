@@ -76,7 +76,7 @@ ErrorVectorSummary summarize(const ErrorVectors& e, double radius_mm) {
     const double area = M_PI * radius_mm * radius_mm;
     std::vector<double> density(e.points_in_sphere.size());
     for (std::size_t i = 0; i < density.size(); ++i) {
-      density[i] = e.points_in_sphere[i] / area;
+      density[i] = e.points_in_sphere[i] / e.scan_fraction / area;
       if (density[i] < kRecommendedDensityPerMm2) ++s.below_recommended_density;
     }
     auto mid = density.begin() + static_cast<std::ptrdiff_t>(density.size() / 2);

@@ -7,7 +7,9 @@
 #include <tbb/parallel_for.h>
 #include <Eigen/Eigenvalues>
 
+#include <algorithm>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 
 namespace truecut::offline {
@@ -283,6 +285,36 @@ void one_point(const Context& c, const Eigen::Vector3d& P, const Eigen::Vector3d
   e.normal_mm[i] = v.dot(normal);
 }
 
+// The median number of scan points in the spheres of up to kProbes
+// compensation points spread evenly over the list.
+std::size_t median_points_per_sphere(const CompensationPoints& points, const spatial::KdTree& tree,
+                                     double radius_mm) {
+  constexpr std::size_t kProbes = 1001;
+  const std::size_t n = points.size(), probes = std::min(n, kProbes);
+  if (probes == 0) return 0;
+  std::vector<std::size_t> count(probes);
+  std::vector<std::uint32_t> found;
+  for (std::size_t k = 0; k < probes; ++k) {
+    found.clear();
+    tree.within(points.positions_mm[k * n / probes], radius_mm, found);
+    count[k] = found.size();
+  }
+  auto mid = count.begin() + static_cast<std::ptrdiff_t>(probes / 2);
+  std::nth_element(count.begin(), mid, count.end());
+  return *mid;
+}
+
+// Whether scan point `index` is in the subset that keeps `fraction` of the
+// points: a fixed hash of the index (splitmix64), so the subset depends on
+// nothing but the scan.
+bool kept_in_subset(std::uint64_t index, double fraction) {
+  std::uint64_t z = index + 0x9e3779b97f4a7c15ull;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  z ^= z >> 31;
+  return static_cast<double>(z >> 11) * 0x1.0p-53 < fraction;
+}
+
 }  // namespace
 
 ErrorVectors error_vectors_by_spheres(const TriangleMesh& nominal, const CompensationPoints& points,
@@ -307,13 +339,31 @@ ErrorVectors error_vectors_by_spheres(const TriangleMesh& nominal, const Compens
   e.sphere_case.assign(n, SphereCase::kNone);
   e.points_in_sphere.assign(n, 0);
 
+  // Thinned when the spheres hold more points than the options allow: the
+  // subset's own points and tree, and each one's index in the scan.
+  std::vector<Eigen::Vector3d> subset;
+  std::vector<std::uint32_t> scan_index_of;
+  std::optional<spatial::KdTree> subset_tree;
+  if (options.max_points_per_sphere > 0) {
+    const std::size_t median = median_points_per_sphere(points, tree, options.radius_mm);
+    if (median > options.max_points_per_sphere) {
+      e.scan_fraction =
+          static_cast<double>(options.max_points_per_sphere) / static_cast<double>(median);
+      for (std::size_t j = 0; j < cloud_mm.size(); ++j) {
+        if (!kept_in_subset(j, e.scan_fraction)) continue;
+        subset.push_back(cloud_mm[j]);
+        scan_index_of.push_back(static_cast<std::uint32_t>(j));
+      }
+      subset_tree.emplace(subset);
+    }
+  }
   const std::vector<Eigen::Vector3d> fn = face_normals(nominal);
   const RayScene nominal_scene(nominal);
   const Context c{nominal,
                   fn,
                   nominal_scene,
-                  tree,
-                  cloud_mm,
+                  subset_tree ? *subset_tree : tree,
+                  subset_tree ? std::span<const Eigen::Vector3d>(subset) : cloud_mm,
                   options,
                   std::cos(options.plane_angle_deg * M_PI / 180.0)};
   std::vector<std::vector<std::pair<std::uint32_t, float>>> support(n);
@@ -329,7 +379,7 @@ ErrorVectors error_vectors_by_spheres(const TriangleMesh& nominal, const Compens
   for (std::size_t i = 0; i < n; ++i) {
     e.support_begin[i] = static_cast<std::uint32_t>(e.support_point.size());
     for (const auto& [point, weight] : support[i]) {
-      e.support_point.push_back(point);
+      e.support_point.push_back(scan_index_of.empty() ? point : scan_index_of[point]);
       e.support_weight.push_back(weight);
     }
   }

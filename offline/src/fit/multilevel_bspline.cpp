@@ -114,8 +114,19 @@ struct LevelSums {
   std::vector<Sym> sym;     // Σ w² n nᵀ of the normal-only samples
 };
 
-void fit_level(Lattice& l, std::span<const Stencil> stencils,
-               std::span<const Eigen::Vector3d> residuals, std::span<const Eigen::Vector3d> normal,
+// The samples at one position (a path sample cuts several points): they
+// share a stencil, so the closed form's sums over them are taken first and
+// scattered to the 64 control points once. What they ask for enters the
+// sums linearly: Σ r (each normal-only residual weighed by P first), the
+// count, Σ n nᵀ of the normal-only ones.
+struct SampleGroup {
+  Eigen::Vector3d r = Eigen::Vector3d::Zero();
+  double count = 0.0;
+  Sym nn{};
+  bool any_normal_only = false;
+};
+
+void fit_level(Lattice& l, std::span<const Stencil> stencils, std::span<const SampleGroup> groups,
                bool any_normal_only, double damping, LevelSums& sums) {
   sums.num.assign(l.phi.size(), Eigen::Vector3d::Zero());
   sums.den.assign(l.phi.size(), 0.0);
@@ -125,6 +136,7 @@ void fit_level(Lattice& l, std::span<const Stencil> stencils,
   std::vector<Sym>& sym = sums.sym;
   auto accumulate = [&](std::uint32_t p, Eigen::Vector3d* to_num, double* to_den, Sym* to_sym) {
     const Stencil& s = stencils[p];
+    const SampleGroup& g = groups[p];
     double sum2 = 1.0;
     for (int a = 0; a < 3; ++a) {
       double q = 0.0;
@@ -132,14 +144,7 @@ void fit_level(Lattice& l, std::span<const Stencil> stencils,
         q += w * w;
       sum2 *= q;
     }
-    const Eigen::Vector3d& n = normal[p];
-    const bool along_normal = to_sym && !n.isZero();
-    const Sym nn{n.x() * n.x(), n.y() * n.y(), n.z() * n.z(),
-                 n.x() * n.y(), n.x() * n.z(), n.y() * n.z()};
-    const Eigen::Vector3d r =
-        along_normal ? Eigen::Vector3d(kTangentialWeight * residuals[p] +
-                                       (1.0 - kTangentialWeight) * n * n.dot(residuals[p]))
-                     : residuals[p];
+    const bool along_normal = to_sym && g.any_normal_only;
     for (int c = 0; c < 4; ++c)
       for (int b = 0; b < 4; ++b) {
         const double wbc = s.b[1][b] * s.b[2][c];
@@ -147,11 +152,11 @@ void fit_level(Lattice& l, std::span<const Stencil> stencils,
         for (int a = 0; a < 4; ++a) {
           const double w = s.b[0][a] * wbc;
           const double w2 = w * w;
-          to_num[row + a] += (w2 * w / sum2) * r;
-          to_den[row + a] += w2;
+          to_num[row + a] += (w2 * w / sum2) * g.r;
+          to_den[row + a] += w2 * g.count;
           if (along_normal)
             for (int k = 0; k < 6; ++k)
-              to_sym[row + a][k] += w2 * nn[k];
+              to_sym[row + a][k] += w2 * g.nn[k];
         }
       }
   };
@@ -380,22 +385,55 @@ std::vector<Eigen::Vector3d> multilevel_bspline_nodes(const rt::FieldGrid& grid,
     if (distinct.empty() || positions[p] != positions[distinct.back()]) distinct.push_back(p);
     distinct_of_sample[p] = static_cast<std::uint32_t>(distinct.size() - 1);
   }
+  // Each position's samples in sample order (a counting sort): the order of
+  // every sum below is fixed by the data alone, whatever the thread count.
+  std::vector<std::uint32_t> member_begin(distinct.size() + 1, 0), members(positions.size());
+  for (const std::uint32_t d : distinct_of_sample)
+    ++member_begin[d + 1];
+  std::partial_sum(member_begin.begin(), member_begin.end(), member_begin.begin());
+  {
+    std::vector<std::uint32_t> next(member_begin.begin(), member_begin.end() - 1);
+    for (std::size_t p = 0; p < positions.size(); ++p)
+      members[next[distinct_of_sample[p]]++] = static_cast<std::uint32_t>(p);
+  }
   std::vector<Eigen::Vector3d> at_distinct(distinct.size());
+  std::vector<SampleGroup> groups(distinct.size());
   std::optional<Lattice> finest, pass;
-  std::vector<Stencil> stencils(positions.size());
+  std::vector<Stencil> stencils(distinct.size());
   int32_t stencil_ratio = 0;
   LevelSums sums;
   for (int32_t r : ratios) {
     if (!pass || pass->ratio != r) pass.emplace(grid, r);
     Lattice& l = *pass;
     if (r != stencil_ratio) {
-      tbb::parallel_for(std::size_t{0}, positions.size(),
-                        [&](std::size_t p) { stencils[p] = stencil_of(grid, l, positions[p]); });
+      tbb::parallel_for(std::size_t{0}, distinct.size(), [&](std::size_t d) {
+        stencils[d] = stencil_of(grid, l, positions[distinct[d]]);
+      });
       stencil_ratio = r;
     }
-    fit_level(l, stencils, residuals, normal, any_normal_only, r == 1 ? o.smoothness : 0.0, sums);
+    tbb::parallel_for(std::size_t{0}, distinct.size(), [&](std::size_t d) {
+      SampleGroup g;
+      for (std::uint32_t m = member_begin[d]; m < member_begin[d + 1]; ++m) {
+        const std::uint32_t p = members[m];
+        const Eigen::Vector3d& n = normal[p];
+        g.count += 1.0;
+        if (!any_normal_only || n.isZero()) {
+          g.r += residuals[p];
+          continue;
+        }
+        g.r +=
+            kTangentialWeight * residuals[p] + (1.0 - kTangentialWeight) * n * n.dot(residuals[p]);
+        const Sym nn{n.x() * n.x(), n.y() * n.y(), n.z() * n.z(),
+                     n.x() * n.y(), n.x() * n.z(), n.y() * n.z()};
+        for (int k = 0; k < 6; ++k)
+          g.nn[k] += nn[k];
+        g.any_normal_only = true;
+      }
+      groups[d] = g;
+    });
+    fit_level(l, stencils, groups, any_normal_only, r == 1 ? o.smoothness : 0.0, sums);
     tbb::parallel_for(std::size_t{0}, distinct.size(),
-                      [&](std::size_t d) { at_distinct[d] = evaluate(l, stencils[distinct[d]]); });
+                      [&](std::size_t d) { at_distinct[d] = evaluate(l, stencils[d]); });
     tbb::parallel_for(std::size_t{0}, positions.size(),
                       [&](std::size_t p) { residuals[p] -= at_distinct[distinct_of_sample[p]]; });
     if (r != 1) {

@@ -214,6 +214,11 @@ std::string audit_json(const FieldPipelineResult& r, const FieldPipelineOptions&
     if (r.error_summary.by_status[s] > 0)
       by_status[std::string(to_string(static_cast<ErrorStatus>(s)))] = r.error_summary.by_status[s];
   errors["by_status"] = by_status;
+  if (!r.errors.points_in_sphere.empty()) {
+    errors["median_density_per_mm2"] = r.error_summary.median_density_per_mm2;
+    errors["below_recommended_density"] = r.error_summary.below_recommended_density;
+    errors["scan_fraction_used"] = r.errors.scan_fraction;
+  }
   j["error_vectors"] = errors;
   json surfaces = json::array();
   for (const SurfaceSignificance& s : r.significance.surfaces)

@@ -47,7 +47,10 @@ struct ErrorVectors {
   // Sphere method only (else empty): the case and the cloud points inside
   // the sphere (points per mm² ≈ count / (π Rs²) on a flat surface).
   std::vector<SphereCase> sphere_case;
-  std::vector<std::uint32_t> points_in_sphere;
+  std::vector<std::uint32_t> points_in_sphere;  // of the points used (see scan_fraction)
+  // Sphere method: the fraction of the scan's points the fits used (1: all;
+  // less when SphereMethodOptions::max_points_per_sphere thinned the scan).
+  double scan_fraction = 1.0;
   // The scan points each valid vector was measured from: normal_mm[i]
   // changes by Σ support_weight[k] · δ_k when scan point support_point[k]
   // moves by δ_k along the normal, k in [support_begin[i],
@@ -103,6 +106,14 @@ struct SphereMethodOptions {
   // the plane keeps the nominal orientation and only its offset along the
   // normal is fitted (the mean distance of its points).
   bool tilted_planes = true;
+  // This project's bound on the cost of a fit (0: every point, the
+  // source): when the median sphere holds more scan points than this, the
+  // fits use a fixed pseudo-random subset of the scan (each point kept or
+  // not by a hash of its index, the same subset on any thread count) of
+  // about this many points per sphere. Without it the cost grows with
+  // points × points per sphere: n² when the same part is scanned denser.
+  // 256 points leave σ/16 of noise on a plane's offset.
+  std::size_t max_points_per_sphere = 256;
 };
 
 // The source's density requirement (points per mm²); reported, not enforced.
