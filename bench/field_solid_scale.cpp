@@ -6,14 +6,18 @@
 // and a ball-end ring program over wall and cap. Prints every stage's wall
 // time, the peak resident memory and the whole; asserts nothing.
 //
-//   build/field_solid_scale [--sequential] [--threads N] [--digest] [FACETS ...]
+//   build/field_solid_scale [--sequential] [--threads N] [--digest] [--write DIR] [FACETS ...]
 //
 // FACETS default to 10000 100000. --sequential runs the stages one after the
 // other (FieldPipelineOptions::concurrent_stages = false: every stage's own
 // time), --threads N limits TBB to N threads, --digest prints a hash of every
 // stage's result (to check that a change to the code leaves them unchanged).
+// --write DIR also writes each size's inputs as files (DIR/FACETS/nominal.stl,
+// scan.ply, rings.ngc, tools.tbl) for timing `truecut field` itself; the
+// command to run is printed.
 #include "truecut/interp/interpreter.hpp"
 #include "truecut/offline/field_pipeline.hpp"
+#include "truecut/offline/mesh_io.hpp"
 
 #include <sys/resource.h>
 #include <tbb/global_control.h>
@@ -23,6 +27,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <memory>
 #include <numbers>
 #include <random>
@@ -218,12 +224,15 @@ void print_digests(const FieldPipelineResult& r) {
 int main(int argc, char** argv) {
   std::vector<long> sizes;
   bool sequential = false, digest = false;
+  std::string write_dir;
   std::unique_ptr<tbb::global_control> threads;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--sequential") == 0) {
       sequential = true;
     } else if (std::strcmp(argv[i], "--digest") == 0) {
       digest = true;
+    } else if (std::strcmp(argv[i], "--write") == 0 && i + 1 < argc) {
+      write_dir = argv[++i];
     } else if (std::strcmp(argv[i], "--threads") == 0 && i + 1 < argc) {
       threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                       std::size_t(std::atol(argv[++i])));
@@ -234,8 +243,9 @@ int main(int argc, char** argv) {
   if (sizes.empty()) sizes = {10000, 100000};
   interp::InterpreterOptions io;
   io.tools = interp::ToolTable::parse("T1 P1 D6 Z50\n", "tools.tbl");
+  const std::string program_text = ring_program();
   const interp::CanonProgram program =
-      interp::Interpreter(std::move(io)).run_text(ring_program(), "rings.ngc");
+      interp::Interpreter(std::move(io)).run_text(program_text, "rings.ngc");
   for (const long facets : sizes) {
     // facets ≈ around · (2 rows + 2 rings + 2) with rows ≈ around · H / (2πR)
     // and rings = around / 4.
@@ -244,6 +254,22 @@ int main(int argc, char** argv) {
     const Solid solid = cylinder_with_cap(around);
     TriangleMesh scan;
     scan.vertices_mm = scan_cloud(std::size_t(5.5 * double(solid.mesh.triangles.size())), 7);
+    if (!write_dir.empty()) {
+      const std::filesystem::path dir =
+          std::filesystem::path(write_dir) / std::to_string(solid.mesh.triangles.size());
+      std::filesystem::create_directories(dir);
+      write_mesh(dir / "nominal.stl", solid.mesh);
+      PointCloud cloud;
+      cloud.points_mm = scan.vertices_mm;
+      write_point_cloud(dir / "scan.ply", cloud);
+      std::ofstream(dir / "rings.ngc") << program_text;
+      std::ofstream(dir / "tools.tbl") << "T1 P1 D6 Z50\n";
+      std::printf(
+          "  inputs written; the same job through the command line:\n"
+          "  truecut field %s/nominal.stl %s/scan.ply --program %s/rings.ngc --tools %s/tools.tbl "
+          "--method sphere --sphere-radius 1 --corner-radius 1=3 --cutting-length 1=10 --out OUT\n",
+          dir.c_str(), dir.c_str(), dir.c_str(), dir.c_str());
+    }
     FieldPipelineInputs in;
     in.nominal = &solid.mesh;
     in.scan = &scan;

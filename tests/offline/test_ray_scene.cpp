@@ -109,6 +109,16 @@ TEST(RayScene, TrianglesWithinMatchesBruteForce) {
       if ((x - p).norm() <= r) want.push_back(static_cast<std::uint32_t>(t));
     }
     EXPECT_EQ(got, want) << "query " << q;
+    // With closest points: the same triangles, each with its closest point.
+    std::vector<RayScene::NearTriangle> with_points;
+    scene.triangles_within(p, r, with_points);
+    ASSERT_EQ(with_points.size(), want.size()) << "query " << q;
+    for (std::size_t i = 0; i < want.size(); ++i) {
+      EXPECT_EQ(with_points[i].triangle, want[i]);
+      const auto& [a, b, d] = m.triangles[want[i]];
+      EXPECT_EQ(with_points[i].closest_mm,
+                closest_point_on_triangle(p, m.vertices_mm[a], m.vertices_mm[b], m.vertices_mm[d]));
+    }
   }
 }
 
@@ -156,6 +166,15 @@ TEST(RayScene, PlacedSceneAnswersAsAMovedMesh) {
   reference.triangles_within(p, 1.5, near_b);
   EXPECT_FALSE(near_a.empty());
   EXPECT_EQ(near_a, near_b);
+  std::vector<RayScene::NearTriangle> points_a, points_b;
+  placed.triangles_within(p, 1.5, points_a);
+  reference.triangles_within(p, 1.5, points_b);
+  ASSERT_EQ(points_a.size(), near_a.size());
+  ASSERT_EQ(points_b.size(), near_b.size());
+  for (std::size_t i = 0; i < points_a.size(); ++i) {
+    EXPECT_EQ(points_a[i].triangle, points_b[i].triangle);
+    EXPECT_NEAR((points_a[i].closest_mm - points_b[i].closest_mm).norm(), 0.0, 1e-9) << i;
+  }
 
   placed.set_world_from_mesh(Eigen::Isometry3d::Identity());  // back where it was built
   RayHit h;

@@ -344,24 +344,71 @@ void RayScene::intersect(std::span<const Ray> rays, std::span<RayHit> hits,
 
 namespace {
 
+template <class Found>
 struct ProximityQuery {
   const std::vector<Eigen::Vector3d>* vertices;
   const std::vector<Triangle>* triangles;
   Eigen::Vector3d p;
   double r2;
-  std::vector<std::uint32_t>* out;
+  std::vector<Found>* out;
 };
 
+void keep(std::vector<std::uint32_t>& out, std::uint32_t triangle, const Eigen::Vector3d&) {
+  out.push_back(triangle);
+}
+void keep(std::vector<RayScene::NearTriangle>& out, std::uint32_t triangle,
+          const Eigen::Vector3d& closest_mm) {
+  out.push_back({triangle, closest_mm});
+}
+
+template <class Found>
 bool collect_triangle(RTCPointQueryFunctionArguments* args) {
-  auto* q = static_cast<ProximityQuery*>(args->userPtr);
+  auto* q = static_cast<ProximityQuery<Found>*>(args->userPtr);
   const auto& [a, b, c] = (*q->triangles)[args->primID];
   const auto& v = *q->vertices;
   const Eigen::Vector3d x = closest_point_on_triangle(q->p, v[a], v[b], v[c]);
-  if ((x - q->p).squaredNorm() <= q->r2) q->out->push_back(args->primID);
+  if ((x - q->p).squaredNorm() <= q->r2) keep(*q->out, args->primID, x);
   return false;  // the query radius is left as it is
 }
 
+std::uint32_t triangle_of(std::uint32_t t) {
+  return t;
+}
+std::uint32_t triangle_of(const RayScene::NearTriangle& t) {
+  return t.triangle;
+}
+
 }  // namespace
+
+template <class Found>
+void RayScene::collect_within(const Eigen::Vector3d& p, double radius_mm,
+                              std::vector<Found>& out) const {
+  const Impl& m = *impl_;
+  const std::size_t first = out.size();
+  ProximityQuery<Found> q{&m.vertices_mm, &m.triangles, p, radius_mm * radius_mm, &out};
+  const Eigen::Vector3d local = p - m.origin_mm;
+  RTCPointQuery query;
+  query.x = static_cast<float>(local.x());
+  query.y = static_cast<float>(local.y());
+  query.z = static_cast<float>(local.z());
+  query.time = 0.0f;
+  // Padded by far more than the float rounding of the query point and the
+  // vertices, so Embree cannot cut off a triangle the exact test keeps.
+  query.radius =
+      static_cast<float>(radius_mm * (1.0 + 1e-5) + 1e-6 * (m.half_diagonal_mm + local.norm()));
+  RTCPointQueryContext context;
+  rtcInitPointQueryContext(&context);
+  rtcPointQuery(m.scene, &query, &context, &collect_triangle<Found>, &q);
+  const auto by_triangle = [](const Found& x, const Found& y) {
+    return triangle_of(x) < triangle_of(y);
+  };
+  std::sort(out.begin() + first, out.end(), by_triangle);
+  out.erase(
+      std::unique(out.begin() + first, out.end(),
+                  [](const Found& x, const Found& y) { return triangle_of(x) == triangle_of(y); }),
+      out.end());
+  impl_->errors.check("point query");
+}
 
 void RayScene::set_world_from_mesh(const Eigen::Isometry3d& world_from_mesh) {
   if (!world_from_mesh.matrix().allFinite())
@@ -375,25 +422,17 @@ void RayScene::set_world_from_mesh(const Eigen::Isometry3d& world_from_mesh) {
 void RayScene::triangles_within(const Eigen::Vector3d& p_world, double radius_mm,
                                 std::vector<std::uint32_t>& out) const {
   const Impl& m = *impl_;
-  const Eigen::Vector3d p = m.posed ? Eigen::Vector3d(m.mesh_from_world * p_world) : p_world;
+  collect_within(m.posed ? Eigen::Vector3d(m.mesh_from_world * p_world) : p_world, radius_mm, out);
+}
+
+void RayScene::triangles_within(const Eigen::Vector3d& p_world, double radius_mm,
+                                std::vector<NearTriangle>& out) const {
+  const Impl& m = *impl_;
   const std::size_t first = out.size();
-  ProximityQuery q{&m.vertices_mm, &m.triangles, p, radius_mm * radius_mm, &out};
-  const Eigen::Vector3d local = p - m.origin_mm;
-  RTCPointQuery query;
-  query.x = static_cast<float>(local.x());
-  query.y = static_cast<float>(local.y());
-  query.z = static_cast<float>(local.z());
-  query.time = 0.0f;
-  // Padded by far more than the float rounding of the query point and the
-  // vertices, so Embree cannot cut off a triangle the exact test keeps.
-  query.radius =
-      static_cast<float>(radius_mm * (1.0 + 1e-5) + 1e-6 * (m.half_diagonal_mm + local.norm()));
-  RTCPointQueryContext context;
-  rtcInitPointQueryContext(&context);
-  rtcPointQuery(m.scene, &query, &context, &collect_triangle, &q);
-  std::sort(out.begin() + first, out.end());
-  out.erase(std::unique(out.begin() + first, out.end()), out.end());
-  impl_->errors.check("point query");
+  collect_within(m.posed ? Eigen::Vector3d(m.mesh_from_world * p_world) : p_world, radius_mm, out);
+  if (m.posed)
+    for (std::size_t i = first; i < out.size(); ++i)
+      out[i].closest_mm = m.world_from_mesh * out[i].closest_mm;
 }
 
 }  // namespace truecut::offline

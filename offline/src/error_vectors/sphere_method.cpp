@@ -6,6 +6,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 
 #include <algorithm>
 #include <cmath>
@@ -42,7 +43,8 @@ struct Plane {
 };
 
 struct Scratch {
-  std::vector<std::uint32_t> triangles, cloud;
+  std::vector<RayScene::NearTriangle> triangles;
+  std::vector<std::uint32_t> cloud;
   std::vector<std::pair<std::uint32_t, float>> support;
   std::vector<Plane> planes;
   std::vector<int> assigned;
@@ -54,6 +56,7 @@ struct Context {
   const std::vector<Eigen::Vector3d>& face_normal;
   const RayScene& nominal_scene;
   const spatial::KdTree& cloud_tree;
+  const Eigen::Isometry3d& tree_from_world;  // the tree's points are tree_from_world · cloud
   std::span<const Eigen::Vector3d> cloud;
   const SphereMethodOptions& options;
   double cos_plane;
@@ -65,10 +68,7 @@ void cluster_nominal(const Context& c, const Eigen::Vector3d& P, Scratch& s) {
   s.planes.clear();
   const double offset_tol = 0.25 * c.options.radius_mm;
   for (int pass = 0; pass < 2; ++pass) {
-    for (std::uint32_t t : s.triangles) {
-      const auto& [a, b, d] = c.nominal.triangles[t];
-      const Eigen::Vector3d x = closest_point_on_triangle(
-          P, c.nominal.vertices_mm[a], c.nominal.vertices_mm[b], c.nominal.vertices_mm[d]);
+    for (const auto& [t, x] : s.triangles) {
       const bool through = (x - P).norm() <= kThroughPointMm;
       if (through != (pass == 0)) continue;
       const Eigen::Vector3d& n = c.face_normal[t];
@@ -190,7 +190,7 @@ void one_point(const Context& c, const Eigen::Vector3d& P, const Eigen::Vector3d
   s.support.clear();
   const double Rs = c.options.radius_mm;
   s.cloud.clear();
-  c.cloud_tree.within(P, Rs, s.cloud);
+  c.cloud_tree.within(c.tree_from_world * P, Rs, s.cloud);
   // No sort needed: the tree, and so the order of the points, is fixed by
   // the input.
   e.points_in_sphere[i] = static_cast<std::uint32_t>(s.cloud.size());
@@ -288,7 +288,7 @@ void one_point(const Context& c, const Eigen::Vector3d& P, const Eigen::Vector3d
 // The median number of scan points in the spheres of up to kProbes
 // compensation points spread evenly over the list.
 std::size_t median_points_per_sphere(const CompensationPoints& points, const spatial::KdTree& tree,
-                                     double radius_mm) {
+                                     const Eigen::Isometry3d& tree_from_world, double radius_mm) {
   constexpr std::size_t kProbes = 1001;
   const std::size_t n = points.size(), probes = std::min(n, kProbes);
   if (probes == 0) return 0;
@@ -296,7 +296,7 @@ std::size_t median_points_per_sphere(const CompensationPoints& points, const spa
   std::vector<std::uint32_t> found;
   for (std::size_t k = 0; k < probes; ++k) {
     found.clear();
-    tree.within(points.positions_mm[k * n / probes], radius_mm, found);
+    tree.within(tree_from_world * points.positions_mm[k * n / probes], radius_mm, found);
     count[k] = found.size();
   }
   auto mid = count.begin() + static_cast<std::ptrdiff_t>(probes / 2);
@@ -327,6 +327,17 @@ ErrorVectors error_vectors_by_spheres(const TriangleMesh& nominal, const Compens
                                       std::span<const Eigen::Vector3d> cloud_mm,
                                       const SphereMethodOptions& options,
                                       const spatial::KdTree& tree) {
+  return error_vectors_by_spheres(nominal, points, cloud_mm, options, tree,
+                                  Eigen::Isometry3d::Identity());
+}
+
+ErrorVectors error_vectors_by_spheres(const TriangleMesh& nominal, const CompensationPoints& points,
+                                      std::span<const Eigen::Vector3d> cloud_mm,
+                                      const SphereMethodOptions& options,
+                                      const spatial::KdTree& tree,
+                                      const Eigen::Isometry3d& world_from_tree) {
+  const Eigen::Isometry3d tree_from_world = world_from_tree.inverse();
+  const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
   const std::size_t n = points.size();
   if (points.normals.size() != n) {
     throw std::invalid_argument("compensation points: positions and normals differ in number");
@@ -345,7 +356,8 @@ ErrorVectors error_vectors_by_spheres(const TriangleMesh& nominal, const Compens
   std::vector<std::uint32_t> scan_index_of;
   std::optional<spatial::KdTree> subset_tree;
   if (options.max_points_per_sphere > 0) {
-    const std::size_t median = median_points_per_sphere(points, tree, options.radius_mm);
+    const std::size_t median =
+        median_points_per_sphere(points, tree, tree_from_world, options.radius_mm);
     if (median > options.max_points_per_sphere) {
       e.scan_fraction =
           static_cast<double>(options.max_points_per_sphere) / static_cast<double>(median);
@@ -363,6 +375,7 @@ ErrorVectors error_vectors_by_spheres(const TriangleMesh& nominal, const Compens
                   fn,
                   nominal_scene,
                   subset_tree ? *subset_tree : tree,
+                  subset_tree ? identity : tree_from_world,
                   subset_tree ? std::span<const Eigen::Vector3d>(subset) : cloud_mm,
                   options,
                   std::cos(options.plane_angle_deg * M_PI / 180.0)};

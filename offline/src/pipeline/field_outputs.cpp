@@ -1,5 +1,6 @@
 #include "truecut/offline/field_outputs.hpp"
 
+#include <tbb/parallel_invoke.h>
 #include <nlohmann/json.hpp>
 
 #include <stdexcept>
@@ -299,26 +300,36 @@ std::vector<FileDigest> write_field_outputs(const fs::path& dir, const FieldPipe
   fs::create_directories(dir, ec);
   if (ec) throw std::runtime_error(dir.string() + ": cannot create the folder: " + ec.message());
 
-  std::vector<FileDigest> out;
-  rt::FieldFileInfo info;
-  info.source = "truecut field";
-  rt::write_field_file(files.staged(0), r.fit->field, info);
-  CompensationMatrix matrix = r.matrix;
-  matrix.raw_vectors_mm = r.matrix.vectors_mm;
-  matrix.vectors_mm = r.smoothed_matrix_mm;
-  write_compensation_matrix(
-      files.staged(1), matrix,
-      rt::format_printf("dx,dy,dz: the mirror smoothed by the truss (kb/kc %.4g) at the point, "
-                        "0 on surfaces whose error is within the scan's noise\n"
-                        "raw_dx,raw_dy,raw_dz: mirror method, -(measured - nominal)",
-                        r.truss_kb_over_kc));
-  write_stl(files.staged(2), r.adapted, StlEncoding::kBinary, "truecut adapted model");
+  // The three files are independent: written and hashed side by side.
   const char* roles[] = {"field", "compensation_matrix", "adapted_model"};
-  for (int i = 0; i < 3; ++i) {
-    FileDigest d = digest_file(roles[i], files.staged(i));
-    d.path = files.target(i);
-    out.push_back(d);
-  }
+  std::vector<FileDigest> out(3);
+  auto digest = [&](int i) {
+    out[i] = digest_file(roles[i], files.staged(i));
+    out[i].path = files.target(i);
+  };
+  tbb::parallel_invoke(
+      [&] {
+        rt::FieldFileInfo info;
+        info.source = "truecut field";
+        rt::write_field_file(files.staged(0), r.fit->field, info);
+        digest(0);
+      },
+      [&] {
+        CompensationMatrix matrix = r.matrix;
+        matrix.raw_vectors_mm = r.matrix.vectors_mm;
+        matrix.vectors_mm = r.smoothed_matrix_mm;
+        write_compensation_matrix(
+            files.staged(1), matrix,
+            rt::format_printf("dx,dy,dz: the mirror smoothed by the truss (kb/kc %.4g) at the "
+                              "point, 0 on surfaces whose error is within the scan's noise\n"
+                              "raw_dx,raw_dy,raw_dz: mirror method, -(measured - nominal)",
+                              r.truss_kb_over_kc));
+        digest(1);
+      },
+      [&] {
+        write_stl(files.staged(2), r.adapted, StlEncoding::kBinary, "truecut adapted model");
+        digest(2);
+      });
   const std::string audit = audit_json(r, o, c, out);
   files.write(3, audit);
   files.commit();

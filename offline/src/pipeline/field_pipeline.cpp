@@ -537,12 +537,10 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
     auto measured_error_vectors = [&](const CompensationPoints& points) {
       if (opt.method == ErrorMethod::kRay)
         return error_vectors_by_rays(nominal, points, *scene, opt.ray);
-      // The scan left in place: its tree is the cloud's.
-      if (cloud.size() == in.scan->vertices_mm.size() &&
-          std::memcmp(cloud.data(), in.scan->vertices_mm.data(),
-                      cloud.size() * sizeof(Eigen::Vector3d)) == 0)
-        return error_vectors_by_spheres(nominal, points, cloud, opt.sphere, shared_scan_tree());
-      return error_vectors_by_spheres(nominal, points, cloud, opt.sphere);
+      // The scan's own tree, queried through the registration's inverse.
+      return error_vectors_by_spheres(
+          nominal, points, cloud, opt.sphere, shared_scan_tree(),
+          r.registration ? r.registration->scan_to_nominal : Eigen::Isometry3d::Identity());
     };
     auto error_vectors = [&](const CompensationPoints& points) {
       ErrorVectors e = measured_error_vectors(points);

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include <span>
 
@@ -24,6 +25,14 @@ ErrorVectors error_vectors_by_spheres(const TriangleMesh& nominal, const Compens
                                       std::span<const Eigen::Vector3d> cloud_mm,
                                       const SphereMethodOptions& options,
                                       const spatial::KdTree& cloud_tree);
+// cloud_tree: of the points before world_from_tree moved them to cloud_mm
+// (the scan before registration); queried through the inverse motion, so a
+// registered scan needs no tree of its own.
+ErrorVectors error_vectors_by_spheres(const TriangleMesh& nominal, const CompensationPoints& points,
+                                      std::span<const Eigen::Vector3d> cloud_mm,
+                                      const SphereMethodOptions& options,
+                                      const spatial::KdTree& cloud_tree,
+                                      const Eigen::Isometry3d& world_from_tree);
 
 // scan_tree: of scan.vertices_mm (used only when the scan has no triangles).
 SignificanceResult test_compensation_significance(const CompensationPoints& points,

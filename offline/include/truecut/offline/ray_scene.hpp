@@ -91,6 +91,13 @@ class RayScene {
   // within radius_mm (distance computed in double). Thread-safe.
   void triangles_within(const Eigen::Vector3d& p, double radius_mm,
                         std::vector<std::uint32_t>& out) const;
+  // The same, with each triangle's closest point to p (world frame).
+  struct NearTriangle {
+    std::uint32_t triangle = 0;
+    Eigen::Vector3d closest_mm = Eigen::Vector3d::Zero();
+  };
+  void triangles_within(const Eigen::Vector3d& p, double radius_mm,
+                        std::vector<NearTriangle>& out) const;
 
   const Eigen::Vector3d& local_origin_mm() const;
   std::size_t triangle_count() const;
@@ -100,6 +107,10 @@ class RayScene {
   bool ray_masks_supported() const;
 
  private:
+  // p in the mesh frame.
+  template <class Found>
+  void collect_within(const Eigen::Vector3d& p, double radius_mm, std::vector<Found>& out) const;
+
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
