@@ -193,6 +193,7 @@ bool ProgramRunner::step() {
     const int line = last ? last->line : 1;
     if (file.end < file.source.lines.size() && frames_.size() == 1) {
       emitter_.set_location(frame.file, line + 1);
+      emitter_.flush();  // moves cutter compensation still holds
       emitter_.emit(Finish{});
       emitter_.clear_block_number();
       emitter_.emit(OnReset{});

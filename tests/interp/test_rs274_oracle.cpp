@@ -16,6 +16,7 @@
 #include <map>
 #include <regex>
 #include <set>
+#include <sstream>
 
 #include "rs274_compare.hpp"
 #include "rs274_oracle.hpp"
@@ -34,22 +35,16 @@ using truecut::test::source_dir;
 // lists them). Keyed by "<folder>/<file>".
 const std::map<std::string, std::string>& out_of_scope() {
   static const std::map<std::string, std::string> kList = {
-      {"ncfiles/comp-g1.ngc", "cutter radius compensation G41/G42"},
-      {"ncfiles/comp.ngc", "cutter radius compensation G41/G42 (D word)"},
-      {"ncfiles/comp311.ngc", "cutter radius compensation G41/G42"},
-      {"ncfiles/comp311_2.ngc", "cutter radius compensation G41/G42"},
-      {"ncfiles/gmoccapy_2_tools_with_cutter_radius_compensation.ngc",
-       "cutter radius compensation G41/G42"},
-      {"ncfiles/useful-subroutines.ngc", "cutter radius compensation G41/G42"},
-      {"ncfiles/lathe_g70_71_demo.ngc", "lathe cycles G70/G71 (D word)"},
-      {"ncfiles/lathe_g7x_face_boring.ngc", "lathe cycles G70-G72 (D word)"},
-      {"ncfiles/lathe_g7x_quadrants.ngc", "lathe cycles G70-G72 (D word)"},
+      {"ncfiles/lathe_g70_71_demo.ngc", "lathe cycles G70/G71"},
+      {"ncfiles/lathe_g7x_face_boring.ngc", "lathe cycles G70-G72"},
+      {"ncfiles/lathe_g7x_quadrants.ngc", "lathe cycles G70-G72"},
       {"ncfiles/lathe_pawn.ngc", "lathe radius/diameter mode G7/G8"},
       {"millturn/example.ngc", "lathe radius/diameter mode G7/G8"},
       {"ncfiles/gridprobe.ngc", "probing G38.x"},
       {"ncfiles/smartprobe.ngc", "probing G38.x"},
       {"ncfiles/x-trim.ngc", "probing G38.x (in the touchoff subroutine)"},
-      {"ncfiles/mmount.ngc", "cutter radius compensation G41 (its canned cycles before it match)"},
+      {"ncfiles/mmount.ngc",
+       "rigid tapping G33.1 (its canned cycles and cutter compensation before it match)"},
       {"ncfiles/systems.ngc", "quadratic B-spline G5.1"},
       {"nc_files/tcdemo.ngc", "quadratic B-spline G5.1"},
       {"ncfiles/threading.ngc", "spindle-synchronized motion G33"}};
@@ -180,6 +175,70 @@ TEST(Rs274Oracle, OwnCorpusMatches) {
     ++compared;
   }
   EXPECT_GE(compared, 6);
+}
+
+// Cutter radius compensation errors (docs/gcode.md "Cutter radius
+// compensation"): rs274 and truecut refuse each program at the same line.
+// Each program's offending line is unique; rs274 prints it after its
+// message.
+TEST(Rs274Oracle, CutterCompErrorsAtTheSameLine) {
+  REQUIRE_ORACLE(o);
+  static const char* kCases[] = {
+      "G41 D1 G1 X-4.5 Y-5 (entry too short)",
+      "G41 D4 G1 X10 Y0\nG1 X10 Y1\nG1 X0 Y1 (reversed line)",
+      "G41 D8 G1 X10 Y0\nG3 X10 Y4 I0 J2 (arc smaller than tool)",
+      "G41 D1 G1 X10 Y0\nG40\nG2 X0 Y0 R20 (arc after G40)",
+      "G41 D1 G1 X10 Y0\nT2 M6 (tool change)",
+      "G41 D1 G1 X10 Y0\nG43 H1 (tool length)",
+      "G41 D1 G1 X10 Y0\nG55 (coordinate system)",
+      "G41 D1 G1 X10 Y0\nG92 X0 (axis offsets)",
+      "G41 D1 G1 X10 Y0\nG10 L2 P1 X1 (active system)",
+      "G41 D1 G1 X10 Y0\nG18 (plane)",
+      "G41 D1 G1 X10 Y0\nG42 D1 (on when on)",
+      "G41 D1 G1 X10 Y0\nG81 X5 R1 Z-1 (cycle)",
+      "G41 D1 G1 X10 Y0\nG53 G1 X1 (G53)",
+      "G41 D1 G1 X10 Y0\nG28 (home)",
+      "G41 D1 G1 X10 Y0\nG64 P0.1 (path mode)",
+      "G41 D1 G1 X10 Y0\nG98 (retract mode)",
+      "G1 D1 X1 (D alone)",
+      "G41.1 G1 X10 (no D)",
+      "G41.1 D2 L3 G1 X10 (L out of G18)",
+      "G19 G41 D1 G1 X10 (YZ plane)",
+      "G41 D1.5 G1 X10 (fraction D)",
+      "G41 D25 G1 X10 (unknown tool)",
+      "G41 D8 G1 X0 Y0\nG1 X20 Y0\nG3 X20 Y10 R5 (inside arc)\nG1 X0 Y10",
+      "G41 D8 G1 X0 Y0\nG3 X20 Y0 R10\nG3 X20 Y2 R1 (small arc)\nG1 X0 Y2",
+      "G41 D8 G1 X0 Y0\nG1 X20 Y0\nG3 X30 Y10 R10\nG1 X29 Y10 (arc then back line)",
+  };
+  const fs::path dir = o->work / "comp_errors";
+  fs::create_directories(dir);
+  int index = 0;
+  for (const char* body : kCases) {
+    const std::string text = std::string("G21 F100 T1 M6\nG0 X-5 Y-5\n") + body + "\nM2\n";
+    const fs::path program = dir / ("e" + std::to_string(++index) + ".ngc");
+    std::ofstream(program) << text;
+    const Outcome r = run_both(*o, program);
+    ASSERT_FALSE(r.rs274_runs) << text << "rs274 runs it";
+    ASSERT_FALSE(r.truecut_runs) << text << "truecut runs it";
+    // rs274: "...\n<message>\n<the line>\n"; truecut: "<file>:<line>:<col>: <message>".
+    std::vector<std::string> err_lines;
+    std::istringstream err(r.rs274_error);
+    for (std::string l; std::getline(err, l);)
+      if (!l.empty()) err_lines.push_back(l);
+    ASSERT_FALSE(err_lines.empty()) << text;
+    std::vector<std::string> program_lines;
+    std::istringstream in(text);
+    for (std::string l; std::getline(in, l);)
+      program_lines.push_back(l);
+    const auto at = std::find(program_lines.begin(), program_lines.end(), err_lines.back());
+    ASSERT_NE(at, program_lines.end()) << text << r.rs274_error;
+    const int rs274_line = static_cast<int>(at - program_lines.begin()) + 1;
+    std::smatch m;
+    static const std::regex located(R"(^[^:]+:(\d+):\d+: )");
+    ASSERT_TRUE(std::regex_search(r.truecut_error, m, located)) << r.truecut_error;
+    EXPECT_EQ(std::stoi(m[1]), rs274_line)
+        << text << "rs274: " << r.rs274_error << "truecut: " << r.truecut_error;
+  }
 }
 
 TEST(Rs274Oracle, FiveAxisDemosMatch) {
