@@ -30,7 +30,7 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 // Angles within this of a corner case count as that case (radians).
-constexpr double kCornerTolerance_rad = 0.01;
+constexpr double kCornerTolerance_rad = 0.05;
 
 struct Vec2 {
   double u = 0, v = 0;
@@ -467,7 +467,9 @@ void BlockExecutor::comp_arc(const ArcRequest& req, const ArcResult& res, const 
       comp_flush();
       c.endpoint[0] = cur.u;
       c.endpoint[1] = cur.v;
-      c.endpoint_valid = true;
+      // rs274 2.9 checks no sweep after a tangent join (measured: random
+      // profiles against rs274 disagree otherwise).
+      c.endpoint_valid = false;
       hold_arc(tool, k, turn, end[ax.normal], sweep);
     }
   }

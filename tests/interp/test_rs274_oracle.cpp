@@ -11,9 +11,11 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <map>
+#include <random>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -239,6 +241,98 @@ TEST(Rs274Oracle, CutterCompErrorsAtTheSameLine) {
     EXPECT_EQ(std::stoi(m[1]), rs274_line)
         << text << "rs274: " << r.rs274_error << "truecut: " << r.truecut_error;
   }
+}
+
+// Random profiles under G41/G42 in G17 and G18 (lines, R and I/J/K arcs,
+// G0 moves, moves along the tool axis only, the tool table's D or G41.1 D):
+// rs274 and truecut must agree on each, call for call or refusing it at the
+// same line. The seed is fixed; most random corners are concave, many
+// cannot be reached without gouging, which exercises every error path.
+TEST(Rs274Oracle, RandomCutterCompProfilesAgree) {
+  REQUIRE_ORACLE(o);
+  const fs::path dir = o->work / "comp_random";
+  fs::create_directories(dir);
+  std::mt19937 rng(20261127);
+  auto uniform = [&](double lo, double hi) {
+    return lo + (hi - lo) * (static_cast<double>(rng()) / static_cast<double>(rng.max()));
+  };
+  int matched = 0, refused = 0;
+  for (int n = 0; n < 150; ++n) {
+    const bool xz = rng() % 3 == 0;
+    const char a = xz ? 'Z' : 'X', b = xz ? 'X' : 'Y';
+    const char ia = xz ? 'K' : 'I', ib = xz ? 'I' : 'J';
+    const bool left = rng() % 2 == 0;
+    char buf[200];
+    std::string comp = left ? "G41" : "G42";
+    if (rng() % 4 == 0) {
+      std::snprintf(buf, sizeof buf, ".1 D%.3f", uniform(0.5, 4));
+      comp += buf;
+    } else {
+      comp += " D" + std::to_string(1 + rng() % 4);
+    }
+    std::string text = std::string("G21 F300 T1 M6\n") + (xz ? "G18" : "G17") + "\nG0 X0 Y0 Z0\n";
+    double x = 0, y = 0;
+    const int moves = 2 + static_cast<int>(rng() % 6);
+    for (int k = 0; k < moves; ++k) {
+      const std::string pre = k == 0 ? comp + " " : "";
+      const double kind = uniform(0, 1);
+      double nx = uniform(-30, 30), ny = uniform(-30, 30);
+      if (k > 0 && kind < 0.08) {  // along the tool axis only
+        std::snprintf(buf, sizeof buf, "G1 %c%.3f", xz ? 'Y' : 'Z', uniform(-2, 2));
+        nx = x, ny = y;
+      } else if (kind < 0.15) {
+        std::snprintf(buf, sizeof buf, "%sG0 %c%.3f %c%.3f", pre.c_str(), a, nx, b, ny);
+      } else if (kind < 0.6) {
+        std::snprintf(buf, sizeof buf, "%sG1 %c%.3f %c%.3f", pre.c_str(), a, nx, b, ny);
+      } else if (kind < 0.8) {
+        const double r = std::max(std::fabs(nx - x), std::fabs(ny - y)) * uniform(0.6, 1.5) + 1;
+        std::snprintf(buf, sizeof buf, "%s%s %c%.3f %c%.3f R%.3f", pre.c_str(),
+                      rng() % 2 ? "G2" : "G3", a, nx, b, ny, r);
+      } else {  // centre form: the end on the circle through the start
+        const double cx = x + uniform(-15, 15), cy = y + uniform(-15, 15);
+        const double r = std::hypot(x - cx, y - cy), t = uniform(0, 6.283);
+        nx = std::round((cx + r * std::cos(t)) * 1e4) / 1e4;
+        ny = std::round((cy + r * std::sin(t)) * 1e4) / 1e4;
+        std::snprintf(buf, sizeof buf, "%s%s %c%.4f %c%.4f %c%.4f %c%.4f", pre.c_str(),
+                      rng() % 2 ? "G2" : "G3", a, nx, b, ny, ia, cx - x, ib, cy - y);
+      }
+      text += std::string(buf) + "\n";
+      x = std::round(nx * 1e3) / 1e3;
+      y = std::round(ny * 1e3) / 1e3;
+      if (kind >= 0.8) x = nx, y = ny;
+    }
+    std::snprintf(buf, sizeof buf, "G40 G1 %c%.3f %c%.3f\nM2\n", a, uniform(-40, 40), b,
+                  uniform(-40, 40));
+    text += buf;
+    const fs::path program = dir / ("r" + std::to_string(n) + ".ngc");
+    std::ofstream(program) << text;
+    const Outcome r = run_both(*o, program);
+    ASSERT_EQ(r.rs274_runs, r.truecut_runs)
+        << text << "rs274: " << r.rs274_error << "\ntruecut: " << r.truecut_error;
+    if (r.rs274_runs) {
+      EXPECT_EQ(r.difference, std::nullopt) << text;
+      ++matched;
+      continue;
+    }
+    ++refused;
+    std::vector<std::string> err_lines, program_lines;
+    std::istringstream err(r.rs274_error), in(text);
+    for (std::string l; std::getline(err, l);)
+      if (!l.empty()) err_lines.push_back(l);
+    for (std::string l; std::getline(in, l);)
+      program_lines.push_back(l);
+    ASSERT_FALSE(err_lines.empty()) << text;
+    const auto at = std::find(program_lines.begin(), program_lines.end(), err_lines.back());
+    ASSERT_NE(at, program_lines.end()) << text << r.rs274_error;
+    std::smatch m;
+    static const std::regex located(R"(^[^:]+:(\d+):\d+: )");
+    ASSERT_TRUE(std::regex_search(r.truecut_error, m, located)) << r.truecut_error;
+    EXPECT_EQ(std::stoi(m[1]), static_cast<int>(at - program_lines.begin()) + 1)
+        << text << "rs274: " << r.rs274_error << "truecut: " << r.truecut_error;
+  }
+  std::printf("random cutter compensation profiles: %d match, %d refused by both\n", matched,
+              refused);
+  EXPECT_GE(matched, 75) << "too few programs ran";
 }
 
 TEST(Rs274Oracle, FiveAxisDemosMatch) {
