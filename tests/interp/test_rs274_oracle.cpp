@@ -265,7 +265,7 @@ TEST(Rs274Oracle, RandomCutterCompProfilesAgree) {
     char buf[200];
     std::string comp = left ? "G41" : "G42";
     if (rng() % 4 == 0) {
-      std::snprintf(buf, sizeof buf, ".1 D%.3f", uniform(0.5, 4));
+      std::snprintf(buf, sizeof buf, ".1 D%.3f", uniform(-3, 4));  // < 0: the other side
       comp += buf;
     } else {
       comp += " D" + std::to_string(1 + rng() % 4);
@@ -277,10 +277,26 @@ TEST(Rs274Oracle, RandomCutterCompProfilesAgree) {
       const std::string pre = k == 0 ? comp + " " : "";
       const double kind = uniform(0, 1);
       double nx = uniform(-30, 30), ny = uniform(-30, 30);
-      if (k > 0 && kind < 0.08) {  // along the tool axis only
+      // Calls queued behind held moves (feed, spindle, coolant, comments).
+      static const char* kExtras[] = {"", "", "", " (note)", " F250", " M8", " S1000 M3"};
+      const char* extra = kExtras[rng() % 7];
+      if (k > 0 && kind < 0.04) {
+        text += "G4 P0.1\n";
+        continue;
+      }
+      if (k > 0 && kind < 0.12) {  // incremental, from the programmed point
+        const double dx = std::round(uniform(-15, 15) * 1e3) / 1e3;
+        const double dy = std::round(uniform(-15, 15) * 1e3) / 1e3;
+        std::snprintf(buf, sizeof buf, "G91 G1 %c%.3f %c%.3f%s\nG90\n", a, dx, b, dy, extra);
+        text += buf;
+        x += dx;
+        y += dy;
+        continue;
+      }
+      if (k > 0 && kind < 0.18) {  // along the tool axis only
         std::snprintf(buf, sizeof buf, "G1 %c%.3f", xz ? 'Y' : 'Z', uniform(-2, 2));
         nx = x, ny = y;
-      } else if (kind < 0.15) {
+      } else if (kind < 0.25) {
         std::snprintf(buf, sizeof buf, "%sG0 %c%.3f %c%.3f", pre.c_str(), a, nx, b, ny);
       } else if (kind < 0.6) {
         std::snprintf(buf, sizeof buf, "%sG1 %c%.3f %c%.3f", pre.c_str(), a, nx, b, ny);
@@ -296,13 +312,21 @@ TEST(Rs274Oracle, RandomCutterCompProfilesAgree) {
         std::snprintf(buf, sizeof buf, "%s%s %c%.4f %c%.4f %c%.4f %c%.4f", pre.c_str(),
                       rng() % 2 ? "G2" : "G3", a, nx, b, ny, ia, cx - x, ib, cy - y);
       }
-      text += std::string(buf) + "\n";
+      text += std::string(buf) + extra + "\n";
       x = std::round(nx * 1e3) / 1e3;
       y = std::round(ny * 1e3) / 1e3;
       if (kind >= 0.8) x = nx, y = ny;
     }
-    std::snprintf(buf, sizeof buf, "G40 G1 %c%.3f %c%.3f\nM2\n", a, uniform(-40, 40), b,
-                  uniform(-40, 40));
+    // Exits: a move on the G40 line, G40 alone then a move along the tool
+    // axis only (from the programmed point), G40 with one plane word.
+    const unsigned exit = rng() % 3;
+    if (exit == 0)
+      std::snprintf(buf, sizeof buf, "G40 G1 %c%.3f %c%.3f\nM2\n", a, uniform(-40, 40), b,
+                    uniform(-40, 40));
+    else if (exit == 1)
+      std::snprintf(buf, sizeof buf, "G40\nG0 %c5\nM30\n", xz ? 'Y' : 'Z');
+    else
+      std::snprintf(buf, sizeof buf, "G40 G0 %c%.3f\nM5\nM2\n", a, uniform(-40, 40));
     text += buf;
     const fs::path program = dir / ("r" + std::to_string(n) + ".ngc");
     std::ofstream(program) << text;
