@@ -110,6 +110,13 @@ void BlockExecutor::comp_on(int code) {
         fail(b_->has('d') ? column_of('d') : col,
              "tool " + std::to_string(tool) + " for " + name + " is not in the tool table");
       radius = s_.to_program(0, e->diameter_mm) / 2;
+      if (e->orientation != 0 && e->orientation != 9) {
+        if (s_.plane != Plane::kXZ)
+          fail(col, name + " with a lathe tool (orientation Q" + std::to_string(e->orientation) +
+                        " in the tool table), but the plane is not G18");
+        fail(col, name + " with a lathe tool (orientation Q" + std::to_string(e->orientation) +
+                      " in the tool table) is not supported: truecut is for mills");
+      }
     }
   }
   if (radius < 0) {  // a negative diameter cuts on the other side

@@ -222,6 +222,27 @@ INSTANTIATE_TEST_SUITE_P(Program, BadInput,
                                            Case{"G43 H8\nM2\n", 1, 5, "not in the tool table"}),
                          case_name);
 
+// A lathe tool (orientation Q1-Q8 in the tool table) for G41/G42: rs274's
+// error outside G18; refused by name in G18 (truecut is for mills).
+TEST(BadInput, CutterCompWithALatheToolIsRefused) {
+  InterpreterOptions o;
+  o.tools = ToolTable::parse("T1 P1 D6 Z10\nT4 P4 D0.8 Q3\n", "tools.tbl");
+  EXPECT_EQ(o.tools.find(4)->orientation, 3);
+  const GcodeError plane = error_of("G0 X0 Y0\nG41 D4 G1 X20 F100\nM2\n", o);
+  EXPECT_EQ(plane.where().line, 2);
+  EXPECT_NE(plane.message().find("with a lathe tool (orientation Q3 in the tool table), but the "
+                                 "plane is not G18"),
+            std::string::npos)
+      << plane.what();
+  const GcodeError lathe = error_of("G18 G0 X0 Z0\nG42 D4 G1 X20 F100\nM2\n", o);
+  EXPECT_EQ(lathe.where().line, 2);
+  EXPECT_NE(lathe.message().find("is not supported: truecut is for mills"), std::string::npos)
+      << lathe.what();
+  // Q0 and Q9 are mills: compensation runs.
+  o.tools = ToolTable::parse("T1 P1 D6 Z10 Q9\n", "tools.tbl");
+  EXPECT_NO_THROW(run("G0 X0 Y0\nG41 D1 G1 X20 F100\nG40 G1 X30\nM2\n", o));
+}
+
 TEST(BadInput, NotTextIsRejectedBeforeAnything) {
   const std::string binary("\x89PNG\r\n\x1a\n\0\0\0\rIHDR", 16);
   try {
