@@ -686,6 +686,28 @@ TEST(Rewrite, CutterCompensationIsExpandedIntoCompensatedMoves) {
   EXPECT_NEAR(ends_out.back().y, -10, 1e-9);
   EXPECT_NEAR(ends_out.back().z, 5, 1e-9);
 
+  // With no correction at all the compensated moves are still written out,
+  // and so is the exit move of the operation, which names only Y: it starts
+  // from the compensated point and its X is the programmed one.
+  const auto zero = plane_matrix(-20, 40, -20, 40, 0, 0.5, V::Zero());
+  const std::string exit_in_op =
+      "G21 G90 G94\nT2 M6\nG0 X-10 Y-10 Z0\n(OPERATION: PROFILE)\nG41 D2 G1 X0 Y0 F300\nX20\n"
+      "Y20\nG40 G1 Y30\nM30\n";
+  const RewriteResult z = rewrite_program(exit_in_op, "exit.ngc", zero, o);
+  auto last_feed = [](const CanonProgram& p) {
+    Axes6 end;
+    for (const auto& c : p.calls)
+      if (const auto* f = std::get_if<StraightFeed>(&c.op)) end = f->end;
+    return end;
+  };
+  const Axes6 want = last_feed(Interpreter(io).run_text(exit_in_op, "exit.ngc"));
+  const Axes6 got = last_feed(Interpreter(io).run_text(z.text, "z.ngc"));
+  EXPECT_NEAR(want.x, 20, 1e-9);
+  EXPECT_NEAR(want.y, 30, 1e-9);
+  EXPECT_NEAR(got.x, want.x, 1e-9) << z.text;
+  EXPECT_NEAR(got.y, want.y, 1e-9) << z.text;
+  EXPECT_EQ(z.text.find("\nX20\n"), std::string::npos) << z.text;
+
   // Compensated moves that run more than once cannot be written out.
   const std::string loop =
       "G21 G90 G94\nT2 M6\nG0 X-10 Y-10 Z1\nG41 D2 G1 X0 Y0 F300\n(OPERATION: PROFILE)\n"

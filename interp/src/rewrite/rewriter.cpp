@@ -340,6 +340,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       displaced = false;
       continue;
     }
+    const bool follows_comp = after_comp;  // starts from a compensated point
     after_comp = ctx.cutter_comp;
     if (in_op && !feed && displaced) {
       // A rapid after a compensated point: written with all of X Y Z, so
@@ -413,7 +414,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
           corr.shift_mm == Eigen::Vector3d::Zero() ? p : path.shifted(p, ctx, corr.shift_mm);
     }
     const std::string& source = raw[ctx.line - 1].content;
-    if (o.keep_unchanged_moves && all_zero && !displaced && !ctx.cutter_comp) {
+    if (o.keep_unchanged_moves && all_zero && !displaced && !ctx.cutter_comp && !follows_comp) {
       bool explicit_motion = false;
       try {
         explicit_motion = split_move_line(source, file, ctx.line).explicit_motion;
