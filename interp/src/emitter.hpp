@@ -48,6 +48,9 @@ class Emitter {
   // Sends the held calls in order. rs274 prints the block number of the
   // block being executed when they go out.
   void flush();
+  // Forgets the held calls: rs274 never sends them when a program ends at
+  // its closing '%' with compensation on.
+  void discard_held() { held_.clear(); }
 
  private:
   CanonCall make(CanonOp op, double inverse_time_f) const;
