@@ -91,6 +91,7 @@ bool BlockExecutor::execute(const Block& block, const LexedLine& line) {
   codes_ = check_codes(block, line);
   s_.line = line.line;
   axes_used_ = false;
+  check_comp_codes();
   if (block.has_polar()) check_polar(s_.plane);
   comments();
   for (const auto& k : block.sinumerik) {
@@ -120,6 +121,7 @@ bool BlockExecutor::execute(const Block& block, const LexedLine& line) {
                           s_.g92_mm[i] + s_.tool_offset_mm[i];
   }
   const int stop = codes_.m[group(MGroup::kStop)];
+  if (stop == 0 || stop == 10 || stop == 20 || stop == 300) comp_flush();
   if (stop == 0) out_.emit(ProgramStop{false});
   if (stop == 10) out_.emit(ProgramStop{true});
   if (stop == 20 || stop == 300) {
@@ -297,6 +299,8 @@ void BlockExecutor::spindle_and_coolant() {
 }
 
 void BlockExecutor::modal_settings() {
+  if (const int p = codes_.g[group(GGroup::kPlane)]; p >= 0)
+    check_comp_plane_change(p == 170 ? Plane::kXY : p == 180 ? Plane::kXZ : Plane::kYZ);
   switch (codes_.g[group(GGroup::kPlane)]) {
     case 170:
       s_.plane = Plane::kXY;
@@ -323,8 +327,10 @@ void BlockExecutor::modal_settings() {
     default:
       break;
   }
-  if (codes_.g[group(GGroup::kCutterComp)] == 400)
-    out_.emit(Comment{"interpreter: cutter radius compensation off"});
+  if (const int comp = codes_.g[group(GGroup::kCutterComp)]; comp == 400)
+    comp_off();
+  else if (comp >= 0)
+    comp_on(comp);
   tool_length_offset();
   const int cs = codes_.g[group(GGroup::kCoordSystem)];
   if (cs >= 0) {
@@ -392,6 +398,10 @@ void BlockExecutor::modal_settings() {
 }
 
 void BlockExecutor::set_units(LengthUnits units) {
+  if (units != s_.units && s_.comp.side != 0)
+    fail(codes_.g_column[group(GGroup::kUnits)],
+         "changing units (G20/G21) with cutter radius compensation on is not supported (G40 "
+         "first)");
   if (units != s_.units) {
     convert_offset_parameters(params_, units == LengthUnits::kInch ? 1.0 / kMmPerInch : kMmPerInch);
     s_.units = units;
@@ -485,7 +495,7 @@ void BlockExecutor::coord_system_data() {
     out_.emit(SetG5xOffset{s_.coord_index, s_.to_program(s_.g5x_mm)});
     out_.emit(SetXYRotation{0});
   } else {
-    out_.emit(Comment{"interpreter: setting coordinate system origin"});
+    out_.emit_now(Comment{"interpreter: setting coordinate system origin"});
   }
 }
 
@@ -546,8 +556,20 @@ void BlockExecutor::go_home(int code) {
   axes_used_ = true;
 }
 
+Axes6 BlockExecutor::move_base() const {
+  Axes6 base = s_.position_mm;
+  // Under cutter compensation, LinuxCNC measures from the programmed point,
+  // not from where the compensated tool is.
+  if (s_.comp.active() && !s_.comp.first_move)
+    for (int i = 0; i < 3; ++i)
+      base[i] = s_.to_machine(i, s_.comp.programmed[i]) + s_.g5x_mm[i] + s_.g92_mm[i] +
+                s_.tool_offset_mm[i];
+  return base;
+}
+
 Axes6 BlockExecutor::target_position(bool machine_coords) const {
-  Axes6 t = s_.position_mm;
+  const Axes6 base = move_base();
+  Axes6 t = base;
   for (int i = 0; i < 6; ++i) {
     const char letter = kAxisLetters[i];
     if (!b_->has(letter)) continue;
@@ -555,7 +577,7 @@ Axes6 BlockExecutor::target_position(bool machine_coords) const {
     if (machine_coords)
       t[i] = v;
     else if (s_.incremental)
-      t[i] = s_.position_mm[i] + v;
+      t[i] = base[i] + v;
     else
       t[i] = v + s_.g5x_mm[i] + s_.g92_mm[i] + s_.tool_offset_mm[i];
   }
@@ -634,8 +656,11 @@ void BlockExecutor::check_unused_words(int motion_code) const {
   if (b_->has('q') && !peck_cycle && codes_.g[group(GGroup::kPathControl)] != 640 &&
       codes_.m[group(MGroup::kToolChange)] != 610)
     fail(column_of('q'), "Q word with no code that uses it (G64, M61, G73/G83)");
-  if (b_->has('l') && nm != 100 && !cycle)
+  const int comp = codes_.g[group(GGroup::kCutterComp)];
+  if (b_->has('l') && nm != 100 && !cycle && comp != 411 && comp != 421)
     fail(column_of('l'), "L word with no G10 or canned cycle to use it");
+  if (b_->has('d') && comp != 410 && comp != 411 && comp != 420 && comp != 421)
+    fail(column_of('d'), "D word with no G41, G41.1, G42 or G42.1 to use it");
 }
 
 void BlockExecutor::motion() {
@@ -672,6 +697,7 @@ void BlockExecutor::motion() {
   if (g53) {
     if (code != 0 && code != 10) fail(b_->g[0].column, "G53 needs G0 or G1 on the line or active");
     if (s_.incremental) fail(b_->g[0].column, "G53 with incremental distance mode (G91)");
+    if (s_.comp.active()) fail(b_->g[0].column, "cannot use G53 with cutter radius compensation");
   }
   if (code < 0 || axes_used_) return;
   if (code == 800) {
@@ -682,12 +708,15 @@ void BlockExecutor::motion() {
   }
   const int motion_column = explicit_code >= 0 ? codes_.g_column[kMotion] : first_axis_column;
   if (is_canned_cycle(code)) {
+    if (s_.comp.side != 0)
+      fail(motion_column ? motion_column : 1,
+           "cannot use canned cycles with cutter radius compensation on (G40 first)");
     canned_cycle(code, motion_column ? motion_column : 1);
     return;
   }
   Axes6 target = target_position(g53);
   if (b_->has_polar()) {
-    const Axes6 here = s_.program_position();
+    const Axes6 here = s_.program_position(move_base());
     double x = here[0], y = here[1];
     polar_point(x, y);
     target[0] = s_.to_machine(0, x) + s_.g5x_mm[0] + s_.g92_mm[0] + s_.tool_offset_mm[0];
@@ -699,12 +728,21 @@ void BlockExecutor::motion() {
   }
   // An explicit G0/G1 without axis words is a move to where the tool is.
   if (!axis_words && (code == kBsplineCode || code == kCsplineCode)) return;
+  if (s_.comp.side != 0 && (code == kBsplineCode || code == kCsplineCode))
+    fail(motion_column ? motion_column : 1,
+         "BSPLINE/CSPLINE points with cutter radius compensation on are not supported (G40 "
+         "first)");
   if (code != 0) check_feed(motion_column);
-  straight(code == 0, target);
+  s_.comp.arc_not_allowed = false;
+  straight(code == 0, target, motion_column);
 }
 
-void BlockExecutor::straight(bool rapid, const Axes6& target) {
+void BlockExecutor::straight(bool rapid, const Axes6& target, int column) {
   const Axes6 end = s_.program_position(target);
+  if (rapid && s_.comp.active()) {
+    comp_straight(true, target, column);
+    return;
+  }
   if (rapid) {
     out_.emit(StraightTraverse{end});
   } else {
@@ -721,6 +759,10 @@ void BlockExecutor::straight(bool rapid, const Axes6& target) {
       const double length = linear > 0 ? std::sqrt(linear) : std::sqrt(rotary);
       f = b_->value('f');
       out_.emit(SetFeedRate{length * f}, f);
+    }
+    if (s_.comp.active()) {
+      comp_straight(false, target, column);
+      return;
     }
     out_.emit(StraightFeed{end}, f);
   }
@@ -748,9 +790,11 @@ void BlockExecutor::arc(bool clockwise, const Axes6& target) {
     fail(col, std::string("missing arc data: give R (radius) or ") +
                   static_cast<char>(std::toupper(off1)) + "/" +
                   static_cast<char>(std::toupper(off2)) + " (centre offsets)");
+  if (s_.comp.arc_not_allowed)
+    fail(col, "the move just after exiting cutter compensation (G40) must be straight, not an arc");
   ArcRequest req;
   req.clockwise = clockwise;
-  const Axes6 start = s_.program_position();
+  const Axes6 start = s_.program_position(move_base());
   const Axes6 end = s_.program_position(target);
   req.start[0] = start[first];
   req.start[1] = start[second];
@@ -777,6 +821,14 @@ void BlockExecutor::arc(bool clockwise, const Axes6& target) {
     if (e.word == 'r') c = column_of('r');
     if (e.word == 'i') c = b_->has(off1) ? column_of(off1) : column_of(off2);
     fail(c ? c : col, e.what());
+  }
+  if (s_.comp.active()) {
+    if (s_.feed_mode == FeedMode::kInverseTime) {
+      const double f = b_->value('f');
+      out_.emit(SetFeedRate{arc_length(req, res, end[axis] - start[axis]) * f}, f);
+    }
+    comp_arc(req, res, end, col);
+    return;
   }
   ArcFeed a;
   a.end = end;
@@ -818,6 +870,7 @@ void BlockExecutor::end_program(bool pallet_shuttle) {
   s_.mist = s_.flood = false;
   s_.motion = 10;
   s_.cycle = CycleState{};
+  s_.comp = CutterCompState{};
   if (s_.spline != SplineMode::kNone) {
     s_.spline = SplineMode::kNone;
     out_.emit(SetSplineMode{s_.spline});

@@ -7,6 +7,7 @@
 #include <optional>
 #include <vector>
 
+#include "arc_geometry.hpp"
 #include "block.hpp"
 #include "emitter.hpp"
 #include "interp_state.hpp"
@@ -54,9 +55,23 @@ class BlockExecutor {
   // (x, y): G90 about the origin, G91 added to the point's own radius and
   // angle, as LinuxCNC does.
   void polar_point(double& x, double& y) const;
-  void straight(bool rapid, const Axes6& target);
+  void straight(bool rapid, const Axes6& target, int column);
+  Axes6 move_base() const;  // where incremental and missing axis words count from
   void arc(bool clockwise, const Axes6& target);
   void canned_cycle(int code, int column);  // canned_cycles.cpp
+  // Cutter radius compensation (cutter_comp.cpp).
+  void comp_on(int code);  // G41 G42 G41.1 G42.1
+  void comp_off();         // G40
+  void comp_flush();       // sends the held moves
+  void check_comp_codes() const;
+  void check_comp_plane_change(Plane next) const;
+  // Moves the end of the held moves to (u, v) in the plane, with the gouge
+  // checks (errors at `column`), and sends them.
+  void move_held_end(double u, double v, int column);
+  void comp_straight(bool rapid, const Axes6& target, int column);
+  // `req` and `res`: the programmed arc from the programmed start.
+  void comp_arc(const ArcRequest& req, const ArcResult& res, const Axes6& end, int column);
+  void set_compensated_position(const Axes6& program_point);
   void check_feed(int column) const;
   void check_unused_words(int motion_code) const;
   void emit_offsets();

@@ -149,7 +149,7 @@ void BlockExecutor::canned_cycle(int code, int column) {
     Axes6 target = s_.position_mm;
     for (int i = 0; i < 3; ++i)
       target[i] = s_.to_machine(i, at[i]) + s_.g5x_mm[i] + s_.g92_mm[i] + s_.tool_offset_mm[i];
-    straight(rapid, target);
+    straight(rapid, target, 0);
   };
 
   // Below the R plane: straight up to it first.

@@ -18,6 +18,19 @@ struct CycleState {
   double r = 0, bottom = 0, p = 0, q = 0;  // sticky R, Z (X, Y), P, Q words as written
 };
 
+// Cutter radius compensation (G40/G41/G42/G41.1/G42.1) between blocks, in
+// program units and the two coordinates of the plane (cutter_comp.cpp).
+struct CutterCompState {
+  int side = 0;                  // 1 left (G41), -1 right (G42), 0 off (G40)
+  double radius = 0;             // program units; 0 = on but moves pass unchanged
+  bool first_move = true;        // the next move is the entry move
+  bool arc_not_allowed = false;  // the move after a G40 exit must be straight
+  Axes6 programmed;              // the uncompensated end of the last move (program units)
+  double endpoint[2] = {0, 0};   // start of the held moves, for the gouge checks
+  bool endpoint_valid = false;
+  bool active() const { return side != 0 && radius > 0; }
+};
+
 struct InterpState {
   int motion = 800;  // active motion code x10 (G80: none), or a spline code
   Plane plane = Plane::kXY;
@@ -40,6 +53,7 @@ struct InterpState {
   Axes6 position_mm;           // controlled point in machine coordinates
   bool retract_old_z = false;  // G98 (else G99)
   CycleState cycle;
+  CutterCompState comp;
   int line = 0;  // source line being executed
   bool tcp = false;
   SplineMode spline = SplineMode::kNone;

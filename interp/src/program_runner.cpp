@@ -193,6 +193,8 @@ bool ProgramRunner::step() {
     const int line = last ? last->line : 1;
     if (file.end < file.source.lines.size() && frames_.size() == 1) {
       emitter_.set_location(frame.file, line + 1);
+      // Moves cutter compensation still holds are never sent, as in rs274.
+      emitter_.discard_held();
       emitter_.emit(Finish{});
       emitter_.clear_block_number();
       emitter_.emit(OnReset{});

@@ -138,7 +138,12 @@ ToolTable ToolTable::parse(std::string_view text, const std::string& name, Lengt
         case 'W':
         case 'I':
         case 'J':
+          break;
         case 'Q':
+          e.orientation = whole_number(v, "orientation Q", name, line, i);
+          if (e.orientation > 9)
+            throw GcodeError({name, line, static_cast<int>(i) + 1},
+                             "tool orientation Q must be 0..9");
           break;
         default:
           throw GcodeError({name, line, static_cast<int>(i) + 1},

@@ -42,10 +42,11 @@ INSTANTIATE_TEST_SUITE_P(Words, BadInput,
                                            Case{"G12.5 X1\nM2\n", 1, 1, "unknown G code G12.5"},
                                            Case{"M123\nM2\n", 1, 1, "M123 is not supported"},
                                            Case{"G0 X1 X2\nM2\n", 1, 7, "two X words"},
-                                           Case{"G41 X1\nM2\n", 1, 1, "not supported"},
+                                           Case{"G19\nG41 G0 X1\nM2\n", 2, 1,
+                                                "only in the XY (G17) and XZ (G18) planes"},
                                            Case{"G87 X1 Z-1 R1 I1 J0 K1\nM2\n", 1, 1,
                                                 "back boring canned cycle"},
-                                           Case{"G0 X1 D3\nM2\n", 1, 7, "word D"},
+                                           Case{"G0 X1 D3\nM2\n", 1, 7, "D word with no G41"},
                                            Case{"G1.3 X1\nM2\n", 1, 1, "unknown G code"},
                                            Case{"G0 X\nM2\n", 1, 4, "has no value"},
                                            Case{"X1\nM2\n", 1, 1, "no motion mode"},
@@ -176,6 +177,32 @@ INSTANTIATE_TEST_SUITE_P(
         Case{"M70\nM72 M2\n", 2, 1, "put M72 on a line of its own"}),
     case_name);
 
+// Cutter radius compensation (docs/gcode.md "Cutter radius compensation");
+// Rs274Oracle.CutterCompErrorsAtTheSameLine checks the lines against rs274.
+// Tool T1 has D6 (radius 3 mm).
+INSTANTIATE_TEST_SUITE_P(
+    CutterComp, BadInput,
+    ::testing::Values(
+        Case{"G0 X0 Y0\nG41 D1 G1 X2 F100\nM2\n", 2, 8,
+             "entry move is not longer than the tool radius"},
+        Case{"G0 X0 Y0\nG41 D1 G1 X20 F100\nT2 M6\nM2\n", 3, 4,
+             "cannot change tools with cutter radius compensation on"},
+        Case{"G0 X0 Y0\nG41 D1 G1 X20 F100\nG20\nM2\n", 3, 1,
+             "changing units (G20/G21) with cutter radius compensation on is not supported"},
+        Case{"G0 X0 Y0\nG41 D1 G1 X20 F100\nG40\nG2 X0 Y0 R20\nM2\n", 4, 1,
+             "must be straight, not an arc"},
+        Case{"G0 X0 Y0\nG41 D1 G1 X20 F100\nG1 X20 Y1\nG1 X0 Y1\nM2\n", 4, 1,
+             "straight feed in a concave corner cannot be reached by the tool without gouging"},
+        Case{"G41 D2.5 G1 X20 F100\nM2\n", 1, 5, "G41 needs D to be a whole number"},
+        Case{"G41 D5 G1 X20 F100\nM2\n", 1, 5, "tool 5 for G41 is not in the tool table"},
+        Case{"G41.1 D2 L3 G1 X20 F100\nM2\n", 1, 10,
+             "G41.1 with an L word, but the plane is not G18"},
+        Case{"G18 G41.1 D2 L3 G1 X20 F100\nM2\n", 1, 14,
+             "L (lathe tool orientation 1-8) is not supported"},
+        Case{"G41 D1 G1 X20 F100\nG81 X5 R1 Z-1\nM2\n", 2, 1,
+             "cannot use canned cycles with cutter radius compensation on"}),
+    case_name);
+
 INSTANTIATE_TEST_SUITE_P(
     Expressions, BadInput,
     ::testing::Values(Case{"G0 X[1 + [2]\nM2\n", 1, 5, "unbalanced brackets"},
@@ -194,6 +221,27 @@ INSTANTIATE_TEST_SUITE_P(Program, BadInput,
                                                 "not in the tool table"},
                                            Case{"G43 H8\nM2\n", 1, 5, "not in the tool table"}),
                          case_name);
+
+// A lathe tool (orientation Q1-Q8 in the tool table) for G41/G42: rs274's
+// error outside G18; refused by name in G18 (truecut is for mills).
+TEST(BadInput, CutterCompWithALatheToolIsRefused) {
+  InterpreterOptions o;
+  o.tools = ToolTable::parse("T1 P1 D6 Z10\nT4 P4 D0.8 Q3\n", "tools.tbl");
+  EXPECT_EQ(o.tools.find(4)->orientation, 3);
+  const GcodeError plane = error_of("G0 X0 Y0\nG41 D4 G1 X20 F100\nM2\n", o);
+  EXPECT_EQ(plane.where().line, 2);
+  EXPECT_NE(plane.message().find("with a lathe tool (orientation Q3 in the tool table), but the "
+                                 "plane is not G18"),
+            std::string::npos)
+      << plane.what();
+  const GcodeError lathe = error_of("G18 G0 X0 Z0\nG42 D4 G1 X20 F100\nM2\n", o);
+  EXPECT_EQ(lathe.where().line, 2);
+  EXPECT_NE(lathe.message().find("is not supported: truecut is for mills"), std::string::npos)
+      << lathe.what();
+  // Q0 and Q9 are mills: compensation runs.
+  o.tools = ToolTable::parse("T1 P1 D6 Z10 Q9\n", "tools.tbl");
+  EXPECT_NO_THROW(run("G0 X0 Y0\nG41 D1 G1 X20 F100\nG40 G1 X30\nM2\n", o));
+}
 
 TEST(BadInput, NotTextIsRejectedBeforeAnything) {
   const std::string binary("\x89PNG\r\n\x1a\n\0\0\0\rIHDR", 16);

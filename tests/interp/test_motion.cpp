@@ -15,6 +15,19 @@ TEST(Motion, TraverseAndFeedKeepUnprogrammedAxes) {
                           "STRAIGHT_FEED(4.0000, 2.0000, 3.0000, 10.0000, 0.0000, 20.0000)"}));
 }
 
+// Cutter compensation holds each move until the next one is known
+// (docs/gcode.md): M2 sends the held move; a closing '%' drops it, as rs274
+// does. Tool T1: D6, radius 3.
+TEST(Motion, CutterCompHeldMovesAtTheProgramEnd) {
+  const auto m2 = moves(run("G0 X0 Y0\nG41 D1 G1 X10 F100\nG1 Y10\nM2\n"));
+  EXPECT_EQ(m2, (std::vector<std::string>{
+                    "STRAIGHT_TRAVERSE(0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+                    "STRAIGHT_FEED(7.0000, 3.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+                    "STRAIGHT_FEED(7.0000, 10.0000, 0.0000, 0.0000, 0.0000, 0.0000)"}));
+  const auto percent = moves(run("%\nG0 X0 Y0\nG41 D1 G1 X10 F100\nG1 Y10\n%\n"));
+  EXPECT_EQ(percent, (std::vector<std::string>(m2.begin(), m2.end() - 1)));
+}
+
 TEST(Motion, ModalMotionAndIncrementalDistance) {
   auto p = run("G1 X1 F100\nY2\nG91 X1 Y1\nC-30\nG90 X0\nM2\n");
   EXPECT_EQ(moves(p), (std::vector<std::string>{

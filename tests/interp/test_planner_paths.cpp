@@ -196,5 +196,35 @@ TEST(PlannerPaths, CannedCyclesReachEveryHoleBottom) {
   EXPECT_NEAR(s.back().tcp_mm[2], 10, 1e-9);
 }
 
+// Cutter radius compensation (G41): the planner runs the compensated path,
+// the 20 mm square profiled from inside by tool T1 (D6, radius 3): round
+// the convex corner after the entry at 3 mm from it, then along the square
+// 3 mm in from the sides.
+TEST(PlannerPaths, CutterCompensationRunsTheOffsetPath) {
+  const auto s =
+      sample_plan(plan_text("G21 G61 T1 M6\nG0 X-10 Y-10\nG41 D1 G1 X0 Y0 F1200\nX20\nY20\nX0\nY0\n"
+                            "G40 G1 X-10 Y-10\nM2\n"),
+                  0.001);
+  ASSERT_FALSE(s.empty());
+  EXPECT_TRUE(s.back().done);
+  const P3 corners[] = {{17, 3, 0}, {17, 17, 0}, {3, 17, 0}, {3, 0, 0}};
+  for (const P3& k : corners) {
+    double closest = 1e300;
+    for (const auto& c : s)
+      closest = std::min(closest, std::hypot(c.tcp_mm[0] - k[0], c.tcp_mm[1] - k[1]));
+    EXPECT_LT(closest, 1e-6) << "corner " << k[0] << " " << k[1];
+  }
+  for (const auto& c : s) {
+    if (c.line == 4) {
+      EXPECT_GE(std::hypot(c.tcp_mm[0], c.tcp_mm[1]), 3 - 1e-6);
+    }
+    if (c.line != 5 && c.line != 6) continue;  // sides Y20 and X0
+    EXPECT_GE(c.tcp_mm[0], 3 - 1e-9);
+    EXPECT_LE(c.tcp_mm[0], 17 + 1e-9);
+    EXPECT_GE(c.tcp_mm[1], 3 - 1e-9);
+    EXPECT_LE(c.tcp_mm[1], 17 + 1e-9);
+  }
+}
+
 }  // namespace
 }  // namespace truecut::interp::testing

@@ -620,6 +620,104 @@ TEST(Rewrite, PolarMovesAreWrittenAsXYAtTheirEnd) {
             "be rewritten");
 }
 
+// A program under cutter radius compensation (G41/G42) is written out in
+// G40 (docs/gcode.md "Cutter radius compensation"): every compensated move
+// where the compensated tool goes, the operation's corrections on top, the
+// first move after the G40 exit with all of X Y Z, and a header comment that
+// says so.
+TEST(Rewrite, CutterCompensationIsExpandedIntoCompensatedMoves) {
+  const V offset(0.01, -0.02, 0.03);
+  const auto m = plane_matrix(-20, 40, -20, 40, 0, 0.5, offset);
+  RewriteOptions o = options("PROFILE", CutType::kPeripheral);
+  o.reach_mm = 100;
+  o.decimals = 6;
+  const std::string program =
+      "G21 G90 G94\nT2 M6\nG43 H2\nG0 X-10 Y-10 Z1\nG41 D2\nG0 X0 Y0\n(OPERATION: PROFILE)\n"
+      "G1 Z0 F300\nX20\nG3 X30 Y10 R10\nG1 Y20\nX0 (left)\n(OPERATION: END)\nY0\n"
+      "G40 G0 Z5\nX-10 Y-10\nM30\n";
+  const RewriteResult r = rewrite_program(program, "comp.ngc", m, o);
+  EXPECT_EQ(r.text.rfind("(truecut rewrite: cutter radius compensation G41/G42 expanded", 0), 0u)
+      << r.text;
+  const std::string body = r.text.substr(r.text.find('\n') + 1);
+  EXPECT_EQ(body.find("G41"), std::string::npos) << r.text;
+  EXPECT_EQ(r.text.find("D2"), std::string::npos) << r.text;
+  EXPECT_NE(r.text.find("(left)"), std::string::npos) << r.text;
+
+  InterpreterOptions io;
+  io.tools = ToolTable::parse(kTools, "tools.tbl");
+  const auto original = Interpreter(io).run_text(program, "comp.ngc");
+  const auto rewritten = Interpreter(io).run_text(r.text, "out.ngc");
+  std::vector<Axes6> ends_out;
+  for (const auto& c : rewritten.calls) {
+    if (!is_motion(c.op)) continue;
+    EXPECT_FALSE(c.context.cutter_comp);
+    if (const auto* f = std::get_if<StraightFeed>(&c.op)) ends_out.push_back(f->end);
+    if (const auto* t = std::get_if<StraightTraverse>(&c.op)) ends_out.push_back(t->end);
+  }
+  // Every end of the original (compensated) path is reached by the output,
+  // shifted by the offset on the operation's feed moves.
+  int compensated = 0;
+  for (const auto& c : original.calls) {
+    if (!is_motion(c.op)) continue;
+    compensated += c.context.cutter_comp;
+    Axes6 want = std::visit(
+        [](const auto& op) -> Axes6 {
+          if constexpr (requires { op.end; }) return op.end;
+          return Axes6{};
+        },
+        c.op);
+    if (c.context.operation == "PROFILE" && !std::holds_alternative<StraightTraverse>(c.op)) {
+      want.x += offset.x();
+      want.y += offset.y();
+      want.z += offset.z();
+    }
+    bool found = false;
+    for (const Axes6& e : ends_out)
+      found = found || (std::fabs(e.x - want.x) < 1e-6 && std::fabs(e.y - want.y) < 1e-6 &&
+                        std::fabs(e.z - want.z) < 1e-6);
+    EXPECT_TRUE(found) << "line " << c.context.line << ": " << want.x << " " << want.y << " "
+                       << want.z << "\n"
+                       << r.text;
+  }
+  EXPECT_GE(compensated, 7);  // entry, Z, X20, corner arc, arc, Y20, X0, Y0
+  // The exit starts from the compensated point: written with X Y Z.
+  ASSERT_FALSE(ends_out.empty());
+  EXPECT_NEAR(ends_out.back().x, -10, 1e-9);
+  EXPECT_NEAR(ends_out.back().y, -10, 1e-9);
+  EXPECT_NEAR(ends_out.back().z, 5, 1e-9);
+
+  // With no correction at all the compensated moves are still written out,
+  // and so is the exit move of the operation, which names only Y: it starts
+  // from the compensated point and its X is the programmed one.
+  const auto zero = plane_matrix(-20, 40, -20, 40, 0, 0.5, V::Zero());
+  const std::string exit_in_op =
+      "G21 G90 G94\nT2 M6\nG0 X-10 Y-10 Z0\n(OPERATION: PROFILE)\nG41 D2 G1 X0 Y0 F300\nX20\n"
+      "Y20\nG40 G1 Y30\nM30\n";
+  const RewriteResult z = rewrite_program(exit_in_op, "exit.ngc", zero, o);
+  auto last_feed = [](const CanonProgram& p) {
+    Axes6 end;
+    for (const auto& c : p.calls)
+      if (const auto* f = std::get_if<StraightFeed>(&c.op)) end = f->end;
+    return end;
+  };
+  const Axes6 want = last_feed(Interpreter(io).run_text(exit_in_op, "exit.ngc"));
+  const Axes6 got = last_feed(Interpreter(io).run_text(z.text, "z.ngc"));
+  EXPECT_NEAR(want.x, 20, 1e-9);
+  EXPECT_NEAR(want.y, 30, 1e-9);
+  EXPECT_NEAR(got.x, want.x, 1e-9) << z.text;
+  EXPECT_NEAR(got.y, want.y, 1e-9) << z.text;
+  EXPECT_EQ(z.text.find("\nX20\n"), std::string::npos) << z.text;
+
+  // Compensated moves that run more than once cannot be written out.
+  const std::string loop =
+      "G21 G90 G94\nT2 M6\nG0 X-10 Y-10 Z1\nG41 D2 G1 X0 Y0 F300\n(OPERATION: PROFILE)\n"
+      "o1 repeat [2]\nG1 X10\no1 endrepeat\nG40 G0 X-10\nM30\n";
+  EXPECT_EQ(error_of<GcodeError>(loop, o),
+            "bad.ngc:6:1: O-word in a program with cutter radius compensation: the rewrite writes "
+            "compensated moves out one by one and cannot do that for subroutines, loops or "
+            "conditions");
+}
+
 // M70/M72 inside the operation are copied as written: the rewritten lines
 // run under the state M72 restores (here the feed), as the originals did.
 // G5.1 (refused by the interpreter) is refused by name at its line.

@@ -86,6 +86,9 @@ LineWords split_move_line(const std::string& source, const std::string& file, in
         if (w.code == 0 || w.code == 10 || w.code == 20 || w.code == 30) {
           remove[k] = true;
           out.explicit_motion = true;
+        } else if (w.code == 410 || w.code == 411 || w.code == 420 || w.code == 421) {
+          remove[k] = true;  // the rewrite writes compensated moves (docs/gcode.md)
+          out.cutter_comp = true;
         } else if (w.code == 910) {
           fail(w.begin, "G91 (incremental distance)");
         } else if (!keep_g(w.code)) {
@@ -107,6 +110,8 @@ LineWords split_move_line(const std::string& source, const std::string& file, in
       case 'k':
       case 'r':
       case 'f':
+      case 'd':  // the radius or diameter of G41/G42 (G41.1/G42.1)
+      case 'l':  // the tool orientation of G41.1/G42.1
         remove[k] = true;
         break;
       case 'a':
@@ -151,6 +156,61 @@ LineWords split_move_line(const std::string& source, const std::string& file, in
          (out.residual.back() == ' ' || out.residual.back() == '\t' || out.residual.back() == '\r'))
     out.residual.pop_back();
   return out;
+}
+
+namespace {
+
+// The G codes (x10) written on a line; empty when it cannot be read.
+std::vector<int> g_codes_of_line(const std::string& source) {
+  LexedLine lx;
+  try {
+    lx = lex_line(source, "", 0);
+  } catch (const GcodeError&) {
+    return {};
+  }
+  const std::string& t = lx.text;
+  std::vector<int> codes;
+  for (size_t pos = 0; pos < t.size(); ++pos) {
+    if (t[pos] == '(') {
+      pos = t.find(')', pos);
+      if (pos == std::string::npos) break;
+      continue;
+    }
+    if (t[pos] == ';') break;
+    if (t[pos] != 'g') continue;
+    size_t end = pos + 1;
+    while (end < t.size() && (std::isdigit(static_cast<unsigned char>(t[end])) || t[end] == '.'))
+      ++end;
+    if (end == pos + 1) continue;
+    codes.push_back(static_cast<int>(
+        std::lround(std::strtod(t.substr(pos + 1, end - pos - 1).c_str(), nullptr) * 10)));
+  }
+  return codes;
+}
+
+}  // namespace
+
+bool has_cutter_comp_code(const std::string& source) {
+  for (int code : g_codes_of_line(source))
+    if (code == 410 || code == 411 || code == 420 || code == 421) return true;
+  return false;
+}
+
+bool is_o_word_line(const std::string& source) {
+  size_t i = 0;
+  auto blanks = [&] {
+    while (i < source.size() && (source[i] == ' ' || source[i] == '\t'))
+      ++i;
+  };
+  blanks();
+  if (i < source.size() && source[i] == '/') ++i, blanks();
+  if (i < source.size() && (source[i] == 'n' || source[i] == 'N')) {
+    ++i;
+    while (i < source.size() && std::isdigit(static_cast<unsigned char>(source[i])))
+      ++i;
+    blanks();
+  }
+  return i < source.size() && (source[i] == 'o' || source[i] == 'O');
 }
 
 int motion_code_of_line(const std::string& source) {

@@ -18,6 +18,7 @@ struct LineWords {
   // but an N number would remain.
   std::string residual;
   bool has_a = false, has_c = false;  // A or C word on the line
+  bool cutter_comp = false;           // G41 G42 G41.1 G42.1 (removed with D and L)
 };
 
 // `source` is the line without its terminator. Throws GcodeError at the
@@ -29,5 +30,11 @@ LineWords split_move_line(const std::string& source, const std::string& file, in
 // The motion-group G code (x10: G0 G1 G2 G3 G73 G80-G89) written on a line,
 // -1 without one or when the line cannot be read. Never throws.
 int motion_code_of_line(const std::string& source);
+
+// Whether a line has G41, G42, G41.1 or G42.1. Never throws.
+bool has_cutter_comp_code(const std::string& source);
+
+// Whether a line is an O-word line (sub, call, if, while ...). Never throws.
+bool is_o_word_line(const std::string& source);
 
 }  // namespace truecut::interp::rewrite

@@ -216,6 +216,20 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
   radii.erase(std::unique(radii.begin(), radii.end()), radii.end());
   const double reach_mm = prepare(radii);
   const std::vector<RawLine> raw = split_raw_lines(text);
+  // Cutter radius compensation (docs/gcode.md): the output runs in G40, with
+  // every compensated move written where the compensated tool goes, and the
+  // first move after the G40 exit with all of X Y Z (it starts from the
+  // compensated point). Moves that run more than once cannot be written so.
+  const bool expands_comp = std::any_of(program.calls.begin(), program.calls.end(),
+                                        [](const CanonCall& c) { return c.context.cutter_comp; });
+  if (expands_comp)
+    for (size_t i = 0; i < raw.size(); ++i)
+      if (is_o_word_line(raw[i].content))
+        throw GcodeError({name, static_cast<int>(i) + 1, 1},
+                         "O-word in a program with cutter radius compensation: the rewrite "
+                         "writes compensated moves out one by one and cannot do that for "
+                         "subroutines, loops or conditions");
+  bool after_comp = false;  // the last move was compensated
   // A canned cycle (G73, G81-G89) expands into several moves on one line:
   // the rewrite cannot keep the cycle word and refuses it by name. The
   // motion mode of a line is followed through the source text in order.
@@ -276,6 +290,58 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     const bool feed = !std::holds_alternative<StraightTraverse>(c.op);
     if (in_op) ++s.moves_read;
     const std::string file = file_of(program, ctx, name);
+    if (expands_comp && (ctx.cutter_comp || after_comp) && !(in_op && feed)) {
+      // A compensated move, or the first after the G40 exit, outside what
+      // the operation corrects: written exactly where the tool goes.
+      if (ctx.file != 0)
+        throw GcodeError({file, ctx.line, 0},
+                         "move under cutter radius compensation in a subroutine file: it "
+                         "cannot be written out");
+      if (!ctx.cutter_comp && motions_per_line[ctx.line] != 1)
+        throw GcodeError({file, ctx.line, 0},
+                         "the first move after the cutter compensation exit makes several "
+                         "moves: it cannot be written out");
+      const LineWords words = split_move_line(raw[ctx.line - 1].content, file, ctx.line);
+      PlannedLine& pl = plan[ctx.line];
+      RewrittenLine& rl = expected[ctx.line];
+      if (pl.moves.empty()) pl.residual = words.residual;
+      rl.context = ctx;
+      rl.traverse = !feed;
+      const int n = pieces_for_chord(move, o);
+      const Axes6 start_prog = path.to_program(move.start, ctx);
+      const Axes6 end_prog = end_of(c.op);
+      const bool write_a = words.has_a || start_prog.a != end_prog.a;
+      const bool write_c = words.has_c || start_prog.c != end_prog.c;
+      for (int k = 1; k <= n; ++k) {
+        const Axes6 q = k == n
+                            ? end_prog
+                            : path.to_program(ToolPath::at(move, static_cast<double>(k) / n), ctx);
+        std::string line = words.block_delete ? "/" : "";
+        line += feed ? "G1" : "G0";
+        Axes6 expect = end_prog;
+        const char letters[] = {'X', 'Y', 'Z', 'A', 'B', 'C'};
+        for (int ax : {0, 1, 2, 3, 5}) {
+          if ((ax == 3 && !write_a) || (ax == 5 && !write_c)) continue;
+          const std::string v = exact(q[ax]);
+          line += std::string(" ") + letters[ax] + v;
+          expect[ax] = std::strtod(v.c_str(), nullptr);
+        }
+        if (feed && ctx.feed_mode == FeedMode::kInverseTime)
+          line += " F" + feed_text(ctx.inverse_time_f * n);
+        else if (feed && k == 1 && feed_before_line != feed_upm)
+          line += " F" + feed_text(feed_upm);
+        pl.moves.push_back(line);
+        rl.expected.push_back(expect);
+      }
+      if (in_op) ++s.moves_kept;
+      after_comp = ctx.cutter_comp;
+      path.finish(move);
+      out_mode = feed ? 1 : 0;
+      displaced = false;
+      continue;
+    }
+    const bool follows_comp = after_comp;  // starts from a compensated point
+    after_comp = ctx.cutter_comp;
     if (in_op && !feed && displaced) {
       // A rapid after a compensated point: written with all of X Y Z, so
       // the axes it does not name come back to the original position.
@@ -325,7 +391,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     if (ctx.spline != SplineMode::kNone)
       throw GcodeError({file, ctx.line, 0},
                        "BSPLINE/CSPLINE point: spline moves cannot be rewritten as G1 moves");
-    if (motions_per_line[ctx.line] != 1) {
+    if (motions_per_line[ctx.line] != 1 && !ctx.cutter_comp) {
       refuse_canned_cycle(file, ctx.line);
       throw GcodeError({file, ctx.line, 0},
                        "line makes several moves (loop, subroutine or G28/G30): it cannot be "
@@ -348,7 +414,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
           corr.shift_mm == Eigen::Vector3d::Zero() ? p : path.shifted(p, ctx, corr.shift_mm);
     }
     const std::string& source = raw[ctx.line - 1].content;
-    if (o.keep_unchanged_moves && all_zero && !displaced) {
+    if (o.keep_unchanged_moves && all_zero && !displaced && !ctx.cutter_comp && !follows_comp) {
       bool explicit_motion = false;
       try {
         explicit_motion = split_move_line(source, file, ctx.line).explicit_motion;
@@ -410,18 +476,47 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     }
     s.points_written += n;
     ++s.moves_rewritten;
-    plan[ctx.line] = std::move(pl);
-    expected[ctx.line] = std::move(rl);
+    // Under cutter compensation a line may make two moves (a corner arc and
+    // its move): both are written.
+    PlannedLine& dst = plan[ctx.line];
+    if (dst.moves.empty()) dst.residual = pl.residual;
+    dst.moves.insert(dst.moves.end(), pl.moves.begin(), pl.moves.end());
+    RewrittenLine& rdst = expected[ctx.line];
+    rdst.context = rl.context;
+    rdst.traverse = false;
+    rdst.expected.insert(rdst.expected.end(), rl.expected.begin(), rl.expected.end());
     out_mode = 1;
     displaced = points.back() != move.end;
     path.finish(move);
   }
   s.mean_compensation_mm = s.points_compensated > 0 ? sum_mm / s.points_compensated : 0.0;
 
+  // Lines that switch compensation on without a move of their own lose
+  // their G41/G42 words too.
+  if (expands_comp)
+    for (size_t i = 0; i < raw.size(); ++i) {
+      const int line = static_cast<int>(i) + 1;
+      if (plan.count(line) || !has_cutter_comp_code(raw[i].content)) continue;
+      plan[line].residual = split_move_line(raw[i].content, name, line).residual;
+      expected[line].context.line = line;
+    }
+
   // Assemble: every other line byte for byte.
   RewriteResult r;
   std::vector<OutputLine> origin;
+  const bool percent_first = !raw.empty() &&
+                             raw[0].content.find_first_not_of(" \t") != std::string::npos &&
+                             raw[0].content[raw[0].content.find_first_not_of(" \t")] == '%';
+  auto header = [&] {
+    if (!expands_comp) return;
+    r.text +=
+        "(truecut rewrite: cutter radius compensation G41/G42 expanded: the moves under it are "
+        "written where the compensated tool goes, the program runs in G40)\n";
+    origin.push_back({1, OutputLine::kResidual});
+  };
+  if (!percent_first) header();
   for (size_t i = 0; i < raw.size(); ++i) {
+    if (i == 1 && percent_first) header();
     const int line = static_cast<int>(i) + 1;
     auto it = plan.find(line);
     if (it == plan.end()) {

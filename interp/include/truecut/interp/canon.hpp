@@ -165,6 +165,9 @@ struct CallContext {
   double inverse_time_f = 0;  // the programmed F of an inverse-time move
   SplineMode spline = SplineMode::kNone;
   bool tcp = false;  // TRAORI active
+  // Under cutter radius compensation (G41/G42 with a radius > 0): the
+  // move's positions are those of the compensated tool, not as programmed.
+  bool cutter_comp = false;
   // Offsets in mm (degrees for A B C) that turn positions into machine ones.
   Axes6 g5x_mm, g92_mm, tool_offset_mm;
 };

@@ -21,6 +21,7 @@ struct ToolEntry {
   int pocket = 0;
   Axes6 offset_mm;  // length offsets per axis (Z is the usual one)
   double diameter_mm = 0;
+  int orientation = 0;  // Q: a lathe tool's orientation 1-8 (0 or 9: a mill)
   std::string comment;
 };
 
