@@ -214,32 +214,11 @@ bool is_o_word_line(const std::string& source) {
 }
 
 int motion_code_of_line(const std::string& source) {
-  LexedLine lx;
-  try {
-    lx = lex_line(source, "", 0);
-  } catch (const GcodeError&) {
-    return -1;
-  }
-  const std::string& t = lx.text;
   int found = -1;
-  for (size_t pos = 0; pos < t.size(); ++pos) {
-    if (t[pos] == '(') {
-      pos = t.find(')', pos);
-      if (pos == std::string::npos) break;
-      continue;
-    }
-    if (t[pos] == ';') break;
-    if (t[pos] != 'g') continue;
-    size_t end = pos + 1;
-    while (end < t.size() && (std::isdigit(static_cast<unsigned char>(t[end])) || t[end] == '.'))
-      ++end;
-    if (end == pos + 1) continue;
-    const int code = static_cast<int>(
-        std::lround(std::strtod(t.substr(pos + 1, end - pos - 1).c_str(), nullptr) * 10));
+  for (int code : g_codes_of_line(source))
     if (code == 0 || code == 10 || code == 20 || code == 30 || code == 730 ||
         (code >= 800 && code <= 890 && code % 10 == 0))
       found = code;
-  }
   return found;
 }
 
