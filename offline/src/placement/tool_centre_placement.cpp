@@ -10,7 +10,6 @@
 #include <limits>
 #include <map>
 #include <numbers>
-#include <numeric>
 #include <stdexcept>
 #include <string>
 
@@ -154,34 +153,65 @@ CutterDistance cutter_distance(const ToolShape& shape, const Eigen::Vector3d& ti
 
 namespace {
 
-// Of the candidate samples those within tie of the
-// closest: the earliest (default), or per pass (run of consecutive samples)
-// the one whose tip is nearest to p.
-void choose_samples(const std::vector<std::uint32_t>& cand, const std::vector<double>& dist,
-                    double best, const Eigen::Vector3d& p, const ToolPath& path,
-                    const PlacementOptions& options,
+// A sample within the contact tolerance of P, and its signed distance.
+struct NearSample {
+  std::uint32_t sample = 0;
+  double distance_mm = 0.0;
+};
+
+// Of the samples within tolerance (`near`, any order) whose cutter normal
+// faces P's normal (`faces`), those within tie of the closest: the earliest
+// in the program, or per pass (run of consecutive samples) the one whose tip
+// is nearest to p. The normal is tested only where it can change the choice:
+// on the closest until one faces, then on those within tie of it.
+template <class Faces>
+void choose_samples(std::vector<NearSample>& near, const Faces& faces, const Eigen::Vector3d& p,
+                    const ToolPath& path, const PlacementOptions& options,
                     std::vector<std::pair<std::uint32_t, double>>& chosen) {
-  std::vector<std::size_t> order(cand.size());
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::sort(order.begin(), order.end(),
-            [&](std::size_t a, std::size_t b) { return cand[a] < cand[b]; });
+  constexpr double kRejected = std::numeric_limits<double>::infinity();
+  double best = kRejected;
+  std::size_t found = near.size();  // the closest that faces
+  while (found == near.size()) {
+    std::size_t closest = near.size();
+    for (std::size_t k = 0; k < near.size(); ++k) {
+      if (std::abs(near[k].distance_mm) <
+          (closest < near.size() ? std::abs(near[closest].distance_mm) : kRejected))
+        closest = k;
+    }
+    if (closest == near.size()) return;
+    if (faces(near[closest].sample)) {
+      found = closest;
+      best = std::abs(near[closest].distance_mm);
+    } else {
+      near[closest].distance_mm = kRejected;
+    }
+  }
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < near.size(); ++k) {
+    const NearSample s = near[k];
+    if (std::abs(s.distance_mm) > best + options.tie_mm) continue;
+    if (k != found && !faces(s.sample)) continue;
+    near[kept++] = s;
+  }
+  near.resize(kept);
+  std::sort(near.begin(), near.end(),
+            [](const NearSample& a, const NearSample& b) { return a.sample < b.sample; });
+  if (!options.every_generating_pass) {
+    chosen.push_back({near.front().sample, near.front().distance_mm});
+    return;
+  }
   std::uint32_t previous = 0;
   double nearest = 0.0;
-  for (std::size_t c : order) {
-    if (std::abs(dist[c]) > best + options.tie_mm) continue;
-    if (!options.every_generating_pass) {
-      chosen.push_back({cand[c], dist[c]});
-      return;
-    }
-    const double tip_distance = (path.samples[cand[c]].tip_mm - p).squaredNorm();
-    if (chosen.empty() || cand[c] != previous + 1) {
-      chosen.push_back({cand[c], dist[c]});
+  for (const NearSample& s : near) {
+    const double tip_distance = (path.samples[s.sample].tip_mm - p).squaredNorm();
+    if (chosen.empty() || s.sample != previous + 1) {
+      chosen.push_back({s.sample, s.distance_mm});
       nearest = tip_distance;
     } else if (tip_distance < nearest) {
-      chosen.back() = {cand[c], dist[c]};
+      chosen.back() = {s.sample, s.distance_mm};
       nearest = tip_distance;
     }
-    previous = cand[c];
+    previous = s.sample;
   }
 }
 
@@ -233,16 +263,13 @@ PlacementResult place_at_tool_centre(std::span<const Eigen::Vector3d> positions_
     tbb::parallel_for(
         tbb::blocked_range<std::size_t>(0, n, 256),
         [&](const tbb::blocked_range<std::size_t>& range) {
-          std::vector<std::uint32_t> near, cand;
-          std::vector<double> dist;
+          std::vector<std::uint32_t> near;
+          std::vector<NearSample> within;
           std::vector<std::uint32_t>& seen = last_point.local();
           for (std::size_t p = range.begin(); p != range.end(); ++p) {
             near.clear();
             ix.tree.within(positions_mm[p], ix.query_radius, near);
-            cand.clear();
-            dist.clear();
-            double best = std::numeric_limits<double>::infinity();
-            const Eigen::Vector3d inside = positions_mm[p] - 0.5 * tol * normals[p];
+            within.clear();
             // A chunk comes up once per probe near P: test it once. (The
             // order the candidates are found in does not matter: they are
             // chosen in sample order, see choose_samples.)
@@ -266,17 +293,18 @@ PlacementResult place_at_tool_centre(std::span<const Eigen::Vector3d> positions_
                 if ((d - h * s.axis).squaredNorm() > reach2) continue;
                 const double distance =
                     cutter_signed_distance(shape, s.tip_mm, s.axis, positions_mm[p]);
-                if (std::abs(distance) > tol) continue;
-                // The cutter normal just inside the material: unambiguous where P lies
-                // on the rim of a flat end mill, where its bottom meets its flank.
-                const CutterDistance ci = cutter_distance(shape, s.tip_mm, s.axis, inside);
-                if (-ci.normal.dot(normals[p]) < min_cos) continue;
-                cand.push_back(sample);
-                dist.push_back(distance);
-                best = std::min(best, std::abs(distance));
+                if (std::abs(distance) <= tol) within.push_back({sample, distance});
               }
             }
-            choose_samples(cand, dist, best, positions_mm[p], path, options, chosen[p]);
+            // The cutter normal just inside the material: unambiguous where P lies
+            // on the rim of a flat end mill, where its bottom meets its flank.
+            const Eigen::Vector3d inside = positions_mm[p] - 0.5 * tol * normals[p];
+            const auto faces = [&](std::uint32_t sample) {
+              const ToolPathSample& s = path.samples[sample];
+              return -cutter_distance(shape, s.tip_mm, s.axis, inside).normal.dot(normals[p]) >=
+                     min_cos;
+            };
+            choose_samples(within, faces, positions_mm[p], path, options, chosen[p]);
           }
         });
     ToolPlacement tp;
