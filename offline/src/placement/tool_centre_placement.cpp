@@ -43,6 +43,7 @@ struct ToolIndex {
   std::vector<Eigen::Vector3d> probes;
   std::vector<std::uint32_t> probe_chunk;
   std::vector<std::uint32_t> chunk_begin;  // into the tool's samples; one past the last at the end
+  std::vector<double> chunk_spread;        // of each chunk's members from its first sample
   spatial::KdTree tree;
   double query_radius = 0.0;
 };
@@ -59,15 +60,18 @@ ToolIndex build_index(const ToolShape& shape, const ToolPath& path,
   for (std::size_t c = 0; c < samples.size();) {
     const ToolPathSample& lead = path.samples[samples[c]];
     std::size_t e = c + 1;
+    double chunk_spread = 0.0;
     for (; e < samples.size() && e - c < kMaxChunk; ++e) {
       const ToolPathSample& m = path.samples[samples[e]];
       const double d =
           (m.tip_mm - lead.tip_mm).norm() + shape.cutting_length_mm * (m.axis - lead.axis).norm();
       if (d > max_spread) break;
-      spread = std::max(spread, d);
+      chunk_spread = std::max(chunk_spread, d);
     }
+    spread = std::max(spread, chunk_spread);
     const auto chunk = static_cast<std::uint32_t>(ix.chunk_begin.size());
     ix.chunk_begin.push_back(static_cast<std::uint32_t>(c));
+    ix.chunk_spread.push_back(chunk_spread);
     for (int i = 0; i <= k; ++i) {
       ix.probes.push_back(lead.tip_mm + (r + i * step) * lead.axis);
       ix.probe_chunk.push_back(chunk);
@@ -78,6 +82,70 @@ ToolIndex build_index(const ToolShape& shape, const ToolPath& path,
   ix.tree = spatial::KdTree(ix.probes);
   ix.query_radius = std::hypot(shape.radius_mm + tol, 0.5 * step) + spread;
   return ix;
+}
+
+// Points in blocks of neighbours, so that one query of the index serves a
+// block: in Morton order of a grid of `extent` cells, cut where a block
+// would hold more than kMaxBlock points or grow beyond `extent` across.
+struct PointBlocks {
+  std::vector<std::uint32_t> order;  // point indices, block after block
+  std::vector<std::uint32_t> begin;  // into order; one past the last at the end
+  std::vector<Eigen::Vector3d> centre;
+  std::vector<double> half_diagonal;
+};
+
+std::uint64_t spread_bits(std::uint64_t v) {  // 21 bits to every third of 63
+  v &= 0x1fffff;
+  v = (v | v << 32) & 0x1f00000000ffffull;
+  v = (v | v << 16) & 0x1f0000ff0000ffull;
+  v = (v | v << 8) & 0x100f00f00f00f00full;
+  v = (v | v << 4) & 0x10c30c30c30c30c3ull;
+  v = (v | v << 2) & 0x1249249249249249ull;
+  return v;
+}
+
+PointBlocks point_blocks(std::span<const Eigen::Vector3d> positions_mm, double extent_mm) {
+  constexpr std::size_t kMaxBlock = 32;
+  const std::size_t n = positions_mm.size();
+  PointBlocks b;
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  for (const Eigen::Vector3d& p : positions_mm)
+    lo = lo.cwiseMin(p);
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d g = (positions_mm[i] - lo) / extent_mm;
+    std::uint64_t key = 0;
+    for (int a = 0; a < 3; ++a) {
+      const double c = std::clamp(g[a], 0.0, double{0x1fffff});
+      key |= spread_bits(static_cast<std::uint64_t>(c)) << a;
+    }
+    keyed[i] = {key, static_cast<std::uint32_t>(i)};
+  }
+  std::sort(keyed.begin(), keyed.end());
+  Eigen::AlignedBox3d box;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d& p = positions_mm[keyed[i].second];
+    Eigen::AlignedBox3d grown = box;
+    grown.extend(p);
+    const bool full = !b.begin.empty() && i - b.begin.back() >= kMaxBlock;
+    if (b.begin.empty() || full || grown.diagonal().norm() > extent_mm) {
+      if (!b.begin.empty()) {
+        b.centre.push_back(box.center());
+        b.half_diagonal.push_back(0.5 * box.diagonal().norm());
+      }
+      b.begin.push_back(static_cast<std::uint32_t>(i));
+      box = Eigen::AlignedBox3d(p, p);
+    } else {
+      box = grown;
+    }
+    b.order.push_back(keyed[i].second);
+  }
+  if (!b.begin.empty()) {
+    b.centre.push_back(box.center());
+    b.half_diagonal.push_back(0.5 * box.diagonal().norm());
+  }
+  b.begin.push_back(static_cast<std::uint32_t>(n));
+  return b;
 }
 
 }  // namespace
@@ -254,57 +322,68 @@ PlacementResult place_at_tool_centre(std::span<const Eigen::Vector3d> positions_
     const ToolIndex ix = build_index(shape, path, samples, tol);
     // Per point, the chosen samples (one, or one per generating pass).
     std::vector<std::vector<std::pair<std::uint32_t, double>>> chosen(n);
-    const double reach2 = (shape.radius_mm + tol) * (shape.radius_mm + tol);
-    // Per thread: the last point each chunk came up for.
+    const double reach = shape.radius_mm + tol;
+    // Per thread: the last block each chunk came up for.
     const std::size_t chunks = ix.chunk_begin.size() - 1;
-    tbb::enumerable_thread_specific<std::vector<std::uint32_t>> last_point([&] {
+    tbb::enumerable_thread_specific<std::vector<std::uint32_t>> last_block([&] {
       return std::vector<std::uint32_t>(chunks, std::numeric_limits<std::uint32_t>::max());
     });
+    const PointBlocks blocks = point_blocks(positions_mm, 0.5 * shape.radius_mm);
     tbb::parallel_for(
-        tbb::blocked_range<std::size_t>(0, n, 256),
+        tbb::blocked_range<std::size_t>(0, blocks.centre.size(), 16),
         [&](const tbb::blocked_range<std::size_t>& range) {
           std::vector<std::uint32_t> near;
           std::vector<NearSample> within;
-          std::vector<std::uint32_t>& seen = last_point.local();
-          for (std::size_t p = range.begin(); p != range.end(); ++p) {
+          std::vector<std::uint32_t>& seen = last_block.local();
+          for (std::size_t block = range.begin(); block != range.end(); ++block) {
             near.clear();
-            ix.tree.within(positions_mm[p], ix.query_radius, near);
-            within.clear();
-            // A chunk comes up once per probe near P: test it once. (The
-            // order the candidates are found in does not matter: they are
-            // chosen in sample order, see choose_samples.)
+            ix.tree.within(blocks.centre[block], ix.query_radius + blocks.half_diagonal[block],
+                           near);
+            // A chunk comes up once per probe near the block: keep it once.
             std::size_t kept = 0;
             for (const std::uint32_t q : near) {
               const std::uint32_t chunk = ix.probe_chunk[q];
-              if (seen[chunk] == static_cast<std::uint32_t>(p)) continue;
-              seen[chunk] = static_cast<std::uint32_t>(p);
+              if (seen[chunk] == static_cast<std::uint32_t>(block)) continue;
+              seen[chunk] = static_cast<std::uint32_t>(block);
               near[kept++] = chunk;
             }
             near.resize(kept);
-            for (std::uint32_t chunk : near) {
-              for (std::uint32_t m = ix.chunk_begin[chunk]; m < ix.chunk_begin[chunk + 1]; ++m) {
-                const std::uint32_t sample = samples[m];
-                const ToolPathSample& s = path.samples[sample];
-                // Necessary for |distance| <= tol: P within R + tol of the
-                // core's axis segment. Cheaper than the exact distance.
-                const Eigen::Vector3d d = positions_mm[p] - s.tip_mm;
-                const double h =
-                    std::clamp(d.dot(s.axis), shape.corner_radius_mm, shape.cutting_length_mm);
-                if ((d - h * s.axis).squaredNorm() > reach2) continue;
-                const double distance =
-                    cutter_signed_distance(shape, s.tip_mm, s.axis, positions_mm[p]);
-                if (std::abs(distance) <= tol) within.push_back({sample, distance});
+            for (std::uint32_t b = blocks.begin[block]; b < blocks.begin[block + 1]; ++b) {
+              const std::uint32_t p = blocks.order[b];
+              within.clear();
+              for (std::uint32_t chunk : near) {
+                // Necessary for a member within reach: P within R + tol +
+                // the chunk's spread of its first sample's core axis segment.
+                const ToolPathSample& lead = path.samples[samples[ix.chunk_begin[chunk]]];
+                const Eigen::Vector3d dl = positions_mm[p] - lead.tip_mm;
+                const double hl =
+                    std::clamp(dl.dot(lead.axis), shape.corner_radius_mm, shape.cutting_length_mm);
+                const double reach_chunk = reach + ix.chunk_spread[chunk];
+                if ((dl - hl * lead.axis).squaredNorm() > reach_chunk * reach_chunk) continue;
+                for (std::uint32_t m = ix.chunk_begin[chunk]; m < ix.chunk_begin[chunk + 1]; ++m) {
+                  const std::uint32_t sample = samples[m];
+                  const ToolPathSample& s = path.samples[sample];
+                  // Necessary for |distance| <= tol: P within R + tol of the
+                  // core's axis segment. Cheaper than the exact distance.
+                  const Eigen::Vector3d d = positions_mm[p] - s.tip_mm;
+                  const double h =
+                      std::clamp(d.dot(s.axis), shape.corner_radius_mm, shape.cutting_length_mm);
+                  if ((d - h * s.axis).squaredNorm() > reach * reach) continue;
+                  const double distance =
+                      cutter_signed_distance(shape, s.tip_mm, s.axis, positions_mm[p]);
+                  if (std::abs(distance) <= tol) within.push_back({sample, distance});
+                }
               }
+              // The cutter normal just inside the material: unambiguous where P lies
+              // on the rim of a flat end mill, where its bottom meets its flank.
+              const Eigen::Vector3d inside = positions_mm[p] - 0.5 * tol * normals[p];
+              const auto faces = [&](std::uint32_t sample) {
+                const ToolPathSample& s = path.samples[sample];
+                return -cutter_distance(shape, s.tip_mm, s.axis, inside).normal.dot(normals[p]) >=
+                       min_cos;
+              };
+              choose_samples(within, faces, positions_mm[p], path, options, chosen[p]);
             }
-            // The cutter normal just inside the material: unambiguous where P lies
-            // on the rim of a flat end mill, where its bottom meets its flank.
-            const Eigen::Vector3d inside = positions_mm[p] - 0.5 * tol * normals[p];
-            const auto faces = [&](std::uint32_t sample) {
-              const ToolPathSample& s = path.samples[sample];
-              return -cutter_distance(shape, s.tip_mm, s.axis, inside).normal.dot(normals[p]) >=
-                     min_cos;
-            };
-            choose_samples(within, faces, positions_mm[p], path, options, chosen[p]);
           }
         });
     ToolPlacement tp;
