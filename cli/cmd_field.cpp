@@ -79,6 +79,10 @@ const char* kFieldHelp =
     "                        points than N, fit on a fixed subset of the scan of\n"
     "                        about N per sphere (default 256; 0: every point, as the\n"
     "                        model-adaptation source does)\n"
+    "  --sphere-max-facets N  sphere method: where the median sphere holds more\n"
+    "                        nominal facets than N, the planes not through the point\n"
+    "                        come from a fixed subset of about N facets per sphere\n"
+    "                        (default 64; 0: every facet, as the source does)\n"
     "  --plane-fit tilted|parallel  sphere method planes: tilted (default) fits each\n"
     "                        plane's orientation too; parallel keeps the nominal's and\n"
     "                        fits only the offset, as the model-adaptation source does\n"
@@ -374,6 +378,9 @@ offline::FieldPipelineOptions pipeline_options(const ParsedArgs& a, const Inputs
   o.sphere.radius_mm = a.number("sphere-radius", o.sphere.radius_mm, 0.01, 100.0);
   o.sphere.max_points_per_sphere = static_cast<std::size_t>(a.integer(
       "sphere-max-points", static_cast<long>(o.sphere.max_points_per_sphere), 0, 100000000));
+  o.sphere.max_facets_per_sphere = static_cast<std::size_t>(
+      a.integer("sphere-max-facets", static_cast<long>(o.sphere.max_facets_per_sphere), 0,
+                100000000));
   const std::string plane_fit = a.value("plane-fit").value_or("tilted");
   if (plane_fit != "tilted" && plane_fit != "parallel")
     throw UsageError("--plane-fit must be tilted or parallel, not '" + plane_fit + "'");
@@ -567,6 +574,7 @@ int cmd_field(const std::vector<std::string>& argv) {
                       {"max-scan-outliers", true},
                       {"sphere-radius", true},
                       {"sphere-max-points", true},
+                      {"sphere-max-facets", true},
                       {"plane-fit", true},
                       {"max-distance", true},
                       {"kb-kc", true},

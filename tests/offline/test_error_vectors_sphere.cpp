@@ -318,5 +318,90 @@ TEST(SphereMethodThinning, ScanBelowTheBoundIsUsedWhole) {
   EXPECT_EQ(bounded.support_point, all.support_point);
 }
 
+// A 4 mm box of 0.1 mm facets (about 630 per sphere of 1 mm) standing on a
+// floor of two facets: the facets beside the point are thinned to about 64
+// per sphere, and the planes are the same as from every facet, a face's
+// included where only a sliver of it reaches into the sphere (of the top's
+// fine facets, a sliver holds one or two: without the facets along the
+// edges kept, some are lost).
+TEST(SphereMethodFacetThinning, FineFacetsBesideCoarseOnesGiveTheSameVectorsAsEveryFacet) {
+  constexpr int kK = 40;
+  TriangleMesh box = test_geo::box(Eigen::Vector3d::Zero(), Eigen::Vector3d(4, 4, 4), kK);
+  std::vector<Triangle> kept;
+  for (const Triangle& t : box.triangles) {
+    if (box.vertices_mm[t[0]].z() != 0.0 || box.vertices_mm[t[1]].z() != 0.0 ||
+        box.vertices_mm[t[2]].z() != 0.0)
+      kept.push_back(t);
+  }
+  auto corner = [&](double x, double y) {
+    for (std::uint32_t v = 0; v < box.vertices_mm.size(); ++v)
+      if (box.vertices_mm[v] == Eigen::Vector3d(x, y, 0.0)) return v;
+    ADD_FAILURE() << "no corner " << x << " " << y;
+    return 0u;
+  };
+  const std::uint32_t c00 = corner(0, 0), c10 = corner(4, 0), c11 = corner(4, 4),
+                      c01 = corner(0, 4);
+  kept.push_back({c00, c11, c10});  // facing -z
+  kept.push_back({c00, c01, c11});
+  box.triangles = kept;
+
+  const Eigen::Vector3d d = 0.02 * Eigen::Vector3d(1, -2, 3).normalized();
+  TriangleMesh machined = box;
+  for (Eigen::Vector3d& p : machined.vertices_mm)
+    p += d;
+  const std::vector<Eigen::Vector3d> cloud = test_geo::sample_surface(machined, 100.0, 0.005, 31);
+
+  CompensationPoints pts;
+  auto add = [&](Eigen::Vector3d p, Eigen::Vector3d n) {
+    pts.positions_mm.push_back(p);
+    pts.normals.push_back(n.normalized());
+    pts.surface_ids.push_back(0);
+    pts.triangles.push_back(0);
+  };
+  const Eigen::Vector3d x(1, 0, 0), z(0, 0, 1);
+  add({4, 2, 2}, x);            // the wall
+  add({4, 2, 0.3}, x);          // the wall, the floor 0.3 mm away
+  add({4, 2, 0.9}, x);          // the wall, a sliver of the floor in the sphere
+  add({4, 2, 0}, x - z);        // the wall's edge on the floor
+  add({3.6, 2, 0}, -z);         // the floor beside the wall
+  add({4, 4, 0}, x - z);        // a corner on the floor
+  add({4, 4, 4}, x + z);        // a corner of fine facets
+  add({4, 2, 4}, x + z);        // an edge of fine facets
+  for (int k = 0; k < 12; ++k)  // the wall, slivers of the fine top in the sphere
+    add({4, 0.5 + 0.25 * k, 3.02 + 0.01 * k}, x);
+  SphereMethodOptions o;
+  o.radius_mm = 1.0;
+  ASSERT_EQ(o.max_facets_per_sphere, 64u);
+  const ErrorVectors thinned = error_vectors_by_spheres(box, pts, cloud, o);
+  o.max_facets_per_sphere = 0;  // every facet, as the source
+  const ErrorVectors all = error_vectors_by_spheres(box, pts, cloud, o);
+  EXPECT_LT(thinned.nominal_fraction, 0.5);
+  EXPECT_EQ(all.nominal_fraction, 1.0);
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    SCOPED_TRACE(i);
+    ASSERT_EQ(thinned.status[i], all.status[i]) << to_string(thinned.status[i]);
+    EXPECT_EQ(thinned.status[i], ErrorStatus::kValid) << to_string(thinned.status[i]);
+    EXPECT_EQ(thinned.sphere_case[i], all.sphere_case[i]);
+    EXPECT_LE((thinned.vectors_mm[i] - all.vectors_mm[i]).norm(), 1e-9);
+  }
+  // And the planted displacement on the wall, where a plane sees its
+  // normal component (σ / √256 of noise, 4 standard deviations).
+  EXPECT_NEAR(thinned.normal_mm[0], d.x(), 4.0 * 0.005 / 16.0);
+  EXPECT_NEAR(thinned.normal_mm[2], d.x(), 4.0 * 0.005 / 16.0);
+}
+
+// Below the bound the facets are used whole: the same result, bit for bit.
+TEST(SphereMethodFacetThinning, CoarseFacetsAreUsedWhole) {
+  const std::vector<Eigen::Vector3d> cloud = dense_patch(15.0, 0.05, 24);
+  const CompensationPoints pts = patch_points();
+  SphereMethodOptions o;
+  o.radius_mm = kRs;
+  const ErrorVectors bounded = error_vectors_by_spheres(nominal(), pts, cloud, o);
+  o.max_facets_per_sphere = 0;
+  const ErrorVectors all = error_vectors_by_spheres(nominal(), pts, cloud, o);
+  EXPECT_EQ(bounded.nominal_fraction, 1.0);
+  EXPECT_EQ(bounded.vectors_mm, all.vectors_mm);
+}
+
 }  // namespace
 }  // namespace truecut::offline

@@ -44,6 +44,7 @@ struct Plane {
 
 struct Scratch {
   std::vector<RayScene::NearTriangle> triangles;
+  std::vector<RayScene::NearTriangle> subset_triangles;
   std::vector<std::uint32_t> cloud;
   std::vector<std::pair<std::uint32_t, float>> support;
   std::vector<Plane> planes;
@@ -55,6 +56,10 @@ struct Context {
   const TriangleMesh& nominal;
   const std::vector<Eigen::Vector3d>& face_normal;
   const RayScene& nominal_scene;
+  // When the facets are thinned: a scene of the subset, and each of its
+  // triangles' index in the nominal.
+  const RayScene* subset_scene;
+  std::span<const std::uint32_t> nominal_triangle_of;
   const spatial::KdTree& cloud_tree;
   const Eigen::Isometry3d& tree_from_world;  // the tree's points are tree_from_world · cloud
   std::span<const Eigen::Vector3d> cloud;
@@ -199,7 +204,20 @@ void one_point(const Context& c, const Eigen::Vector3d& P, const Eigen::Vector3d
     return;
   }
   s.triangles.clear();
-  c.nominal_scene.triangles_within(P, Rs, s.triangles);
+  if (c.subset_scene) {
+    // Every facet through the point, then the subset's other facets (the
+    // query's own test, so none comes twice); both in facet order.
+    c.nominal_scene.triangles_within(P, kThroughPointMm, s.triangles);
+    s.subset_triangles.clear();
+    c.subset_scene->triangles_within(P, Rs, s.subset_triangles);
+    for (RayScene::NearTriangle t : s.subset_triangles) {
+      if ((t.closest_mm - P).squaredNorm() <= kThroughPointMm * kThroughPointMm) continue;
+      t.triangle = c.nominal_triangle_of[t.triangle];
+      s.triangles.push_back(t);
+    }
+  } else {
+    c.nominal_scene.triangles_within(P, Rs, s.triangles);
+  }
   cluster_nominal(c, P, s);
   s.assigned.assign(s.cloud.size(), -1);
   for (Plane& p : s.planes)
@@ -304,6 +322,25 @@ std::size_t median_points_per_sphere(const CompensationPoints& points, const spa
   return *mid;
 }
 
+// The median number of nominal facets in the spheres of up to kProbes
+// compensation points spread evenly over the list.
+std::size_t median_triangles_per_sphere(const CompensationPoints& points, const RayScene& scene,
+                                        double radius_mm) {
+  constexpr std::size_t kProbes = 1001;
+  const std::size_t n = points.size(), probes = std::min(n, kProbes);
+  if (probes == 0) return 0;
+  std::vector<std::size_t> count(probes);
+  std::vector<std::uint32_t> found;
+  for (std::size_t k = 0; k < probes; ++k) {
+    found.clear();
+    scene.triangles_within(points.positions_mm[k * n / probes], radius_mm, found);
+    count[k] = found.size();
+  }
+  auto mid = count.begin() + static_cast<std::ptrdiff_t>(probes / 2);
+  std::nth_element(count.begin(), mid, count.end());
+  return *mid;
+}
+
 // Whether scan point `index` is in the subset that keeps `fraction` of the
 // points: a fixed hash of the index (splitmix64), so the subset depends on
 // nothing but the scan.
@@ -313,6 +350,38 @@ bool kept_in_subset(std::uint64_t index, double fraction) {
   z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
   z ^= z >> 31;
   return static_cast<double>(z >> 11) * 0x1.0p-53 < fraction;
+}
+
+// The facets the planes beside a point are clustered from when the spheres
+// hold too many (SphereMethodOptions::max_facets_per_sphere): each facet
+// kept with a probability of its area over a0 = π Rs² / bound (by a hash of
+// its index), so that a sphere keeps about `bound` of the small ones; every
+// facet of a0 or more; and every facet on an edge where planes part (a
+// dihedral of half the plane angle or more, a boundary, a non-manifold
+// edge), so that no face next to the point is lost however little of it
+// reaches into the sphere. `triangle_of`: each kept facet's index.
+TriangleMesh facet_subset(const TriangleMesh& nominal, const std::vector<Eigen::Vector3d>& fn,
+                          const SphereMethodOptions& options,
+                          std::vector<std::uint32_t>& triangle_of) {
+  const std::size_t n = nominal.triangles.size();
+  std::vector<std::uint8_t> keep(n, 0);
+  for (const MeshEdge& edge : mesh_edges(nominal, fn)) {
+    if (edge.dihedral_deg < 0.5 * options.plane_angle_deg) continue;
+    if (edge.t0 != kNoTriangle) keep[edge.t0] = 1;
+    if (edge.t1 != kNoTriangle) keep[edge.t1] = 1;
+  }
+  const std::vector<double> area = face_areas_mm2(nominal);
+  const double a0 = M_PI * options.radius_mm * options.radius_mm /
+                    static_cast<double>(options.max_facets_per_sphere);
+  TriangleMesh subset;
+  subset.vertices_mm = nominal.vertices_mm;
+  triangle_of.clear();
+  for (std::size_t t = 0; t < n; ++t) {
+    if (!keep[t] && !kept_in_subset(t, area[t] / a0)) continue;
+    subset.triangles.push_back(nominal.triangles[t]);
+    triangle_of.push_back(static_cast<std::uint32_t>(t));
+  }
+  return subset;
 }
 
 }  // namespace
@@ -371,9 +440,22 @@ ErrorVectors error_vectors_by_spheres(const TriangleMesh& nominal, const Compens
   }
   const std::vector<Eigen::Vector3d> fn = face_normals(nominal);
   const RayScene nominal_scene(nominal);
+  // Thinned when the spheres hold more facets than the options allow.
+  std::optional<RayScene> subset_scene;
+  std::vector<std::uint32_t> nominal_triangle_of;
+  if (options.max_facets_per_sphere > 0 &&
+      median_triangles_per_sphere(points, nominal_scene, options.radius_mm) >
+          options.max_facets_per_sphere) {
+    const TriangleMesh subset_mesh = facet_subset(nominal, fn, options, nominal_triangle_of);
+    e.nominal_fraction = static_cast<double>(nominal_triangle_of.size()) /
+                         static_cast<double>(nominal.triangles.size());
+    subset_scene.emplace(subset_mesh);
+  }
   const Context c{nominal,
                   fn,
                   nominal_scene,
+                  subset_scene ? &*subset_scene : nullptr,
+                  nominal_triangle_of,
                   subset_tree ? *subset_tree : tree,
                   subset_tree ? identity : tree_from_world,
                   subset_tree ? std::span<const Eigen::Vector3d>(subset) : cloud_mm,

@@ -86,6 +86,8 @@ json parameters_json(const FieldPipelineOptions& o, const AuditContext& c, doubl
         {"min_points", o.sphere.min_points},
         {"plane_angle_deg", o.sphere.plane_angle_deg},
         {"max_displacement_ratio", o.sphere.max_displacement_ratio},
+        {"max_points_per_sphere", o.sphere.max_points_per_sphere},
+        {"max_facets_per_sphere", o.sphere.max_facets_per_sphere},
         {"plane_fit", o.sphere.tilted_planes ? "tilted" : "parallel"}}},
       {"significance",
        {{"level", o.significance.significance_level},
@@ -219,6 +221,7 @@ std::string audit_json(const FieldPipelineResult& r, const FieldPipelineOptions&
     errors["median_density_per_mm2"] = r.error_summary.median_density_per_mm2;
     errors["below_recommended_density"] = r.error_summary.below_recommended_density;
     errors["scan_fraction_used"] = r.errors.scan_fraction;
+    errors["nominal_fraction_used"] = r.errors.nominal_fraction;
   }
   j["error_vectors"] = errors;
   json surfaces = json::array();

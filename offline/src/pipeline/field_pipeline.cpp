@@ -566,15 +566,21 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
     timer.done(
         kErrorStage, t0,
         opt.method == ErrorMethod::kRay ? "error vectors (rays)" : "error vectors (spheres)",
-        r.errors.scan_fraction < 1.0
-            ? rt::format_printf("%zu of %zu valid; fitted on %.1f %% of the scan (median %.0f "
-                                "points per sphere, more than --sphere-max-points %zu)",
-                                r.error_summary.valid, r.error_summary.points,
-                                100.0 * r.errors.scan_fraction,
-                                r.error_summary.median_density_per_mm2 * M_PI *
-                                    opt.sphere.radius_mm * opt.sphere.radius_mm,
-                                opt.sphere.max_points_per_sphere)
-            : rt::format_printf("%zu of %zu valid", r.error_summary.valid, r.error_summary.points));
+        rt::format_printf("%zu of %zu valid", r.error_summary.valid, r.error_summary.points) +
+            (r.errors.scan_fraction < 1.0
+                 ? rt::format_printf("; fitted on %.1f %% of the scan (median %.0f points per "
+                                     "sphere, more than --sphere-max-points %zu)",
+                                     100.0 * r.errors.scan_fraction,
+                                     r.error_summary.median_density_per_mm2 * M_PI *
+                                         opt.sphere.radius_mm * opt.sphere.radius_mm,
+                                     opt.sphere.max_points_per_sphere)
+                 : std::string()) +
+            (r.errors.nominal_fraction < 1.0
+                 ? rt::format_printf("; planes beside the point from %.1f %% of the facets "
+                                     "(more than --sphere-max-facets %zu per sphere)",
+                                     100.0 * r.errors.nominal_fraction,
+                                     opt.sphere.max_facets_per_sphere)
+                 : std::string()));
     const auto t_test = timer.now();
     const Eigen::Isometry3d world_from_scan =
         r.registration ? r.registration->scan_to_nominal : Eigen::Isometry3d::Identity();

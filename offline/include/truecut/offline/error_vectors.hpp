@@ -51,6 +51,10 @@ struct ErrorVectors {
   // Sphere method: the fraction of the scan's points the fits used (1: all;
   // less when SphereMethodOptions::max_points_per_sphere thinned the scan).
   double scan_fraction = 1.0;
+  // Sphere method: the fraction of the nominal's facets that were clustered
+  // into the planes not through the point (1: all; less when
+  // SphereMethodOptions::max_facets_per_sphere thinned them).
+  double nominal_fraction = 1.0;
   // The scan points each valid vector was measured from: normal_mm[i]
   // changes by Σ support_weight[k] · δ_k when scan point support_point[k]
   // moves by δ_k along the normal, k in [support_begin[i],
@@ -114,6 +118,14 @@ struct SphereMethodOptions {
   // points × points per sphere: n² when the same part is scanned denser.
   // 256 points leave σ/16 of noise on a plane's offset.
   std::size_t max_points_per_sphere = 256;
+  // This project's bound on the nominal's facets per sphere (0: every
+  // facet, the source): when the median sphere holds more facets than this,
+  // the planes through the point still come from every facet touching it,
+  // the other planes near it from a fixed subset of the facets (each kept or
+  // not by a hash of its index) of about this many per sphere. Without it
+  // the cost grows with points × facets per sphere: n² when the same part is
+  // tessellated finer.
+  std::size_t max_facets_per_sphere = 64;
 };
 
 // The source's density requirement (points per mm²); reported, not enforced.
