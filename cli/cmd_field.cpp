@@ -378,9 +378,8 @@ offline::FieldPipelineOptions pipeline_options(const ParsedArgs& a, const Inputs
   o.sphere.radius_mm = a.number("sphere-radius", o.sphere.radius_mm, 0.01, 100.0);
   o.sphere.max_points_per_sphere = static_cast<std::size_t>(a.integer(
       "sphere-max-points", static_cast<long>(o.sphere.max_points_per_sphere), 0, 100000000));
-  o.sphere.max_facets_per_sphere = static_cast<std::size_t>(
-      a.integer("sphere-max-facets", static_cast<long>(o.sphere.max_facets_per_sphere), 0,
-                100000000));
+  o.sphere.max_facets_per_sphere = static_cast<std::size_t>(a.integer(
+      "sphere-max-facets", static_cast<long>(o.sphere.max_facets_per_sphere), 0, 100000000));
   const std::string plane_fit = a.value("plane-fit").value_or("tilted");
   if (plane_fit != "tilted" && plane_fit != "parallel")
     throw UsageError("--plane-fit must be tilted or parallel, not '" + plane_fit + "'");
