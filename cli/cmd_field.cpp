@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -14,6 +15,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "side_by_side.hpp"
 #include "stage_progress.hpp"
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/interpreter.hpp"
@@ -312,19 +314,32 @@ Inputs read_inputs(const ParsedArgs& a, const fs::path& program_file, const fs::
   Inputs in;
   const fs::path nominal_file = a.positionals()[0], scan_file = a.positionals()[1];
   const bool strict = a.flag("strict-mesh");
-  in.nominal = read_input_mesh(nominal_file, "nominal", strict, in.meshes);
-  in.scan = read_input_mesh(scan_file, "scan", strict, in.meshes);
-  try {
-    interp::InterpreterOptions io;
-    in.tools = interp::ToolTable::load(tools_file);
-    io.tools = in.tools;
-    in.program = interp::Interpreter(std::move(io)).run_file(program_file);
-  } catch (const interp::GcodeError& e) {
-    throw InputError(e.what());
-  }
+  // The two meshes, the program and the meshes' digests side by side; an
+  // error is reported for the first of them in this order.
+  std::vector<offline::MeshInputAudit> nominal_audit, scan_audit;
+  offline::FileDigest nominal_digest, scan_digest;
+  run_side_by_side({
+      [&] { in.nominal = read_input_mesh(nominal_file, "nominal", strict, nominal_audit); },
+      [&] { in.scan = read_input_mesh(scan_file, "scan", strict, scan_audit); },
+      [&] {
+        try {
+          interp::InterpreterOptions io;
+          in.tools = interp::ToolTable::load(tools_file);
+          io.tools = in.tools;
+          in.program = interp::Interpreter(std::move(io)).run_file(program_file);
+        } catch (const interp::GcodeError& e) {
+          throw InputError(e.what());
+        }
+      },
+      [&] { nominal_digest = offline::digest_file("nominal", nominal_file); },
+      [&] { scan_digest = offline::digest_file("scan", scan_file); },
+  });
+  in.meshes = std::move(nominal_audit);
+  in.meshes.insert(in.meshes.end(), std::make_move_iterator(scan_audit.begin()),
+                   std::make_move_iterator(scan_audit.end()));
   if (auto p = a.value("part")) in.part = read_part_file(*p);
-  in.digests.push_back(offline::digest_file("nominal", nominal_file));
-  in.digests.push_back(offline::digest_file("scan", scan_file));
+  in.digests.push_back(std::move(nominal_digest));
+  in.digests.push_back(std::move(scan_digest));
   for (std::size_t i = 0; i < in.program.files.size(); ++i)
     in.digests.push_back(
         offline::digest_file(i == 0 ? "program" : "subroutine", in.program.files[i]));
@@ -465,6 +480,10 @@ void print_summary(const offline::FieldPipelineResult& r,
   std::printf("total %.3f s\n", r.total_wall_s);
 }
 
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
 int run_field(const ParsedArgs& a, const std::vector<std::string>& argv) {
   if (a.positionals().size() != 2) throw UsageError("expected NOMINAL and SCAN files");
   const auto program = a.value("program"), tools = a.value("tools"), out = a.value("out");
@@ -480,7 +499,12 @@ int run_field(const ParsedArgs& a, const std::vector<std::string>& argv) {
   shown.emplace("truecut field", !quiet && isatty(STDERR_FILENO) != 0);
   shown->stage("reading the inputs");
 
+  const auto t_read = std::chrono::steady_clock::now();
   Inputs in = read_inputs(a, *program, *tools);
+  if (verbose)
+    std::fprintf(stderr, "field: %-34s %8.3f s  %zu nominal facets, %zu scan points\n",
+                 "reading and hashing the inputs", seconds_since(t_read),
+                 in.nominal.triangles.size(), in.scan.vertices_mm.size());
   const offline::FieldPipelineOptions options = pipeline_options(a, in);
   offline::FieldPipelineInputs pin;
   pin.nominal = &in.nominal;
@@ -545,7 +569,11 @@ int run_field(const ParsedArgs& a, const std::vector<std::string>& argv) {
   ctx.tools = pin.tools;
   ctx.max_correction_limit_mm = max_correction;
   ctx.forced = exceeded;
+  const auto t_write = std::chrono::steady_clock::now();
   const auto written = offline::write_field_outputs(*out, result, options, ctx);
+  if (verbose)
+    std::fprintf(stderr, "field: %-34s %8.3f s  %zu files\n", "writing the outputs",
+                 seconds_since(t_write), written.size());
   if (exceeded)
     std::fprintf(stderr,
                  "truecut field: WARNING: correction %.4f mm above %.4f mm, written (--force)\n",

@@ -74,10 +74,16 @@ std::string printable(std::string_view s) {
   return out + (s.size() > 60 ? "...'" : "'");
 }
 
-void put_le(std::string& out, double v) {
+// Writes v's 8 bytes little-endian at p and moves p past them.
+void put_le(char*& p, double v) {
   uint64_t bits = std::bit_cast<uint64_t>(v);
-  for (int b = 0; b < 8; ++b, bits >>= 8)
-    out.push_back(static_cast<char>(bits & 0xFF));
+  if constexpr (std::endian::native == std::endian::little) {
+    std::memcpy(p, &bits, sizeof bits);
+  } else {
+    for (int b = 0; b < 8; ++b, bits >>= 8)
+      p[b] = static_cast<char>(bits & 0xFF);
+  }
+  p += sizeof bits;
 }
 
 double get_le(const char* p) {
@@ -360,14 +366,15 @@ std::string encode_field_file(const CorrectionField& field, const FieldFileInfo&
   for (const int32_t t : field.tools())
     tools += (tools.empty() ? "" : " ") + std::to_string(t);
 
-  std::string payload;
-  payload.reserve(field.tools().size() * static_cast<std::size_t>(g.node_count()) * kBytesPerNode);
+  std::string payload(
+      field.tools().size() * static_cast<std::size_t>(g.node_count()) * kBytesPerNode, '\0');
+  char* at = payload.data();
   for (const int32_t t : field.tools()) {
     for (const FieldNode& n : field.nodes(t)) {
-      put_le(payload, n.dx_mm);
-      put_le(payload, n.dy_mm);
-      put_le(payload, n.dz_mm);
-      put_le(payload, n.weight);
+      put_le(at, n.dx_mm);
+      put_le(at, n.dy_mm);
+      put_le(at, n.dz_mm);
+      put_le(at, n.weight);
     }
   }
 

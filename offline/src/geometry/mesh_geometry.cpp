@@ -1,5 +1,7 @@
 #include "truecut/offline/mesh_geometry.hpp"
 
+#include "geometry/half_edge_order.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <tuple>
@@ -70,9 +72,11 @@ std::vector<MeshEdge> mesh_edges(const TriangleMesh& mesh,
       half.push_back({std::min(a, b), std::max(a, b), static_cast<std::uint32_t>(t)});
     }
   }
-  std::sort(half.begin(), half.end(), [](const HalfEdge& x, const HalfEdge& y) {
-    return std::tie(x.v0, x.v1, x.t) < std::tie(y.v0, y.v1, y.t);
-  });
+  geometry::sort_half_edges(
+      half, [](const HalfEdge& h) { return h.v0; },
+      [](const HalfEdge& x, const HalfEdge& y) {
+        return std::tie(x.v0, x.v1, x.t) < std::tie(y.v0, y.v1, y.t);
+      });
   std::vector<MeshEdge> edges;
   edges.reserve(half.size() / 2 + 1);
   for (std::size_t i = 0; i < half.size();) {

@@ -1,5 +1,7 @@
 #include "truecut/offline/mesh_topology.hpp"
 
+#include "geometry/half_edge_order.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cstdint>
@@ -35,12 +37,22 @@ MeshTopology analyse(const TriangleMesh& mesh, std::vector<std::uint8_t>* flip) 
       const std::uint32_t lo = std::min(a, b), hi = std::max(a, b);
       half.push_back({(std::uint64_t{lo} << 32) | hi, static_cast<std::uint32_t>(t), a < b});
     }
-  std::sort(half.begin(), half.end(), [](const HalfEdge& x, const HalfEdge& y) {
-    return x.key != y.key ? x.key < y.key : x.triangle < y.triangle;
-  });
+  geometry::sort_half_edges(
+      half, [](const HalfEdge& h) { return static_cast<std::uint32_t>(h.key >> 32); },
+      [](const HalfEdge& x, const HalfEdge& y) {
+        return x.key != y.key ? x.key < y.key : x.triangle < y.triangle;
+      });
 
   MeshTopology m;
-  std::vector<std::vector<Link>> links(nt);
+  // At most one link per half-edge, so three per triangle.
+  struct Links {
+    std::array<Link, 3> link;
+    std::uint8_t count = 0;
+    void add(const Link& l) { link[count++] = l; }
+    const Link* begin() const { return link.data(); }
+    const Link* end() const { return link.data() + count; }
+  };
+  std::vector<Links> links(nt);
   std::vector<std::uint8_t> open(nt, 0);
   for (std::size_t i = 0; i < half.size();) {
     std::size_t j = i;
@@ -58,8 +70,8 @@ MeshTopology analyse(const TriangleMesh& mesh, std::vector<std::uint8_t>* flip) 
     } else {
       const bool same = half[i].forward == half[i + 1].forward;
       if (same) ++m.inconsistent_edges;
-      links[half[i].triangle].push_back({half[i + 1].triangle, same});
-      links[half[i + 1].triangle].push_back({half[i].triangle, same});
+      links[half[i].triangle].add({half[i + 1].triangle, same});
+      links[half[i + 1].triangle].add({half[i].triangle, same});
     }
     i = j;
   }

@@ -53,7 +53,7 @@ ToolIndex build_index(const ToolShape& shape, const ToolPath& path,
   const double r = shape.corner_radius_mm, len = shape.cutting_length_mm - r;
   const int k = std::max(1, static_cast<int>(std::ceil(2.0 * len / shape.radius_mm)));
   const double step = len / k;
-  const double max_spread = 0.1 * shape.radius_mm;
+  const double max_spread = 0.3 * shape.radius_mm;
   constexpr std::size_t kMaxChunk = 32;
   ToolIndex ix;
   double spread = 0.0;
@@ -328,7 +328,7 @@ PlacementResult place_at_tool_centre(std::span<const Eigen::Vector3d> positions_
     tbb::enumerable_thread_specific<std::vector<std::uint32_t>> last_block([&] {
       return std::vector<std::uint32_t>(chunks, std::numeric_limits<std::uint32_t>::max());
     });
-    const PointBlocks blocks = point_blocks(positions_mm, 0.5 * shape.radius_mm);
+    const PointBlocks blocks = point_blocks(positions_mm, shape.radius_mm);
     tbb::parallel_for(
         tbb::blocked_range<std::size_t>(0, blocks.centre.size(), 16),
         [&](const tbb::blocked_range<std::size_t>& range) {
