@@ -9,6 +9,7 @@
 #include "system_parameters.hpp"
 #include "truecut/interp/operations.hpp"
 #include "truecut/interp/path_geometry.hpp"
+#include "truecut/rt/number_format.hpp"
 
 namespace truecut::interp {
 
@@ -235,6 +236,8 @@ void BlockExecutor::tool_words() {
     const double t = b_->value('t');
     if (t < 0 || t != std::floor(t))
       fail(column_of('t'), "tool number T must be a whole number >= 0");
+    if (t > kLargestWholeWord)
+      fail(column_of('t'), "tool T" + rt::format_shortest(t) + " is not in the tool table");
     const int tool = static_cast<int>(t);
     if (tool != 0 && !tools_.find(tool))
       fail(column_of('t'), "tool T" + std::to_string(tool) + " is not in the tool table");
@@ -254,6 +257,8 @@ void BlockExecutor::tool_words() {
       fail(codes_.m_column[group(MGroup::kToolChange)], "M61 needs Q (tool number)");
     const double q = b_->value('q');
     if (q < 0 || q != std::floor(q)) fail(column_of('q'), "M61 Q must be a whole number >= 0");
+    if (q > kLargestWholeWord)
+      fail(column_of('q'), "tool " + rt::format_shortest(q) + " is not in the tool table");
     const int tool = static_cast<int>(q);
     if (tool != 0 && !tools_.find(tool))
       fail(column_of('q'), "tool " + std::to_string(tool) + " is not in the tool table");
@@ -440,6 +445,8 @@ void BlockExecutor::tool_length_offset() {
   if (b_->has('h')) {
     const double h = b_->value('h');
     if (h < 0 || h != std::floor(h)) fail(column_of('h'), "H must be a whole number >= 0");
+    if (h > kLargestWholeWord)
+      fail(column_of('h'), "H" + rt::format_shortest(h) + ": no such tool in the tool table");
     tool = static_cast<int>(h);
   }
   Axes6 offset;
@@ -810,6 +817,8 @@ void BlockExecutor::arc(bool clockwise, const Axes6& target) {
     const double p = b_->value('p');
     if (p < 1 || p != std::floor(p))
       fail(column_of('p'), "arc turns P must be a whole number >= 1");
+    if (p > kLargestWholeWord)
+      fail(column_of('p'), "arc turns P " + rt::format_shortest(p) + " is too large");
     req.turns = static_cast<int>(p);
   }
   check_feed(col);

@@ -17,6 +17,11 @@
 
 namespace truecut::interp {
 
+// The largest whole-number word (T, H, D, M61 Q, arc P) a block may carry:
+// int's range. No tool or turn count lies beyond it, and converting a
+// larger value to int would be undefined.
+inline constexpr double kLargestWholeWord = 2147483647.0;
+
 class BlockExecutor {
  public:
   BlockExecutor(InterpState& state, Parameters& params, const ToolTable& tools, Emitter& out)

@@ -23,6 +23,7 @@
 
 #include "block_executor.hpp"
 #include "truecut/interp/path_geometry.hpp"
+#include "truecut/rt/number_format.hpp"
 
 namespace truecut::interp {
 
@@ -102,6 +103,8 @@ void BlockExecutor::comp_on(int code) {
       const double nearest = std::floor(d + 0.5);
       if (std::fabs(nearest - d) >= 0.0001 || nearest < 0)
         fail(column_of('d'), name + " needs D to be a whole number (a tool number)");
+      if (nearest > kLargestWholeWord)
+        fail(column_of('d'), "D" + rt::format_shortest(d) + ": no such tool in the tool table");
       if (nearest > 0) tool = static_cast<int>(nearest);
     }
     if (tool != 0) {

@@ -56,14 +56,23 @@ INSTANTIATE_TEST_SUITE_P(Words, BadInput,
 
 // Found by fuzz_gcode and fuzz_expression (tools/fuzz.sh): values too large
 // for an int were converted to one (undefined behaviour).
-INSTANTIATE_TEST_SUITE_P(FuzzFindings, BadInput,
-                         ::testing::Values(Case{"G21\nG2177777777777777777777 X1\nM2\n", 2, 1,
-                                                "G code 2177777777777777836032 does not exist"},
-                                           Case{"M99999999999999999999\nM2\n", 1, 1,
-                                                "does not exist"},
-                                           Case{"G0 Y[-#99999999999999999999999999999]\nM2\n", 1, 8,
-                                                "value 1e+29 is too large"}),
-                         case_name);
+INSTANTIATE_TEST_SUITE_P(
+    FuzzFindings, BadInput,
+    ::testing::Values(
+        Case{"G21\nG2177777777777777777777 X1\nM2\n", 2, 1,
+             "G code 2177777777777777836032 does not exist"},
+        Case{"M99999999999999999999\nM2\n", 1, 1, "does not exist"},
+        Case{"G0 Y[-#99999999999999999999999999999]\nM2\n", 1, 8, "value 1e+29 is too large"},
+        // Whole-number words beyond int (a float-to-int
+        // conversion UBSan caught in fuzz_expression).
+        Case{"T[2222222222222222222222222222222]\nM2\n", 1, 1,
+             "tool T2.222222222222222e+30 is not in the tool "
+             "table"},
+        Case{"M61 Q3000000000\nM2\n", 1, 5, "tool 3e+09 is not in the tool table"},
+        Case{"G43 H3000000000\nM2\n", 1, 5, "H3e+09: no such tool"},
+        Case{"G17 G41 D3000000000\nM2\n", 1, 9, "D3e+09: no such tool"},
+        Case{"F100\nG2 X10 I5 P3000000000\nM2\n", 2, 11, "arc turns P 3e+09 is too large"}),
+    case_name);
 
 INSTANTIATE_TEST_SUITE_P(
     ModalConflicts, BadInput,
