@@ -303,17 +303,19 @@ TEST(SphereMethodThinning, TheSubsetDoesNotDependOnTheThreadCount) {
   EXPECT_EQ(one.support_weight, any.support_weight);
 }
 
-// Below the bound nothing changes: the same result, bit for bit, as with
-// every point.
-TEST(SphereMethodThinning, ScanBelowTheBoundIsUsedWhole) {
+// Below the bounds nothing changes: the same result, bit for bit, as with
+// every point and every facet.
+TEST(SphereMethodThinning, ScanAndFacetsBelowTheBoundsAreUsedWhole) {
   const std::vector<Eigen::Vector3d> cloud = dense_patch(15.0, 0.05, 23);  // ~190 per sphere
   const CompensationPoints pts = patch_points();
   SphereMethodOptions o;
   o.radius_mm = kRs;
   const ErrorVectors bounded = error_vectors_by_spheres(nominal(), pts, cloud, o);
   o.max_points_per_sphere = 0;
+  o.max_facets_per_sphere = 0;
   const ErrorVectors all = error_vectors_by_spheres(nominal(), pts, cloud, o);
   EXPECT_EQ(bounded.scan_fraction, 1.0);
+  EXPECT_EQ(bounded.nominal_fraction, 1.0);
   EXPECT_EQ(bounded.vectors_mm, all.vectors_mm);
   EXPECT_EQ(bounded.support_point, all.support_point);
 }
@@ -388,19 +390,6 @@ TEST(SphereMethodFacetThinning, FineFacetsBesideCoarseOnesGiveTheSameVectorsAsEv
   // normal component (σ / √256 of noise, 4 standard deviations).
   EXPECT_NEAR(thinned.normal_mm[0], d.x(), 4.0 * 0.005 / 16.0);
   EXPECT_NEAR(thinned.normal_mm[2], d.x(), 4.0 * 0.005 / 16.0);
-}
-
-// Below the bound the facets are used whole: the same result, bit for bit.
-TEST(SphereMethodFacetThinning, CoarseFacetsAreUsedWhole) {
-  const std::vector<Eigen::Vector3d> cloud = dense_patch(15.0, 0.05, 24);
-  const CompensationPoints pts = patch_points();
-  SphereMethodOptions o;
-  o.radius_mm = kRs;
-  const ErrorVectors bounded = error_vectors_by_spheres(nominal(), pts, cloud, o);
-  o.max_facets_per_sphere = 0;
-  const ErrorVectors all = error_vectors_by_spheres(nominal(), pts, cloud, o);
-  EXPECT_EQ(bounded.nominal_fraction, 1.0);
-  EXPECT_EQ(bounded.vectors_mm, all.vectors_mm);
 }
 
 }  // namespace

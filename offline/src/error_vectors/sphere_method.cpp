@@ -303,42 +303,41 @@ void one_point(const Context& c, const Eigen::Vector3d& P, const Eigen::Vector3d
   e.normal_mm[i] = v.dot(normal);
 }
 
-// The median number of scan points in the spheres of up to kProbes
-// compensation points spread evenly over the list.
-std::size_t median_points_per_sphere(const CompensationPoints& points, const spatial::KdTree& tree,
-                                     const Eigen::Isometry3d& tree_from_world, double radius_mm) {
+// The median of count(P) over up to 1,001 compensation points P spread
+// evenly over the list.
+template <class Count>
+std::size_t median_over_points(const CompensationPoints& points, Count count) {
   constexpr std::size_t kProbes = 1001;
   const std::size_t n = points.size(), probes = std::min(n, kProbes);
   if (probes == 0) return 0;
-  std::vector<std::size_t> count(probes);
-  std::vector<std::uint32_t> found;
-  for (std::size_t k = 0; k < probes; ++k) {
-    found.clear();
-    tree.within(tree_from_world * points.positions_mm[k * n / probes], radius_mm, found);
-    count[k] = found.size();
-  }
-  auto mid = count.begin() + static_cast<std::ptrdiff_t>(probes / 2);
-  std::nth_element(count.begin(), mid, count.end());
+  std::vector<std::size_t> counts(probes);
+  for (std::size_t k = 0; k < probes; ++k)
+    counts[k] = count(points.positions_mm[k * n / probes]);
+  auto mid = counts.begin() + static_cast<std::ptrdiff_t>(probes / 2);
+  std::nth_element(counts.begin(), mid, counts.end());
   return *mid;
 }
 
-// The median number of nominal facets in the spheres of up to kProbes
-// compensation points spread evenly over the list.
+// The median number of scan points in a sphere.
+std::size_t median_points_per_sphere(const CompensationPoints& points, const spatial::KdTree& tree,
+                                     const Eigen::Isometry3d& tree_from_world, double radius_mm) {
+  std::vector<std::uint32_t> found;
+  return median_over_points(points, [&](const Eigen::Vector3d& p) {
+    found.clear();
+    tree.within(tree_from_world * p, radius_mm, found);
+    return found.size();
+  });
+}
+
+// The median number of nominal facets in a sphere.
 std::size_t median_triangles_per_sphere(const CompensationPoints& points, const RayScene& scene,
                                         double radius_mm) {
-  constexpr std::size_t kProbes = 1001;
-  const std::size_t n = points.size(), probes = std::min(n, kProbes);
-  if (probes == 0) return 0;
-  std::vector<std::size_t> count(probes);
   std::vector<std::uint32_t> found;
-  for (std::size_t k = 0; k < probes; ++k) {
+  return median_over_points(points, [&](const Eigen::Vector3d& p) {
     found.clear();
-    scene.triangles_within(points.positions_mm[k * n / probes], radius_mm, found);
-    count[k] = found.size();
-  }
-  auto mid = count.begin() + static_cast<std::ptrdiff_t>(probes / 2);
-  std::nth_element(count.begin(), mid, count.end());
-  return *mid;
+    scene.triangles_within(p, radius_mm, found);
+    return found.size();
+  });
 }
 
 // Whether scan point `index` is in the subset that keeps `fraction` of the
