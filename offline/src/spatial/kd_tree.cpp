@@ -11,6 +11,10 @@ constexpr std::uint32_t kLeafSize = 8;
 // Subtrees larger than this are built as parallel tasks.
 constexpr std::uint32_t kParallelBuild = 1u << 15;
 constexpr int kTightBoundsDepth = 6;
+// A cell's distance is built up by sums and differences, so it may round
+// above a point's own distance on the sphere: cells are kept that little
+// beyond the radius (the points themselves are tested exactly).
+constexpr double kCellSlack = 1.0 + 1e-9;
 }  // namespace
 
 KdTree::KdTree(std::span<const Eigen::Vector3d> points) {
@@ -154,12 +158,19 @@ void KdTree::nearest_k_in(std::uint32_t node, std::uint32_t begin, std::uint32_t
 void KdTree::within(const Eigen::Vector3d& q, double radius,
                     std::vector<std::uint32_t>& out) const {
   if (!items_.empty() && radius >= 0.0) {
-    within_in(0, 0, static_cast<std::uint32_t>(items_.size()), 0, q, radius * radius, out);
+    std::array<double, 3> off{0.0, 0.0, 0.0};
+    within_in(0, 0, static_cast<std::uint32_t>(items_.size()), 0, q, radius * radius, 0.0, off,
+              out);
   }
 }
 
+// A child is entered only when its whole cell may reach the ball (the
+// distance to the cell, built up split by split: Arya and Mount's
+// incremental distance), always left before right, so the points come out
+// in tree order whatever the query.
 void KdTree::within_in(std::uint32_t node, std::uint32_t begin, std::uint32_t end, int depth,
-                       const Eigen::Vector3d& q, double r2, std::vector<std::uint32_t>& out) const {
+                       const Eigen::Vector3d& q, double r2, double box_sq,
+                       std::array<double, 3>& off, std::vector<std::uint32_t>& out) const {
   if (depth == depth_) {
     for (std::uint32_t i = begin; i < end; ++i) {
       if ((items_[i].p - q).squaredNorm() <= r2) out.push_back(items_[i].index);
@@ -169,9 +180,28 @@ void KdTree::within_in(std::uint32_t node, std::uint32_t begin, std::uint32_t en
   const Split s = splits_[node];
   const std::uint32_t mid = begin + (end - begin) / 2;
   const double delta = q[s.axis] - s.value;
-  if (delta <= 0.0 || delta * delta <= r2)
-    within_in(2 * node + 1, begin, mid, depth + 1, q, r2, out);
-  if (delta >= 0.0 || delta * delta <= r2) within_in(2 * node + 2, mid, end, depth + 1, q, r2, out);
+  const double old = off[s.axis];
+  // Left cell: up to the split; q beyond it (delta > 0) is delta away along the axis.
+  if (delta <= 0.0) {
+    within_in(2 * node + 1, begin, mid, depth + 1, q, r2, box_sq, off, out);
+  } else {
+    const double left_sq = box_sq - old * old + delta * delta;
+    if (left_sq <= r2 * kCellSlack) {
+      off[s.axis] = delta;
+      within_in(2 * node + 1, begin, mid, depth + 1, q, r2, left_sq, off, out);
+      off[s.axis] = old;
+    }
+  }
+  if (delta >= 0.0) {
+    within_in(2 * node + 2, mid, end, depth + 1, q, r2, box_sq, off, out);
+  } else {
+    const double right_sq = box_sq - old * old + delta * delta;
+    if (right_sq <= r2 * kCellSlack) {
+      off[s.axis] = -delta;
+      within_in(2 * node + 2, mid, end, depth + 1, q, r2, right_sq, off, out);
+      off[s.axis] = old;
+    }
+  }
 }
 
 }  // namespace truecut::offline::spatial

@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <span>
@@ -39,7 +40,7 @@ class KdTree {
                  std::vector<Nearest>& out) const;
 
   // Appends the indices of all points within `radius` (inclusive) to `out`,
-  // in no particular order.
+  // in the tree's order: fixed by the points alone, the same for every call.
   void within(const Eigen::Vector3d& q, double radius, std::vector<std::uint32_t>& out) const;
 
   std::size_t size() const { return items_.size(); }
@@ -58,8 +59,11 @@ class KdTree {
   void nearest_k_in(std::uint32_t node, std::uint32_t begin, std::uint32_t end, int depth,
                     const Eigen::Vector3d& q, std::size_t k, double& bound_sq,
                     std::vector<Nearest>& heap) const;
+  // box_sq: the squared distance from q to the node's cell, off: its part
+  // along each axis (the cell bounded by the splits above).
   void within_in(std::uint32_t node, std::uint32_t begin, std::uint32_t end, int depth,
-                 const Eigen::Vector3d& q, double r2, std::vector<std::uint32_t>& out) const;
+                 const Eigen::Vector3d& q, double r2, double box_sq, std::array<double, 3>& off,
+                 std::vector<std::uint32_t>& out) const;
 
   struct Item {
     Eigen::Vector3d p;
