@@ -442,9 +442,11 @@ ErrorVectors error_vectors_by_spheres(const TriangleMesh& nominal, const Compens
   // Thinned when the spheres hold more facets than the options allow.
   std::optional<RayScene> subset_scene;
   std::vector<std::uint32_t> nominal_triangle_of;
+  if (options.max_facets_per_sphere > 0)
+    e.median_facets_per_sphere =
+        median_triangles_per_sphere(points, nominal_scene, options.radius_mm);
   if (options.max_facets_per_sphere > 0 &&
-      median_triangles_per_sphere(points, nominal_scene, options.radius_mm) >
-          options.max_facets_per_sphere) {
+      e.median_facets_per_sphere > options.max_facets_per_sphere) {
     const TriangleMesh subset_mesh = facet_subset(nominal, fn, options, nominal_triangle_of);
     e.nominal_fraction = static_cast<double>(nominal_triangle_of.size()) /
                          static_cast<double>(nominal.triangles.size());

@@ -577,8 +577,9 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
                  : std::string()) +
             (r.errors.nominal_fraction < 1.0
                  ? rt::format_printf("; planes beside the point from %.1f %% of the facets "
-                                     "(more than --sphere-max-facets %zu per sphere)",
+                                     "(median %zu per sphere, more than --sphere-max-facets %zu)",
                                      100.0 * r.errors.nominal_fraction,
+                                     r.errors.median_facets_per_sphere,
                                      opt.sphere.max_facets_per_sphere)
                  : std::string()));
     const auto t_test = timer.now();

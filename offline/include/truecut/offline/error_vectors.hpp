@@ -55,6 +55,8 @@ struct ErrorVectors {
   // into the planes not through the point (1: all; less when
   // SphereMethodOptions::max_facets_per_sphere thinned them).
   double nominal_fraction = 1.0;
+  // The median number of facets in a sphere (0 when not counted: no bound).
+  std::size_t median_facets_per_sphere = 0;
   // The scan points each valid vector was measured from: normal_mm[i]
   // changes by Σ support_weight[k] · δ_k when scan point support_point[k]
   // moves by δ_k along the normal, k in [support_begin[i],
