@@ -72,9 +72,11 @@ void refine(const FitContext& ctx, ModelFit& fit);
 // equal steady lag (1 − ff1)/Kv to the best of the profile in which every
 // other fitted parameter follows by a linear step: Levenberg–Marquardt
 // does not travel that valley from a grid point of the start, and other
-// terms (a pitch scale) take up what the split leaves. Runs after the
-// round's other effects are in (so that none missing pulls the split);
-// the move is kept when the refit lowers the residual. True when a loop moved.
+// terms (a pitch scale) take up what the split leaves. Runs after each
+// round's fit (so that none of the round's effects missing pulls the
+// split) and once more on the model that stays after the rounds and the
+// pruning (fit_model); the move is kept when the refit lowers the
+// residual. True when a loop moved.
 bool refine_servo_splits(const FitContext& ctx, ModelFit& fit);
 
 // The 95 % intervals of each selected loop's Kv and ff1 widened to the
