@@ -116,17 +116,21 @@ bool fit_round(const FitContext& ctx, const sim::MachineParams& base, int round,
 // dropped afterwards; the split they pulled stayed, since
 // Levenberg–Marquardt does not travel the valley. What a moved split no
 // longer needs is eliminated again, and the splits refined once more
-// when something went.
+// when something went. Last, an effect that stands in for a split the
+// refinement cannot leave beside it (the two pulled each other) is dropped
+// when the splits refined without it fit as well (drop_stand_ins_for_splits).
 void refine_splits_of_final_model(const FitContext& ctx, const sim::MachineParams& base,
                                   ModelFit& fit) {
+  auto n_eff = [&] {
+    return n_eff_of(double(fit.n), ctx.layout.lag1(weighted_residual(ctx, fit.params)));
+  };
   for (int pass = 0; pass < 3 && refine_servo_splits(ctx, fit); ++pass) {
     const std::size_t had = fit.selected.size();
-    const double n_eff =
-        n_eff_of(double(fit.n), ctx.layout.lag1(weighted_residual(ctx, fit.params)));
-    drop_unneeded(ctx, base, n_eff, fit);
+    drop_unneeded(ctx, base, n_eff(), fit);
     drop_too_small(ctx, base, fit);
     if (fit.selected.size() == had) break;
   }
+  drop_stand_ins_for_splits(ctx, base, n_eff(), fit);
 }
 
 }  // namespace
