@@ -75,6 +75,15 @@ TEST(DiagnosisPlanted, BacklashUnderServoLagOnIsoSteps) {
   expect_right(c);
 }
 
+// Friction 100 N under servo lag on the contour, the sweep's seed 8: a
+// pitch scale of Z (-45 µm/m, not planted) and Z's split (Kv 77 / ff1 0.81
+// for 40 / 0.9) pulled each other; priced without the pitch at the split it
+// pulled, the pitch stayed. It goes when the splits refined without it fit
+// as well.
+TEST(DiagnosisPlanted, PitchStandingInForAServoSplitIsDropped) {
+  expect_right(sweep_case(Effect::kReversalSpike, 1, 8));
+}
+
 // A reversal spike (Coulomb friction) under servo lag, on the 3-axis
 // contour: the loop found by the diagnosis must not bend to mimic the
 // spikes (Kv 79 / ff1 0.8 with 169 N for 100 N planted; at 300 N a pure lag
