@@ -72,9 +72,11 @@ void refine(const FitContext& ctx, ModelFit& fit);
 // equal steady lag (1 − ff1)/Kv to the best of the profile in which every
 // other fitted parameter follows by a linear step: Levenberg–Marquardt
 // does not travel that valley from a grid point of the start, and other
-// terms (a pitch scale) take up what the split leaves. Runs after the
-// round's other effects are in (so that none missing pulls the split);
-// the move is kept when the refit lowers the residual. True when a loop moved.
+// terms (a pitch scale) take up what the split leaves. Runs after each
+// round's fit (so that none of the round's effects missing pulls the
+// split) and once more on the model that stays after the rounds and the
+// pruning (fit_model); the move is kept when the refit lowers the
+// residual. True when a loop moved.
 bool refine_servo_splits(const FitContext& ctx, ModelFit& fit);
 
 // The 95 % intervals of each selected loop's Kv and ff1 widened to the
@@ -124,6 +126,15 @@ std::vector<std::string> drop_offsets_taken_for_drifts(const FitContext& ctx,
 // of the noise floor.
 std::vector<std::string> drop_unneeded(const FitContext& ctx, const sim::MachineParams& base,
                                        double n_eff, ModelFit& fit);
+// Backward elimination with the servo loops' splits refined: an effect that
+// stands in for a wrong split (a pitch scale of Z beside Z's loop at Kv 77 /
+// ff1 0.81 for 40 / 0.9) costs much when dropped alone, the split staying
+// where the two pulled it; it is dropped when, without it, a split moves
+// (refine_servo_splits) and the model costs less than the threshold.
+// Returns the groups dropped.
+std::vector<std::string> drop_stand_ins_for_splits(const FitContext& ctx,
+                                                   const sim::MachineParams& base, double n_eff,
+                                                   ModelFit& fit);
 void drop_believed_within_interval(const FitContext& ctx, const sim::MachineParams& base,
                                    ModelFit& fit);
 void drop_too_small(const FitContext& ctx, const sim::MachineParams& base, ModelFit& fit);

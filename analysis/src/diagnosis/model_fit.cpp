@@ -109,6 +109,30 @@ bool fit_round(const FitContext& ctx, const sim::MachineParams& base, int round,
   return true;
 }
 
+// The splits of the servo loops once more, on the model that stays: the
+// rounds refined them beside terms that stood in for effects not yet in the
+// model (a friction that a later round brings in) or for the wrong split
+// itself (pitch scales taking up part of the lag), which the elimination
+// dropped afterwards; the split they pulled stayed, since
+// Levenberg–Marquardt does not travel the valley. What a moved split no
+// longer needs is eliminated again, and the splits refined once more
+// when something went. Last, an effect that stands in for a split the
+// refinement cannot leave beside it (the two pulled each other) is dropped
+// when the splits refined without it fit as well (drop_stand_ins_for_splits).
+void refine_splits_of_final_model(const FitContext& ctx, const sim::MachineParams& base,
+                                  ModelFit& fit) {
+  auto n_eff = [&] {
+    return n_eff_of(double(fit.n), ctx.layout.lag1(weighted_residual(ctx, fit.params)));
+  };
+  for (int pass = 0; pass < 3 && refine_servo_splits(ctx, fit); ++pass) {
+    const std::size_t had = fit.selected.size();
+    drop_unneeded(ctx, base, n_eff(), fit);
+    drop_too_small(ctx, base, fit);
+    if (fit.selected.size() == had) break;
+  }
+  drop_stand_ins_for_splits(ctx, base, n_eff(), fit);
+}
+
 }  // namespace
 
 ModelFit fit_model(const FitContext& ctx, const sim::MachineParams& base) {
@@ -121,6 +145,7 @@ ModelFit fit_model(const FitContext& ctx, const sim::MachineParams& base) {
   drop_believed_within_interval(ctx, base, fit);
   drop_too_small(ctx, base, fit);
   confirm_on_heldout(ctx, base, fit);
+  refine_splits_of_final_model(ctx, base, fit);
   drop_slopes_taken_for_bows(ctx, base, fit);
   drop_offsets_taken_for_drifts(ctx, base, fit);
   // Confusions found on the linearisation count only for effects that stayed.

@@ -134,6 +134,37 @@ std::vector<std::string> drop_unneeded(const FitContext& ctx, const sim::Machine
   return dropped;
 }
 
+std::vector<std::string> drop_stand_ins_for_splits(const FitContext& ctx,
+                                                   const sim::MachineParams& base, double n_eff,
+                                                   ModelFit& fit) {
+  std::vector<std::string> dropped;
+  FitContext quiet = ctx;  // the trials' splits are not reported
+  quiet.progress = nullptr;
+  fit.rss = weighted_residual(ctx, fit.params).squaredNorm();
+  for (bool again = true; again;) {
+    again = false;
+    for (std::size_t e = 0; e < fit.selected.size() && !again; ++e) {
+      const SelectedEffect& s = fit.selected[e];
+      if (s.effect == "servo_lag") continue;
+      ModelFit trial = fit;
+      trial.params = without_effect(fit.params, base, s);
+      trial.selected.erase(trial.selected.begin() + std::ptrdiff_t(e));
+      // Only where a split moves without it: otherwise drop_unneeded judged it.
+      if (!refine_servo_splits(quiet, trial)) continue;
+      const double cost =
+          n_eff * std::log(std::max(trial.rss, 1e-300) / std::max(fit.rss, 1e-300)) -
+          double(s.keys.size()) * std::log(n_eff);
+      if (cost >= ctx.bic_threshold) continue;
+      say(ctx, "dropped " + s.group + ": it stood in for a servo loop's split (re-simulated ΔBIC " +
+                   fmt4g(-cost) + " with the splits refined without it)");
+      dropped.push_back(s.group);
+      fit = std::move(trial);
+      again = true;
+    }
+  }
+  return dropped;
+}
+
 // An adjustment of an effect the believed model already has is kept only
 // when the data move it: when the 95 % interval of every one of its
 // parameters still covers the believed value, the believed value stands.
