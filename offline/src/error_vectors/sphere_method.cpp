@@ -356,9 +356,9 @@ bool kept_in_subset(std::uint64_t index, double fraction) {
 // kept with a probability of its area over a0 = π Rs² / bound (by a hash of
 // its index), so that a sphere keeps about `bound` of the small ones; every
 // facet of a0 or more; and every facet on an edge where planes part (a
-// dihedral of half the plane angle or more, a boundary, a non-manifold
-// edge), so that no face next to the point is lost however little of it
-// reaches into the sphere. `triangle_of`: each kept facet's index.
+// dihedral of half the plane angle or more, a boundary; of a non-manifold
+// edge the two facets mesh_edges names), so that no face next to the point
+// is lost however little of it reaches into the sphere. `triangle_of`: each kept facet's index.
 TriangleMesh facet_subset(const TriangleMesh& nominal, const std::vector<Eigen::Vector3d>& fn,
                           const SphereMethodOptions& options,
                           std::vector<std::uint32_t>& triangle_of) {
@@ -442,15 +442,15 @@ ErrorVectors error_vectors_by_spheres(const TriangleMesh& nominal, const Compens
   // Thinned when the spheres hold more facets than the options allow.
   std::optional<RayScene> subset_scene;
   std::vector<std::uint32_t> nominal_triangle_of;
-  if (options.max_facets_per_sphere > 0)
+  if (options.max_facets_per_sphere > 0) {
     e.median_facets_per_sphere =
         median_triangles_per_sphere(points, nominal_scene, options.radius_mm);
-  if (options.max_facets_per_sphere > 0 &&
-      e.median_facets_per_sphere > options.max_facets_per_sphere) {
-    const TriangleMesh subset_mesh = facet_subset(nominal, fn, options, nominal_triangle_of);
-    e.nominal_fraction = static_cast<double>(nominal_triangle_of.size()) /
-                         static_cast<double>(nominal.triangles.size());
-    subset_scene.emplace(subset_mesh);
+    if (e.median_facets_per_sphere > options.max_facets_per_sphere) {
+      const TriangleMesh subset_mesh = facet_subset(nominal, fn, options, nominal_triangle_of);
+      e.nominal_fraction = static_cast<double>(nominal_triangle_of.size()) /
+                           static_cast<double>(nominal.triangles.size());
+      subset_scene.emplace(subset_mesh);
+    }
   }
   const Context c{nominal,
                   fn,
