@@ -314,8 +314,8 @@ Inputs read_inputs(const ParsedArgs& a, const fs::path& program_file, const fs::
   Inputs in;
   const fs::path nominal_file = a.positionals()[0], scan_file = a.positionals()[1];
   const bool strict = a.flag("strict-mesh");
-  // The two meshes, the program and the meshes' digests side by side; an
-  // error is reported for the first of them in this order.
+  // The two meshes and the program side by side; an error is reported for
+  // the first of them in this order.
   std::vector<offline::MeshInputAudit> nominal_audit, scan_audit;
   offline::FileDigest nominal_digest, scan_digest;
   run_side_by_side({
@@ -331,6 +331,10 @@ Inputs read_inputs(const ParsedArgs& a, const fs::path& program_file, const fs::
           throw InputError(e.what());
         }
       },
+  });
+  // Hashed only once read: a file the readers refuse (a device, an endless
+  // stream) is never read to its end.
+  run_side_by_side({
       [&] { nominal_digest = offline::digest_file("nominal", nominal_file); },
       [&] { scan_digest = offline::digest_file("scan", scan_file); },
   });

@@ -321,6 +321,23 @@ std::string moved_stl(std::string stl, const std::function<void(float*)>& f) {
 // Scans that are not of this part or not where they say: refused with exit 2,
 // a message that says how far off and which option accepts it, and nothing
 // written; the same scans pass when the option says the offset is intended.
+// An endless stream given as a mesh is refused by the reader, and never
+// hashed (the inputs are hashed only once read): before that order, the
+// hash read /dev/zero without end.
+TEST(FieldCli, AnEndlessStreamAsAMeshIsRefusedNotHashed) {
+  const fs::path root = scratch_dir();
+  const Part p = make_part_and_scan(root, 0.05);
+  const fs::path out = root / "out";
+  for (int which : {1, 2}) {
+    std::vector<std::string> args = field_args(p, out);
+    args[static_cast<std::size_t>(which)] = "/dev/zero";
+    const ProcessResult r = truecut(args);
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(r.err.find("/dev/zero"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+  }
+}
+
 TEST(FieldCli, WrongScansAreRefused) {
   const fs::path root = scratch_dir();
   const Part p = make_part_and_scan(root, 0.05);
