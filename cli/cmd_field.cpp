@@ -75,6 +75,9 @@ const char* kFieldHelp =
     "  --max-scan-outliers PERCENT  refuse a scan with more of its points than this\n"
     "                        farther than --max-scan-offset from the nominal after\n"
     "                        registration (default 20)\n"
+    "  --tool-rotation       also fit a rotation of the tool about its tip where a\n"
+    "                        flank's error changes along the tool axis (field\n"
+    "                        channels rx ry rz; docs/offline.md, Tool rotation)\n"
     "  --remove-rbm          remove the rigid-body motion left in the error vectors\n"
     "  --sphere-radius MM    sphere method radius Rs (default 1.5)\n"
     "  --sphere-max-points N  sphere method: where the median sphere holds more scan\n"
@@ -394,6 +397,7 @@ offline::FieldPipelineOptions pipeline_options(const ParsedArgs& a, const Inputs
   o.scan_check.max_off_percent =
       a.number("max-scan-outliers", o.scan_check.max_off_percent, 0.0, 100.0);
   o.remove_rigid_body_motion = a.flag("remove-rbm");
+  o.tool_rotation = a.flag("tool-rotation");
   o.sphere.radius_mm = a.number("sphere-radius", o.sphere.radius_mm, 0.01, 100.0);
   o.sphere.max_points_per_sphere = static_cast<std::size_t>(a.integer(
       "sphere-max-points", static_cast<long>(o.sphere.max_points_per_sphere), 0, 100000000));
@@ -599,6 +603,7 @@ int cmd_field(const std::vector<std::string>& argv) {
                       {"datum", true},
                       {"no-register", false},
                       {"remove-rbm", false},
+                      {"tool-rotation", false},
                       {"max-scan-offset", true},
                       {"max-points", true},
                       {"max-grid-nodes", true},

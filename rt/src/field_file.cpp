@@ -25,11 +25,21 @@ namespace {
 constexpr std::string_view kMagic = "TRUECUT-FIELD";
 constexpr int kVersion = 1;
 constexpr std::string_view kEndHeader = "end_header";
+// The two channel layouts: the translation alone, or with the tool's
+// rotation (rx ry rz, rad) before the weight.
 constexpr std::string_view kChannels = "dx dy dz weight";
+constexpr std::string_view kChannelsWithRotation = "dx dy dz rx ry rz weight";
 constexpr std::string_view kEncoding = "float64-le";
 constexpr std::size_t kMaxHeaderBytes = 64 * 1024;
-constexpr std::size_t kBytesPerNode = 4 * sizeof(double);
 constexpr const char* kChannelNames[] = {"dx", "dy", "dz", "weight"};
+constexpr const char* kChannelNamesWithRotation[] = {"dx", "dy", "dz", "rx", "ry", "rz", "weight"};
+
+int channel_count(bool rotation) {
+  return rotation ? 7 : 4;
+}
+std::size_t bytes_per_node(bool rotation) {
+  return static_cast<std::size_t>(channel_count(rotation)) * sizeof(double);
+}
 constexpr std::string_view kKeys[] = {
     "frame",    "units",   "origin", "spacing", "dims", "tools",    "interpolation", "channels",
     "encoding", "created", "source", "machine", "part", "tool_set", "payload_bytes", "crc64"};
@@ -115,11 +125,11 @@ class Decoder {
     const FieldInterpolation interpolation = interpolation_of(header);
     expect_value(header, "frame", "workpiece");
     expect_value(header, "units", "mm");
-    expect_value(header, "channels", kChannels);
+    const bool rotation = has_rotation_channels(header);
     expect_value(header, "encoding", kEncoding);
 
     const uint64_t expected = static_cast<uint64_t>(tools.size()) *
-                              static_cast<uint64_t>(grid.node_count()) * kBytesPerNode;
+                              static_cast<uint64_t>(grid.node_count()) * bytes_per_node(rotation);
     const auto declared = parse_number<uint64_t>(required(header, "payload_bytes"));
     if (!declared)
       fail("payload_bytes is not a byte count: " + printable(required(header, "payload_bytes")));
@@ -140,7 +150,7 @@ class Decoder {
     LoadedField loaded{{header_value(header, "created"), header_value(header, "source"),
                         header_value(header, "machine"), header_value(header, "part"),
                         header_value(header, "tool_set")},
-                       make_field(grid, tools, interpolation, header.payload_offset)};
+                       make_field(grid, tools, interpolation, rotation, header.payload_offset)};
     loaded.crc64 = *parse_number<uint64_t>(required(header, "crc64"), 16);
     loaded.field.set_identity({loaded.crc64, field_identity_id(loaded.info.machine),
                                field_identity_id(loaded.info.part),
@@ -218,6 +228,15 @@ class Decoder {
     return it == h.values.end() ? std::string() : it->second;
   }
 
+  bool has_rotation_channels(const Header& h) const {
+    const std::string_view value = required(h, "channels");
+    const auto got = split_words(value);
+    if (got == split_words(kChannels)) return false;
+    if (got == split_words(kChannelsWithRotation)) return true;
+    fail("channels is " + printable(value) + ", must be '" + std::string(kChannels) + "' or '" +
+         std::string(kChannelsWithRotation) + "'");
+  }
+
   void expect_value(const Header& h, std::string_view key, std::string_view want) const {
     const std::string_view value = required(h, key);
     const auto got = split_words(value), expected = split_words(want);
@@ -291,21 +310,27 @@ class Decoder {
   }
 
   CorrectionField make_field(const FieldGrid& grid, const std::vector<int32_t>& tools,
-                             FieldInterpolation interpolation, std::size_t offset) const {
+                             FieldInterpolation interpolation, bool rotation,
+                             std::size_t offset) const {
     std::vector<FieldLayer> layers;
     layers.reserve(tools.size());
     const char* p = bytes_.data() + offset;
+    const int channels = channel_count(rotation);
+    const auto nodes = static_cast<std::size_t>(grid.node_count());
     for (std::size_t l = 0; l < tools.size(); ++l) {
-      FieldLayer layer{tools[l],
-                       std::vector<FieldNode>(static_cast<std::size_t>(grid.node_count()))};
+      FieldLayer layer{tools[l], std::vector<FieldNode>(nodes)};
+      if (rotation) layer.rotation_rad.resize(nodes);
       for (int64_t n = 0; n < grid.node_count(); ++n) {
-        double v[4];
-        for (int c = 0; c < 4; ++c, p += sizeof(double)) {
+        double v[7];
+        for (int c = 0; c < channels; ++c, p += sizeof(double)) {
           v[c] = get_le(p);
-          const bool bad = c < 3 ? !std::isfinite(v[c]) : !(v[c] >= 0.0 && v[c] <= 1.0);
-          if (bad) fail(bad_value_message(grid, tools, l, n, c, v[c], p - bytes_.data() - offset));
+          const bool bad = c < channels - 1 ? !std::isfinite(v[c]) : !(v[c] >= 0.0 && v[c] <= 1.0);
+          if (bad)
+            fail(bad_value_message(grid, tools, l, n, rotation, c, v[c],
+                                   p - bytes_.data() - offset));
         }
-        layer.nodes[static_cast<std::size_t>(n)] = {v[0], v[1], v[2], v[3]};
+        layer.nodes[static_cast<std::size_t>(n)] = {v[0], v[1], v[2], v[channels - 1]};
+        if (rotation) layer.rotation_rad[static_cast<std::size_t>(n)] = {v[3], v[4], v[5]};
       }
       layers.push_back(std::move(layer));
     }
@@ -317,14 +342,16 @@ class Decoder {
   }
 
   static std::string bad_value_message(const FieldGrid& grid, const std::vector<int32_t>& tools,
-                                       std::size_t layer, int64_t node, int channel, double value,
-                                       std::ptrdiff_t payload_offset) {
+                                       std::size_t layer, int64_t node, bool rotation, int channel,
+                                       double value, std::ptrdiff_t payload_offset) {
     const int64_t i = node % grid.dims[0], j = (node / grid.dims[0]) % grid.dims[1],
                   k = node / (int64_t{grid.dims[0]} * grid.dims[1]);
     std::ostringstream s;
-    s << (channel < 3 ? "non-finite value " : "weight outside [0, 1]: ") << value
+    const bool weight = channel == channel_count(rotation) - 1;
+    s << (weight ? "weight outside [0, 1]: " : "non-finite value ") << value
       << " in payload: layer " << layer << " (tool " << tools[layer] << "), node (i, j, k) = (" << i
-      << ", " << j << ", " << k << "), channel " << kChannelNames[channel]
+      << ", " << j << ", " << k << "), channel "
+      << (rotation ? kChannelNamesWithRotation[channel] : kChannelNames[channel])
       << ", payload byte offset " << payload_offset;
     return s.str();
   }
@@ -366,15 +393,22 @@ std::string encode_field_file(const CorrectionField& field, const FieldFileInfo&
   for (const int32_t t : field.tools())
     tools += (tools.empty() ? "" : " ") + std::to_string(t);
 
+  const bool rotation = field.has_rotation();
   std::string payload(
-      field.tools().size() * static_cast<std::size_t>(g.node_count()) * kBytesPerNode, '\0');
+      field.tools().size() * static_cast<std::size_t>(g.node_count()) * bytes_per_node(rotation),
+      '\0');
   char* at = payload.data();
   for (const int32_t t : field.tools()) {
-    for (const FieldNode& n : field.nodes(t)) {
-      put_le(at, n.dx_mm);
-      put_le(at, n.dy_mm);
-      put_le(at, n.dz_mm);
-      put_le(at, n.weight);
+    const std::span<const FieldNode> nodes = field.nodes(t);
+    const std::span<const Eigen::Vector3d> rotations = field.rotations(t);
+    for (std::size_t n = 0; n < nodes.size(); ++n) {
+      put_le(at, nodes[n].dx_mm);
+      put_le(at, nodes[n].dy_mm);
+      put_le(at, nodes[n].dz_mm);
+      if (rotation)
+        for (int c = 0; c < 3; ++c)
+          put_le(at, rotations[n][c]);
+      put_le(at, nodes[n].weight);
     }
   }
 
@@ -386,7 +420,7 @@ std::string encode_field_file(const CorrectionField& field, const FieldFileInfo&
             std::to_string(g.dims[2]) + "\n";
   header += "tools: " + tools + "\n";
   header += "interpolation: " + std::string(to_string(field.interpolation())) + "\n";
-  header += "channels: " + std::string(kChannels) + "\n";
+  header += "channels: " + std::string(rotation ? kChannelsWithRotation : kChannels) + "\n";
   header += "encoding: " + std::string(kEncoding) + "\n";
   header += "created: " + (info.created.empty() ? utc_timestamp_now() : info.created) + "\n";
   header += "source: " + info.source + "\n";

@@ -6,9 +6,11 @@
 //   cross-fade  tcp mode, field B adopted by a reload while field A fades out
 //               (fade-time 10 s: every measured cycle is inside the fade)
 //   joint       joint mode (forward kinematics, correction, inverse
-//               kinematics) with A tilting and C turning every cycle; the
-//               tool-orientation corrections of issue 19 do not exist yet,
-//               so this is the "joint mode with orientation" path for now
+//               kinematics) with A tilting and C turning every cycle, a
+//               field without rotation
+//   joint-tilt  the same with a field that also turns the tool (a few
+//               mrad): "joint mode with orientation" (rotation shaped, A and
+//               C turned by rotary_correction())
 //   fault       tcp mode, the TCP outside the field's grid (fault 3), the
 //               correction fading out (fade-time 10 s)
 //
@@ -34,10 +36,11 @@
 
 namespace truecut::test::comp {
 
-enum class CyclePath { kPlain, kCrossFade, kJoint, kFault };
+enum class CyclePath { kPlain, kCrossFade, kJoint, kJointTilt, kFault };
 
 inline constexpr CyclePath kAllCyclePaths[] = {CyclePath::kPlain, CyclePath::kCrossFade,
-                                               CyclePath::kJoint, CyclePath::kFault};
+                                               CyclePath::kJoint, CyclePath::kJointTilt,
+                                               CyclePath::kFault};
 
 inline const char* cycle_path_name(CyclePath p) {
   switch (p) {
@@ -47,6 +50,8 @@ inline const char* cycle_path_name(CyclePath p) {
       return "cross-fade";
     case CyclePath::kJoint:
       return "joint";
+    case CyclePath::kJointTilt:
+      return "joint-tilt";
     case CyclePath::kFault:
       return "fault";
   }
@@ -60,11 +65,12 @@ inline std::optional<CyclePath> parse_cycle_path(const std::string& text) {
 }
 
 // The 80 x 80 x 60 mm field around the origin the paths run in.
-inline FieldSpec cycle_path_field(double scale) {
+inline FieldSpec cycle_path_field(double scale, double rotation_scale = 0.0) {
   FieldSpec s;
   s.origin_mm = {-40.0, -40.0, -30.0};
   s.dims = {17, 17, 13};
   s.scale = scale;
+  s.rotation_scale = rotation_scale;
   return s;
 }
 
@@ -77,8 +83,8 @@ class CyclePathRig {
                rt::hal::HalOptions options = hal_options())
       : path_(path), hal_(std::make_unique<rt::hal::Hal>(std::move(options))) {
     const auto file = dir / "cycle_path.tcf";
-    write_field(file, cycle_path_field(1.0));
-    const bool joint = path == CyclePath::kJoint;
+    const bool joint = path == CyclePath::kJoint || path == CyclePath::kJointTilt;
+    write_field(file, cycle_path_field(1.0, path == CyclePath::kJointTilt ? 1.0 : 0.0));
     load_source(*hal_, source_, joint ? 5 : 3);
     std::string text =
         "loadrt threads name1=servo-thread period1=1000000\n"
@@ -150,6 +156,10 @@ class CyclePathRig {
       case CyclePath::kPlain:
       case CyclePath::kJoint:
         ok = ok && fault == 0 && fade == 1.0 && generation == 1;
+        break;
+      case CyclePath::kJointTilt:
+        ok = ok && fault == 0 && fade == 1.0 && generation == 1 &&
+             hal_->get_pin_or_param("c.tilt-mag").f > 0.0;
         break;
       case CyclePath::kCrossFade:
         ok = ok && fault == 0 && fade > 0.0 && fade < 1.0 && generation == 2;

@@ -134,7 +134,7 @@ struct Driver {
   bool ever_limited = false;
 
   CycleOutput cycle(const CycleInput& in) {
-    const Vec3 before = state.output;
+    const Vec3 before = state.translation.output;
     const CycleOutput o = step(state, in, limits, kDt);
     EXPECT_TRUE(o.correction_mm.allFinite());
     max_step_mm = std::max(max_step_mm, (o.correction_mm - before).norm());
@@ -193,7 +193,7 @@ TEST(CompCore, ToolChangeCrossFadesFromTheOldLayerToTheNew) {
   in.candidate = nullptr;
   for (int i = 0; i < 150; ++i)
     d.cycle(in);
-  EXPECT_EQ(c1, d.state.output);
+  EXPECT_EQ(c1, d.state.translation.output);
   in.tool = 2;
   CycleOutput o;
   for (int i = 0; i < 100; ++i) {
@@ -235,7 +235,7 @@ TEST(CompCore, ASecondChangeWaitsForTheFirstCrossFade) {
   EXPECT_EQ(2, d.state.outgoing.tool);
   for (int i = 0; i < 100; ++i)
     d.cycle(in);
-  EXPECT_EQ(field.evaluate(3, p).correction_mm, d.state.output);
+  EXPECT_EQ(field.evaluate(3, p).correction_mm, d.state.translation.output);
   EXPECT_FALSE(d.ever_limited);
 }
 
@@ -267,7 +267,7 @@ TEST(CompCore, FieldSwapBlendsAndReleasesTheOldFieldOnceUnused) {
   d.cycle(in);
   ASSERT_EQ(1u, d.released.size());
   EXPECT_EQ(&a, d.released[0]);
-  EXPECT_EQ(b.evaluate(1, p).correction_mm, d.state.output);
+  EXPECT_EQ(b.evaluate(1, p).correction_mm, d.state.translation.output);
   const Vec3 ca = a.evaluate(1, p).correction_mm, cb = b.evaluate(1, p).correction_mm;
   EXPECT_LE(d.max_step_mm, kFadeGainMaxSlope * (ca - cb).norm() * kDt / 0.1 * (1 + 1e-9));
   EXPECT_FALSE(d.ever_limited);
@@ -443,7 +443,7 @@ TEST(CompCore, FaultsFadeTheHeldCorrectionToZero) {
     in.candidate = nullptr;
     for (int i = 0; i < 60; ++i)
       d.cycle(in);
-    const Vec3 full = d.state.output;
+    const Vec3 full = d.state.translation.output;
     ASSERT_GT(full.norm(), 0.05);
     c.apply(in, d);
     CycleOutput o;
@@ -518,7 +518,7 @@ TEST(CompCore, RecoveryFromAFaultCrossFadesFromTheHeldValue) {
   in.tcp_mm = Vec3(10.0, -12.0, 4.0);  // the input comes back somewhere else
   for (int i = 0; i < 200; ++i)
     EXPECT_EQ(Fault::kNone, d.cycle(in).fault);
-  EXPECT_EQ(field.evaluate(1, in.tcp_mm).correction_mm, d.state.output);
+  EXPECT_EQ(field.evaluate(1, in.tcp_mm).correction_mm, d.state.translation.output);
   EXPECT_FALSE(d.ever_limited);
 }
 
@@ -578,7 +578,7 @@ TEST(CompCore, InvalidParametersNeverFreezeTheOutputAndDisableAlwaysReachesZero)
         in.candidate = nullptr;
         for (int i = 0; i < 100; ++i)
           d.cycle(in);
-        const Vec3 full = d.state.output;
+        const Vec3 full = d.state.translation.output;
         ASSERT_GT(full.norm(), 0.05);
         const CompLimits valid = d.limits;
         double* tunable[] = {&d.limits.max_correction_mm, &d.limits.max_rate_mm_per_s,
@@ -611,7 +611,7 @@ TEST(CompCore, InvalidParametersNeverFreezeTheOutputAndDisableAlwaysReachesZero)
           ASSERT_EQ(Fault::kNone, o.latched);
         }
         in.reset = false;
-        EXPECT_EQ(full, d.state.output);
+        EXPECT_EQ(full, d.state.translation.output);
         EXPECT_LE(d.max_step_mm, 5.0 * kDt * (1 + kSlack));
       }
     }
@@ -642,7 +642,7 @@ TEST(CompCore, NoJumpWhenANaNInputRecoversElsewhere) {
     in.tcp_mm = -in.tcp_mm;
     for (int i = 0; i < 300; ++i)
       d.cycle(in);
-    EXPECT_EQ(field.evaluate(1, in.tcp_mm).correction_mm, d.state.output) << nan_cycles;
+    EXPECT_EQ(field.evaluate(1, in.tcp_mm).correction_mm, d.state.translation.output) << nan_cycles;
   }
   EXPECT_LE(d.max_step_mm, 10.0 * kDt * (1 + kSlack));
 }
@@ -666,11 +666,11 @@ TEST(CompCore, MaxCorrectionIsHardInEveryCycleAndAStepDownIsAFault) {
   in.candidate = nullptr;
   for (int i = 0; i < 100; ++i)
     d.cycle(in);
-  ASSERT_NEAR(0.065, d.state.output.norm(), 1e-15);
+  ASSERT_NEAR(0.065, d.state.translation.output.norm(), 1e-15);
   const int32_t clamps_before = d.state.clamp_count;
   int faults = 0;
   for (double bound : {0.05, 0.045, 0.03, 0.025, 0.01, 0.005}) {
-    const double before = d.state.output.norm();
+    const double before = d.state.translation.output.norm();
     d.limits.max_correction_mm = bound;
     for (int i = 0; i < 20; ++i) {
       in.reset = i == 1;  // acknowledge a step at once (it latches)
@@ -686,14 +686,14 @@ TEST(CompCore, MaxCorrectionIsHardInEveryCycleAndAStepDownIsAFault) {
   }
   EXPECT_EQ(3, faults) << "steps of 0.005 mm are within one cycle's step (0.01 mm)";
   EXPECT_EQ(clamps_before + 120, d.state.clamp_count);
-  EXPECT_NEAR(0.005, d.state.output.norm(), 1e-15);
+  EXPECT_NEAR(0.005, d.state.translation.output.norm(), 1e-15);
   // Raising the bound again is no fault: the rate limit follows it up.
   d.limits.max_correction_mm = 0.065;
   d.max_step_mm = 0.0;
   for (int i = 0; i < 100; ++i)
     ASSERT_EQ(Fault::kNone, d.cycle(in).fault);
   EXPECT_LE(d.max_step_mm, 10.0 * kDt * (1 + kSlack));
-  EXPECT_NEAR(0.065, d.state.output.norm(), 1e-15);
+  EXPECT_NEAR(0.065, d.state.translation.output.norm(), 1e-15);
 }
 
 TEST(CompCore, ABoundLoweredWithinTheRateIsFollowedWithoutAFault) {
@@ -814,14 +814,14 @@ TEST(CompCore, AccelerationLimitHoldsForSwapsToolChangesFadesAndGridExit) {
   r.in.tcp_mm = Vec3(-3.0, 4.0, 1.0);
   for (int i = 0; i < 1000; ++i)
     r.cycle();
-  EXPECT_EQ(r.field.evaluate(1, r.in.tcp_mm).correction_mm, r.d.state.output);
+  EXPECT_EQ(r.field.evaluate(1, r.in.tcp_mm).correction_mm, r.d.state.translation.output);
   r.in.tool = 2;  // tool change
   for (int i = 0; i < 1000; ++i)
     r.cycle();
   r.in.tcp_mm = Vec3(100.0, 0.0, 0.0);  // leaves the grid
   for (int i = 0; i < 1000; ++i)
     EXPECT_EQ(Fault::kOutsideGrid, r.cycle().fault);
-  EXPECT_EQ(Vec3::Zero(), r.d.state.output);
+  EXPECT_EQ(Vec3::Zero(), r.d.state.translation.output);
   r.in.tcp_mm = Vec3(2.0, -2.0, 0.0);
   r.in.enable = false;
   for (int i = 0; i < 10; ++i)
@@ -832,7 +832,7 @@ TEST(CompCore, AccelerationLimitHoldsForSwapsToolChangesFadesAndGridExit) {
   r.in.enable = false;
   for (int i = 0; i < 1000; ++i)
     r.cycle();
-  EXPECT_EQ(Vec3::Zero(), r.d.state.output) << "disable reaches zero";
+  EXPECT_EQ(Vec3::Zero(), r.d.state.translation.output) << "disable reaches zero";
   EXPECT_LE(r.probe.max_v, 10.0 * (1 + 1e-9));
   EXPECT_LE(r.probe.max_a, 100.0 * (1 + 1e-6));
   EXPECT_TRUE(r.d.ever_limited);
@@ -866,7 +866,7 @@ TEST(CompCore, ABoundSteppedDownStepsOnceAsAFaultThenMovesWithinTheLimits) {
   r.in.tcp_mm = Vec3(2.0, 3.0, 1.0);
   for (int i = 0; i < 1500; ++i)
     r.cycle();
-  ASSERT_NEAR(0.065, r.d.state.output.norm(), 1e-15);
+  ASSERT_NEAR(0.065, r.d.state.translation.output.norm(), 1e-15);
   r.d.limits.max_correction_mm = 0.005;
   EXPECT_EQ(Fault::kBoundStep, r.cycle().fault);
   EXPECT_EQ(Fault::kBoundStep, r.d.state.latched);
@@ -874,7 +874,7 @@ TEST(CompCore, ABoundSteppedDownStepsOnceAsAFaultThenMovesWithinTheLimits) {
   r.cycle();
   r.in.reset = false;
   EXPECT_EQ(Fault::kNone, r.d.state.latched);
-  r.probe = MotionProbe{r.d.state.output, Vec3::Zero()};
+  r.probe = MotionProbe{r.d.state.translation.output, Vec3::Zero()};
   for (int i = 0; i < 500; ++i)
     ASSERT_EQ(Fault::kNone, r.cycle().fault);
   EXPECT_LT(r.probe.max_v, 1e-9) << "at rest at the bound";
@@ -882,7 +882,7 @@ TEST(CompCore, ABoundSteppedDownStepsOnceAsAFaultThenMovesWithinTheLimits) {
   r.d.limits.max_correction_mm = 0.065;
   for (int i = 0; i < 500; ++i)
     ASSERT_EQ(Fault::kNone, r.cycle().fault);
-  ASSERT_NEAR(0.065, r.d.state.output.norm(), 1e-15);
+  ASSERT_NEAR(0.065, r.d.state.translation.output.norm(), 1e-15);
   for (int i = 1; i <= 500; ++i) {
     r.d.limits.max_correction_mm = 0.065 - 0.06 * fade_gain(i / 500.0);
     ASSERT_EQ(Fault::kNone, r.cycle().fault) << i;
@@ -903,7 +903,7 @@ TEST(CompCore, ALatchedFaultHoldsTheCorrectionAtZeroUntilResetRises) {
   in.candidate = nullptr;
   for (int i = 0; i < 100; ++i)
     d.cycle(in);
-  const Vec3 full = d.state.output;
+  const Vec3 full = d.state.translation.output;
   ASSERT_GT(full.norm(), 0.05);
   // A reset held high does not pre-empt a fault: only its rising edge acts.
   in.reset = true;
@@ -932,7 +932,7 @@ TEST(CompCore, ALatchedFaultHoldsTheCorrectionAtZeroUntilResetRises) {
   in.reset = true;  // the cause is gone: the latch clears, the correction fades in
   for (int i = 0; i < 200; ++i)
     ASSERT_EQ(Fault::kNone, d.cycle(in).latched);
-  EXPECT_EQ(full, d.state.output);
+  EXPECT_EQ(full, d.state.translation.output);
   EXPECT_LE(d.max_step_mm, 5.0 * kDt * (1 + kSlack));
   // A latching fault latches even in a cycle whose `fault` shows an input
   // fault.
@@ -1059,13 +1059,14 @@ TEST(CompCore, JerkLimitHoldsInEveryTransition) {
   r.d.limits.max_correction_mm = 10.0;  // not clamped here except where lowered
   r.in.tcp_mm = Vec3(-3.0, 4.0, 1.0);
   r.run(1000);  // enable
-  EXPECT_EQ(r.field.evaluate(1, r.in.tcp_mm).correction_mm, r.d.state.output) << "lands exactly";
+  EXPECT_EQ(r.field.evaluate(1, r.in.tcp_mm).correction_mm, r.d.state.translation.output)
+      << "lands exactly";
   r.in.tool = 2;  // tool change
   r.run(1000);
-  EXPECT_EQ(r.field.evaluate(2, r.in.tcp_mm).correction_mm, r.d.state.output);
+  EXPECT_EQ(r.field.evaluate(2, r.in.tcp_mm).correction_mm, r.d.state.translation.output);
   r.in.candidate = &r.other;  // field swap
   r.run(1000);
-  EXPECT_EQ(r.other.evaluate(2, r.in.tcp_mm).correction_mm, r.d.state.output);
+  EXPECT_EQ(r.other.evaluate(2, r.in.tcp_mm).correction_mm, r.d.state.translation.output);
   // Grid exit while moving: 20 mm/s in x out of the grid and back.
   for (int i = 0; i < 3000; ++i) {
     r.in.tcp_mm.x() = -3.0 + 60.0 * std::sin(i * kDt / 3.0);
@@ -1079,10 +1080,10 @@ TEST(CompCore, JerkLimitHoldsInEveryTransition) {
   r.in.input_fault = Fault::kNone;
   r.in.tcp_mm = Vec3(-12.0, 9.0, -3.0);
   r.run(1000);
-  EXPECT_EQ(r.other.evaluate(2, r.in.tcp_mm).correction_mm, r.d.state.output);
+  EXPECT_EQ(r.other.evaluate(2, r.in.tcp_mm).correction_mm, r.d.state.translation.output);
   // Bound lowered below the correction smoothly (within the limits), then
   // raised.
-  const double full = r.d.state.output.norm();
+  const double full = r.d.state.translation.output.norm();
   ASSERT_GT(full, 0.5);
   for (int i = 0; i <= 1000; ++i) {
     r.d.limits.max_correction_mm = (1.0 - 0.7 * fade_gain(i / 1000.0)) * full;
@@ -1097,7 +1098,7 @@ TEST(CompCore, JerkLimitHoldsInEveryTransition) {
   r.run(20);
   r.in.enable = false;
   r.run(1000);
-  EXPECT_EQ(Vec3::Zero(), r.d.state.output) << "disable reaches zero";
+  EXPECT_EQ(Vec3::Zero(), r.d.state.translation.output) << "disable reaches zero";
   r.expect_within_limits();
   EXPECT_GT(r.probe.max_j, 0.5e5) << "the jerk limit was what acted";
   EXPECT_TRUE(r.d.ever_limited);
@@ -1110,14 +1111,14 @@ TEST(CompCore, JerkLimitHoldsThroughAReportedBoundStep) {
   r.d.limits.max_correction_mm = 0.065;
   r.in.tcp_mm = Vec3(2.0, 3.0, 1.0);
   r.run(1500);
-  ASSERT_NEAR(0.065, r.d.state.output.norm(), 1e-15);
+  ASSERT_NEAR(0.065, r.d.state.translation.output.norm(), 1e-15);
   r.d.limits.max_correction_mm = 0.005;
   EXPECT_EQ(Fault::kBoundStep, r.cycle().fault);
   r.in.reset = true;
   r.run(2000);
   r.d.limits.max_correction_mm = 0.065;
   r.run(1000);
-  EXPECT_NEAR(0.065, r.d.state.output.norm(), 1e-15);
+  EXPECT_NEAR(0.065, r.d.state.translation.output.norm(), 1e-15);
   r.expect_within_limits();
 }
 
@@ -1142,18 +1143,18 @@ TEST(CompCore, DefaultLimitsLeaveADefaultFadeUntouched) {
     in.candidate = nullptr;
     ASSERT_FALSE(o.limited) << i;
   }
-  EXPECT_EQ(full, d.state.output);
+  EXPECT_EQ(full, d.state.translation.output);
   in.enable = false;
   for (int i = 0; i < 1500; ++i)
     ASSERT_FALSE(d.cycle(in).limited) << i;
-  EXPECT_EQ(Vec3::Zero(), d.state.output);
+  EXPECT_EQ(Vec3::Zero(), d.state.translation.output);
 }
 
 TEST(CompCore, AnInvalidJerkIsABadParameter) {
   JerkRig r(1.0, 0.05);
   r.in.tcp_mm = Vec3(1.0, 1.0, 0.0);
   r.run(200);
-  ASSERT_GT(r.d.state.output.norm(), 0.05);
+  ASSERT_GT(r.d.state.translation.output.norm(), 0.05);
   r.d.limits.max_jerk_mm_per_s3 = -1.0;
   CycleOutput o;
   for (int i = 0; i < 500; ++i) {
@@ -1218,7 +1219,7 @@ TEST(CompCore, AFieldBuiltForAnotherMachinePartOrToolSetIsRefused) {
   in.candidate = nullptr;
   for (int i = 0; i < 100; ++i)
     ASSERT_EQ(Fault::kNone, d.cycle(in).fault);
-  EXPECT_EQ(a.evaluate(1, in.tcp_mm).correction_mm, d.state.output);
+  EXPECT_EQ(a.evaluate(1, in.tcp_mm).correction_mm, d.state.translation.output);
   // A matching candidate is adopted; a wrong one waits and is reported
   // while the current field stays applied.
   in.candidate = &b;
@@ -1227,7 +1228,7 @@ TEST(CompCore, AFieldBuiltForAnotherMachinePartOrToolSetIsRefused) {
     ASSERT_FALSE(o.adopted);
     ASSERT_EQ(Fault::kWrongField, o.fault);
   }
-  EXPECT_EQ(a.evaluate(1, in.tcp_mm).correction_mm, d.state.output);
+  EXPECT_EQ(a.evaluate(1, in.tcp_mm).correction_mm, d.state.translation.output);
   in.candidate = nullptr;
   // The expectation changes: the current field is wrong now and fades out.
   in.expect_machine = 6;
@@ -1242,7 +1243,7 @@ TEST(CompCore, AFieldBuiltForAnotherMachinePartOrToolSetIsRefused) {
   in.expect_machine = 0;  // not checked: it fades back in
   for (int i = 0; i < 100; ++i)
     ASSERT_EQ(Fault::kNone, d.cycle(in).fault);
-  EXPECT_EQ(a.evaluate(1, in.tcp_mm).correction_mm, d.state.output);
+  EXPECT_EQ(a.evaluate(1, in.tcp_mm).correction_mm, d.state.translation.output);
 }
 
 namespace {

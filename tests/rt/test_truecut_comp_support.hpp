@@ -24,6 +24,15 @@ inline Eigen::Vector3d synthetic_vector(int32_t tool, double scale, const Eigen:
                                  0.05 * std::sin(0.07 * (p.x() + p.y() + p.z()) + t));
 }
 
+// The stored tool rotation (rad) of the synthetic field at a node position
+// (mm): a few mrad, varying smoothly.
+inline Eigen::Vector3d synthetic_rotation(int32_t tool, double scale, const Eigen::Vector3d& p) {
+  const double t = tool;
+  return scale * Eigen::Vector3d(2e-3 * std::sin(0.09 * p.y() + 0.3 * t),
+                                 -1.5e-3 * std::cos(0.12 * p.x() - 0.4 * t),
+                                 1e-3 * std::sin(0.05 * p.z() + t));
+}
+
 struct FieldSpec {
   std::vector<int32_t> tools{1, 2};
   double scale = 1.0;  // multiplies every vector
@@ -34,6 +43,8 @@ struct FieldSpec {
   std::array<int32_t, 3> dims{9, 9, 5};
   double spacing_mm = 5.0;
   rt::FieldInterpolation interpolation = rt::FieldInterpolation::kTricubicBspline;
+  // Multiplies every synthetic_rotation(); 0: the field has no rotation.
+  double rotation_scale = 0.0;
 };
 
 inline rt::CorrectionField make_field(const FieldSpec& spec) {
@@ -52,6 +63,11 @@ inline rt::CorrectionField make_field(const FieldSpec& spec) {
           const Eigen::Vector3d v = synthetic_vector(tool, spec.scale, g.node_position_mm(i, j, k));
           auto& n = l.nodes[static_cast<std::size_t>(g.index(i, j, k))];
           n = {v.x(), v.y(), v.z(), 1.0};
+          if (spec.rotation_scale != 0.0) {
+            if (l.rotation_rad.empty()) l.rotation_rad.resize(l.nodes.size());
+            l.rotation_rad[static_cast<std::size_t>(g.index(i, j, k))] =
+                synthetic_rotation(tool, spec.rotation_scale, g.node_position_mm(i, j, k));
+          }
           if (spec.fading_border) {
             auto edge = [](int32_t a, int32_t d) { return a < 2 || a > d - 3; };
             if (edge(i, g.dims[0]) || edge(j, g.dims[1]) || edge(k, g.dims[2])) n.weight = 0.0;

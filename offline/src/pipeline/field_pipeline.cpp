@@ -13,6 +13,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 
+#include "fit_with_rotation.hpp"
 #include "spatial/shared_scan_tree.hpp"
 #include "truecut/offline/compensation_points.hpp"
 #include "truecut/offline/compensation_significance.hpp"
@@ -697,7 +698,12 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
   if (fit_samples == 0)
     throw std::invalid_argument(
         "no valid compensation point is cut by any tool of the program: nothing to fit");
-  r.fit = fit_correction_field(r.tool_samples, opt.fit);
+  // A base field that turns the tool keeps doing so in the next iteration.
+  if (opt.tool_rotation || (in.base_field != nullptr && in.base_field->has_rotation())) {
+    r.fit = fit_with_tool_rotation(r, in, opt);
+  } else {
+    r.fit = fit_correction_field(r.tool_samples, opt.fit);
+  }
   timer.done(kFitStage, started, "field fit",
              rt::format_printf("%zu samples, %zu layers, %d x %d x %d nodes", fit_samples,
                                r.fit->layers.size(), r.fit->field.grid().dims[0],

@@ -34,6 +34,10 @@ struct Pins {
   double* fade_time;       // s
   double* max_accel;       // mm/s^2
   double* max_jerk;        // mm/s^3
+  double* max_tilt;        // rad: the tool-orientation correction's limits
+  double* max_tilt_rate;   // rad/s
+  double* max_tilt_accel;  // rad/s^2
+  double* max_tilt_jerk;   // rad/s^3
   bool* reload;
   bool* swap_inhibit;
   bool* reset;
@@ -53,11 +57,16 @@ struct Pins {
   std::array<double*, 3> joint_max_correction;  // joint mode, X Y Z, mm
   std::array<double*, 3> joint_min_limit;
   std::array<double*, 3> joint_max_limit;
+  double* joint_a_max_correction;  // joint mode, A and C, deg (orientation correction)
+  double* joint_c_max_correction;
+  double* tilt_shortfall;  // joint mode, rad: the part of the tilt A and C cannot give
   int32_t* joint_clip_count;
   std::array<double*, 3> tcp_out;
   std::array<double*, 3> axis_out;
   std::array<double*, 3> corr;  // mm, workpiece frame
   double* corr_mag;
+  std::array<double*, 3> tilt;  // rad, rotation vector, workpiece frame
+  double* tilt_mag;
   bool* active;
   int32_t* fault;
   bool* limited;
@@ -154,6 +163,8 @@ rt::comp::JointLimits joint_limits(const Pins& p) noexcept {
     l.min_limit[i] = *p.joint_min_limit[i];
     l.max_limit[i] = *p.joint_max_limit[i];
   }
+  l.max_a_correction_deg = *p.joint_a_max_correction;
+  l.max_c_correction_deg = *p.joint_c_max_correction;
   return l;
 }
 
@@ -204,8 +215,9 @@ void update(void* arg, long period_ns) {
   }
   in.tcp_mm = pose.tcp_mm;
 
-  const rt::comp::CompLimits limits{*p.max_correction, *p.max_rate, *p.fade_time, *p.max_accel,
-                                    *p.max_jerk};
+  const rt::comp::CompLimits limits{*p.max_correction, *p.max_rate,       *p.fade_time,
+                                    *p.max_accel,      *p.max_jerk,       *p.max_tilt,
+                                    *p.max_tilt_rate,  *p.max_tilt_accel, *p.max_tilt_jerk};
   const rt::comp::CycleOutput out = rt::comp::step(s.core, in, limits, double(period_ns) * 1e-9);
   if (out.adopted) {
     s.pending = nullptr;
@@ -215,6 +227,8 @@ void update(void* arg, long period_ns) {
 
   write3(p.corr, out.correction_mm);
   *p.corr_mag = out.correction_mm.norm();
+  write3(p.tilt, out.rotation_rad);
+  *p.tilt_mag = out.rotation_rad.norm();
   *p.active = out.active;
   *p.fault = static_cast<int32_t>(out.fault);
   *p.limited = out.limited;
@@ -229,13 +243,26 @@ void update(void* arg, long period_ns) {
   *p.field_machine = id.machine;
   *p.field_part = id.part;
   *p.field_tool_set = id.tool_set;
-  if (s.mode == Mode::kJoint) *p.joint_clip_count = s.core.joint_clip_count;
   // Position outputs hold their last value while the inputs are unusable.
-  if (in.input_fault == Fault::kInputNotFinite) return;
+  if (in.input_fault == Fault::kInputNotFinite) {
+    if (s.mode == Mode::kJoint) *p.joint_clip_count = s.core.joint_clip_count;
+    return;
+  }
   write3(p.tcp_out, pose.tcp_mm + out.correction_mm);
-  write3(p.axis_out, pose.axis);
+  write3(p.axis_out, rt::comp::tilted_axis(pose.axis, out.rotation_rad));
   if (s.mode == Mode::kJoint) {
-    rt::AcJoints j = rt::comp::correct_joints(kins, joints, pose, out.correction_mm);
+    // The tilt as far as small turns of A and C give it (joint_mode.hpp);
+    // a turn cut by its bound counts as a joint clip.
+    const rt::comp::RotaryCorrection rc =
+        rt::comp::exactly_zero(out.rotation_rad)
+            ? rt::comp::RotaryCorrection{}
+            : rt::comp::rotary_correction(kins, joints, pose, out.rotation_rad, jlim);
+    if (rc.clipped)
+      s.core.joint_clip_count =
+          static_cast<int32_t>(static_cast<uint32_t>(s.core.joint_clip_count) + 1u);
+    *p.joint_clip_count = s.core.joint_clip_count;
+    *p.tilt_shortfall = rc.shortfall_rad;
+    rt::AcJoints j = rt::comp::correct_joints(kins, joints, pose, out.correction_mm, rc);
     if (in.joint_clip.active) rt::comp::clamp_joints(jlim, joints, j);
     const double v[5] = {j.x_mm, j.y_mm, j.z_mm, j.a_deg, j.c_deg};
     for (int i = 0; i < 5; ++i)
@@ -288,6 +315,10 @@ void make_pins(rt::hal::component::Builder& b, const std::string& n, Mode mode, 
   in_f("fade-time", &p.fade_time);
   in_f("max-accel", &p.max_accel);
   in_f("max-jerk", &p.max_jerk);
+  in_f("max-tilt", &p.max_tilt);
+  in_f("max-tilt-rate", &p.max_tilt_rate);
+  in_f("max-tilt-accel", &p.max_tilt_accel);
+  in_f("max-tilt-jerk", &p.max_tilt_jerk);
   b.pin(n + ".reload", TC_HAL_BIT, TC_HAL_IN, &p.reload);
   b.pin(n + ".swap-inhibit", TC_HAL_BIT, TC_HAL_IN, &p.swap_inhibit);
   b.pin(n + ".reset", TC_HAL_BIT, TC_HAL_IN, &p.reset);
@@ -319,14 +350,19 @@ void make_pins(rt::hal::component::Builder& b, const std::string& n, Mode mode, 
       in_f((j + "-min-limit").c_str(), &p.joint_min_limit[i]);
       in_f((j + "-max-limit").c_str(), &p.joint_max_limit[i]);
     }
+    in_f("joint-a-max-correction", &p.joint_a_max_correction);
+    in_f("joint-c-max-correction", &p.joint_c_max_correction);
+    out_f("tilt-shortfall", &p.tilt_shortfall);
     b.pin(n + ".joint-clip-count", TC_HAL_S32, TC_HAL_OUT, &p.joint_clip_count);
   }
   for (int i = 0; i < 3; ++i) {
     out_f((std::string("tcp-") + kXyz[i] + "-out").c_str(), &p.tcp_out[i]);
     out_f((std::string("axis-") + kIjk[i] + "-out").c_str(), &p.axis_out[i]);
     out_f((std::string("corr-") + kXyz[i]).c_str(), &p.corr[i]);
+    out_f((std::string("tilt-") + kXyz[i]).c_str(), &p.tilt[i]);
   }
   out_f("corr-mag", &p.corr_mag);
+  out_f("tilt-mag", &p.tilt_mag);
   b.pin(n + ".active", TC_HAL_BIT, TC_HAL_OUT, &p.active);
   b.pin(n + ".fault", TC_HAL_S32, TC_HAL_OUT, &p.fault);
   b.pin(n + ".limited", TC_HAL_BIT, TC_HAL_OUT, &p.limited);
@@ -350,6 +386,10 @@ void make_pins(rt::hal::component::Builder& b, const std::string& n, Mode mode, 
   *p.fade_time = defaults.fade_time_s;
   *p.max_accel = rt::comp::kDefaultMaxAccelMmPerS2;
   *p.max_jerk = rt::comp::kDefaultMaxJerkMmPerS3;
+  *p.max_tilt = defaults.max_tilt_rad;
+  *p.max_tilt_rate = defaults.max_tilt_rate_rad_per_s;
+  *p.max_tilt_accel = rt::comp::kDefaultMaxTiltAccelRadPerS2;
+  *p.max_tilt_jerk = rt::comp::kDefaultMaxTiltJerkRadPerS3;
   if (mode == Mode::kTcp) {
     *p.axis_in[2] = 1.0;
   } else {
@@ -361,6 +401,8 @@ void make_pins(rt::hal::component::Builder& b, const std::string& n, Mode mode, 
       *p.joint_min_limit[i] = jl.min_limit[i];
       *p.joint_max_limit[i] = jl.max_limit[i];
     }
+    *p.joint_a_max_correction = jl.max_a_correction_deg;
+    *p.joint_c_max_correction = jl.max_c_correction_deg;
   }
   *p.axis_out[2] = 1.0;
 }

@@ -43,6 +43,12 @@ void validate_layer(const FieldGrid& grid, const FieldLayer& layer) {
       fail(name + ": weight " + std::to_string(v.weight) + " outside [0, 1] at node index " +
            std::to_string(n));
   }
+  if (!layer.rotation_rad.empty() && layer.rotation_rad.size() != layer.nodes.size())
+    fail(name + ": " + std::to_string(layer.rotation_rad.size()) + " rotations for " +
+         std::to_string(layer.nodes.size()) + " nodes");
+  for (std::size_t n = 0; n < layer.rotation_rad.size(); ++n)
+    if (!layer.rotation_rad[n].allFinite())
+      fail(name + ": non-finite rotation at node index " + std::to_string(n));
 }
 
 struct LineScratch {
@@ -93,14 +99,16 @@ void prefilter_line(Eigen::Vector4d* line, int64_t stride, int32_t n, LineScratc
 // neighbours one step nearer — so no invalid node's value enters the
 // interpolation of its neighbours, and the spline does not ring at the
 // edge of the data. A layer without valid nodes interpolates zeros.
+// `value(n)` is node n's vector.
+template <class Value>
 std::vector<Eigen::Vector3d> usable_vectors(const FieldGrid& grid,
-                                            const std::vector<FieldNode>& nodes) {
+                                            const std::vector<FieldNode>& nodes, Value value) {
   std::vector<Eigen::Vector3d> v(nodes.size(), Eigen::Vector3d::Zero());
   std::vector<int32_t> step(nodes.size(), -1);  // face steps from the data; -1: not reached
   std::vector<int64_t> frontier, next;
   for (std::size_t n = 0; n < nodes.size(); ++n)
     if (nodes[n].weight > 0.0) {
-      v[n] = {nodes[n].dx_mm, nodes[n].dy_mm, nodes[n].dz_mm};
+      v[n] = value(n);
       step[n] = 0;
       frontier.push_back(static_cast<int64_t>(n));
     }
@@ -138,9 +146,10 @@ std::vector<Eigen::Vector3d> usable_vectors(const FieldGrid& grid,
   return v;
 }
 
+template <class Value>
 std::vector<Eigen::Vector4d> make_coefficients(const FieldGrid& grid,
-                                               const std::vector<FieldNode>& nodes) {
-  const std::vector<Eigen::Vector3d> vectors = usable_vectors(grid, nodes);
+                                               const std::vector<FieldNode>& nodes, Value value) {
+  const std::vector<Eigen::Vector3d> vectors = usable_vectors(grid, nodes, value);
   const int32_t nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
   const int64_t px = nx + 2, py = ny + 2, pz = nz + 2;
   std::vector<Eigen::Vector4d> c(static_cast<std::size_t>(px * py * pz), Eigen::Vector4d::Zero());
@@ -202,6 +211,12 @@ CorrectionField::CorrectionField(const FieldGrid& grid, std::vector<FieldLayer> 
     fail(std::to_string(layers.size()) + " layers, at most " + std::to_string(kMaxLayers));
   for (const FieldLayer& layer : layers)
     validate_layer(grid_, layer);
+  has_rotation_ = !layers.front().rotation_rad.empty();
+  for (const FieldLayer& layer : layers)
+    if (layer.rotation_rad.empty() == has_rotation_)
+      fail("layer for tool " + std::to_string(layer.tool) +
+           (has_rotation_ ? " has no rotation, another layer has"
+                          : " has a rotation, another layer has none"));
   std::sort(layers.begin(), layers.end(),
             [](const FieldLayer& a, const FieldLayer& b) { return a.tool < b.tool; });
   for (std::size_t n = 1; n < layers.size(); ++n)
@@ -213,7 +228,16 @@ CorrectionField::CorrectionField(const FieldGrid& grid, std::vector<FieldLayer> 
   for (FieldLayer& layer : layers) {
     tools_.push_back(layer.tool);
     Layer built;
-    built.coefficients = make_coefficients(grid_, layer.nodes);
+    const std::vector<FieldNode>& nodes = layer.nodes;
+    built.coefficients = make_coefficients(grid_, nodes, [&](std::size_t n) {
+      return Eigen::Vector3d(nodes[n].dx_mm, nodes[n].dy_mm, nodes[n].dz_mm);
+    });
+    if (has_rotation_) {
+      const std::vector<Eigen::Vector3d>& r = layer.rotation_rad;
+      built.rotation_coefficients =
+          make_coefficients(grid_, nodes, [&](std::size_t n) { return r[n]; });
+      built.rotations = std::move(layer.rotation_rad);
+    }
     built.nodes = std::move(layer.nodes);
     layers_.push_back(std::move(built));
   }
@@ -223,6 +247,12 @@ std::span<const FieldNode> CorrectionField::nodes(int32_t tool) const noexcept {
   const Layer* layer = find(tool);
   if (layer == nullptr) return {};
   return layer->nodes;
+}
+
+std::span<const Eigen::Vector3d> CorrectionField::rotations(int32_t tool) const noexcept {
+  const Layer* layer = find(tool);
+  if (layer == nullptr) return {};
+  return layer->rotations;
 }
 
 }  // namespace truecut::rt

@@ -65,6 +65,17 @@ FieldSample finish(const FieldGrid& grid, const Eigen::Vector4d& value,
   return s;
 }
 
+// Adds the weighted rotation to an accepted sample (or rejects a non-finite
+// one).
+void with_rotation(FieldSample& s, const Eigen::Vector3d& rotation_rad) noexcept {
+  if (!rotation_rad.allFinite()) {
+    s = FieldSample{};
+    s.status = FieldStatus::kNonFinite;
+    return;
+  }
+  s.rotation_rad = s.weight * rotation_rad;
+}
+
 FieldSample rejected(FieldStatus status) noexcept {
   FieldSample s;
   s.status = status;
@@ -155,7 +166,19 @@ FieldSample CorrectionField::evaluate_tricubic(int32_t tool,
   value[3] = w;
   for (int a = 0; a < 3; ++a)
     d[a][3] = dw[a];
-  return finish(grid_, value, d);
+  FieldSample sample = finish(grid_, value, d);
+  if (!layer->rotation_coefficients.empty() && sample.status == FieldStatus::kOk) {
+    const Eigen::Vector4d* rbase =
+        &layer->rotation_coefficients[cell.index[0] + px * (cell.index[1] + py * cell.index[2])];
+    Eigen::Vector4d r = Eigen::Vector4d::Zero();
+    for (int k = 0; k < 4; ++k)
+      for (int j = 0; j < 4; ++j) {
+        const Eigen::Vector4d* row = rbase + px * (j + py * k);
+        r += (by[j] * bz[k]) * (bx[0] * row[0] + bx[1] * row[1] + bx[2] * row[2] + bx[3] * row[3]);
+      }
+    with_rotation(sample, r.head<3>());
+  }
+  return sample;
 }
 
 FieldSample CorrectionField::evaluate_trilinear(int32_t tool,
@@ -173,20 +196,26 @@ FieldSample CorrectionField::evaluate_trilinear(int32_t tool,
   Eigen::Vector4d value = Eigen::Vector4d::Zero();
   Eigen::Vector4d d[3] = {Eigen::Vector4d::Zero(), Eigen::Vector4d::Zero(),
                           Eigen::Vector4d::Zero()};
+  Eigen::Vector3d rotation = Eigen::Vector3d::Zero();
+  const bool rotates = !layer->rotations.empty();
   for (int k = 0; k < 2; ++k) {
     for (int j = 0; j < 2; ++j) {
       for (int i = 0; i < 2; ++i) {
-        const FieldNode& n = layer->nodes[static_cast<std::size_t>(
-            grid_.index(cell.index[0] + i, cell.index[1] + j, cell.index[2] + k))];
+        const auto at = static_cast<std::size_t>(
+            grid_.index(cell.index[0] + i, cell.index[1] + j, cell.index[2] + k));
+        const FieldNode& n = layer->nodes[at];
         const Eigen::Vector4d v{n.dx_mm, n.dy_mm, n.dz_mm, n.weight};
         value += (b[0][i] * b[1][j] * b[2][k]) * v;
         d[0] += (db[i] * b[1][j] * b[2][k]) * v;
         d[1] += (b[0][i] * db[j] * b[2][k]) * v;
         d[2] += (b[0][i] * b[1][j] * db[k]) * v;
+        if (rotates) rotation += (b[0][i] * b[1][j] * b[2][k]) * layer->rotations[at];
       }
     }
   }
-  return finish(grid_, value, d);
+  FieldSample sample = finish(grid_, value, d);
+  if (rotates && sample.status == FieldStatus::kOk) with_rotation(sample, rotation);
+  return sample;
 }
 
 }  // namespace truecut::rt

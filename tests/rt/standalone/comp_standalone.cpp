@@ -58,7 +58,7 @@ int main() {
   check(out.fade == 1.0, "fully faded in");
   check(!out.limited, "not limited");
   check((out.correction_mm - v).norm() < 1e-12, "the correction is the field's vector");
-  check(state.output == out.correction_mm, "the state keeps the output");
+  check(state.translation.output == out.correction_mm, "the state keeps the output");
 
   // The magnitude clamp: the next cycle with a bound of 0.01 mm.
   const comp::CompLimits tight{0.01, 1e6, 0.0};

@@ -22,6 +22,7 @@
 #include "truecut/offline/scan_check.hpp"
 #include "truecut/offline/tool_centre_placement.hpp"
 #include "truecut/offline/tool_path.hpp"
+#include "truecut/offline/tool_rotation.hpp"
 #include "truecut/offline/truss_smoothing.hpp"
 
 namespace truecut::offline {
@@ -54,6 +55,10 @@ struct FieldPipelineOptions {
   FieldFitOptions fit;  // fit.spacing_mm is the field resolution
   ToolPathOptions path;
   PlacementOptions placement;
+  // Fit a rotation of the tool too (tool_rotation.hpp): the field gets the
+  // channels rx ry rz. false: translation only, the field as before.
+  bool tool_rotation = false;
+  ToolRotationOptions rotation;
   // Budgets, checked before any work: refused (std::invalid_argument naming
   // the command-line option) when the compensation points that spacing_mm
   // would place (about the compensated area / spacing²), or the field grid

@@ -74,33 +74,51 @@ inline const char* to_string(Fault f) noexcept {
   return "unknown";
 }
 
+// A correction: the translation of the tool-centre point (mm) and the
+// rotation of the tool about it (rad, a rotation vector; zero unless the
+// field has a rotation). Both in the workpiece frame.
+struct Correction {
+  Vec3 translation_mm = Vec3::Zero();
+  Vec3 rotation_rad = Vec3::Zero();
+};
+
 // One source of correction: a field layer, faded in by u.
 struct Channel {
   const rt::CorrectionField* field = nullptr;
   int32_t tool = 0;
-  Vec3 held = Vec3::Zero();  // last good (weighted) correction of this source
-  double u = 0.0;            // fade progress in [0, 1]
-  bool frozen = false;       // failed: outputs `held` until faded out or replaced
+  Correction held;      // last good (weighted) correction of this source
+  double u = 0.0;       // fade progress in [0, 1]
+  bool frozen = false;  // failed: outputs `held` until faded out or replaced
+};
+
+// The motion of one shaped output (the translation, mm, or the rotation,
+// rad; "unit" below): where it is, how it moves, what it followed.
+struct Shaped {
+  Vec3 output = Vec3::Zero();        // output by the last cycle, unit
+  Vec3 velocity = Vec3::Zero();      // of the output, unit/s
+  Vec3 accel = Vec3::Zero();         // of the output, unit/s^2
+  Vec3 target_prev = Vec3::Zero();   // last cycle's wanted (clamped) value
+  Vec3 target_prev2 = Vec3::Zero();  // the cycle's before
+  double bound_prev = 0.0;           // last cycle's bound
+  int32_t clip_cycles = 0;           // cycles still affected by the last bound-clip (reported)
+  int32_t joint_clip_cycles = 0;     // cycles still showing the last joint clip (reported)
+  // Output, velocity, acceleration and the last targets are all exactly
+  // zero: at rest at zero, nothing to shape while the wanted value is zero.
+  bool resting = true;
 };
 
 struct CompState {
-  Channel current;             // the source being faded in (or held)
-  Channel outgoing;            // the source being faded out; idle when u == 0
-  Vec3 output = Vec3::Zero();  // correction output by the last cycle, mm
+  Channel current;   // the source being faded in (or held)
+  Channel outgoing;  // the source being faded out; idle when u == 0
+  Shaped translation{.bound_prev = kDefaultMaxCorrectionMm};  // mm
+  Shaped rotation{.bound_prev = kDefaultMaxTiltRad};          // rad
   // The last valid value of each tunable (kBadParameter: the invalid one is
   // replaced by it, and the correction fades to zero at these limits).
   CompLimits last_good;
-  Vec3 velocity = Vec3::Zero();                 // of the output, mm/s
-  Vec3 accel = Vec3::Zero();                    // of the output, mm/s^2
-  Vec3 target_prev = Vec3::Zero();              // last cycle's wanted (clamped) correction
-  Vec3 target_prev2 = Vec3::Zero();             // the cycle's before
-  double bound_prev = kDefaultMaxCorrectionMm;  // last cycle's max-correction
-  int32_t clamp_count = 0;
-  int32_t clip_cycles = 0;        // cycles still affected by the last bound-clip (reported)
-  Fault latched = Fault::kNone;   // a latching fault, held until a rising `reset`
-  bool reset_prev = false;        // cycles in which max-correction acted (wraps)
-  int32_t joint_clip_count = 0;   // cycles clipped by a joint's limits (wraps)
-  int32_t joint_clip_cycles = 0;  // cycles still showing the last joint clip (reported)
+  int32_t clamp_count = 0;       // cycles in which max-correction or max-tilt acted (wraps)
+  Fault latched = Fault::kNone;  // a latching fault, held until a rising `reset`
+  bool reset_prev = false;
+  int32_t joint_clip_count = 0;  // cycles clipped by a joint's limits (wraps)
 };
 
 // Joint mode: the box the correction of the linear joints X Y Z must stay in
@@ -136,6 +154,7 @@ struct CycleInput {
 
 struct CycleOutput {
   Vec3 correction_mm = Vec3::Zero();
+  Vec3 rotation_rad = Vec3::Zero();  // the tool's rotation about the TCP
   Fault fault = Fault::kNone;
   bool limited = false;          // the magnitude clamp or the rate limit acted
   bool clamped = false;          // max-correction acted (on the target or, hard, on the output)
@@ -169,7 +188,7 @@ inline bool identity_ok(const rt::CorrectionField* field, const CycleInput& in) 
 }
 
 struct Evaluated {
-  Vec3 value = Vec3::Zero();
+  Correction value;
   Fault fault = Fault::kNone;
 };
 
@@ -195,11 +214,11 @@ inline Evaluated evaluate(const Channel& ch, const CycleInput& in) noexcept {
   const rt::FieldSample s = ch.field->evaluate(ch.tool, tcp_mm);
   const Fault f = fault_of(s.status);
   if (f != Fault::kNone) return {ch.held, f};
-  return {s.correction_mm, Fault::kNone};
+  return {{s.correction_mm, s.rotation_rad}, Fault::kNone};
 }
 
 // The value a channel contributes this cycle; a failure freezes it.
-inline Vec3 channel_value(Channel& ch, const Evaluated& e) noexcept {
+inline Correction channel_value(Channel& ch, const Evaluated& e) noexcept {
   if (e.fault != Fault::kNone) ch.frozen = true;
   if (ch.frozen) return ch.held;
   ch.held = e.value;
@@ -218,6 +237,143 @@ inline Limited clip_to_joint_box(const JointClip& jc, const Vec3& c, double boun
 }
 
 }  // namespace detail
+
+// The limits one shaped output obeys (unit as in Shaped).
+struct ShapeLimits {
+  double bound = 0.0;  // largest length
+  double rate = 0.0;   // largest speed, > 0
+  double accel = 0.0;  // 0: not limited
+  double jerk = 0.0;   // 0: not limited
+};
+
+inline ShapeLimits translation_limits(const CompLimits& l) noexcept {
+  return {l.max_correction_mm, l.max_rate_mm_per_s, l.max_accel_mm_per_s2, l.max_jerk_mm_per_s3};
+}
+inline ShapeLimits rotation_limits(const CompLimits& l) noexcept {
+  return {l.max_tilt_rad, l.max_tilt_rate_rad_per_s, l.max_tilt_accel_rad_per_s2,
+          l.max_tilt_jerk_rad_per_s3};
+}
+
+struct ShapeResult {
+  Vec3 applied = Vec3::Zero();
+  bool clamped = false;         // the bound acted (on the wanted value or, hard, on the output)
+  bool limited = false;         // the bound, the motion limits or a joint's limit acted
+  bool bound_step = false;      // the bound was lowered faster than the limits can follow
+  bool clip_reported = false;   // a bound-clip this cycle or in the two before
+  bool joint_clipped = false;   // a joint's limit clipped the output this cycle
+  bool joint_reported = false;  // ... this cycle or, after a clip beyond the limits, shortly before
+};
+
+// One cycle of one output: clamp the wanted value `blended` to the bound
+// (and to the joints' box `jc`, if any), limit its velocity, acceleration
+// and jerk against the last cycle's output, then the hard bound. The
+// limited output can be above the bound only when the bound was lowered
+// below it; the bound wins, and a step beyond the limits is a fault.
+inline ShapeResult shape(Shaped& s, const Vec3& blended, const ShapeLimits& lim,
+                         const JointClip* jc, double dt_s) noexcept {
+  ShapeResult res;
+  Limited m = limit_magnitude(blended, lim.bound);
+  // Joint mode: the wanted correction within the joints' box too, so that
+  // the motion follows it within the limits; the output is clipped to the
+  // box again below (as the hard bound).
+  bool joint_clipped = false;
+  if (jc != nullptr) {
+    const Limited b = detail::clip_to_joint_box(*jc, m.value, lim.bound);
+    if (b.limited) {
+      m = {b.value, m.limited};
+      joint_clipped = true;
+    }
+  }
+  Limited r;
+  Vec3 velocity, accel;
+  if (lim.jerk > 0.0) {
+    const JerkMotion mo =
+        limit_motion_jerk(m.value, s.target_prev, s.target_prev2, s.output, s.velocity, s.accel,
+                          lim.rate, lim.accel, lim.jerk, lim.bound, dt_s);
+    r = {mo.position, mo.limited};
+    velocity = mo.velocity;
+    accel = mo.acceleration;
+  } else {
+    const Motion mo = limit_motion(m.value, s.target_prev, s.output, s.velocity, lim.rate,
+                                   lim.accel, lim.bound, dt_s);
+    r = {mo.position, mo.limited};
+    velocity = mo.velocity;
+    accel = (velocity - s.velocity) / dt_s;
+  }
+  s.target_prev2 = s.target_prev;
+  s.target_prev = m.value;
+  if (!r.value.allFinite() || !velocity.allFinite() || !accel.allFinite()) {
+    // cannot happen; never pass NaN on
+    r = {s.output, true};
+    velocity.setZero();
+    accel.setZero();
+  }
+  const Limited h = limit_magnitude_hard(r.value, lim.bound);
+  // Whether moving the output to `p` this cycle exceeds a limit.
+  constexpr double kTol = 1.0 + 1e-9;
+  auto beyond_limits = [&](const Vec3& p) {
+    const Vec3 v_new = (p - s.output) / dt_s;
+    const Vec3 a_new = (v_new - s.velocity) / dt_s;
+    return v_new.norm() > lim.rate * kTol || (lim.accel > 0.0 && a_new.norm() > lim.accel * kTol) ||
+           (lim.jerk > 0.0 && (a_new - s.accel).norm() > lim.jerk * dt_s * kTol);
+  };
+  // (Rounding can put the output 1 ulp above the bound: the clamp removes
+  // it, but that is no step.)
+  if (h.limited && r.value.norm() - lim.bound > 1e-12 * (1.0 + lim.bound)) {
+    const Vec3 v_new = (h.value - s.output) / dt_s;
+    const Vec3 a_new = (v_new - s.velocity) / dt_s;
+    const bool beyond = beyond_limits(h.value);
+    // A step is a fault only in a cycle that lowered the bound; otherwise
+    // the clip is the output running into the bound (or along it, faster
+    // than the acceleration allows on its curvature): reported, not latched.
+    res.bound_step = beyond && lim.bound < s.bound_prev;
+    const bool bound_clip = beyond && !res.bound_step;
+    // After a step or a clip the output starts from rest.
+    velocity = beyond ? Vec3::Zero() : v_new;
+    accel = beyond ? Vec3::Zero() : a_new;
+    // The two cycles after a clip still show it in their differences (rest
+    // after motion): reported too.
+    if (bound_clip)
+      s.clip_cycles = 3;
+    else if (res.bound_step)
+      s.clip_cycles = 0;
+  }
+  res.clip_reported = s.clip_cycles > 0;
+  if (s.clip_cycles > 0) --s.clip_cycles;
+  // Joint mode: the output within the joints' box (soft limits, per-joint
+  // bounds), as the hard bound: clip, and when the clip needs more than the
+  // limits allow, continue from rest. Reported in every cycle that clipped
+  // the target or the output (and the two after a clip beyond the limits,
+  // whose differences span it).
+  Vec3 applied = h.value;
+  if (jc != nullptr) {
+    const Limited b = detail::clip_to_joint_box(*jc, h.value, lim.bound);
+    if (b.limited) {
+      applied = b.value;
+      const Vec3 v_new = (applied - s.output) / dt_s;
+      const Vec3 a_new = (v_new - s.velocity) / dt_s;
+      const bool beyond = beyond_limits(applied);
+      velocity = beyond ? Vec3::Zero() : v_new;
+      accel = beyond ? Vec3::Zero() : a_new;
+      s.joint_clip_cycles = std::max(s.joint_clip_cycles, beyond ? 3 : 1);
+      joint_clipped = true;
+    }
+  }
+  if (joint_clipped) s.joint_clip_cycles = std::max(s.joint_clip_cycles, 1);
+  res.joint_reported = s.joint_clip_cycles > 0;
+  if (s.joint_clip_cycles > 0) --s.joint_clip_cycles;
+  s.output = applied;
+  s.velocity = velocity;
+  s.accel = accel;
+  s.bound_prev = lim.bound;
+  s.resting = exactly_zero(applied) && exactly_zero(velocity) && exactly_zero(accel) &&
+              exactly_zero(s.target_prev) && exactly_zero(s.target_prev2);
+  res.applied = applied;
+  res.joint_clipped = joint_clipped;
+  res.clamped = m.limited || h.limited;
+  res.limited = m.limited || r.limited || h.limited || joint_clipped;
+  return res;
+}
 
 inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& raw_limits,
                         double dt_s) noexcept {
@@ -262,8 +418,8 @@ inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& ra
       s.current.frozen = false;
     }
   }
-  const Vec3 v_cur = detail::channel_value(s.current, cur);
-  Vec3 v_out = Vec3::Zero();
+  const Correction v_cur = detail::channel_value(s.current, cur);
+  Correction v_out;
   if (s.outgoing.u > 0.0)
     v_out = detail::channel_value(s.outgoing, detail::evaluate(s.outgoing, in));
 
@@ -271,127 +427,43 @@ inline CycleOutput step(CompState& s, const CycleInput& in, const CompLimits& ra
   const bool wanted = in.enable && limits_ok && s.latched == Fault::kNone && !s.current.frozen;
   s.current.u = advance_fade(s.current.u, wanted ? 1.0 : 0.0, dt_s, lim.fade_time_s);
   s.outgoing.u = advance_fade(s.outgoing.u, 0.0, dt_s, lim.fade_time_s);
-  const Vec3 blended = fade_gain(s.current.u) * v_cur + fade_gain(s.outgoing.u) * v_out;
+  const double g_cur = fade_gain(s.current.u), g_out = fade_gain(s.outgoing.u);
+  const Correction blended{g_cur * v_cur.translation_mm + g_out * v_out.translation_mm,
+                           g_cur * v_cur.rotation_rad + g_out * v_out.rotation_rad};
   if (s.outgoing.u <= 0.0) {
     if (s.outgoing.field != nullptr && s.outgoing.field != s.current.field)
       out.released = s.outgoing.field;
     s.outgoing = Channel{};
   }
 
-  // 6. Clamp, then limit the velocity (and acceleration) against last
-  // cycle's output, then the hard bound: the limited output can be above
-  // max-correction only when the bound was lowered below it; the bound wins,
-  // and a step beyond the limits is a fault.
-  Limited m = limit_magnitude(blended, lim.max_correction_mm);
-  // Joint mode: the wanted correction within the joints' box too, so that
-  // the motion follows it within the limits; the output is clipped to the
-  // box again below (as the hard bound).
-  bool joint_clipped = false;
-  if (in.joint_clip.active) {
-    const Limited b = detail::clip_to_joint_box(in.joint_clip, m.value, lim.max_correction_mm);
-    if (b.limited) {
-      m = {b.value, m.limited};
-      joint_clipped = true;
-    }
-  }
-  Limited r;
-  Vec3 velocity, accel;
-  if (lim.max_jerk_mm_per_s3 > 0.0) {
-    const JerkMotion mo =
-        limit_motion_jerk(m.value, s.target_prev, s.target_prev2, s.output, s.velocity, s.accel,
-                          lim.max_rate_mm_per_s, lim.max_accel_mm_per_s2, lim.max_jerk_mm_per_s3,
-                          lim.max_correction_mm, dt_s);
-    r = {mo.position, mo.limited};
-    velocity = mo.velocity;
-    accel = mo.acceleration;
-  } else {
-    const Motion mo =
-        limit_motion(m.value, s.target_prev, s.output, s.velocity, lim.max_rate_mm_per_s,
-                     lim.max_accel_mm_per_s2, lim.max_correction_mm, dt_s);
-    r = {mo.position, mo.limited};
-    velocity = mo.velocity;
-    accel = (velocity - s.velocity) / dt_s;
-  }
-  s.target_prev2 = s.target_prev;
-  s.target_prev = m.value;
-  if (!r.value.allFinite() || !velocity.allFinite() || !accel.allFinite()) {
-    // cannot happen; never pass NaN on
-    r = {s.output, true};
-    velocity.setZero();
-    accel.setZero();
-  }
-  const Limited h = limit_magnitude_hard(r.value, lim.max_correction_mm);
-  // Whether moving the output to `p` this cycle exceeds a limit.
-  constexpr double kTol = 1.0 + 1e-9;
-  auto beyond_limits = [&](const Vec3& p) {
-    const Vec3 v_new = (p - s.output) / dt_s;
-    const Vec3 a_new = (v_new - s.velocity) / dt_s;
-    return v_new.norm() > lim.max_rate_mm_per_s * kTol ||
-           (lim.max_accel_mm_per_s2 > 0.0 && a_new.norm() > lim.max_accel_mm_per_s2 * kTol) ||
-           (lim.max_jerk_mm_per_s3 > 0.0 &&
-            (a_new - s.accel).norm() > lim.max_jerk_mm_per_s3 * dt_s * kTol);
-  };
-  bool bound_step = false, bound_clip = false;
-  // (Rounding can put the output 1 ulp above the bound: the clamp removes
-  // it, but that is no step.)
-  if (h.limited && r.value.norm() - lim.max_correction_mm > 1e-12 * (1.0 + lim.max_correction_mm)) {
-    const Vec3 v_new = (h.value - s.output) / dt_s;
-    const Vec3 a_new = (v_new - s.velocity) / dt_s;
-    const bool beyond = beyond_limits(h.value);
-    // A step is a fault only in a cycle that lowered the bound; otherwise
-    // the clip is the output running into the bound (or along it, faster
-    // than the acceleration allows on its curvature): reported, not latched.
-    bound_step = beyond && lim.max_correction_mm < s.bound_prev;
-    bound_clip = beyond && !bound_step;
-    // After a step or a clip the output starts from rest.
-    velocity = beyond ? Vec3::Zero() : v_new;
-    accel = beyond ? Vec3::Zero() : a_new;
-  }
-  // The two cycles after a clip still show it in their differences (rest
-  // after motion): reported too.
-  if (bound_clip)
-    s.clip_cycles = 3;
-  else if (bound_step)
-    s.clip_cycles = 0;
-  const bool clip_reported = s.clip_cycles > 0;
-  if (s.clip_cycles > 0) --s.clip_cycles;
-  // Joint mode: the output within the joints' box (soft limits, per-joint
-  // bounds), as the hard bound: clip, and when the clip needs more than the
-  // limits allow, continue from rest. Reported in every cycle that clipped
-  // the target or the output (and the two after a clip beyond the limits,
-  // whose differences span it).
-  Vec3 applied = h.value;
-  if (in.joint_clip.active) {
-    const Limited b = detail::clip_to_joint_box(in.joint_clip, h.value, lim.max_correction_mm);
-    if (b.limited) {
-      applied = b.value;
-      const Vec3 v_new = (applied - s.output) / dt_s;
-      const Vec3 a_new = (v_new - s.velocity) / dt_s;
-      const bool beyond = beyond_limits(applied);
-      velocity = beyond ? Vec3::Zero() : v_new;
-      accel = beyond ? Vec3::Zero() : a_new;
-      s.joint_clip_cycles = std::max(s.joint_clip_cycles, beyond ? 3 : 1);
-      joint_clipped = true;
-    }
-  }
-  if (joint_clipped) {
-    s.joint_clip_cycles = std::max(s.joint_clip_cycles, 1);
+  // 6. Clamp, limit the motion, then the hard bound: the translation within
+  // max-correction (and, in joint mode, the joints' box), the rotation
+  // within max-tilt, each at its own limits.
+  const ShapeResult t = shape(s.translation, blended.translation_mm, translation_limits(lim),
+                              in.joint_clip.active ? &in.joint_clip : nullptr, dt_s);
+  // A field without rotation leaves the rotation at rest at zero: nothing
+  // to shape.
+  ShapeResult r;
+  if (!s.rotation.resting || !exactly_zero(blended.rotation_rad))
+    r = shape(s.rotation, blended.rotation_rad, rotation_limits(lim), nullptr, dt_s);
+  else
+    s.rotation.bound_prev = lim.max_tilt_rad;
+  if (t.joint_clipped)
     s.joint_clip_count = static_cast<int32_t>(static_cast<uint32_t>(s.joint_clip_count) + 1u);
-  }
-  const bool joint_reported = s.joint_clip_cycles > 0;
-  if (s.joint_clip_cycles > 0) --s.joint_clip_cycles;
-  s.output = applied;
-  s.velocity = velocity;
-  s.accel = accel;
-  s.bound_prev = lim.max_correction_mm;
-  out.clamped = m.limited || h.limited;
+  out.clamped = t.clamped || r.clamped;
   if (out.clamped) s.clamp_count = static_cast<int32_t>(static_cast<uint32_t>(s.clamp_count) + 1u);
-
+  const bool bound_step = t.bound_step || r.bound_step;
+  const bool clip_reported = t.clip_reported || r.clip_reported;
+  const bool joint_reported = t.joint_reported;
+  const Vec3 applied = t.applied;
+  out.rotation_rad = r.applied;
+  const bool joint_clipped = t.joint_clipped;
   out.correction_mm = applied;
   out.joint_clipped = joint_clipped;
-  out.limited = m.limited || r.limited || h.limited || joint_clipped;
+  out.limited = t.limited || r.limited;
   out.fade = fade_gain(s.current.u);
-  out.active = s.current.u > 0.0 || s.outgoing.u > 0.0 || !s.output.isZero(0.0);
+  out.active = s.current.u > 0.0 || s.outgoing.u > 0.0 || !exactly_zero(s.translation.output) ||
+               !exactly_zero(s.rotation.output);
   out.fault = in.input_fault != Fault::kNone ? in.input_fault
               : !limits_ok                   ? Fault::kBadParameter
               : bound_step                   ? Fault::kBoundStep

@@ -14,6 +14,11 @@ namespace truecut::rt::comp {
 
 using Vec3 = Eigen::Vector3d;
 
+// Every component exactly 0 (cheaper in the cycle than Eigen's isZero).
+inline bool exactly_zero(const Vec3& v) noexcept {
+  return v.x() == 0.0 && v.y() == 0.0 && v.z() == 0.0;
+}
+
 // Fade gain of a fade progress u in [0, 1]: the quintic "smootherstep"
 // 6u^5 - 15u^4 + 10u^3. Its first and second derivatives vanish at both ends,
 // so a linear ramp of u gives a correction that starts and stops with zero
@@ -79,6 +84,13 @@ inline Limited limit_rate(const Vec3& target, const Vec3& previous, double max_s
 // it overrides it.
 inline constexpr double kDefaultMaxCorrectionMm = 1.0;
 
+// The tool-orientation correction's limits default to the translation's seen
+// at a lever of 100 mm (a rotation of r rad moves a point 100 mm up the tool
+// by 100 r mm): bound 0.01 rad (0.57 deg), rate 0.1 rad/s, and (HAL pins)
+// acceleration 10 rad/s^2, jerk 1000 rad/s^3.
+inline constexpr double kToolLeverMm = 100.0;
+inline constexpr double kDefaultMaxTiltRad = kDefaultMaxCorrectionMm / kToolLeverMm;
+
 // The tunables, as the pins hold them.
 struct CompLimits {
   double max_correction_mm = kDefaultMaxCorrectionMm;  // length of the correction vector
@@ -90,6 +102,12 @@ struct CompLimits {
   // Jerk of the correction vector; 0: not limited (the core's default; the
   // HAL pin's default is kDefaultMaxJerkMmPerS3).
   double max_jerk_mm_per_s3 = 0.0;
+  // The same four for the rotation of the tool (rotation vector, rad): its
+  // angle, angular speed, acceleration and jerk.
+  double max_tilt_rad = kDefaultMaxTiltRad;
+  double max_tilt_rate_rad_per_s = 10.0 / kToolLeverMm;
+  double max_tilt_accel_rad_per_s2 = 0.0;
+  double max_tilt_jerk_rad_per_s3 = 0.0;
 };
 
 // The `max-accel` pin's default, mm/s^2: 0.1 g. A full default fade (1 mm in
@@ -101,6 +119,10 @@ inline constexpr double kDefaultMaxAccelMmPerS2 = 1000.0;
 // 10 ms. A default fade (smootherstep of 1 mm in 1 s) peaks at 60 mm/s^3,
 // the soft-CNC loop's (0.5 mm in 0.2 s) at 3750 mm/s^3: both far below.
 inline constexpr double kDefaultMaxJerkMmPerS3 = 1.0e5;
+
+// The tilt pins' defaults: the translation's over the lever.
+inline constexpr double kDefaultMaxTiltAccelRadPerS2 = kDefaultMaxAccelMmPerS2 / kToolLeverMm;
+inline constexpr double kDefaultMaxTiltJerkRadPerS3 = kDefaultMaxJerkMmPerS3 / kToolLeverMm;
 
 // Replaces each invalid tunable (not finite, or negative) by its safe value:
 // max correction 0 (the correction goes to zero), max rate 0 (the correction
@@ -139,6 +161,16 @@ inline bool adopt_limits(const CompLimits& raw, CompLimits& last_good, CompLimit
       take(raw.max_accel_mm_per_s2, last_good.max_accel_mm_per_s2, ok(raw.max_accel_mm_per_s2));
   use.max_jerk_mm_per_s3 =
       take(raw.max_jerk_mm_per_s3, last_good.max_jerk_mm_per_s3, ok(raw.max_jerk_mm_per_s3));
+  use.max_tilt_rad = take(raw.max_tilt_rad, last_good.max_tilt_rad, ok(raw.max_tilt_rad));
+  use.max_tilt_rate_rad_per_s =
+      take(raw.max_tilt_rate_rad_per_s, last_good.max_tilt_rate_rad_per_s,
+           ok(raw.max_tilt_rate_rad_per_s) && raw.max_tilt_rate_rad_per_s > 0.0);
+  use.max_tilt_accel_rad_per_s2 =
+      take(raw.max_tilt_accel_rad_per_s2, last_good.max_tilt_accel_rad_per_s2,
+           ok(raw.max_tilt_accel_rad_per_s2));
+  use.max_tilt_jerk_rad_per_s3 =
+      take(raw.max_tilt_jerk_rad_per_s3, last_good.max_tilt_jerk_rad_per_s3,
+           ok(raw.max_tilt_jerk_rad_per_s3));
   return all;
 }
 

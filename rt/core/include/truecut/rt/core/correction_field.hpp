@@ -18,6 +18,11 @@
 //   on the grid boundary, so the correction joins the zero outside the grid
 //   C2-smoothly.
 // - correction = weight * vector.
+// - rotation (optional, a field either has it in every layer or in none): a
+//   small rotation of the tool about its tip, rad, per node (the rotation
+//   vector, workpiece frame: the corrected tool axis is k + r x k; the part of
+//   r along k does nothing). Interpolated like the vector, weighted by the
+//   same weight.
 // A trilinear evaluation of the node values (C0, as in FANUC-style pitch and
 // 3-D error compensation tables) is available as a baseline.
 #pragma once
@@ -57,6 +62,9 @@ struct FieldNode {
 struct FieldLayer {
   int32_t tool = 0;              // tool number, >= 0
   std::vector<FieldNode> nodes;  // grid.node_count() entries, x fastest
+  // Empty (no orientation correction) or one rotation vector per node, rad,
+  // in the order of `nodes`.
+  std::vector<Eigen::Vector3d> rotation_rad = {};
 };
 
 enum class FieldInterpolation { kTricubicBspline, kTrilinear };
@@ -78,6 +86,9 @@ struct FieldSample {
   double weight = 0.0;
   // d correction_mm(i) / d position(j), mm per mm.
   Eigen::Matrix3d jacobian = Eigen::Matrix3d::Zero();
+  // weight * the interpolated rotation vector, rad (zero when the field has
+  // no rotation).
+  Eigen::Vector3d rotation_rad = Eigen::Vector3d::Zero();
 };
 
 // What a field was built for, as the real-time side sees it: the CRC-64 of
@@ -96,7 +107,8 @@ class CorrectionField {
  public:
   // Validates the grid (finite origin, positive finite spacing, dims >= 2, at
   // most kMaxNodes nodes), the layers (distinct tools >= 0, right node count,
-  // finite vectors, weights in [0, 1]) and prefilters. Throws
+  // finite vectors, weights in [0, 1], a finite rotation per node in every
+  // layer or in none) and prefilters. Throws
   // std::invalid_argument saying what is wrong. Layers are kept sorted by tool.
   CorrectionField(const FieldGrid& grid, std::vector<FieldLayer> layers,
                   FieldInterpolation interpolation = FieldInterpolation::kTricubicBspline);
@@ -114,6 +126,11 @@ class CorrectionField {
   std::span<const int32_t> tools() const noexcept { return tools_; }  // ascending
   // Node values of the layer for `tool`; empty when there is none.
   std::span<const FieldNode> nodes(int32_t tool) const noexcept;
+  // Whether the field corrects the tool's orientation too.
+  bool has_rotation() const noexcept { return has_rotation_; }
+  // Node rotations of the layer for `tool`, rad; empty when there is none
+  // or the field has no rotation.
+  std::span<const Eigen::Vector3d> rotations(int32_t tool) const noexcept;
   bool inside(const Eigen::Vector3d& position_mm) const noexcept;
   const FieldIdentity& identity() const noexcept { return identity_; }
   // Before publishing only (the field is immutable once shared).
@@ -126,11 +143,16 @@ class CorrectionField {
     // coefficients, w = node weight (edges repeated; not used by the
     // evaluation, which blends the node weights themselves).
     std::vector<Eigen::Vector4d> coefficients;
+    std::vector<Eigen::Vector3d> rotations;  // empty: no rotation
+    // Padded like `coefficients`: x, y, z = the rotation's B-spline
+    // coefficients (w unused).
+    std::vector<Eigen::Vector4d> rotation_coefficients;
   };
   const Layer* find(int32_t tool) const noexcept;
 
   FieldGrid grid_;
   FieldInterpolation interpolation_;
+  bool has_rotation_ = false;
   std::vector<int32_t> tools_;
   std::vector<Layer> layers_;  // same order as tools_
   FieldIdentity identity_;

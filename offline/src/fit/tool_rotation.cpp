@@ -1,0 +1,82 @@
+// Tool rotation from the compensation vectors along a flank
+// (tool_rotation.hpp).
+#include "truecut/offline/tool_rotation.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace truecut::offline {
+
+ToolRotationEstimate estimate_tool_rotation(std::span<const PlacedVector> placed,
+                                            const ToolRotationOptions& options) {
+  ToolRotationEstimate out;
+  out.translations_mm.resize(placed.size());
+  std::vector<std::size_t> order(placed.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return placed[a].sample < placed[b].sample;
+  });
+  const double cos_spread = std::cos(options.max_normal_spread_deg * M_PI / 180.0);
+  for (std::size_t begin = 0; begin < order.size();) {
+    std::size_t end = begin;
+    while (end < order.size() && placed[order[end]].sample == placed[order[begin]].sample)
+      ++end;
+    const PlacedVector& first = placed[order[begin]];
+    const Eigen::Vector3d k = first.axis;
+    // The group's normal across the axis.
+    Eigen::Vector3d n = Eigen::Vector3d::Zero();
+    double h_min = 1e300, h_max = -1e300;
+    for (std::size_t i = begin; i < end; ++i) {
+      const PlacedVector& p = placed[order[i]];
+      n += p.normal;
+      const double h = (p.point_mm - p.tcp_mm).dot(k);
+      h_min = std::min(h_min, h);
+      h_max = std::max(h_max, h);
+    }
+    n -= n.dot(k) * k;
+    Eigen::Vector3d w = Eigen::Vector3d::Zero();
+    const auto count = static_cast<int>(end - begin);
+    if (n.norm() > 1e-9 && count >= options.min_points &&
+        h_max - h_min >= options.min_height_spread_mm) {
+      n.normalize();
+      bool one_way = true;
+      for (std::size_t i = begin; i < end; ++i)
+        one_way = one_way && placed[order[i]].normal.dot(n) >= cos_spread;
+      if (one_way) {
+        // Least-squares line s = a + b h through the normal components.
+        double sh = 0, ss = 0, shh = 0, shs = 0;
+        for (std::size_t i = begin; i < end; ++i) {
+          const PlacedVector& p = placed[order[i]];
+          const double h = (p.point_mm - p.tcp_mm).dot(k), s = p.vector_mm.dot(n);
+          sh += h;
+          ss += s;
+          shh += h * h;
+          shs += h * s;
+        }
+        const double m = count, var = shh - sh * sh / m;
+        if (var > 0.0) {
+          const double b = (shs - sh * ss / m) / var;
+          w = b * k.cross(n);
+          ++out.tilted_samples;
+        }
+      }
+    }
+    FitSample r;
+    r.position_mm = first.tcp_mm;
+    r.normal = n.norm() > 0.0 ? Eigen::Vector3d(n) : Eigen::Vector3d(k);
+    r.vector_mm = w;
+    r.along_normal_only = false;
+    out.rotations.push_back(r);
+    for (std::size_t i = begin; i < end; ++i) {
+      const PlacedVector& p = placed[order[i]];
+      const double h = (p.point_mm - p.tcp_mm).dot(k);
+      out.translations_mm[order[i]] = p.vector_mm - w.cross(h * k);
+    }
+    begin = end;
+  }
+  return out;
+}
+
+}  // namespace truecut::offline
