@@ -3,7 +3,7 @@
 //
 //   loadrt cutting nominal=FILE.stl part=PART.json [out=FOLDER] [spacing=MM]
 //                  [surfaces=ID,ID,...] [max-stock=MM] [max-depth=MM] [names=NAME]
-//                  [sampling=swept|cycle]
+//                  [sampling=swept|cycle] [threads=N]
 //
 // FILE and PART are read at load time (relative to the working folder); a bad
 // file fails the load naming the file and key. OUT (default ".") is relative
@@ -26,7 +26,10 @@
 // default) a tool instance is placed only where the swept solid needs one
 // (swept_cut.hpp), with sampling=cycle at every cycle's pose. On exit the
 // pending motion is cut and the machined surface is written to
-// OUT/machined.stl and OUT/machined.ply.
+// OUT/machined.stl and OUT/machined.ply. threads=N (default 0: one per
+// hardware thread) cuts each tool instance's grid rows on N threads (the
+// servo thread and N − 1 helpers the model starts); the result is the same
+// bit for bit for any N.
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -207,6 +210,7 @@ extern "C" TC_COMPONENT_EXPORT int truecut_component_init(const tc_hal_api_t* ap
     options.spacing_mm = args.take_double("spacing", options.spacing_mm);
     options.max_stock_mm = args.take_double("max-stock", options.max_stock_mm);
     options.max_depth_mm = args.take_double("max-depth", options.max_depth_mm);
+    options.threads = static_cast<int>(args.take_long("threads", 0, 0, 256));
     if (auto ids = args.take("surfaces")) options.surfaces = parse_ids(*ids);
     const std::string sampling = args.take_or("sampling", "swept");
     if (sampling != "swept" && sampling != "cycle")
