@@ -240,7 +240,9 @@ void DexelModel::cut_chunk(const Instance& in, std::uint32_t chunk, int thread) 
       if (h <= floor) continue;
       const Eigen::Vector3d& p = line_origin_[d];
       const Eigen::Vector3d& n = normal_[d];
-      const detail::Span span = detail::tool_span(p - tip, n, axis, g, floor, h);
+      const Eigen::Vector3d q = p - tip;
+      if (detail::starts_above(q, n, axis, g, h)) continue;
+      const detail::Span span = detail::tool_span(q, n, axis, g, floor, h);
       if (span.empty() || !(span.t0 < h) || !(span.t1 > floor)) continue;
       const double new_h = std::max(span.t0, floor);
       height_[d] = new_h;
