@@ -365,6 +365,9 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
   m.sweep_point_.assign(nd, Eigen::Vector3f::Zero());
   m.sweep_vector_.assign(nd, Eigen::Vector3f::Zero());
   m.sweep_radius_.assign(nd, 0.0f);
+  m.line_.resize(nd);
+  for (std::size_t i = 0; i < nd; ++i)
+    m.line_[i] = {m.line_origin_[i], m.normal_[i], m.floor_[i]};
   m.stamp_.assign(nd, 0);
   m.old_height_.assign(nd, 0.0);
   m.threads_ = detail::CutThreads(options.threads > 0

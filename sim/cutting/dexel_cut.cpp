@@ -236,10 +236,11 @@ void DexelModel::cut_chunk(const Instance& in, std::uint32_t chunk, int thread) 
       const std::uint32_t entry = cell_items_[it];
       if ((entry & need) != need) continue;
       const std::uint32_t d = entry & kIndexMask;
-      const double h = height_[d], floor = floor_[d];
+      const Line& line = line_[d];
+      const double h = height_[d], floor = line.floor;
       if (h <= floor) continue;
-      const Eigen::Vector3d& p = line_origin_[d];
-      const Eigen::Vector3d& n = normal_[d];
+      const Eigen::Vector3d& p = line.origin;
+      const Eigen::Vector3d& n = line.normal;
       const Eigen::Vector3d q = p - tip;
       if (detail::starts_above(q, n, axis, g, h)) continue;
       const detail::Span span = detail::tool_span(q, n, axis, g, floor, h);

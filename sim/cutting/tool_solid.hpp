@@ -163,8 +163,9 @@ inline Span tool_span(const Eigen::Vector3d& q, const Eigen::Vector3d& n, const 
 // beyond h by a margin (1e-8 mm, mm²) far above the rounding of tool_span's
 // roots, so it never hides a cut that tool_span would make: a cut dexel gets
 // the same height bit for bit, with or without this test.
-inline bool starts_above(const Eigen::Vector3d& q, const Eigen::Vector3d& n,
-                         const Eigen::Vector3d& a, const ToolGeometry& g, double h) {
+[[gnu::always_inline]] inline bool starts_above(const Eigen::Vector3d& q, const Eigen::Vector3d& n,
+                                                const Eigen::Vector3d& a, const ToolGeometry& g,
+                                                double h) {
   constexpr double m = 1e-8;
   const double qa = q.dot(a), na = n.dot(a);
   const double wh = qa + h * na;  // height along the axis of the line's point at h

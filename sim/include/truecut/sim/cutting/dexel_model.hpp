@@ -163,6 +163,14 @@ class DexelModel {
   std::vector<Eigen::Vector3f> sweep_point_;
   std::vector<Eigen::Vector3f> sweep_vector_;
   std::vector<float> sweep_radius_;
+  // What a tool instance reads of each dexel it tests, on one cache line:
+  // line_origin_, normal_ and floor_ (copies, made at build).
+  struct alignas(64) Line {
+    Eigen::Vector3d origin;
+    Eigen::Vector3d normal;
+    double floor;
+  };
+  std::vector<Line> line_;
   std::vector<std::uint32_t> stamp_;  // last cut() that lowered the dexel
   std::uint32_t epoch_ = 0;
   // One tool instance's work: grid rows in chunks, each chunk lowering
