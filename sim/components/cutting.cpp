@@ -32,6 +32,7 @@
 // bit for bit for any N.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
@@ -279,6 +280,19 @@ extern "C" TC_COMPONENT_EXPORT void truecut_component_exit(const tc_hal_api_t* a
                  (s->name + ": wrote machined.stl and machined.ply to " + s->out_dir.string() +
                   " (" + std::to_string(s->removed_total_mm3) + " mm³ removed)")
                      .c_str());
+    // How the tool instances were shared with the helper threads.
+    const auto t = s->model.thread_stats();
+    if (t.jobs > 0) {
+      char line[256];
+      std::snprintf(
+          line, sizeof line,
+          "%s: %d threads: %llu instances shared, %.1f chunks each, %.1f %% of the "
+          "chunks run by helpers, %llu wake-ups, %.1f polls waiting per instance",
+          s->name.c_str(), s->model.threads(), static_cast<unsigned long long>(t.jobs),
+          double(t.chunks) / double(t.jobs), 100.0 * double(t.worker_chunks) / double(t.chunks),
+          static_cast<unsigned long long>(t.wakes), double(t.wait_spins) / double(t.jobs));
+      api->message(hal, TC_HAL_MSG_INFO, line);
+    }
   } catch (const std::exception& e) {
     api->message(hal, TC_HAL_MSG_ERR,
                  (s->name + ": writing the machined surface failed: " + e.what()).c_str());

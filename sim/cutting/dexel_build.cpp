@@ -457,6 +457,17 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
     for_cells(i, [&](std::size_t c, std::uint32_t flags) {
       m.cell_items_[fill[c]++] = static_cast<std::uint32_t>(i) | flags;
     });
+  // In each cell the dexels whose box of cells starts there come first (in
+  // index order, as the rest): inside an instance's box only they are tested.
+  constexpr std::uint32_t kHome = kFirstX | kFirstY | kFirstZ;
+  m.cell_home_end_.resize(ncells);
+  for (std::size_t c = 0; c < ncells; ++c) {
+    const auto first = m.cell_items_.begin() + m.cell_start_[c];
+    const auto last = m.cell_items_.begin() + m.cell_start_[c + 1];
+    const auto mid = std::stable_partition(
+        first, last, [&](std::uint32_t entry) { return (entry & kHome) == kHome; });
+    m.cell_home_end_[c] = static_cast<std::uint32_t>(mid - m.cell_items_.begin());
+  }
   return m;
 }
 

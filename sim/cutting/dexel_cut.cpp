@@ -232,6 +232,7 @@ void DexelModel::cut_chunk(const Instance& in, std::uint32_t chunk, int thread) 
   // Lowers the dexels of grid entries [first, last) whose flags include `need`
   // (the dexel's box of cells starts in this cell along those axes).
   auto cut_entries = [&](std::uint32_t first, std::uint32_t last, std::uint32_t need) {
+    const std::uint32_t cell_begin = cursor;
     for (std::uint32_t it = first; it < last; ++it) {
       const std::uint32_t entry = cell_items_[it];
       if ((entry & need) != need) continue;
@@ -281,6 +282,24 @@ void DexelModel::cut_chunk(const Instance& in, std::uint32_t chunk, int thread) 
         ++result.touched;
       }
     }
+    // The cell's home dexels were tested before the others: lowered ones in
+    // index order, as the cell lists them (insertion sort: a handful).
+    for (std::uint32_t i = cell_begin + 1; i < cursor; ++i) {
+      const std::uint32_t d = lowered[i];
+      std::uint32_t j = i;
+      for (; j > cell_begin && lowered[j - 1] > d; --j)
+        lowered[j] = lowered[j - 1];
+      lowered[j] = d;
+    }
+  };
+  // One cell: all its entries with the flags `need`; inside the instance's
+  // box (need = all three flags) those are its leading home entries.
+  constexpr std::uint32_t kHome = kFirstX | kFirstY | kFirstZ;
+  auto cut_cell = [&](std::size_t cell, std::uint32_t need) {
+    if (need == kHome)
+      cut_entries(cell_start_[cell], cell_home_end_[cell], need);
+    else
+      cut_entries(cell_start_[cell], cell_start_[cell + 1], need);
   };
   const std::uint32_t row_end = std::min(in.rows, (chunk + 1) * in.rows_per_chunk);
   for (std::uint32_t r = chunk * in.rows_per_chunk; r < row_end; ++r) {
@@ -290,8 +309,9 @@ void DexelModel::cut_chunk(const Instance& in, std::uint32_t chunk, int thread) 
     // starts its box at or before it; further in, only those that start there.
     const std::uint32_t need = (y != in.c0[1] ? kFirstY : 0u) | (z != in.c0[2] ? kFirstZ : 0u);
     const std::size_t row = (std::size_t(z) * grid_dims_[1] + y) * grid_dims_[0];
-    cut_entries(cell_start_[row + in.c0[0]], cell_start_[row + in.c0[0] + 1], need);
-    cut_entries(cell_start_[row + in.c0[0] + 1], cell_start_[row + in.c1[0] + 1], need | kFirstX);
+    cut_cell(row + in.c0[0], need);
+    for (int x = in.c0[0] + 1; x <= in.c1[0]; ++x)
+      cut_cell(row + x, need | kFirstX);
   }
   result.count = cursor - result.begin;
   cursor_[std::size_t(thread)].value = cursor;

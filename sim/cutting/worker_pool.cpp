@@ -11,9 +11,10 @@ namespace truecut::sim::cutting::detail {
 namespace {
 
 constexpr std::uint64_t kField = (1u << 24) - 1;
-// A worker polls this many times (about 50–100 µs) for the next job before
+// A worker polls this many times (about 0.3 ms: a pause is ~30 ns on the
+// EPYC VM of docs/performance.md) for the next job before
 // it sleeps: the cutting's instances come every few servo cycles.
-constexpr int kSpinPolls = 4000;
+constexpr int kSpinPolls = 1000;
 
 std::uint64_t claim_word(std::uint32_t gen, std::uint32_t chunks, std::uint32_t next) {
   return (std::uint64_t(gen & 0xFFFF) << 48) | (std::uint64_t(chunks) << 24) | next;

@@ -197,12 +197,16 @@ class DexelModel {
   // cell of the box of cells its line [p + floor·n, p + h0·n] touches. The
   // top bits of an entry say whether the cell is the first of that box along
   // x, y, z (kFirstX…): a tool instance tests a dexel in the first cell of
-  // its box that lies in the instance's box of cells, so exactly once.
+  // its box that lies in the instance's box of cells, so exactly once; the
+  // dexels it lowers are summed in the order of (that cell, dexel index).
   Eigen::Vector3d grid_origin_mm_ = Eigen::Vector3d::Zero();
   double cell_mm_ = 1;
   Eigen::Vector3i grid_dims_ = Eigen::Vector3i::Zero();
   std::vector<std::uint32_t> cell_start_;
   std::vector<std::uint32_t> cell_items_;
+  // Per cell, the end of its leading entries that start their box there
+  // (all three kFirst flags); the others follow, each part in index order.
+  std::vector<std::uint32_t> cell_home_end_;
   static constexpr std::uint32_t kFirstX = 1u << 31, kFirstY = 1u << 30, kFirstZ = 1u << 29,
                                  kIndexMask = kFirstZ - 1;
   DexelOptions options_;
