@@ -309,13 +309,17 @@ void DexelModel::cut_chunk(const Instance& in, std::uint32_t chunk, int thread) 
     // starts its box at or before it; further in, only those that start there.
     const std::uint32_t need = (y != in.c0[1] ? kFirstY : 0u) | (z != in.c0[2] ? kFirstZ : 0u);
     const std::size_t row = (std::size_t(z) * grid_dims_[1] + y) * grid_dims_[0];
+    if (cell_start_[row + in.c0[0]] == cell_start_[row + in.c1[0] + 1]) continue;  // empty
     cut_cell(row + in.c0[0], need);
     for (int x = in.c0[0] + 1; x <= in.c1[0]; ++x)
       cut_cell(row + x, need | kFirstX);
   }
-  result.count = cursor - result.begin;
   cursor_[std::size_t(thread)].value = cursor;
-  chunks_[chunk] = result;
+  ChunkResult& out = chunks_[chunk];
+  out.thread = result.thread;
+  out.begin = result.begin;
+  out.count = cursor - result.begin;
+  out.touched = result.touched;
 }
 
 DexelModel::ThreadStats DexelModel::thread_stats() const noexcept {

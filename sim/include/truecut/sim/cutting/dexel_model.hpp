@@ -180,7 +180,9 @@ class DexelModel {
   struct ChunkResult {
     std::uint32_t thread = 0, begin = 0, count = 0, touched = 0;
   };
-  static constexpr std::uint32_t kMaxChunks = 4096;
+  // At most this many chunks of consecutive rows per instance: enough to share
+  // between a few threads, few enough that empty rows cost little.
+  static constexpr std::uint32_t kMaxChunks = 32;
   std::vector<ChunkResult> chunks_;
   std::vector<std::vector<std::uint32_t>> lowered_;
   struct alignas(64) Cursor {  // per thread, on its own cache line
