@@ -3,7 +3,7 @@
 // time to build the model; each path replayed with a cut per cycle and
 // sampled by swept distance (SweptCut, as the cutting component does).
 //
-//   cutting_bench [--spacing MM] [--cell MM] [--cycles N]
+//   cutting_bench [--spacing MM] [--cell MM] [--cycles N] [--threads N]
 //
 // freeform: ball R3 raster along x at F1500 (25 µm per cycle), tip from the
 // contact point on the free-form (tip = p + R·n − R·axis), 5 µm below it so
@@ -13,6 +13,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -90,11 +91,12 @@ Path implant_path(int cycles) {
   return p;
 }
 
-void run(const char* name, PartId id, const Path& path, double spacing, double cell) {
+void run(const char* name, PartId id, const Path& path, double spacing, double cell, int threads) {
   const BenchmarkPart part = make_part(id);
   DexelOptions o;
   o.spacing_mm = spacing;
   o.cell_mm = cell;
+  o.threads = threads;
   auto t0 = Clock::now();
   DexelModel model = DexelModel::build(part.mesh, part.triangle_surface, part.metadata.stock, o);
   const double build_s = seconds_since(t0);
@@ -119,12 +121,30 @@ void run(const char* name, PartId id, const Path& path, double spacing, double c
     if (swept) add(sampler.finish(model));
     const double wall = seconds_since(t0);
     const double s = thread_cpu_s() - cpu0;
+    // FNV-1a over the heights' bits: equal across thread counts.
+    std::uint64_t hash = 1469598103934665603ull;
+    for (std::size_t i = 0; i < model.size(); ++i) {
+      const double h = model.height_mm(i);
+      std::uint64_t bits;
+      std::memcpy(&bits, &h, sizeof bits);
+      hash = (hash ^ bits) * 1099511628211ull;
+    }
     const double cycles = double(path.poses.size() - 1);
     std::printf(
         "%-9s %s %.0f cycles in %.3f s CPU (%.3f s wall): %.2f us per cycle (%.1f %% of a 1 ms "
-        "servo period); %.2f instances and %.0f dexels lowered per cycle, %.2f mm3 removed\n",
+        "servo period); %.2f instances and %.0f dexels lowered per cycle, %.9f mm3 removed, "
+        "heights %016llx\n",
         name, swept ? "swept:    " : "per cycle:", cycles, s, wall, s / cycles * 1e6,
-        s / cycles * 1e3 * 100, substeps / cycles, touched / cycles, removed);
+        s / cycles * 1e3 * 100, substeps / cycles, touched / cycles, removed,
+        static_cast<unsigned long long>(hash));
+    const auto t = model.thread_stats();
+    if (t.jobs > 0)
+      std::printf(
+          "%-9s           %d threads: %llu instances shared (%.1f chunks each, %.1f %% run by the "
+          "helper), %llu wake-ups, %.1f polls waiting per shared instance\n",
+          name, model.threads(), static_cast<unsigned long long>(t.jobs),
+          double(t.chunks) / double(t.jobs), 100.0 * double(t.worker_chunks) / double(t.chunks),
+          static_cast<unsigned long long>(t.wakes), double(t.wait_spins) / double(t.jobs));
   }
 }
 
@@ -132,7 +152,7 @@ void run(const char* name, PartId id, const Path& path, double spacing, double c
 
 int main(int argc, char** argv) {
   double spacing = 0.1, cell = 0;
-  int cycles = 20000;
+  int cycles = 20000, threads = 1;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--spacing") && i + 1 < argc)
       spacing = std::atof(argv[++i]);
@@ -140,16 +160,20 @@ int main(int argc, char** argv) {
       cell = std::atof(argv[++i]);
     else if (!std::strcmp(argv[i], "--cycles") && i + 1 < argc)
       cycles = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--threads") && i + 1 < argc)
+      threads = std::atoi(argv[++i]);
     else {
-      std::fprintf(stderr, "usage: cutting_bench [--spacing MM] [--cell MM] [--cycles N]\n");
+      std::fprintf(stderr,
+                   "usage: cutting_bench [--spacing MM] [--cell MM] [--cycles N] [--threads N]\n");
       return 2;
     }
   }
-  if (!(spacing >= 0.01) || !(cell >= 0) || cycles < 2) {
-    std::fprintf(stderr, "cutting_bench: --spacing must be >= 0.01 and --cycles >= 2\n");
+  if (!(spacing >= 0.01) || !(cell >= 0) || cycles < 2 || threads < 0) {
+    std::fprintf(stderr,
+                 "cutting_bench: --spacing must be >= 0.01, --cycles >= 2, --threads >= 0\n");
     return 2;
   }
-  run("freeform", PartId::kFreeform, freeform_path(cycles), spacing, cell);
-  run("implant", PartId::kImplant, implant_path(cycles), spacing, cell);
+  run("freeform", PartId::kFreeform, freeform_path(cycles), spacing, cell, threads);
+  run("implant", PartId::kImplant, implant_path(cycles), spacing, cell, threads);
   return 0;
 }

@@ -2,9 +2,11 @@
 // part (truecut run MACHINE PROGRAM): planned program time / wall time, on
 // the part's machine with its hidden physics.
 //
-//   soft_cnc_bench [--fine]     (default: coarse parts, 0.3 mm dexels)
+//   soft_cnc_bench [--fine] [--cut-threads N]   (default: coarse parts, 0.3 mm
+//                                               dexels, one cutting thread per CPU)
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <string>
@@ -17,7 +19,18 @@
 int main(int argc, char** argv) {
   using namespace truecut;
   namespace fs = std::filesystem;
-  const bool fine = argc > 1 && std::strcmp(argv[1], "--fine") == 0;
+  bool fine = false;
+  int cut_threads = 0;
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--fine") == 0) {
+      fine = true;
+    } else if (std::strcmp(argv[i], "--cut-threads") == 0 && i + 1 < argc) {
+      cut_threads = std::atoi(argv[++i]);
+    } else {
+      std::fprintf(stderr, "usage: soft_cnc_bench [--fine] [--cut-threads N]\n");
+      return 2;
+    }
+  }
   const fs::path root =
       fs::temp_directory_path() / ("truecut_soft_cnc_bench_" + std::to_string(::getpid()));
   std::printf("%-13s %10s %10s %12s %8s\n", "part", "program s", "wall s", "x real time",
@@ -42,6 +55,7 @@ int main(int argc, char** argv) {
     job.tools = dir / "tools.tbl";
     job.out_dir = dir / "run";
     job.dexel_spacing_mm = id == sim::PartId::kImplant ? 0.1 : 0.3;
+    job.cut_threads = cut_threads;
     job.component_path = {TRUECUT_COMPONENT_DIR};
     const sim::SoftCncResult r = sim::run_soft_cnc(job);
     std::printf("%-13s %10.1f %10.2f %12.1f %8.2f%s\n", std::string(sim::part_name(id)).c_str(),

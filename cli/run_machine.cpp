@@ -45,6 +45,7 @@ const char* kHelp =
     "  --fade-time S          truecut_comp fade in/out (default 0.2)\n"
     "  --period-us US         servo period (default 1000)\n"
     "  --dexel-spacing MM     cutting model's surface sampling (default 0.1)\n"
+    "  --cut-threads N        threads that cut (default 0: one per CPU; same result for any)\n"
     "  --record-every N       record every N-th cycle (default 1)\n"
     "  --component-path DIR   also search DIR for components (repeatable)\n"
     "  --realtime             run against the wall clock instead of simulated time\n"
@@ -85,6 +86,7 @@ int run_machine(const std::vector<std::string>& argv) {
                              {"fade-time", true},
                              {"period-us", true},
                              {"dexel-spacing", true},
+                             {"cut-threads", true},
                              {"record-every", true},
                              {"component-path", true, true},
                              {"realtime", false},
@@ -115,6 +117,7 @@ int run_machine(const std::vector<std::string>& argv) {
   job.out_dir = *out;
   job.period_us = a.number("period-us", 1000.0, 50.0, 100000.0);
   job.dexel_spacing_mm = a.number("dexel-spacing", 0.1, 0.01, 5.0);
+  job.cut_threads = static_cast<int>(a.integer("cut-threads", 0, 0, 256));
   job.record_every = a.integer("record-every", 1, 1, 1000000);
   job.max_correction_mm = a.number("max-correction", sim::kSoftCncMaxCorrectionMm, 0.0, 10.0);
   job.max_rate_mm_per_s = a.number("max-rate", 5.0, 0.0, 1000.0);

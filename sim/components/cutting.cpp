@@ -3,7 +3,7 @@
 //
 //   loadrt cutting nominal=FILE.stl part=PART.json [out=FOLDER] [spacing=MM]
 //                  [surfaces=ID,ID,...] [max-stock=MM] [max-depth=MM] [names=NAME]
-//                  [sampling=swept|cycle]
+//                  [sampling=swept|cycle] [threads=N]
 //
 // FILE and PART are read at load time (relative to the working folder); a bad
 // file fails the load naming the file and key. OUT (default ".") is relative
@@ -26,9 +26,13 @@
 // default) a tool instance is placed only where the swept solid needs one
 // (swept_cut.hpp), with sampling=cycle at every cycle's pose. On exit the
 // pending motion is cut and the machined surface is written to
-// OUT/machined.stl and OUT/machined.ply.
+// OUT/machined.stl and OUT/machined.ply. threads=N (default 0: one per
+// hardware thread) cuts each tool instance's grid rows on N threads (the
+// servo thread and N − 1 helpers the model starts); the result is the same
+// bit for bit for any N.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
@@ -207,6 +211,7 @@ extern "C" TC_COMPONENT_EXPORT int truecut_component_init(const tc_hal_api_t* ap
     options.spacing_mm = args.take_double("spacing", options.spacing_mm);
     options.max_stock_mm = args.take_double("max-stock", options.max_stock_mm);
     options.max_depth_mm = args.take_double("max-depth", options.max_depth_mm);
+    options.threads = static_cast<int>(args.take_long("threads", 0, 0, 256));
     if (auto ids = args.take("surfaces")) options.surfaces = parse_ids(*ids);
     const std::string sampling = args.take_or("sampling", "swept");
     if (sampling != "swept" && sampling != "cycle")
@@ -275,6 +280,19 @@ extern "C" TC_COMPONENT_EXPORT void truecut_component_exit(const tc_hal_api_t* a
                  (s->name + ": wrote machined.stl and machined.ply to " + s->out_dir.string() +
                   " (" + std::to_string(s->removed_total_mm3) + " mm³ removed)")
                      .c_str());
+    // How the tool instances were shared with the helper threads.
+    const auto t = s->model.thread_stats();
+    if (t.jobs > 0) {
+      char line[256];
+      std::snprintf(
+          line, sizeof line,
+          "%s: %d threads: %llu instances shared, %.1f chunks each, %.1f %% of the "
+          "chunks run by helpers, %llu wake-ups, %.1f polls waiting per instance",
+          s->name.c_str(), s->model.threads(), static_cast<unsigned long long>(t.jobs),
+          double(t.chunks) / double(t.jobs), 100.0 * double(t.worker_chunks) / double(t.chunks),
+          static_cast<unsigned long long>(t.wakes), double(t.wait_spins) / double(t.jobs));
+      api->message(hal, TC_HAL_MSG_INFO, line);
+    }
   } catch (const std::exception& e) {
     api->message(hal, TC_HAL_MSG_ERR,
                  (s->name + ": writing the machined surface failed: " + e.what()).c_str());

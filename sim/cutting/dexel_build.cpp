@@ -6,6 +6,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 #include <Eigen/Geometry>
 
@@ -131,6 +132,8 @@ void check_options(const DexelOptions& o) {
   positive(o.tolerance_mm, "tolerance_mm", 1e-6);
   positive(o.cell_mm, "cell_mm", 0);
   if (o.max_substeps < 1) throw std::invalid_argument("DexelOptions::max_substeps must be >= 1");
+  if (o.threads < 0 || o.threads > 256)
+    throw std::invalid_argument("DexelOptions::threads must be 0 (one per hardware thread) .. 256");
 }
 
 }  // namespace
@@ -362,8 +365,17 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
   m.sweep_point_.assign(nd, Eigen::Vector3f::Zero());
   m.sweep_vector_.assign(nd, Eigen::Vector3f::Zero());
   m.sweep_radius_.assign(nd, 0.0f);
+  m.line_.resize(nd);
+  for (std::size_t i = 0; i < nd; ++i)
+    m.line_[i] = {m.line_origin_[i], m.normal_[i], m.floor_[i]};
   m.stamp_.assign(nd, 0);
-  m.visit_.assign(nd, 0);
+  m.old_height_.assign(nd, 0.0);
+  m.threads_ = detail::CutThreads(options.threads > 0
+                                      ? options.threads
+                                      : std::max(1, int(std::thread::hardware_concurrency())));
+  m.lowered_.assign(std::size_t(m.threads_.threads()), std::vector<std::uint32_t>(nd));
+  m.chunks_.assign(kMaxChunks, {});
+  m.cursor_.assign(std::size_t(m.threads_.threads()), {});
   if (nd == 0) return m;
 
   // Grid over the dexel lines [p + floor·n, p + h0·n].
@@ -415,6 +427,7 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
   };
   const std::size_t ncells = std::size_t(m.grid_dims_[0]) * m.grid_dims_[1] * m.grid_dims_[2];
   m.cell_start_.assign(ncells + 1, 0);
+  // fn(cell, flags): kFirstX/Y/Z where the cell is the first of the box.
   auto for_cells = [&](std::size_t i, auto&& fn) {
     Eigen::Vector3d a, b;
     line_box(i, a, b);
@@ -423,11 +436,14 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
     for (int z = c0[2]; z <= c1[2]; ++z)
       for (int y = c0[1]; y <= c1[1]; ++y)
         for (int x = c0[0]; x <= c1[0]; ++x)
-          fn((std::size_t(z) * m.grid_dims_[1] + y) * m.grid_dims_[0] + x);
+          fn((std::size_t(z) * m.grid_dims_[1] + y) * m.grid_dims_[0] + x,
+             (x == c0[0] ? kFirstX : 0u) | (y == c0[1] ? kFirstY : 0u) |
+                 (z == c0[2] ? kFirstZ : 0u));
   };
+  static_assert(kMaxDexels <= kIndexMask + 1, "dexel index and first-cell flags share a word");
   std::size_t total = 0;
   for (std::size_t i = 0; i < nd; ++i)
-    for_cells(i, [&](std::size_t c) {
+    for_cells(i, [&](std::size_t c, std::uint32_t) {
       ++m.cell_start_[c + 1];
       ++total;
     });
@@ -438,7 +454,20 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
   m.cell_items_.resize(total);
   std::vector<std::uint32_t> fill(m.cell_start_.begin(), m.cell_start_.end() - 1);
   for (std::size_t i = 0; i < nd; ++i)
-    for_cells(i, [&](std::size_t c) { m.cell_items_[fill[c]++] = static_cast<std::uint32_t>(i); });
+    for_cells(i, [&](std::size_t c, std::uint32_t flags) {
+      m.cell_items_[fill[c]++] = static_cast<std::uint32_t>(i) | flags;
+    });
+  // In each cell the dexels whose box of cells starts there come first (in
+  // index order, as the rest): inside an instance's box only they are tested.
+  constexpr std::uint32_t kHome = kFirstX | kFirstY | kFirstZ;
+  m.cell_home_end_.resize(ncells);
+  for (std::size_t c = 0; c < ncells; ++c) {
+    const auto first = m.cell_items_.begin() + m.cell_start_[c];
+    const auto last = m.cell_items_.begin() + m.cell_start_[c + 1];
+    const auto mid = std::stable_partition(
+        first, last, [&](std::uint32_t entry) { return (entry & kHome) == kHome; });
+    m.cell_home_end_[c] = static_cast<std::uint32_t>(mid - m.cell_items_.begin());
+  }
   return m;
 }
 

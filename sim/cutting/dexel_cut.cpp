@@ -5,6 +5,7 @@
 
 #include "tool_solid.hpp"
 #include "truecut/sim/cutting/dexel_model.hpp"
+#include "worker_pool.hpp"
 
 namespace truecut::sim::cutting {
 
@@ -121,13 +122,40 @@ Engagement DexelModel::cut(const CutterShape& shape, const CutterPose& from, con
   return e;
 }
 
+struct DexelModel::Instance {
+  DexelModel* model;
+  detail::ToolGeometry g;
+  Eigen::Vector3d tip, axis, centre_motion;
+  int c0[3], c1[3];
+  std::uint32_t ny;              // grid rows per z layer of the box
+  std::uint32_t rows;            // grid rows (y, z) in the box
+  std::uint32_t rows_per_chunk;  // consecutive rows per chunk
+};
+
+namespace {
+
+// Below this many grid entries under an instance the helper threads cost
+// more than they save.
+constexpr std::uint32_t kMinParallelEntries = 256;
+
+}  // namespace
+
 void DexelModel::apply_instance(const CutterShape& shape, const Eigen::Vector3d& tip,
                                 const Eigen::Vector3d& axis, const Eigen::Vector3d& centre_motion,
                                 Engagement& e, Eigen::Vector3d& normal_sum,
                                 Eigen::Vector3d& contact_sum) noexcept {
   if (cell_start_.empty()) return;
-  const detail::ToolGeometry g{shape.radius_mm, shape.corner_radius_mm,
-                               shape.radius_mm - shape.corner_radius_mm, shape.flute_length_mm};
+  Instance in{this,
+              {shape.radius_mm, shape.corner_radius_mm, shape.radius_mm - shape.corner_radius_mm,
+               shape.flute_length_mm},
+              tip,
+              axis,
+              centre_motion,
+              {},
+              {},
+              0,
+              0,
+              1};
   // Bounding box of the tool: its axis segment widened by the rim disk.
   const Eigen::Vector3d top = tip + shape.flute_length_mm * axis;
   Eigen::Vector3d lo_box = tip.cwiseMin(top), hi_box = tip.cwiseMax(top);
@@ -136,76 +164,191 @@ void DexelModel::apply_instance(const CutterShape& shape, const Eigen::Vector3d&
     lo_box[i] -= r;
     hi_box[i] += r;
   }
-  int c0[3], c1[3];
   for (int i = 0; i < 3; ++i) {
     const double a = std::floor((lo_box[i] - grid_origin_mm_[i]) / cell_mm_);
     const double b = std::floor((hi_box[i] - grid_origin_mm_[i]) / cell_mm_);
     if (b < 0 || a >= grid_dims_[i]) return;
-    c0[i] = static_cast<int>(std::max(a, 0.0));
-    c1[i] = static_cast<int>(std::min(b, double(grid_dims_[i] - 1)));
+    in.c0[i] = static_cast<int>(std::max(a, 0.0));
+    in.c1[i] = static_cast<int>(std::min(b, double(grid_dims_[i] - 1)));
   }
-  ++visit_epoch_;
-  if (visit_epoch_ == 0) {
-    std::fill(visit_.begin(), visit_.end(), 0u);
-    visit_epoch_ = 1;
-  }
-  for (int z = c0[2]; z <= c1[2]; ++z) {
-    for (int y = c0[1]; y <= c1[1]; ++y) {
-      const std::size_t row = (std::size_t(z) * grid_dims_[1] + y) * grid_dims_[0];
-      const std::uint32_t first = cell_start_[row + c0[0]];
-      const std::uint32_t last = cell_start_[row + c1[0] + 1];
-      for (std::uint32_t it = first; it < last; ++it) {
-        const std::uint32_t d = cell_items_[it];
-        if (visit_[d] == visit_epoch_) continue;
-        visit_[d] = visit_epoch_;
-        const double h = height_[d], floor = floor_[d];
-        if (h <= floor) continue;
-        const Eigen::Vector3d& p = line_origin_[d];
-        const Eigen::Vector3d& n = normal_[d];
-        const detail::Span span = detail::tool_span(p - tip, n, axis, g, floor, h);
-        if (span.empty() || !(span.t0 < h) || !(span.t1 > floor)) continue;
-        const double new_h = std::max(span.t0, floor);
-        const double removed = (h - new_h) * area_[d];
-        height_[d] = new_h;
-        e.removed_mm3 += removed;
-        normal_sum += removed * n;
-        contact_sum += removed * (p + (0.5 * (h + new_h)) * n);
-        const double w = (p + new_h * n - tip).dot(axis);
-        e.axial_min_mm = std::min(e.axial_min_mm, w);
-        e.axial_max_mm = std::max(e.axial_max_mm, w);
-        // The surface this instance leaves at the dexel, for the output
-        // mesh's cusps: the ball's tube, the flank's or the flat bottom's
-        // tangent plane (g: out of the material, into the tool).
-        const Eigen::Vector3d x = p + new_h * n;
-        const Eigen::Vector3d radial = x - tip - w * axis;
-        const double r = radial.norm();
-        constexpr double kOn = 1e-7;  // mm: which face of the cutter the entry lies on
-        std::uint8_t kind = kSweptNone;
-        if (span.t0 <= floor) {
-          // cut to the floor: no surface of the tool here
-        } else if (g.core_mm <= 0 && g.corner_mm > 0 && w < g.corner_mm) {
-          kind = kSweptBall;
-          sweep_point_[d] = (tip + g.corner_mm * axis - position_[d]).cast<float>();
-          sweep_vector_[d] = centre_motion.cast<float>();
-          sweep_radius_[d] = static_cast<float>(g.corner_mm);
-        } else if (w <= kOn && r <= g.core_mm + kOn) {
-          kind = kSweptPlane;  // flat bottom
-          sweep_point_[d] = (x - position_[d]).cast<float>();
-          sweep_vector_[d] = axis.cast<float>();
-        } else if (w >= g.corner_mm - kOn && w <= g.flute_mm - kOn && r > 0.5 * g.radius_mm &&
-                   std::abs(r - g.radius_mm) <= 1e-6) {
-          kind = kSweptPlane;  // flank
-          sweep_point_[d] = (x - position_[d]).cast<float>();
-          sweep_vector_[d] = (-radial / r).cast<float>();
-        }
-        sweep_kind_[d] = kind;
-        if (stamp_[d] != epoch_) {
-          stamp_[d] = epoch_;
-          ++e.dexels_touched;
-        }
+  in.ny = static_cast<std::uint32_t>(in.c1[1] - in.c0[1] + 1);
+  in.rows = in.ny * static_cast<std::uint32_t>(in.c1[2] - in.c0[2] + 1);
+  in.rows_per_chunk = (in.rows + kMaxChunks - 1) / kMaxChunks;
+  const std::uint32_t chunks = (in.rows + in.rows_per_chunk - 1) / in.rows_per_chunk;
+  for (auto& c : cursor_)
+    c.value = 0;
+  detail::WorkerPool* pool = threads_.get();
+  bool parallel = false;
+  if (pool != nullptr && pool->threads() > 1 && chunks > 1) {
+    std::uint32_t entries = 0;
+    for (int z = in.c0[2]; z <= in.c1[2] && entries < kMinParallelEntries; ++z)
+      for (int y = in.c0[1]; y <= in.c1[1]; ++y) {
+        const std::size_t row = (std::size_t(z) * grid_dims_[1] + y) * grid_dims_[0];
+        entries += cell_start_[row + in.c1[0] + 1] - cell_start_[row + in.c0[0]];
       }
+    parallel = entries >= kMinParallelEntries;
+  }
+  if (parallel) {
+    pool->run(
+        chunks,
+        [](void* context, std::uint32_t chunk, int thread) {
+          const auto& instance = *static_cast<const Instance*>(context);
+          instance.model->cut_chunk(instance, chunk, thread);
+        },
+        &in);
+  } else {
+    for (std::uint32_t c = 0; c < chunks; ++c)
+      cut_chunk(in, c, 0);
+  }
+  // The sums over the lowered dexels, chunk by chunk in row order: the order
+  // one thread lowers them in, whichever thread did.
+  for (std::uint32_t c = 0; c < chunks; ++c) {
+    const ChunkResult& r = chunks_[c];
+    e.dexels_touched += r.touched;
+    const std::uint32_t* list = lowered_[r.thread].data() + r.begin;
+    for (std::uint32_t k = 0; k < r.count; ++k) {
+      const std::uint32_t d = list[k];
+      const double h = old_height_[d], new_h = height_[d];
+      const Eigen::Vector3d& p = line_origin_[d];
+      const Eigen::Vector3d& n = normal_[d];
+      const double removed = (h - new_h) * area_[d];
+      e.removed_mm3 += removed;
+      normal_sum += removed * n;
+      contact_sum += removed * (p + (0.5 * (h + new_h)) * n);
+      const double w = (p + new_h * n - tip).dot(axis);
+      e.axial_min_mm = std::min(e.axial_min_mm, w);
+      e.axial_max_mm = std::max(e.axial_max_mm, w);
     }
   }
 }
+
+void DexelModel::cut_chunk(const Instance& in, std::uint32_t chunk, int thread) noexcept {
+  const detail::ToolGeometry& g = in.g;
+  const Eigen::Vector3d& tip = in.tip;
+  const Eigen::Vector3d& axis = in.axis;
+  std::uint32_t* const lowered = lowered_[std::size_t(thread)].data();
+  std::uint32_t cursor = cursor_[std::size_t(thread)].value;
+  ChunkResult result{static_cast<std::uint32_t>(thread), cursor, 0, 0};
+  // Lowers the dexels of grid entries [first, last) whose flags include `need`
+  // (the dexel's box of cells starts in this cell along those axes).
+  auto cut_entries = [&](std::uint32_t first, std::uint32_t last, std::uint32_t need) {
+    const std::uint32_t cell_begin = cursor;
+    for (std::uint32_t it = first; it < last; ++it) {
+      const std::uint32_t entry = cell_items_[it];
+      if ((entry & need) != need) continue;
+      const std::uint32_t d = entry & kIndexMask;
+      const Line& line = line_[d];
+      const double h = height_[d], floor = line.floor;
+      if (h <= floor) continue;
+      const Eigen::Vector3d& p = line.origin;
+      const Eigen::Vector3d& n = line.normal;
+      const Eigen::Vector3d q = p - tip;
+      if (detail::starts_above(q, n, axis, g, h)) continue;
+      const detail::Span span = detail::tool_span(q, n, axis, g, floor, h);
+      if (span.empty() || !(span.t0 < h) || !(span.t1 > floor)) continue;
+      const double new_h = std::max(span.t0, floor);
+      height_[d] = new_h;
+      old_height_[d] = h;
+      lowered[cursor++] = d;
+      // The surface this instance leaves at the dexel, for the output
+      // mesh's cusps: the ball's tube, the flank's or the flat bottom's
+      // tangent plane (g: out of the material, into the tool).
+      const double w = (p + new_h * n - tip).dot(axis);
+      const Eigen::Vector3d x = p + new_h * n;
+      const Eigen::Vector3d radial = x - tip - w * axis;
+      const double r = radial.norm();
+      constexpr double kOn = 1e-7;  // mm: which face of the cutter the entry lies on
+      std::uint8_t kind = kSweptNone;
+      if (span.t0 <= floor) {
+        // cut to the floor: no surface of the tool here
+      } else if (g.core_mm <= 0 && g.corner_mm > 0 && w < g.corner_mm) {
+        kind = kSweptBall;
+        sweep_point_[d] = (tip + g.corner_mm * axis - position_[d]).cast<float>();
+        sweep_vector_[d] = in.centre_motion.cast<float>();
+        sweep_radius_[d] = static_cast<float>(g.corner_mm);
+      } else if (w <= kOn && r <= g.core_mm + kOn) {
+        kind = kSweptPlane;  // flat bottom
+        sweep_point_[d] = (x - position_[d]).cast<float>();
+        sweep_vector_[d] = axis.cast<float>();
+      } else if (w >= g.corner_mm - kOn && w <= g.flute_mm - kOn && r > 0.5 * g.radius_mm &&
+                 std::abs(r - g.radius_mm) <= 1e-6) {
+        kind = kSweptPlane;  // flank
+        sweep_point_[d] = (x - position_[d]).cast<float>();
+        sweep_vector_[d] = (-radial / r).cast<float>();
+      }
+      sweep_kind_[d] = kind;
+      if (stamp_[d] != epoch_) {
+        stamp_[d] = epoch_;
+        ++result.touched;
+      }
+    }
+    // The cell's home dexels were tested before the others: lowered ones in
+    // index order, as the cell lists them (insertion sort: a handful).
+    for (std::uint32_t i = cell_begin + 1; i < cursor; ++i) {
+      const std::uint32_t d = lowered[i];
+      std::uint32_t j = i;
+      for (; j > cell_begin && lowered[j - 1] > d; --j)
+        lowered[j] = lowered[j - 1];
+      lowered[j] = d;
+    }
+  };
+  // One cell: all its entries with the flags `need`; inside the instance's
+  // box (need = all three flags) those are its leading home entries.
+  constexpr std::uint32_t kHome = kFirstX | kFirstY | kFirstZ;
+  auto cut_cell = [&](std::size_t cell, std::uint32_t need) {
+    if (need == kHome)
+      cut_entries(cell_start_[cell], cell_home_end_[cell], need);
+    else
+      cut_entries(cell_start_[cell], cell_start_[cell + 1], need);
+  };
+  const std::uint32_t row_end = std::min(in.rows, (chunk + 1) * in.rows_per_chunk);
+  for (std::uint32_t r = chunk * in.rows_per_chunk; r < row_end; ++r) {
+    const int z = in.c0[2] + static_cast<int>(r / in.ny);
+    const int y = in.c0[1] + static_cast<int>(r % in.ny);
+    // In the instance's first row (column) of cells every dexel listed there
+    // starts its box at or before it; further in, only those that start there.
+    const std::uint32_t need = (y != in.c0[1] ? kFirstY : 0u) | (z != in.c0[2] ? kFirstZ : 0u);
+    const std::size_t row = (std::size_t(z) * grid_dims_[1] + y) * grid_dims_[0];
+    if (cell_start_[row + in.c0[0]] == cell_start_[row + in.c1[0] + 1]) continue;  // empty
+    cut_cell(row + in.c0[0], need);
+    for (int x = in.c0[0] + 1; x <= in.c1[0]; ++x)
+      cut_cell(row + x, need | kFirstX);
+  }
+  cursor_[std::size_t(thread)].value = cursor;
+  ChunkResult& out = chunks_[chunk];
+  out.thread = result.thread;
+  out.begin = result.begin;
+  out.count = cursor - result.begin;
+  out.touched = result.touched;
+}
+
+DexelModel::ThreadStats DexelModel::thread_stats() const noexcept {
+  ThreadStats t;
+  if (const detail::WorkerPool* pool = threads_.get()) {
+    const auto s = pool->stats();
+    t = {s.jobs, s.chunks, s.worker_chunks, s.wakes, s.wait_spins};
+  }
+  return t;
+}
+
+namespace detail {
+
+CutThreads::CutThreads() noexcept = default;
+CutThreads::CutThreads(int threads) {
+  if (threads > 1) pool_ = std::make_unique<WorkerPool>(threads);
+}
+CutThreads::CutThreads(const CutThreads& other) : CutThreads(other.threads()) {}
+CutThreads& CutThreads::operator=(const CutThreads& other) {
+  if (this != &other && threads() != other.threads()) *this = CutThreads(other.threads());
+  return *this;
+}
+CutThreads::CutThreads(CutThreads&&) noexcept = default;
+CutThreads& CutThreads::operator=(CutThreads&&) noexcept = default;
+CutThreads::~CutThreads() = default;
+int CutThreads::threads() const noexcept {
+  return pool_ ? pool_->threads() : 1;
+}
+
+}  // namespace detail
 
 }  // namespace truecut::sim::cutting

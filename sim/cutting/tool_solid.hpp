@@ -155,4 +155,41 @@ inline Span tool_span(const Eigen::Vector3d& q, const Eigen::Vector3d& n, const 
   return hull(top, bottom);
 }
 
+// A quick test, without square roots or divisions, that tool_span(q, n, a, g,
+// lo, h) starts at or above h, i.e. that the tool does not reach below the
+// material's top h on this line — true for most dexels under a tool that
+// moved a little since the last instance (their material already ends at or
+// below its surface). True only where each part of the solid is entered
+// beyond h by a margin (1e-8 mm, mm²) far above the rounding of tool_span's
+// roots, so it never hides a cut that tool_span would make: a cut dexel gets
+// the same height bit for bit, with or without this test.
+[[gnu::always_inline]] inline bool starts_above(const Eigen::Vector3d& q, const Eigen::Vector3d& n,
+                                                const Eigen::Vector3d& a, const ToolGeometry& g,
+                                                double h) {
+  constexpr double m = 1e-8;
+  const double qa = q.dot(a), na = n.dot(a);
+  const double wh = qa + h * na;  // height along the axis of the line's point at h
+  // The line climbs along the axis into the slab [w_lo, ...] beyond h, or
+  // descends into [..., w_hi] beyond h.
+  auto enters_slab_above = [&](double w_lo, double w_hi) {
+    return (wh < w_lo - m && na > m) || (wh > w_hi + m && na < -m);
+  };
+  // The line is outside the cylinder of radius R at h and closing in.
+  auto enters_cylinder_above = [&] {
+    const Eigen::Vector3d qp = q - qa * a, np = n - na * a;
+    const Eigen::Vector3d v = qp + h * np;
+    return v.squaredNorm() - g.radius_mm * g.radius_mm > m && v.dot(np) < -m;
+  };
+  // The cylinder part, w in [rc, L].
+  if (!enters_slab_above(g.corner_mm, g.flute_mm) && !enters_cylinder_above()) return false;
+  if (g.corner_mm <= 0) return true;  // flat end mill: nothing below
+  if (g.core_mm <= 0) {               // ball: the sphere about rc·a, below w = rc
+    const Eigen::Vector3d v = q - g.corner_mm * a + h * n;
+    if (v.squaredNorm() - g.corner_mm * g.corner_mm > m && v.dot(n) < -m) return true;
+    return wh > g.corner_mm + m && na < -m;
+  }
+  // bull-nose: its bottom lies within the cylinder, w in [0, rc]
+  return enters_slab_above(0, g.corner_mm) || enters_cylinder_above();
+}
+
 }  // namespace truecut::sim::cutting::detail

@@ -79,6 +79,7 @@ std::string soft_cnc_ini_text(const SoftCncJob& job, const MachineDescription& m
   ini.set("RUN", "NOMINAL", absolute_text(job.nominal));
   ini.set("RUN", "OUT_DIR", absolute_text(job.out_dir));
   ini.set("RUN", "DEXEL_SPACING", number_text(job.dexel_spacing_mm));
+  ini.set("RUN", "CUT_THREADS", std::to_string(job.cut_threads));
   ini.set("RUN", "SERVO_PERIOD_NS", std::to_string(servo_period_ns(job)));
   ini.set("RUN", "RECORD_EVERY", std::to_string(job.record_every));
   const std::array<double, 5> start = start_joints(machine);

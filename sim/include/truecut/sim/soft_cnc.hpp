@@ -49,6 +49,7 @@ struct SoftCncJob {
   std::filesystem::path out_dir;
   double period_us = 1000.0;
   double dexel_spacing_mm = 0.1;  // the cutting model's surface sampling (docs/cutting.md)
+  int cut_threads = 0;  // threads that cut (0: one per hardware thread); same result for any
   long record_every = 1;
   double max_correction_mm = kSoftCncMaxCorrectionMm;  // truecut_comp's limit
   double max_rate_mm_per_s = 5.0;

@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -30,7 +31,31 @@ struct DexelOptions {
   int max_substeps = 4096;     // per cut() call; a longer move is sampled more coarsely
   double cell_mm = 0;          // spatial grid cell; 0 = automatic
   std::vector<int> surfaces;   // surface ids to model; empty = all
+  // Threads that cut (the caller and threads − 1 helper threads the model
+  // starts); 0 = one per hardware thread. The result is the same bit for bit
+  // whatever the number.
+  int threads = 1;
 };
+
+namespace detail {
+class WorkerPool;
+// The model's helper threads; a copy of the model starts its own.
+class CutThreads {
+ public:
+  CutThreads() noexcept;
+  explicit CutThreads(int threads);
+  CutThreads(const CutThreads& other);
+  CutThreads& operator=(const CutThreads& other);
+  CutThreads(CutThreads&&) noexcept;
+  CutThreads& operator=(CutThreads&&) noexcept;
+  ~CutThreads();
+  WorkerPool* get() const noexcept { return pool_.get(); }
+  int threads() const noexcept;
+
+ private:
+  std::unique_ptr<WorkerPool> pool_;
+};
+}  // namespace detail
 
 // What one cut() removed. Weights are removed volumes (Δh × dexel area).
 struct Engagement {
@@ -92,6 +117,14 @@ class DexelModel {
   int surface(std::size_t i) const { return surface_[i]; }
   // Σ (initial h − h) × area.
   double removed_total_mm3() const;
+  // Threads that cut (DexelOptions::threads, resolved).
+  int threads() const noexcept { return threads_.threads(); }
+  // Jobs shared with the helper threads so far, and how the hand-over went
+  // (worker_pool.hpp): for the benchmark.
+  struct ThreadStats {
+    std::uint64_t jobs = 0, chunks = 0, worker_chunks = 0, wakes = 0, wait_spins = 0;
+  };
+  ThreadStats thread_stats() const noexcept;
 
  private:
   // `centre_motion`: unit direction in which the ball centre moves during
@@ -100,6 +133,9 @@ class DexelModel {
                       const Eigen::Vector3d& axis, const Eigen::Vector3d& centre_motion,
                       Engagement& e, Eigen::Vector3d& normal_sum,
                       Eigen::Vector3d& contact_sum) noexcept;
+  struct Instance;
+  // Tests and lowers the dexels of one chunk of grid rows (any thread).
+  void cut_chunk(const Instance& in, std::uint32_t chunk, int thread) noexcept;
 
   // Per dexel (structure of arrays).
   std::vector<Eigen::Vector3d> position_;     // on the nominal surface (output mesh)
@@ -127,21 +163,54 @@ class DexelModel {
   std::vector<Eigen::Vector3f> sweep_point_;
   std::vector<Eigen::Vector3f> sweep_vector_;
   std::vector<float> sweep_radius_;
+  // What a tool instance reads of each dexel it tests, on one cache line:
+  // line_origin_, normal_ and floor_ (copies, made at build).
+  struct alignas(64) Line {
+    Eigen::Vector3d origin;
+    Eigen::Vector3d normal;
+    double floor;
+  };
+  std::vector<Line> line_;
   std::vector<std::uint32_t> stamp_;  // last cut() that lowered the dexel
   std::uint32_t epoch_ = 0;
-  std::vector<std::uint32_t> visit_;  // last tool instance that tested the dexel
-  std::uint32_t visit_epoch_ = 0;
+  // One tool instance's work: grid rows in chunks, each chunk lowering
+  // dexels on one thread and listing them (their index in lowered_[thread],
+  // their height before in old_height_); the sums are then taken over the
+  // chunks in order, so they do not depend on which thread ran which chunk.
+  struct ChunkResult {
+    std::uint32_t thread = 0, begin = 0, count = 0, touched = 0;
+  };
+  // At most this many chunks of consecutive rows per instance: enough to share
+  // between a few threads, few enough that empty rows cost little.
+  static constexpr std::uint32_t kMaxChunks = 32;
+  std::vector<ChunkResult> chunks_;
+  std::vector<std::vector<std::uint32_t>> lowered_;
+  struct alignas(64) Cursor {  // per thread, on its own cache line
+    std::uint32_t value = 0;
+  };
+  std::vector<Cursor> cursor_;
+  std::vector<double> old_height_;
+  detail::CutThreads threads_;
   // Output topology: triangles over dexels, plus the unmodelled triangles.
   std::vector<offline::Triangle> triangles_;
   std::vector<Eigen::Vector3d> fixed_vertices_;
   std::vector<offline::Triangle> fixed_triangles_;
   // Uniform grid: dexel indices per cell (CSR); a dexel is listed in every
-  // cell its line [p + floor·n, p + h0·n] passes near.
+  // cell of the box of cells its line [p + floor·n, p + h0·n] touches. The
+  // top bits of an entry say whether the cell is the first of that box along
+  // x, y, z (kFirstX…): a tool instance tests a dexel in the first cell of
+  // its box that lies in the instance's box of cells, so exactly once; the
+  // dexels it lowers are summed in the order of (that cell, dexel index).
   Eigen::Vector3d grid_origin_mm_ = Eigen::Vector3d::Zero();
   double cell_mm_ = 1;
   Eigen::Vector3i grid_dims_ = Eigen::Vector3i::Zero();
   std::vector<std::uint32_t> cell_start_;
   std::vector<std::uint32_t> cell_items_;
+  // Per cell, the end of its leading entries that start their box there
+  // (all three kFirst flags); the others follow, each part in index order.
+  std::vector<std::uint32_t> cell_home_end_;
+  static constexpr std::uint32_t kFirstX = 1u << 31, kFirstY = 1u << 30, kFirstZ = 1u << 29,
+                                 kIndexMask = kFirstZ - 1;
   DexelOptions options_;
 };
 
