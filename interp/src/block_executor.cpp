@@ -644,12 +644,13 @@ void BlockExecutor::check_feed(int column) const {
 void BlockExecutor::check_unused_words(int motion_code) const {
   const bool arc = motion_code == 20 || motion_code == 30;
   const bool cycle = is_canned_cycle(motion_code);
-  const bool dwell_cycle =
-      motion_code == 820 || motion_code == 860 || motion_code == 880 || motion_code == 890;
+  const bool dwell_cycle = motion_code == 740 || motion_code == 820 || motion_code == 840 ||
+                           motion_code == 860 || motion_code == 880 || motion_code == 890;
   const bool peck_cycle = motion_code == 730 || motion_code == 830;
   const int nm = codes_.g[0];
   for (char l : {'i', 'j', 'k', 'r'})
-    if (b_->has(l) && !arc && !(l == 'r' && (nm == 100 || cycle))) {
+    if (b_->has(l) && !arc && !(l == 'r' && (nm == 100 || cycle)) &&
+        !(l != 'r' && motion_code == 870)) {
       if (cycle)
         fail(column_of(l), std::string(1, static_cast<char>(std::toupper(l))) +
                                " word in a canned cycle (only G87 uses I, J, K)");
@@ -659,7 +660,7 @@ void BlockExecutor::check_unused_words(int motion_code) const {
   if (b_->has('p') && !arc && !dwell_cycle && nm != 40 && nm != 100 &&
       codes_.g[group(GGroup::kPathControl)] != 640)
     fail(column_of('p'),
-         "P word with no G code that uses it (G4, G10, G64, G2/G3, G82/G86/G88/G89)");
+         "P word with no G code that uses it (G4, G10, G64, G2/G3, G74/G82/G84/G86/G88/G89)");
   if (b_->has('q') && !peck_cycle && codes_.g[group(GGroup::kPathControl)] != 640 &&
       codes_.m[group(MGroup::kToolChange)] != 610)
     fail(column_of('q'), "Q word with no code that uses it (G64, M61, G73/G83)");

@@ -30,6 +30,11 @@ const char* call_name(const CanonOp& op) {
         if constexpr (std::is_same_v<T, StartSpindle>)
           return c.clockwise ? "START_SPINDLE_CLOCKWISE" : "START_SPINDLE_COUNTERCLOCKWISE";
         if constexpr (std::is_same_v<T, StopSpindle>) return "STOP_SPINDLE_TURNING";
+        if constexpr (std::is_same_v<T, OrientSpindle>) return "ORIENT_SPINDLE";
+        if constexpr (std::is_same_v<T, FeedOverride>)
+          return c.enabled ? "ENABLE_FEED_OVERRIDE" : "DISABLE_FEED_OVERRIDE";
+        if constexpr (std::is_same_v<T, SpeedOverride>)
+          return c.enabled ? "ENABLE_SPEED_OVERRIDE" : "DISABLE_SPEED_OVERRIDE";
         if constexpr (std::is_same_v<T, SetSpindleMode>) return "SET_SPINDLE_MODE";
         if constexpr (std::is_same_v<T, Coolant>) {
           if (c.kind == Coolant::kMist) return c.on ? "MIST_ON" : "MIST_OFF";

@@ -70,18 +70,16 @@ constexpr GInfo kGCodes[] = {
     {700, GGroup::kUnits, "G70 (use G20)"},
     {710, GGroup::kUnits, "G71 (use G21)"},
     {730, GGroup::kMotion, nullptr},
-    {740, GGroup::kMotion,
-     "left-hand tapping canned cycle (it switches the overrides off like M48-M53)"},
+    {740, GGroup::kMotion, nullptr},
     {760, GGroup::kMotion, "threading cycle (G76)"},
     {800, GGroup::kMotion, nullptr},
     {810, GGroup::kMotion, nullptr},
     {820, GGroup::kMotion, nullptr},
     {830, GGroup::kMotion, nullptr},
-    {840, GGroup::kMotion,
-     "right-hand tapping canned cycle (it switches the overrides off like M48-M53)"},
+    {840, GGroup::kMotion, nullptr},
     {850, GGroup::kMotion, nullptr},
     {860, GGroup::kMotion, nullptr},
-    {870, GGroup::kMotion, "back boring canned cycle (it orients the spindle like M19)"},
+    {870, GGroup::kMotion, nullptr},
     {880, GGroup::kMotion, nullptr},
     {890, GGroup::kMotion, nullptr},
     {900, GGroup::kDistance, nullptr},
@@ -98,7 +96,8 @@ constexpr GInfo kGCodes[] = {
     {960, GGroup::kSpindleMode, "constant surface speed (G96)"},
     {970, GGroup::kSpindleMode, nullptr},
     {980, GGroup::kRetract, nullptr},
-    {990, GGroup::kRetract, nullptr}};
+    {990, GGroup::kRetract, nullptr},
+};
 
 struct MInfo {
   int code;

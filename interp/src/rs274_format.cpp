@@ -108,6 +108,11 @@ std::string format_rs274(const CanonOp& op, const FormatOptions& options) {
           args = "0, " + p.num(c.rpm);
         } else if constexpr (std::is_same_v<T, StartSpindle> || std::is_same_v<T, StopSpindle>) {
           args = "0";
+        } else if constexpr (std::is_same_v<T, SpeedOverride>) {
+          args = "0";
+        } else if constexpr (std::is_same_v<T, OrientSpindle>) {
+          // LinuxCNC's CANON_DIRECTION: 2 clockwise, 3 counter-clockwise.
+          args = "0, " + p.num(c.degrees) + ", " + (c.clockwise ? "2" : "3");
         } else if constexpr (std::is_same_v<T, SetSpindleMode>) {
           args = "0 " + p.num(c.css_max_rpm);
         } else if constexpr (std::is_same_v<T, Comment> || std::is_same_v<T, Message>) {

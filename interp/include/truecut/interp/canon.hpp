@@ -110,6 +110,20 @@ struct StartSpindle {
   bool clockwise = true;
 };
 struct StopSpindle {};
+// Stops the spindle at an angle (G87 before it enters and leaves the hole);
+// `clockwise`: the direction it turned in, as rs274 passes it on.
+struct OrientSpindle {
+  double degrees = 0;
+  bool clockwise = true;
+};
+// The feed and spindle speed overrides switched off and on again around the
+// tapping cycles G74/G84, as LinuxCNC does.
+struct FeedOverride {
+  bool enabled = true;
+};
+struct SpeedOverride {
+  bool enabled = true;
+};
 struct SetSpindleMode {  // G97 (the only spindle mode supported)
   double css_max_rpm = 0;
 };
@@ -148,8 +162,9 @@ using CanonOp =
                  SelectPlane, UseLengthUnits, SetMotionControlMode, SetNaivecamTolerance,
                  SetG5xOffset, SetG92Offset, SetXYRotation, UseToolLengthOffset, SelectTool,
                  StartChange, ChangeTool, ChangeToolNumber, SetSpindleSpeed, StartSpindle,
-                 StopSpindle, SetSpindleMode, Coolant, Comment, Message, ProgramStop, PalletShuttle,
-                 ProgramEnd, Finish, SetFeedReference, OnReset, SetTcp, SetSplineMode>;
+                 StopSpindle, OrientSpindle, FeedOverride, SpeedOverride, SetSpindleMode, Coolant,
+                 Comment, Message, ProgramStop, PalletShuttle, ProgramEnd, Finish, SetFeedReference,
+                 OnReset, SetTcp, SetSplineMode>;
 
 // What was in force when a call was made.
 struct CallContext {
