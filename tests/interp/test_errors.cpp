@@ -151,7 +151,16 @@ INSTANTIATE_TEST_SUITE_P(
         Case{"M3 S100\nG0 Z10\nG87 X1 Z-3 R2 I1 K1 F100\nM2\n", 3, 1, "G87 needs J"},
         Case{"M3 S100\nG0 Z10\nG87 X1 Z-3 R2 I1 J1 F100\nM2\n", 3, 1, "G87 needs K"},
         Case{"M3 S100\nG0 Z10\nG81 X1 Z-3 R2 F100\nG87 X2 I1 J1 K1\nM2\n", 4, 1, "G87 needs R"},
-        Case{"M3 S100\nG0 Z10\nG84 X1 Z-3 R2 I1 F100\nM2\n", 3, 15, "I word in a canned cycle"}),
+        Case{"M3 S100\nG0 Z10\nG84 X1 Z-3 R2 I1 F100\nM2\n", 3, 15, "I word in a canned cycle"},
+        // Spindle-synchronised motion and probing: truecut's own refusals.
+        Case{"M3 S100\nG33 Z-3 K0\nM2\n", 2, 9, "K (the distance per spindle revolution) must be"},
+        Case{"M3 S100\nG33.1 Z-3 K-1\nM2\n", 2, 11, "must be greater than 0"},
+        Case{"M3 S100\nG33.1 Z-3 A5 K1\nM2\n", 2, 11, "A word with G33.1"},
+        Case{"G0 Z5\nG93 G38.2 Z-3 F1\nM2\n", 2, 5, "G38.2 with inverse-time feed (G93)"},
+        // rs274 runs Fanuc-style subprograms; truecut refuses them by name.
+        Case{"G0 Z5\nM98 P100\nM2\nO100\nG1 X1 F100\nM99\n", 2, 1,
+             "M98 Fanuc-style subprogram call (M98; use O-word sub/call) is not supported"},
+        Case{"G0 Z5\nM99\n", 2, 1, "Fanuc-style subprogram return (M99"}),
     case_name);
 
 // Polar coordinates (docs/gcode.md "Polar coordinates"): the programs

@@ -42,14 +42,9 @@ const std::map<std::string, std::string>& out_of_scope() {
       {"ncfiles/lathe_g7x_quadrants.ngc", "lathe cycles G70-G72"},
       {"ncfiles/lathe_pawn.ngc", "lathe radius/diameter mode G7/G8"},
       {"millturn/example.ngc", "lathe radius/diameter mode G7/G8"},
-      {"ncfiles/gridprobe.ngc", "probing G38.x"},
-      {"ncfiles/smartprobe.ngc", "probing G38.x"},
-      {"ncfiles/x-trim.ngc", "probing G38.x (in the touchoff subroutine)"},
-      {"ncfiles/mmount.ngc",
-       "rigid tapping G33.1 (its canned cycles and cutter compensation before it match)"},
+      {"ncfiles/x-trim.ngc", "M66 (wait on input) in the touchoff subroutine"},
       {"ncfiles/systems.ngc", "quadratic B-spline G5.1"},
-      {"nc_files/tcdemo.ngc", "quadratic B-spline G5.1"},
-      {"ncfiles/threading.ngc", "spindle-synchronized motion G33"}};
+      {"nc_files/tcdemo.ngc", "quadratic B-spline G5.1"}};
   return kList;
 }
 
@@ -269,6 +264,26 @@ TEST(Rs274Oracle, TappingAndBackBoringErrorsAtTheSameLine) {
       "M3\nG81 X1 Z-3 R2\nG87 X2 I1 J1 K1 (R of another cycle)",
   };
   expect_refused_at_the_same_line(*o, "tap_errors", "G21 F100 S500\nG0 X-5 Y-5 Z10\n", kCases);
+}
+
+// Spindle-synchronised motion and probing (docs/gcode.md): the programs
+// rs274 refuses, refused by truecut at the same line.
+TEST(Rs274Oracle, SyncMotionAndProbingErrorsAtTheSameLine) {
+  REQUIRE_ORACLE(o);
+  static const char* kCases[] = {
+      "M3\nG33 Z-3 (no K)",
+      "M3\nG33.1 Z-3 K1 F100 (F with G33.1)",
+      "M5\nG33 Z-3 K1 (spindle stopped)",
+      "M5\nG33.1 Z-3 K1 (spindle stopped in G33.1)",
+      "M3\nG33 K1 (no axis word)",
+      "M3\nG41.1 D1 G1 X10\nG33 Y-5 K1 (under cutter compensation)",
+      "M3\nG33 Z-3 K1\nZ-4 (K does not carry over)",
+      "G38.2 Z5 (start is the probe point)",
+      "G38.2 Z-3 F0 (zero feed)",
+      "G41.1 D1 G1 X10\nG38.2 Y-5 (under cutter compensation)",
+      "G38.6 Z-3 (no such probe)",
+  };
+  expect_refused_at_the_same_line(*o, "sync_errors", "G21 F100 S500\nG0 X-5 Y-5 Z5\n", kCases);
 }
 
 // Random profiles under G41/G42 in G17 and G18 (lines, R and I/J/K arcs,
