@@ -152,9 +152,18 @@ void BlockExecutor::comments() {
     out_.emit(Message{substitute_parameters(text.substr(text.find(',') + 1))});
     return;
   }
+  // The log file: canonical calls, as rs274 makes them (the text after the
+  // comma as written; LOG replaces parameters like DEBUG).
+  const std::string after_comma = text.substr(text.find(',') + 1);
+  if (low.rfind("logopen,", 0) == 0) return out_.emit(LogFile{LogFile::kOpen, after_comma});
+  if (low.rfind("logappend,", 0) == 0) return out_.emit(LogFile{LogFile::kAppend, after_comma});
+  if (low == "logclose") return out_.emit(LogFile{LogFile::kClose, {}});
+  if (low.rfind("log,", 0) == 0)
+    return out_.emit(LogFile{LogFile::kLine, substitute_parameters(after_comma)});
   // rs274 prints these itself (not as canonical calls); they move nothing.
-  static const char* kSilent[] = {"print,",   "log,",      "logopen,",   "logappend,",
-                                  "logclose", "probeopen", "probeclose", "py,"};
+  // (PROBEOPEN file) and (PROBECLOSE) stay comments, as rs274 prints them:
+  // truecut writes no probe file.
+  static const char* kSilent[] = {"print,", "py,"};
   for (const char* p : kSilent)
     if (low.rfind(p, 0) == 0) return;
   out_.emit(Comment{trim_left(text)});
@@ -644,12 +653,14 @@ void BlockExecutor::check_feed(int column) const {
 void BlockExecutor::check_unused_words(int motion_code) const {
   const bool arc = motion_code == 20 || motion_code == 30;
   const bool cycle = is_canned_cycle(motion_code);
-  const bool dwell_cycle =
-      motion_code == 820 || motion_code == 860 || motion_code == 880 || motion_code == 890;
+  const bool dwell_cycle = motion_code == 740 || motion_code == 820 || motion_code == 840 ||
+                           motion_code == 860 || motion_code == 880 || motion_code == 890;
   const bool peck_cycle = motion_code == 730 || motion_code == 830;
   const int nm = codes_.g[0];
   for (char l : {'i', 'j', 'k', 'r'})
-    if (b_->has(l) && !arc && !(l == 'r' && (nm == 100 || cycle))) {
+    if (b_->has(l) && !arc && !(l == 'r' && (nm == 100 || cycle)) &&
+        !(l != 'r' && motion_code == 870) &&
+        !(l == 'k' && (motion_code == 330 || motion_code == 331))) {
       if (cycle)
         fail(column_of(l), std::string(1, static_cast<char>(std::toupper(l))) +
                                " word in a canned cycle (only G87 uses I, J, K)");
@@ -659,7 +670,7 @@ void BlockExecutor::check_unused_words(int motion_code) const {
   if (b_->has('p') && !arc && !dwell_cycle && nm != 40 && nm != 100 &&
       codes_.g[group(GGroup::kPathControl)] != 640)
     fail(column_of('p'),
-         "P word with no G code that uses it (G4, G10, G64, G2/G3, G82/G86/G88/G89)");
+         "P word with no G code that uses it (G4, G10, G64, G2/G3, G74/G82/G84/G86/G88/G89)");
   if (b_->has('q') && !peck_cycle && codes_.g[group(GGroup::kPathControl)] != 640 &&
       codes_.m[group(MGroup::kToolChange)] != 610)
     fail(column_of('q'), "Q word with no code that uses it (G64, M61, G73/G83)");
@@ -728,6 +739,14 @@ void BlockExecutor::motion() {
     polar_point(x, y);
     target[0] = s_.to_machine(0, x) + s_.g5x_mm[0] + s_.g92_mm[0] + s_.tool_offset_mm[0];
     target[1] = s_.to_machine(1, y) + s_.g5x_mm[1] + s_.g92_mm[1] + s_.tool_offset_mm[1];
+  }
+  if (code == 330 || code == 331) {
+    sync_motion(code, target, motion_column ? motion_column : 1, axis_words);
+    return;
+  }
+  if (code >= 382 && code <= 385) {
+    probe(code, target, motion_column ? motion_column : 1, axis_words);
+    return;
   }
   if (code == 20 || code == 30) {
     arc(code == 20, target);

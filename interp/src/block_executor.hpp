@@ -13,6 +13,7 @@
 #include "interp_state.hpp"
 #include "modal_groups.hpp"
 #include "parameters.hpp"
+#include "truecut/interp/probe.hpp"
 #include "truecut/interp/tool_table.hpp"
 
 namespace truecut::interp {
@@ -27,6 +28,8 @@ class BlockExecutor {
   BlockExecutor(InterpState& state, Parameters& params, const ToolTable& tools, Emitter& out)
       : s_(state), params_(params), tools_(tools), out_(out) {}
 
+  // Answers the probing moves; null: standalone_probe.
+  void set_probe(const ProbeFunction* probe) { probe_ = probe; }
   // Emits the calls LinuxCNC makes before the first block.
   void start_program();
   // Returns true when the block ends the program (M2, M30).
@@ -64,6 +67,9 @@ class BlockExecutor {
   Axes6 move_base() const;  // where incremental and missing axis words count from
   void arc(bool clockwise, const Axes6& target);
   void canned_cycle(int code, int column);  // canned_cycles.cpp
+  // G33 G33.1 (sync_motion.cpp) and G38.2-G38.5 (probing.cpp) to `target`.
+  void sync_motion(int code, const Axes6& target, int column, bool axis_words);
+  void probe(int code, const Axes6& target, int column, bool axis_words);
   // Cutter radius compensation (cutter_comp.cpp).
   void comp_on(int code);  // G41 G42 G41.1 G42.1
   void comp_off();         // G40
@@ -113,6 +119,7 @@ class BlockExecutor {
   bool axes_used_ = false;               // axis words consumed by G10/G28/G30/G92
   Axes6 last_program_position_;          // end of the last move as emitted
   std::vector<SavedModal> saved_modal_;  // by call level
+  const ProbeFunction* probe_ = nullptr;
 };
 
 }  // namespace truecut::interp

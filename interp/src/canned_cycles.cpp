@@ -1,6 +1,6 @@
-// The canned cycles G73, G81-G83, G85, G86, G88 and G89 as LinuxCNC 2.9's
-// interpreter runs them (docs/gcode.md, "Canned cycles"): each block expands
-// into rapids, feeds, dwells and spindle calls in the selected plane.
+// The canned cycles G73, G74, G81-G89 as LinuxCNC 2.9's interpreter runs
+// them (docs/gcode.md, "Canned cycles"): each block expands into rapids,
+// feeds, dwells and spindle calls in the selected plane.
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -87,14 +87,18 @@ void BlockExecutor::canned_cycle(int code, int column) {
     fail(column, name + " needs " + upper(lc) + " (the hole bottom) on its first block");
 
   const bool dwells = code == 820 || code == 860 || code == 880 || code == 890;
+  // The tapping cycles dwell at the bottom for P, or the last cycle's P
+  // (any cycle's, 0 at first), as rs274 does.
+  const bool taps = code == 740 || code == 840;
   const bool pecks = code == 730 || code == 830;
   double dwell = cy.p, peck = cy.q;
-  if (dwells) {
+  if (dwells || taps) {
     if (b_->has('p'))
       dwell = b_->value('p');
-    else if (!same)
+    else if (!same && dwells)
       fail(column, name + " needs P (the dwell in seconds)");
-    if (dwell < 0) fail(column_of('p'), "dwell time P must not be negative");
+    if (dwell < 0)
+      fail(b_->has('p') ? column_of('p') : column, "dwell time P must not be negative");
   }
   if (pecks) {
     if (b_->has('q'))
@@ -104,8 +108,35 @@ void BlockExecutor::canned_cycle(int code, int column) {
     if (peck <= 0)
       fail(b_->has('q') ? column_of('q') : column, "Q (the peck depth) must be greater than zero");
   }
-  if ((code == 860 || code == 880) && s_.spindle == 0)
-    fail(column, name + " needs the spindle turning (M3 or M4)");
+  if ((code == 860 || code == 870 || code == 880 || taps) && s_.spindle == 0)
+    fail(column, name + " needs the spindle turning (" +
+                     (code == 740   ? "M4"
+                      : code == 840 ? "M3"
+                                    : "M3 or M4") +
+                     ")");
+  // rs274 2.9 feeds a G18/G19 tap to a point with its axes mixed up (it
+  // passes the hole's coordinates to the feed in the wrong order): refused
+  // rather than copied.
+  if (taps && s_.plane != Plane::kXY)
+    fail(column, name +
+                     " (tapping) outside the XY plane (G17): LinuxCNC 2.9 feeds it to the "
+                     "wrong point in G18 and G19");
+  if (code == 740 && s_.spindle > 0)
+    fail(column, "G74 (left-hand tapping) with the spindle turning clockwise: program M4");
+  if (code == 840 && s_.spindle < 0)
+    fail(column, "G84 (right-hand tapping) with the spindle turning counterclockwise: program M3");
+  // G87: the offset of the entry point along the plane's axes (I J K of
+  // those axes, always incremental) and the top of the back bore (the
+  // normal axis' letter: K in G17).
+  double ijk[3] = {cy.ijk[0], cy.ijk[1], cy.ijk[2]};
+  if (code == 870)
+    for (int i = 0; i < 3; ++i) {
+      const char l = static_cast<char>('i' + i);
+      if (b_->has(l))
+        ijk[i] = b_->value(l);
+      else if (!same)
+        fail(column, "G87 needs " + upper(l) + " on its first block");
+    }
 
   Axes6 at = s_.program_position();
   // The initial level: where the normal axis was when this run of cycles
@@ -129,6 +160,8 @@ void BlockExecutor::canned_cycle(int code, int column) {
     r = r_word;
     bottom = bottom_word;
   }
+  // G87's back-bore top: absolute in G90, from the bottom in G91.
+  const double middle = s_.incremental ? bottom + ijk[ic] : ijk[ic];
   if (r < bottom)
     fail(b_->has('r') ? column_of('r') : column,
          "R (the retract plane, " + number(r) + ") is below the hole bottom " + upper(lc) + " (" +
@@ -225,6 +258,44 @@ void BlockExecutor::canned_cycle(int code, int column) {
         out_.emit(Dwell{dwell});
         move(false, a, b, clear);
         break;
+      case 740:
+      case 840: {
+        // Overrides off, feed in, reverse, dwell, feed out, restore.
+        const bool right_hand = code == 840;
+        out_.emit(FeedOverride{false});
+        out_.emit(SpeedOverride{false});
+        move(false, a, b, bottom);
+        out_.emit(StopSpindle{});
+        out_.emit(StartSpindle{!right_hand});
+        out_.emit(Dwell{dwell});
+        move(false, a, b, clear);
+        out_.emit(StopSpindle{});
+        out_.emit(StartSpindle{right_hand});
+        out_.emit(FeedOverride{true});
+        out_.emit(SpeedOverride{true});
+        break;
+      }
+      case 870: {
+        // Oriented through the hole at the offset point, back bore upward
+        // from the bottom to `middle` and down again, out the same way.
+        const bool cw = s_.spindle > 0;
+        const double oa = a + ijk[ia], ob = b + ijk[ib];
+        move(true, oa, ob, r);
+        out_.emit(StopSpindle{});
+        out_.emit(OrientSpindle{0, cw});
+        move(true, oa, ob, bottom);
+        move(true, a, b, bottom);
+        out_.emit(StartSpindle{cw});
+        move(false, a, b, middle);
+        move(false, a, b, bottom);
+        out_.emit(StopSpindle{});
+        out_.emit(OrientSpindle{0, cw});
+        move(true, oa, ob, bottom);
+        move(true, oa, ob, clear);
+        move(true, a, b, clear);
+        out_.emit(StartSpindle{cw});
+        break;
+      }
       default:
         break;
     }
@@ -236,7 +307,8 @@ void BlockExecutor::canned_cycle(int code, int column) {
   cy.last_code = code;
   cy.r = r_word;
   cy.bottom = bottom_word;
-  if (dwells) cy.p = dwell;
+  if (dwells || taps) cy.p = dwell;
+  if (code == 870) std::copy(ijk, ijk + 3, cy.ijk);
   if (pecks) cy.q = peck;
 }
 

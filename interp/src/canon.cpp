@@ -12,6 +12,12 @@ const char* call_name(const CanonOp& op) {
         if constexpr (std::is_same_v<T, StraightFeed>) return "STRAIGHT_FEED";
         if constexpr (std::is_same_v<T, ArcFeed>) return "ARC_FEED";
         if constexpr (std::is_same_v<T, Dwell>) return "DWELL";
+        if constexpr (std::is_same_v<T, SpeedFeedSync>)
+          return c.on ? "START_SPEED_FEED_SYNC" : "STOP_SPEED_FEED_SYNCH";
+        if constexpr (std::is_same_v<T, RigidTap>) return "RIGID_TAP";
+        if constexpr (std::is_same_v<T, ProbeSwitch>)
+          return c.on ? "TURN_PROBE_ON" : "TURN_PROBE_OFF";
+        if constexpr (std::is_same_v<T, StraightProbe>) return "STRAIGHT_PROBE";
         if constexpr (std::is_same_v<T, SetFeedRate>) return "SET_FEED_RATE";
         if constexpr (std::is_same_v<T, SetFeedMode>) return "SET_FEED_MODE";
         if constexpr (std::is_same_v<T, SelectPlane>) return "SELECT_PLANE";
@@ -30,6 +36,11 @@ const char* call_name(const CanonOp& op) {
         if constexpr (std::is_same_v<T, StartSpindle>)
           return c.clockwise ? "START_SPINDLE_CLOCKWISE" : "START_SPINDLE_COUNTERCLOCKWISE";
         if constexpr (std::is_same_v<T, StopSpindle>) return "STOP_SPINDLE_TURNING";
+        if constexpr (std::is_same_v<T, OrientSpindle>) return "ORIENT_SPINDLE";
+        if constexpr (std::is_same_v<T, FeedOverride>)
+          return c.enabled ? "ENABLE_FEED_OVERRIDE" : "DISABLE_FEED_OVERRIDE";
+        if constexpr (std::is_same_v<T, SpeedOverride>)
+          return c.enabled ? "ENABLE_SPEED_OVERRIDE" : "DISABLE_SPEED_OVERRIDE";
         if constexpr (std::is_same_v<T, SetSpindleMode>) return "SET_SPINDLE_MODE";
         if constexpr (std::is_same_v<T, Coolant>) {
           if (c.kind == Coolant::kMist) return c.on ? "MIST_ON" : "MIST_OFF";
@@ -37,6 +48,19 @@ const char* call_name(const CanonOp& op) {
         }
         if constexpr (std::is_same_v<T, Comment>) return "COMMENT";
         if constexpr (std::is_same_v<T, Message>) return "MESSAGE";
+        if constexpr (std::is_same_v<T, LogFile>) {
+          switch (c.kind) {
+            case LogFile::kOpen:
+              return "LOGOPEN";
+            case LogFile::kAppend:
+              return "LOGAPPEND";
+            case LogFile::kClose:
+              return "LOGCLOSE";
+            case LogFile::kLine:
+              break;
+          }
+          return "LOG";
+        }
         if constexpr (std::is_same_v<T, ProgramStop>)
           return c.optional ? "OPTIONAL_PROGRAM_STOP" : "PROGRAM_STOP";
         if constexpr (std::is_same_v<T, PalletShuttle>) return "PALLET_SHUTTLE";

@@ -37,10 +37,9 @@ enum class MGroup {
 constexpr int kBsplineCode = 90010;
 constexpr int kCsplineCode = 90020;
 
-// G73, G81-G83, G85, G86, G88, G89 (the canned cycles truecut runs).
+// G73, G74, G81-G89 (the canned cycles truecut runs).
 constexpr bool is_canned_cycle(int code) {
-  return code == 730 || code == 810 || code == 820 || code == 830 || code == 850 || code == 860 ||
-         code == 880 || code == 890;
+  return code == 730 || code == 740 || (code >= 810 && code <= 890 && code % 10 == 0);
 }
 
 // Per-block result of the checks: the code of each group or -1.

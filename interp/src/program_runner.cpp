@@ -81,6 +81,7 @@ ProgramRunner::ProgramRunner(const InterpreterOptions& options, CanonProgram& ou
       out_(out),
       emitter_(out, state_, &options.on_call),
       executor_(state_, params_, options.tools, emitter_) {
+  if (options.probe) executor_.set_probe(&options_.probe);
   params_.set(kDebugSwitch, 1.0);
   params_.predefined = [this](std::string_view name) {
     return predefined_parameter(state_, params_, name);

@@ -62,8 +62,14 @@ std::string format_rs274(const CanonOp& op, const FormatOptions& options) {
       [&](const auto& c) -> std::string {
         using T = std::decay_t<decltype(c)>;
         std::string args;
-        if constexpr (std::is_same_v<T, StraightTraverse> || std::is_same_v<T, StraightFeed>) {
+        if constexpr (std::is_same_v<T, StraightTraverse> || std::is_same_v<T, StraightFeed> ||
+                      std::is_same_v<T, StraightProbe>) {
           args = p.axes(c.end);
+        } else if constexpr (std::is_same_v<T, RigidTap>) {
+          args = p.num(c.end.x) + ", " + p.num(c.end.y) + ", " + p.num(c.end.z);
+        } else if constexpr (std::is_same_v<T, SpeedFeedSync>) {
+          // rs274: "%f,0" (the pitch and "not CSS"); nothing when it stops.
+          if (c.on) args = Printer::fixed(c.units_per_rev, options.decimals + 2) + ",0";
         } else if constexpr (std::is_same_v<T, ArcFeed>) {
           const path_geometry::PlaneAxes axes = path_geometry::plane_axes(c.plane);
           const int first = axes.first, second = axes.second, axis = axes.normal;
@@ -108,10 +114,17 @@ std::string format_rs274(const CanonOp& op, const FormatOptions& options) {
           args = "0, " + p.num(c.rpm);
         } else if constexpr (std::is_same_v<T, StartSpindle> || std::is_same_v<T, StopSpindle>) {
           args = "0";
+        } else if constexpr (std::is_same_v<T, SpeedOverride>) {
+          args = "0";
+        } else if constexpr (std::is_same_v<T, OrientSpindle>) {
+          // LinuxCNC's CANON_DIRECTION: 2 clockwise, 3 counter-clockwise.
+          args = "0, " + p.num(c.degrees) + ", " + (c.clockwise ? "2" : "3");
         } else if constexpr (std::is_same_v<T, SetSpindleMode>) {
           args = "0 " + p.num(c.css_max_rpm);
         } else if constexpr (std::is_same_v<T, Comment> || std::is_same_v<T, Message>) {
           args = "\"" + c.text + "\"";
+        } else if constexpr (std::is_same_v<T, LogFile>) {
+          if (c.kind != LogFile::kClose) args = "\"" + c.text + "\"";
         } else if constexpr (std::is_same_v<T, SetFeedReference>) {
           args = "CANON_XYZ";
         } else if constexpr (std::is_same_v<T, SetTcp>) {

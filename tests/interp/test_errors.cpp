@@ -44,8 +44,6 @@ INSTANTIATE_TEST_SUITE_P(Words, BadInput,
                                            Case{"G0 X1 X2\nM2\n", 1, 7, "two X words"},
                                            Case{"G19\nG41 G0 X1\nM2\n", 2, 1,
                                                 "only in the XY (G17) and XZ (G18) planes"},
-                                           Case{"G87 X1 Z-1 R1 I1 J0 K1\nM2\n", 1, 1,
-                                                "back boring canned cycle"},
                                            Case{"G0 X1 D3\nM2\n", 1, 7, "D word with no G41"},
                                            Case{"G1.3 X1\nM2\n", 1, 1, "unknown G code"},
                                            Case{"G0 X\nM2\n", 1, 4, "has no value"},
@@ -137,8 +135,32 @@ INSTANTIATE_TEST_SUITE_P(
         // The sticky R and Z belong to the cycle that set them.
         Case{"G0 Z10\nG81 X1 Z-3 R2 F100\nG82 X2 P1\nM2\n", 3, 1, "G82 needs R"},
         Case{"G0 Z10\nG81 X1 Z-3 R2 F100\nG0 X0\nG81 X2\nM2\n", 4, 1, "G81 needs R"},
-        Case{"G0 Z10\nG84 X1 Z-3 R2 F100\nM2\n", 2, 1, "G84 right-hand tapping canned cycle"},
-        Case{"G0 Z10\nG74 X1 Z-3 R2 F100\nM2\n", 2, 1, "G74 left-hand tapping canned cycle"}),
+        // Tapping and back boring (G74 G84 G87).
+        Case{"G0 Z10\nG84 X1 Z-3 R2 F100\nM2\n", 2, 1, "G84 needs the spindle turning (M3)"},
+        Case{"M3 S100\nG0 Z10\nG74 X1 Z-3 R2 F100\nM2\n", 3, 1,
+             "G74 (left-hand tapping) with the spindle turning clockwise"},
+        Case{"M4 S100\nG0 Z10\nG84 X1 Z-3 R2 F100\nM2\n", 3, 1,
+             "G84 (right-hand tapping) with the spindle turning counterclockwise"},
+        Case{"M3 S100\nG18 G0 Y10\nG84 X1 Z1 Y-3 R2 F100\nM2\n", 3, 1,
+             "G84 (tapping) outside the XY plane (G17)"},
+        Case{"M4 S100\nG19 G0 X10\nG74 Y1 Z1 X-3 R2 F100\nM2\n", 3, 1,
+             "G74 (tapping) outside the XY plane (G17)"},
+        Case{"M3 S100\nG0 Z10\nG84 X1 Z-3 R2 P-1 F100\nM2\n", 3, 15,
+             "dwell time P must not be negative"},
+        Case{"G0 Z10\nG87 X1 Z-3 R2 I1 J0 K1 F100\nM2\n", 2, 1, "G87 needs the spindle turning"},
+        Case{"M3 S100\nG0 Z10\nG87 X1 Z-3 R2 I1 K1 F100\nM2\n", 3, 1, "G87 needs J"},
+        Case{"M3 S100\nG0 Z10\nG87 X1 Z-3 R2 I1 J1 F100\nM2\n", 3, 1, "G87 needs K"},
+        Case{"M3 S100\nG0 Z10\nG81 X1 Z-3 R2 F100\nG87 X2 I1 J1 K1\nM2\n", 4, 1, "G87 needs R"},
+        Case{"M3 S100\nG0 Z10\nG84 X1 Z-3 R2 I1 F100\nM2\n", 3, 15, "I word in a canned cycle"},
+        // Spindle-synchronised motion and probing: truecut's own refusals.
+        Case{"M3 S100\nG33 Z-3 K0\nM2\n", 2, 9, "K (the distance per spindle revolution) must be"},
+        Case{"M3 S100\nG33.1 Z-3 K-1\nM2\n", 2, 11, "must be greater than 0"},
+        Case{"M3 S100\nG33.1 Z-3 A5 K1\nM2\n", 2, 11, "A word with G33.1"},
+        Case{"G0 Z5\nG93 G38.2 Z-3 F1\nM2\n", 2, 5, "G38.2 with inverse-time feed (G93)"},
+        // rs274 runs Fanuc-style subprograms; truecut refuses them by name.
+        Case{"G0 Z5\nM98 P100\nM2\nO100\nG1 X1 F100\nM99\n", 2, 1,
+             "M98 Fanuc-style subprogram call (M98; use O-word sub/call) is not supported"},
+        Case{"G0 Z5\nM99\n", 2, 1, "Fanuc-style subprogram return (M99"}),
     case_name);
 
 // Polar coordinates (docs/gcode.md "Polar coordinates"): the programs

@@ -42,8 +42,9 @@ struct Builder {
   double tcp_tool_length_mm = 0;  // tool length the TCP position `cur` refers to
   Vec5 cur{};                     // planning-space position (joint space at start)
   double feed_upm = 0;
-  double spindle_rpm = 0;   // last S word
-  bool spindle_on = false;  // M3/M4 until M5
+  double unsynced_feed_upm = 0;  // F while G33/G33.1 feed at K per revolution
+  double spindle_rpm = 0;        // last S word
+  bool spindle_on = false;       // M3/M4 until M5
   PathMode mode = PathMode::kContinuous;
   double tolerance_mm = 0;
 
@@ -319,7 +320,7 @@ struct Builder {
       return;
     }
     if (std::holds_alternative<Comment>(c.op) || std::holds_alternative<Message>(c.op) ||
-        std::holds_alternative<SetFeedMode>(c.op))
+        std::holds_alternative<LogFile>(c.op) || std::holds_alternative<SetFeedMode>(c.op))
       return;  // do not interrupt a spline
     flush_spline();
     if (const auto* t = std::get_if<StraightTraverse>(&c.op)) {
@@ -330,6 +331,29 @@ struct Builder {
       ++out.programmed_moves;
     } else if (const auto* d = std::get_if<Dwell>(&c.op)) {
       add_dwell(d->seconds, ctx);
+    } else if (const auto* sync = std::get_if<SpeedFeedSync>(&c.op)) {
+      // G33/G33.1: K per revolution at the last S (a spindle at constant
+      // speed), the programmed F again afterwards.
+      if (sync->on) {
+        unsynced_feed_upm = feed_upm;
+        feed_upm = sync->units_per_rev * spindle_rpm;
+      } else {
+        feed_upm = unsynced_feed_upm;
+      }
+    } else if (const auto* tap = std::get_if<RigidTap>(&c.op)) {
+      // In to the end, reverse, out to where the tap started.
+      rebase(ctx);
+      const Vec5 start = cur;
+      add_line(to_planning(tap->end, ctx), ctx, false);
+      stop_here();
+      add_line(start, ctx, false);
+      stop_here();
+    } else if (const auto* probe = std::get_if<StraightProbe>(&c.op)) {
+      // To where the probe tripped, then to where the machine stopped.
+      add_line(to_planning(probe->trip, ctx), ctx, false);
+      stop_here();
+      add_line(to_planning(probe->stopped, ctx), ctx, false);
+      stop_here();
     } else if (const auto* mc = std::get_if<SetMotionControlMode>(&c.op)) {
       mode = mc->mode;
       tolerance_mm = mc->tolerance * scale(ctx);

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "line_words.hpp"
+#include "modal_groups.hpp"
 #include "neighbours.hpp"
 #include "raw_lines.hpp"
 #include "self_check.hpp"
@@ -230,7 +231,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
                          "writes compensated moves out one by one and cannot do that for "
                          "subroutines, loops or conditions");
   bool after_comp = false;  // the last move was compensated
-  // A canned cycle (G73, G81-G89) expands into several moves on one line:
+  // A canned cycle (G73, G74, G81-G89) expands into several moves on one line:
   // the rewrite cannot keep the cycle word and refuses it by name. The
   // motion mode of a line is followed through the source text in order.
   auto refuse_canned_cycle = [&](const std::string& file, int line) {
@@ -239,7 +240,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       const int code = motion_code_of_line(raw[i - 1].content);
       if (code >= 0) mode = code, mode_line = i;
     }
-    if (mode != 730 && !(mode >= 810 && mode <= 890)) return;
+    if (!is_canned_cycle(mode)) return;
     const std::string g = "G" + std::to_string(mode / 10);
     throw GcodeError(
         {file, line, 0},

@@ -51,6 +51,32 @@ struct ArcFeed {
 struct Dwell {
   double seconds = 0;
 };
+// G33/G33.1: the moves between on and off advance `units_per_rev` (K, program
+// units) per spindle revolution instead of at F.
+struct SpeedFeedSync {
+  bool on = false;
+  double units_per_rev = 0;
+};
+// G33.1: feed to `end` synchronised with the spindle, reverse it and come
+// back to where the tap started (the position does not change). rs274
+// prints X Y Z only; A B C stay where they are.
+struct RigidTap {
+  Axes6 end;
+};
+// G38.2-G38.5 between TURN_PROBE_ON and TURN_PROBE_OFF: a straight feed to
+// `end` that stops where the probe trips (2, 4: toward the work, error if it
+// does not; 3, 5: no error) or loses contact (4, 5).
+struct ProbeSwitch {
+  bool on = false;
+};
+struct StraightProbe {
+  Axes6 end;     // as programmed (rs274 prints it)
+  int kind = 2;  // G38.kind
+  // What the probe reported (InterpreterOptions::probe): where it tripped
+  // (`end` when it did not) and where the machine stopped; the next move
+  // starts there.
+  Axes6 trip, stopped;
+};
 
 // Feed and motion settings.
 // Feed in program units per minute. In inverse-time mode (G93) the
@@ -110,6 +136,20 @@ struct StartSpindle {
   bool clockwise = true;
 };
 struct StopSpindle {};
+// Stops the spindle at an angle (G87 before it enters and leaves the hole);
+// `clockwise`: the direction it turned in, as rs274 passes it on.
+struct OrientSpindle {
+  double degrees = 0;
+  bool clockwise = true;
+};
+// The feed and spindle speed overrides switched off and on again around the
+// tapping cycles G74/G84, as LinuxCNC does.
+struct FeedOverride {
+  bool enabled = true;
+};
+struct SpeedOverride {
+  bool enabled = true;
+};
 struct SetSpindleMode {  // G97 (the only spindle mode supported)
   double css_max_rpm = 0;
 };
@@ -124,6 +164,12 @@ struct Comment {
 };
 struct Message {  // (MSG, ...)
   std::string text;
+};
+// (LOGOPEN,file) (LOGAPPEND,file) (LOGCLOSE) (LOG,text): LinuxCNC's log
+// file, as canonical calls (truecut writes no file; a consumer may).
+struct LogFile {
+  enum Kind { kOpen, kAppend, kClose, kLine } kind = kLine;
+  std::string text;  // file name, or the line with #n/#<name> replaced
 };
 struct ProgramStop {  // M0, or M1 when optional
   bool optional = false;
@@ -144,12 +190,14 @@ struct SetSplineMode {  // BSPLINE, CSPLINE, or back to G1
 };
 
 using CanonOp =
-    std::variant<StraightTraverse, StraightFeed, ArcFeed, Dwell, SetFeedRate, SetFeedMode,
-                 SelectPlane, UseLengthUnits, SetMotionControlMode, SetNaivecamTolerance,
-                 SetG5xOffset, SetG92Offset, SetXYRotation, UseToolLengthOffset, SelectTool,
-                 StartChange, ChangeTool, ChangeToolNumber, SetSpindleSpeed, StartSpindle,
-                 StopSpindle, SetSpindleMode, Coolant, Comment, Message, ProgramStop, PalletShuttle,
-                 ProgramEnd, Finish, SetFeedReference, OnReset, SetTcp, SetSplineMode>;
+    std::variant<StraightTraverse, StraightFeed, ArcFeed, Dwell, SpeedFeedSync, RigidTap,
+                 ProbeSwitch, StraightProbe, SetFeedRate, SetFeedMode, SelectPlane, UseLengthUnits,
+                 SetMotionControlMode, SetNaivecamTolerance, SetG5xOffset, SetG92Offset,
+                 SetXYRotation, UseToolLengthOffset, SelectTool, StartChange, ChangeTool,
+                 ChangeToolNumber, SetSpindleSpeed, StartSpindle, StopSpindle, OrientSpindle,
+                 FeedOverride, SpeedOverride, SetSpindleMode, Coolant, Comment, Message, LogFile,
+                 ProgramStop, PalletShuttle, ProgramEnd, Finish, SetFeedReference, OnReset, SetTcp,
+                 SetSplineMode>;
 
 // What was in force when a call was made.
 struct CallContext {

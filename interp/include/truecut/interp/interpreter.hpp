@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "truecut/interp/canon.hpp"
+#include "truecut/interp/probe.hpp"
 #include "truecut/interp/tool_table.hpp"
 
 namespace truecut::interp {
@@ -35,6 +36,10 @@ struct InterpreterOptions {
   // named so far (CanonProgram::files), and CanonProgram::calls stays empty:
   // a program of any length in constant memory.
   CanonSink on_call;
+  // Answers the probing moves G38.2-G38.5. Unset: standalone_probe (as
+  // LinuxCNC's rs274: never trips, no error). When set, a G38.2 or G38.4
+  // whose probe does not trip is an error at its line, as on LinuxCNC.
+  ProbeFunction probe;
 };
 
 class Interpreter {
