@@ -192,12 +192,7 @@ TEST(ToolRotation, TiltedAxisIsTheFieldsDefinitionAndNearlyTheRotation) {
 // turns by exactly the rotation (its part across the axis), and X Y Z put
 // the TCP where the translation says.
 TEST(ToolRotation, JointModeTurnsTheToolAxisByThePlantedRotation) {
-  rt::AcTrtParams k;
-  k.x_rot_point_mm = 5;
-  k.y_rot_point_mm = -3;
-  k.z_rot_point_mm = 20;
-  k.z_offset_mm = -12;
-  k.tool_length_mm = 50;
+  rt::AcTrtParams k = joint_test_kinematics();
   rt::comp::JointLimits limits;
   // At A = 4 deg a tilt sideways needs C to turn by tilt / sin A: 1.2 deg.
   limits.max_a_correction_deg = limits.max_c_correction_deg = 10.0;
@@ -351,22 +346,15 @@ TEST(ToolRotationComp, JointModeGivesThePlantedTiltThroughAAndC) {
   const auto path = write_field(scratch_dir() / "rot.tcf", rotating_spec());
   const rt::CorrectionField field = make_field(rotating_spec());
   Rig r("field=" + path.string() + " mode=joint",
-        "setp c.x-rot-point 5\nsetp c.y-rot-point -3\nsetp c.z-rot-point 20\n"
-        "setp c.z-offset -12\nsetp c.tool-offset 50\nsetp c.fade-time 0\n"
-        "setp c.max-rate 1e9\nsetp c.max-accel 0\nsetp c.max-jerk 0\n"
-        "setp c.max-tilt-rate 1e9\nsetp c.max-tilt-accel 0\nsetp c.max-tilt-jerk 0\n"
-        "setp c.tool 1\n");
-  rt::AcTrtParams k;
-  k.x_rot_point_mm = 5;
-  k.y_rot_point_mm = -3;
-  k.z_rot_point_mm = 20;
-  k.z_offset_mm = -12;
-  k.tool_length_mm = 50;
+        std::string(kJointTestKinematicsHal) +
+            "setp c.fade-time 0\nsetp c.max-rate 1e9\nsetp c.max-accel 0\nsetp c.max-jerk 0\n"
+            "setp c.max-tilt-rate 1e9\nsetp c.max-tilt-accel 0\nsetp c.max-tilt-jerk 0\n"
+            "setp c.tool 1\n");
+  const rt::AcTrtParams k = joint_test_kinematics();
   const rt::AcJoints j{3.0, -7.0, 60.0, 25.0, 40.0};
-  const char* names[] = {"joint-x", "joint-y", "joint-z", "joint-a", "joint-c"};
   const double v[] = {j.x_mm, j.y_mm, j.z_mm, j.a_deg, j.c_deg};
   for (int i = 0; i < 5; ++i)
-    r.set(names[i], v[i]);
+    r.set(kJointInputPins[i], v[i]);
   r.set("enable", 1.0);
   r.run(2);
   const rt::ToolPose in = rt::forward_ac(k, j);

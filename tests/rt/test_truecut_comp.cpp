@@ -242,17 +242,12 @@ TEST(TruecutComp, JointModeCorrectsThroughTheKinematics) {
   const auto path = write_field(field_path(), spec);
   const rt::CorrectionField field = make_field(spec);
   Rig r("field=" + path.string() + " mode=joint",
-        "setp c.x-rot-point 5\nsetp c.y-rot-point -3\nsetp c.z-rot-point 20\n"
-        "setp c.z-offset -12\nsetp c.tool-offset 50\nsetp c.fade-time 0\n"
-        "setp c.max-rate 1e9\nsetp c.max-accel 0\nsetp c.max-jerk 0\nsetp c.tool 1\n");
-  rt::AcTrtParams k;
-  k.x_rot_point_mm = 5;
-  k.y_rot_point_mm = -3;
-  k.z_rot_point_mm = 20;
-  k.z_offset_mm = -12;
-  k.tool_length_mm = 50;
+        std::string(kJointTestKinematicsHal) +
+            "setp c.fade-time 0\nsetp c.max-rate 1e9\nsetp c.max-accel 0\nsetp c.max-jerk 0\n"
+            "setp c.tool 1\n");
+  const rt::AcTrtParams k = joint_test_kinematics();
   const rt::AcJoints j{3.0, -7.0, 60.0, 25.0, 40.0};
-  const char* names[] = {"joint-x", "joint-y", "joint-z", "joint-a", "joint-c"};
+  const char* const* names = kJointInputPins;
   const double v[] = {j.x_mm, j.y_mm, j.z_mm, j.a_deg, j.c_deg};
   for (int i = 0; i < 5; ++i)
     r.set(names[i], v[i]);

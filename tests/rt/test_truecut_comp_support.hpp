@@ -11,6 +11,7 @@
 
 #include "test_paths.hpp"
 #include "truecut/rt/core/correction_field.hpp"
+#include "truecut/rt/core/kinematics_ac.hpp"
 #include "truecut/rt/field_file.hpp"
 #include "truecut/rt/hal.hpp"
 
@@ -32,6 +33,25 @@ inline Eigen::Vector3d synthetic_rotation(int32_t tool, double scale, const Eige
                                  -1.5e-3 * std::cos(0.12 * p.x() - 0.4 * t),
                                  1e-3 * std::sin(0.05 * p.z() + t));
 }
+
+// The A/C table-table kinematics the joint-mode tests use (pivots off the
+// origin, a tool length), and the same as `setp` lines for an instance `c`.
+inline rt::AcTrtParams joint_test_kinematics() {
+  rt::AcTrtParams k;
+  k.x_rot_point_mm = 5;
+  k.y_rot_point_mm = -3;
+  k.z_rot_point_mm = 20;
+  k.z_offset_mm = -12;
+  k.tool_length_mm = 50;
+  return k;
+}
+inline constexpr const char* kJointTestKinematicsHal =
+    "setp c.x-rot-point 5\nsetp c.y-rot-point -3\nsetp c.z-rot-point 20\n"
+    "setp c.z-offset -12\nsetp c.tool-offset 50\n";
+
+// The joint inputs of an instance `c` (x y z mm, a c deg).
+inline constexpr const char* kJointInputPins[] = {"joint-x", "joint-y", "joint-z", "joint-a",
+                                                  "joint-c"};
 
 struct FieldSpec {
   std::vector<int32_t> tools{1, 2};
