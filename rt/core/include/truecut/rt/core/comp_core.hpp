@@ -33,10 +33,10 @@ enum class Fault : int32_t {
   kFieldNotFinite = 5,  // the field evaluated to NaN/Inf
   kBadParameter = 6,    // a limit NaN/Inf or < 0, or max-rate 0: the last valid one is used
   kKinematics = 7,      // joint mode: joint A outside [a-min, a-max]
-  kBoundStep = 8,       // max-correction was lowered below the output by more
-                        // than the limits let it follow: the output stepped
-  kBoundClip = 9,       // the output reached max-correction faster than the
-                        // limits let it stop there: clipped, a limit exceeded
+  kBoundStep = 8,       // max-correction (or max-tilt) was lowered below the output
+                        // by more than the limits let it follow: the output stepped
+  kBoundClip = 9,       // the output reached max-correction (or max-tilt) faster
+                        // than the limits let it stop there: clipped, a limit exceeded
   kWrongField = 10,     // the field names another machine, part or tool set
                         // than the expected ids: not applied
   kJointLimit = 11,     // joint mode: the correction would have pushed a linear
