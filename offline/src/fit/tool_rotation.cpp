@@ -19,6 +19,10 @@ ToolRotationEstimate estimate_tool_rotation(std::span<const PlacedVector> placed
     return placed[a].sample < placed[b].sample;
   });
   const double cos_spread = std::cos(options.max_normal_spread_deg * M_PI / 180.0);
+  // Each point's height above its tip along the axis.
+  std::vector<double> height(placed.size());
+  for (std::size_t i = 0; i < placed.size(); ++i)
+    height[i] = (placed[i].point_mm - placed[i].tcp_mm).dot(placed[i].axis);
   for (std::size_t begin = 0; begin < order.size();) {
     std::size_t end = begin;
     while (end < order.size() && placed[order[end]].sample == placed[order[begin]].sample)
@@ -31,7 +35,7 @@ ToolRotationEstimate estimate_tool_rotation(std::span<const PlacedVector> placed
     for (std::size_t i = begin; i < end; ++i) {
       const PlacedVector& p = placed[order[i]];
       n += p.normal;
-      const double h = (p.point_mm - p.tcp_mm).dot(k);
+      const double h = height[order[i]];
       h_min = std::min(h_min, h);
       h_max = std::max(h_max, h);
     }
@@ -49,7 +53,7 @@ ToolRotationEstimate estimate_tool_rotation(std::span<const PlacedVector> placed
         double sh = 0, ss = 0, shh = 0, shs = 0;
         for (std::size_t i = begin; i < end; ++i) {
           const PlacedVector& p = placed[order[i]];
-          const double h = (p.point_mm - p.tcp_mm).dot(k), s = p.vector_mm.dot(n);
+          const double h = height[order[i]], s = p.vector_mm.dot(n);
           sh += h;
           ss += s;
           shh += h * h;
@@ -71,8 +75,7 @@ ToolRotationEstimate estimate_tool_rotation(std::span<const PlacedVector> placed
     out.rotations.push_back(r);
     for (std::size_t i = begin; i < end; ++i) {
       const PlacedVector& p = placed[order[i]];
-      const double h = (p.point_mm - p.tcp_mm).dot(k);
-      out.translations_mm[order[i]] = p.vector_mm - w.cross(h * k);
+      out.translations_mm[order[i]] = p.vector_mm - w.cross(height[order[i]] * k);
     }
     begin = end;
   }

@@ -230,8 +230,10 @@ inline RotaryCorrection rotary_correction(const rt::AcTrtParams& params, const r
   const double det = normal(0, 0) * normal(1, 1) - normal(0, 1) * normal(1, 0);
   double da = (normal(1, 1) * rhs[0] - normal(0, 1) * rhs[1]) / det * kDegPerRad;
   double dc = (normal(0, 0) * rhs[1] - normal(1, 0) * rhs[0]) / det * kDegPerRad;
+  // A bound that is NaN, negative or 0 lets the joint not turn.
+  auto bound_of = [](double bound) { return bound > 0.0 ? bound : 0.0; };
   auto clip = [&](double& v, double bound) {
-    const double b = bound > 0.0 ? bound : 0.0;  // NaN: 0
+    const double b = bound_of(bound);
     const double c = std::clamp(v, -b, b);
     rc.clipped = rc.clipped || c != v;
     v = c;
@@ -247,8 +249,8 @@ inline RotaryCorrection rotary_correction(const rt::AcTrtParams& params, const r
   if (ik.status == rt::AcIkStatus::kOk || ik.status == rt::AcIkStatus::kSingular) {
     // (Exact, the turns differ from the linear ones at third order; the
     // bounds stay hard.)
-    const double ba = limits.max_a_correction_deg > 0.0 ? limits.max_a_correction_deg : 0.0;
-    const double bc = limits.max_c_correction_deg > 0.0 ? limits.max_c_correction_deg : 0.0;
+    const double ba = bound_of(limits.max_a_correction_deg);
+    const double bc = bound_of(limits.max_c_correction_deg);
     da = std::clamp(ik.joints.a_deg - joints.a_deg, -ba, ba);
     dc = std::clamp(ik.joints.c_deg - joints.c_deg, -bc, bc);
   }
