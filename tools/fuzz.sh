@@ -4,7 +4,7 @@
 #   tools/fuzz.sh --cpu 3600 [TARGET...]       each target an hour of its own CPU time, however
 #                                              busy the machine (stopped with SIGINT, as a user would)
 # Builds build-fuzz/ (or $TRUECUT_FUZZ_DIR) with clang (-fsanitize=fuzzer,address,undefined),
-# seeds each target from the repository's own files, keeps what it learns in
+# seeds each target from the repository's own files (fuzz/seeds.sh), keeps what it learns in
 # build-fuzz/corpus/TARGET, what crashes in build-fuzz/findings/TARGET, and one
 # line per run (UTC time, target, CPU s, inputs run, result) in build-fuzz/fuzz-runs.tsv.
 # Exit 1 when a target found a crash, a leak or a timeout.
@@ -26,26 +26,6 @@ CC=clang CXX=clang++ cmake -S . -B "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTR
   -DTRUECUT_BUILD_TESTS=OFF -DTRUECUT_BUILD_BENCH=OFF >/dev/null
 cmake --build "$dir" -j"$(nproc)" --target $(printf 'fuzz_%s ' "${targets[@]}") >/dev/null
 
-seed() {  # seed TARGET DIR: copies the repository's own inputs for TARGET
-  local d=$2
-  case $1 in
-    gcode|expression) find examples tests/interp/corpus -name '*.ngc' -size -64k -exec cp -t "$d" {} + 2>/dev/null || true ;;
-    tool_table) find examples tests -name '*.tbl' -exec cp -t "$d" {} + 2>/dev/null || true ;;
-    mesh) find examples tests -name '*.stl' -size -256k -o -name '*.ply' -size -256k -o -name '*.xyz' -size -256k | head -50 |
-            while read -r f; do case $f in *.stl) p=0;; *.ply) p=1;; *) p=2;; esac
-              { printf "\\x$(printf %02x $p)"; cat "$f"; } > "$d/$(basename "$f")"; done ;;
-    field_file) find examples tests -name '*.tcf' -size -256k -exec cp -t "$d" {} + 2>/dev/null || true ;;
-    ini) find examples sim -name '*.ini' -exec cp -t "$d" {} + 2>/dev/null || true ;;
-    hal) find examples sim -name '*.hal' -exec cp -t "$d" {} + 2>/dev/null || true ;;
-    machine_json) cp examples/machines/*.json "$d" ;;
-    part_json) if [ -x build/truecut ]; then  # the demo's build: a real part.json
-                 build/truecut part implant --out "$dir/seed-part" >/dev/null && cp "$dir/seed-part/part.json" "$d"
-               fi ;;
-    recording) find data examples tests -name '*.csv' -size -256k | head -50 | xargs -r cp -t "$d" ;;
-  esac
-  [ -n "$(ls -A "$d")" ] || printf 'x' > "$d/empty-seed"
-}
-
 # CPU seconds (user + system) a running process has used so far.
 cpu_seconds() {
   local st
@@ -57,7 +37,7 @@ status=0
 for t in "${targets[@]}"; do
   corpus=$dir/corpus/$t findings=$dir/findings/$t
   mkdir -p "$corpus" "$findings"
-  [ -n "$(ls -A "$corpus")" ] || seed "$t" "$corpus"
+  [ -n "$(ls -A "$corpus")" ] || fuzz/seeds.sh "$t" "$corpus" build/truecut
   wall_limit=$seconds
   timeout_s=10
   # libFuzzer's per-input timeout is wall time: a run at nice 19 beside other

@@ -27,13 +27,3 @@ if [ "${1:-}" != "--sanitize" ]; then
   ctest --test-dir "$dir" --output-on-failure -j"$(nproc)" --timeout 600 -L linuxcnc
   ctest --test-dir "$dir" --output-on-failure -j"$(nproc)" --timeout 900 -L planted
 fi
-# Sanitizer half: a short fuzzing run of every reader (docs/reliability.md,
-# "Fuzzing"), about 10 minutes with its own clang build on 2 cores. A crash,
-# a sanitizer report, a leak or a timeout fails the run.
-if [ "${1:-}" = "--sanitize" ]; then
-  if command -v clang++ >/dev/null; then
-    tools/fuzz.sh 10
-  else
-    echo "test.sh: fuzzing smoke run skipped: clang++ is not installed (apt install clang libclang-rt-14-dev)" >&2
-  fi
-fi

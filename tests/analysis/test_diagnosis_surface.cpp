@@ -32,8 +32,16 @@ using truecut::test::scratch_dir;
 // Implant surface ids (docs/parts.md).
 constexpr int kXPos = 1, kXNeg = 2, kYPos = 3, kYNeg = 4, kTop = 5;
 
+// GCC defines __SANITIZE_ADDRESS__; clang (which builds the sanitizer tree
+// when installed, tools/configure.sh) answers __has_feature instead.
 #if defined(__SANITIZE_ADDRESS__)
 constexpr bool kSanitized = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+constexpr bool kSanitized = true;
+#else
+constexpr bool kSanitized = false;
+#endif
 #else
 constexpr bool kSanitized = false;
 #endif
