@@ -18,12 +18,16 @@ inline std::string_view as_text(const uint8_t* data, std::size_t size) {
   return {reinterpret_cast<const char*>(data), size};
 }
 
+// This process's folder for the files of as_file.
+inline std::filesystem::path scratch_dir() {
+  return std::filesystem::temp_directory_path() / ("truecut-fuzz-" + std::to_string(::getpid()));
+}
+
 // The bytes as a file named like `name` (its extension chooses the reader).
 inline std::filesystem::path as_file(const uint8_t* data, std::size_t size,
                                      const std::string& name) {
   static const std::filesystem::path dir = [] {
-    auto d = std::filesystem::temp_directory_path() /
-             ("truecut-fuzz-" + std::to_string(::getpid()));
+    auto d = scratch_dir();
     std::filesystem::create_directories(d);
     return d;
   }();

@@ -3,8 +3,6 @@
 // sanitizer build included, so the targets keep compiling and their inputs
 // keep passing. Exploring new inputs is tools/fuzz.sh's job (clang).
 //   fuzz_replay_TARGET FILE|FOLDER...
-#include <unistd.h>
-
 #include <algorithm>
 #include <cstdint>
 #include <cstdio>
@@ -13,6 +11,8 @@
 #include <string>
 #include <system_error>
 #include <vector>
+
+#include "fuzz_input.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size);
 
@@ -50,9 +50,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s (%zu bytes)\n", path.c_str(), bytes.size());
     LLVMFuzzerTestOneInput(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size());
   }
-  // Where fuzz_input.hpp's as_file wrote the inputs of readers that take a path.
+  // Where as_file wrote the inputs of readers that take a path.
   std::error_code ec;
-  fs::remove_all(fs::temp_directory_path() / ("truecut-fuzz-" + std::to_string(::getpid())), ec);
+  fs::remove_all(truecut::fuzz::scratch_dir(), ec);
   std::printf("%zu inputs replayed, none crashed\n", inputs.size());
   return 0;
 }
