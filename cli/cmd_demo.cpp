@@ -1,4 +1,5 @@
 // truecut demo [--part NAME|all] [--out DIR]: the closed loop end to end.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -39,6 +40,13 @@ const char* kHelp =
     "  --tolerance-um T   tolerance drawn in the report (default 20)\n"
     "  --iterations N     real-time iterations, 1 or 2 (default 2)\n"
     "  --no-rewrite       skip the G-code rewrite stage\n"
+    "  --no-adapted       benchmark004: skip the part machined with the program its\n"
+    "                     generator makes for the first field's adapted.stl\n"
+    "  --paper            also the sources' own recipes on the same scan: the node\n"
+    "                     matrix with tip placement rewritten into the program\n"
+    "                     (Denkena et al.) and the adapted model from the point\n"
+    "                     cloud (Sortino et al.; benchmark004: program regenerated,\n"
+    "                     other parts: its field in real time); docs/results.md\n"
     "  --no-ideal         skip the reference part machined on the error-free\n"
     "                     machine (machine_ideal.json, no compensation); the\n"
     "                     fields then measure errors against the nominal instead\n"
@@ -75,6 +83,8 @@ int cmd_demo(const std::vector<std::string>& argv) {
                       {"tolerance-um", true},
                       {"iterations", true},
                       {"no-rewrite", false},
+                      {"no-adapted", false},
+                      {"paper", false},
                       {"no-ideal", false},
                       {"mesh-edge", true},
                       {"stepover", true},
@@ -96,6 +106,8 @@ int cmd_demo(const std::vector<std::string>& argv) {
   o.sigma_um = a.number("sigma-um", 20.0, 5.0, 50.0);
   o.iterations = static_cast<int>(a.integer("iterations", 2, 1, 2));
   o.rewrite = !a.flag("no-rewrite");
+  o.adapted_route = !a.flag("no-adapted");
+  o.paper_routes = a.flag("paper");
   o.ideal_reference = !a.flag("no-ideal");
   o.mesh_edge_mm = a.number("mesh-edge", 0.0, 0.0, 10.0);
   o.stepover_mm = a.number("stepover", 0.0, 0.0, 10.0);
@@ -125,8 +137,12 @@ int cmd_demo(const std::vector<std::string>& argv) {
   json["truecut_demo"] = 1;
   json["scanner_sigma_um"] = o.sigma_um;
   json["tolerance_um"] = tolerance_um;
-  std::printf("%-13s %-28s %9s %9s %9s %9s %10s\n", "part", "stage", "RMS um", "max um", "P95 um",
-              "std um", "RMS cut");
+  int title_width = 28;
+  for (const auto& r : results)
+    for (const auto& st : r.stages)
+      title_width = std::max(title_width, static_cast<int>(st.title.size()));
+  std::printf("%-13s %-*s %9s %9s %9s %9s %10s\n", "part", title_width, "stage", "RMS um", "max um",
+              "P95 um", "std um", "RMS cut");
   for (const auto& r : results) {
     analysis::report::ReportPart rp;
     rp.name = r.part;
@@ -163,8 +179,8 @@ int cmd_demo(const std::vector<std::string>& argv) {
       else if (st.key != "uncompensated" && reference_rms > 0)
         sj["rms_reduction_percent"] = 100.0 * (1.0 - all.rms_um / reference_rms);
       pj["stages"][st.key] = sj;
-      std::printf("%-13s %-28s %9.1f %9.1f %9.1f %9.1f %9s\n", r.part.c_str(), st.title.c_str(),
-                  all.rms_um, all.max_abs_um, all.p95_abs_um, all.std_um,
+      std::printf("%-13s %-*s %9.1f %9.1f %9.1f %9.1f %9s\n", r.part.c_str(), title_width,
+                  st.title.c_str(), all.rms_um, all.max_abs_um, all.p95_abs_um, all.std_um,
                   st.key == "uncompensated" ? "-"
                   : is_floor                ? "floor"
                                             : (std::to_string(static_cast<int>(

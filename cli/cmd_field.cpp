@@ -59,6 +59,14 @@ const char* kFieldHelp =
     "                        machine): errors are measured against it, so scallops\n"
     "                        and what else the program leaves are not compensated\n"
     "options:\n"
+    "  --paper sortino|denkena  every stage's default as in that source, explicit\n"
+    "                        options still win (docs/offline.md, The sources' recipes).\n"
+    "                        sortino (3D model adaptation): sphere method, Rs 1 mm,\n"
+    "                        planes parallel to the nominal, every point and facet,\n"
+    "                        rigid-body motion removed, truss of bars, kb/kc 0.2.\n"
+    "                        denkena (optical-scan G-code compensation): ray method;\n"
+    "                        its route continues with truecut rewrite --paper denkena\n"
+    "                        on compensation_matrix.csv. Both: no significance tests\n"
     "  --method ray|sphere   error vectors: rays to a scanned mesh (default when the\n"
     "                        scan has faces) or plane fits in spheres (point clouds)\n"
     "  --spacing MM          compensation points: even sampling at this spacing\n"
@@ -371,8 +379,22 @@ Inputs read_inputs(const ParsedArgs& a, const fs::path& program_file, const fs::
 
 offline::FieldPipelineOptions pipeline_options(const ParsedArgs& a, const Inputs& in) {
   offline::FieldPipelineOptions o;
-  const std::string method =
-      a.value("method").value_or(in.scan.triangles.empty() ? "sphere" : "ray");
+  // --paper: every stage's default as in that source (docs/offline.md,
+  // "The sources' recipes"); an option given explicitly still wins.
+  const std::string paper = a.value("paper").value_or("");
+  if (!paper.empty() && paper != "sortino" && paper != "denkena")
+    throw UsageError("--paper must be sortino or denkena, not '" + paper + "'");
+  const bool sortino = paper == "sortino", denkena = paper == "denkena";
+  if (sortino) {
+    o.sphere.radius_mm = 1.0;
+    o.sphere.max_points_per_sphere = 0;
+    o.sphere.max_facets_per_sphere = 0;
+    o.truss.kb_over_kc = 0.2;
+  }
+  const std::string method = a.value("method").value_or(sortino                     ? "sphere"
+                                                        : denkena                   ? "ray"
+                                                        : in.scan.triangles.empty() ? "sphere"
+                                                                                    : "ray");
   if (method == "ray") {
     o.method = offline::ErrorMethod::kRay;
   } else if (method == "sphere") {
@@ -391,30 +413,33 @@ offline::FieldPipelineOptions pipeline_options(const ParsedArgs& a, const Inputs
   }
   if (auto d = a.value("datum")) o.datum_surfaces = id_list("datum", *d);
   o.register_scan = !a.flag("no-register");
-  o.icp.significance_level = a.number("register-significance", 0.001, 0.0, 0.5);
+  // Neither source tests the registration or a surface's error against the
+  // scan's noise: both apply what they find.
+  o.icp.significance_level =
+      a.number("register-significance", paper.empty() ? 0.001 : 0.0, 0.0, 0.5);
   o.scan_check.max_offset_mm =
       a.number("max-scan-offset", o.scan_check.max_offset_mm, 1e-3, 1000.0);
   o.scan_check.max_off_percent =
       a.number("max-scan-outliers", o.scan_check.max_off_percent, 0.0, 100.0);
-  o.remove_rigid_body_motion = a.flag("remove-rbm");
+  o.remove_rigid_body_motion = a.flag("remove-rbm") || sortino;
   o.tool_rotation = a.flag("tool-rotation");
   o.sphere.radius_mm = a.number("sphere-radius", o.sphere.radius_mm, 0.01, 100.0);
   o.sphere.max_points_per_sphere = static_cast<std::size_t>(a.integer(
       "sphere-max-points", static_cast<long>(o.sphere.max_points_per_sphere), 0, 100000000));
   o.sphere.max_facets_per_sphere = static_cast<std::size_t>(a.integer(
       "sphere-max-facets", static_cast<long>(o.sphere.max_facets_per_sphere), 0, 100000000));
-  const std::string plane_fit = a.value("plane-fit").value_or("tilted");
+  const std::string plane_fit = a.value("plane-fit").value_or(sortino ? "parallel" : "tilted");
   if (plane_fit != "tilted" && plane_fit != "parallel")
     throw UsageError("--plane-fit must be tilted or parallel, not '" + plane_fit + "'");
   o.sphere.tilted_planes = plane_fit == "tilted";
   o.ray.max_distance_mm = a.number("max-distance", o.ray.max_distance_mm, 0.001, 100.0);
   o.significance.significance_level =
-      a.number("significance", o.significance.significance_level, 0.0, 0.5);
+      a.number("significance", paper.empty() ? o.significance.significance_level : 0.0, 0.0, 0.5);
   o.significance.noise_mm = a.number("scan-noise", 0.0, 0.0, 10.0);
   o.truss.kb_over_kc = a.number("kb-kc", o.truss.kb_over_kc, 0.0, 1e6);
   // A kb/kc given is used as given; the default scales with the scan's noise.
-  if (a.value("kb-kc")) o.truss_reference_noise_mm = 0.0;
-  const std::string truss = a.value("truss").value_or("springs");
+  if (a.value("kb-kc") || sortino) o.truss_reference_noise_mm = 0.0;
+  const std::string truss = a.value("truss").value_or(sortino ? "bars" : "springs");
   if (truss != "springs" && truss != "bars")
     throw UsageError("--truss must be springs or bars, not '" + truss + "'");
   o.truss.stiffness = truss == "bars" ? offline::TrussStiffness::kAxialBars
@@ -598,6 +623,7 @@ int cmd_field(const std::vector<std::string>& argv) {
                       {"part", true},
                       {"out", true},
                       {"method", true},
+                      {"paper", true},
                       {"spacing", true},
                       {"surfaces", true},
                       {"datum", true},

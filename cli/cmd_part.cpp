@@ -12,6 +12,7 @@
 #include "commands.hpp"
 #include "stage_progress.hpp"
 #include "truecut/interp/interpreter.hpp"
+#include "truecut/offline/mesh_io.hpp"
 #include "truecut/rt/number_format.hpp"
 #include "truecut/sim/benchmark_parts.hpp"
 #include "truecut/sim/program_travel.hpp"
@@ -41,6 +42,11 @@ const char* kPartHelp =
     "  --stepover MM        distance between passes (default 0.5)\n"
     "  --point-spacing MM   distance between points along a curved pass (default 0.5)\n"
     "  --step-down MM       axial depth per level (default 1.0)\n"
+    "  --adapted MESH       generate the program for this adapted geometry (the\n"
+    "                       adapted.stl of truecut field, made from this part's\n"
+    "                       nominal with the same options): every finishing pass\n"
+    "                       placed on the adapted surface, the model-adaptation\n"
+    "                       route (benchmark004 only; nominal.stl stays the nominal)\n"
     "  --quiet              no progress on stderr (shown only on a terminal, after 1 s)\n"
     "  --help               this text\n";
 
@@ -53,6 +59,7 @@ int cmd_part(const std::vector<std::string>& argv) {
                       {"stepover", true},
                       {"point-spacing", true},
                       {"step-down", true},
+                      {"adapted", true},
                       {"quiet", false},
                       {"help", false}});
   if (a.flag("help")) {
@@ -90,7 +97,36 @@ int cmd_part(const std::vector<std::string>& argv) {
   std::optional<StageProgress> progress;
   progress.emplace("truecut part", !a.flag("quiet") && isatty(STDERR_FILENO) != 0);
   progress->stage("building the mesh and the program");
-  const sim::BenchmarkPart part = sim::make_part(*id, opt);
+  std::optional<sim::BenchmarkPart> driven;
+  if (auto adapted_file = a.value("adapted")) {
+    if (*id != sim::PartId::kBenchmark004)
+      throw UsageError(
+          "--adapted: only benchmark004's tool path can be driven by an adapted "
+          "geometry so far");
+    const sim::BenchmarkPart nominal = sim::make_part(*id, opt);
+    // A bad mesh is an input error (exit 2), named by the reader.
+    const auto input_error = [](const std::string& message) {
+      std::fprintf(stderr, "truecut part: %s\n", message.c_str());
+      return kExitUsage;
+    };
+    offline::TriangleMesh adapted;
+    try {
+      adapted = offline::read_mesh(*adapted_file);
+    } catch (const std::exception& e) {
+      return input_error(e.what());
+    }
+    if (adapted.triangles.size() != nominal.mesh.triangles.size())
+      return input_error(rt::format_printf(
+          "%s: %zu facets, but the nominal of %s at --mesh-edge %g has %zu: the adapted geometry "
+          "must come from this nominal (give the --mesh-edge it was made with)",
+          adapted_file->c_str(), adapted.triangles.size(), a.positionals()[0].c_str(),
+          opt.mesh_edge_mm, nominal.mesh.triangles.size()));
+    const sim::DriveSurface drive(nominal.mesh, adapted);
+    driven = sim::make_part(*id, opt, drive);
+    std::printf("program driven by %s: %zu surface queries, %zu found no facet (offset 0)\n",
+                adapted_file->c_str(), drive.queries(), drive.misses());
+  }
+  const sim::BenchmarkPart part = driven ? std::move(*driven) : sim::make_part(*id, opt);
   progress->stage("checking the program against the travel");
   // The program must stay inside the travel of its machine; a part that does
   // not is a generator bug, reported before anything is written.

@@ -76,6 +76,9 @@ const char* kRewriteHelp =
     "  --max-correction MM  refuse (exit 1, nothing written) when the compensation\n"
     "                       exceeds this (default 0.2, as truecut field)\n"
     "  --force              write although it does (recorded in the audit)\n"
+    "  --paper denkena      the optical-compensation source's recipe (with --matrix):\n"
+    "                       --raw-matrix, --placement tip, --step 0.5, no smoothing;\n"
+    "                       options given explicitly still win\n"
     "  --out FILE           the rewritten program\n"
     "  --help               this text\n"
     "\n"
@@ -141,7 +144,7 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
                       {"smooth", true},  {"raw-matrix", false},    {"max-correction", true},
                       {"force", false},  {"cutting-length", true}, {"tools", true},
                       {"machine", true}, {"decimals", true},       {"rewrite-all", false},
-                      {"out", true},     {"help", false}});
+                      {"out", true},     {"paper", true},          {"help", false}});
   if (a.flag("help")) {
     std::fputs(kRewriteHelp, stdout);
     return kExitOk;
@@ -151,6 +154,14 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
   const auto matrix_path = a.value("matrix"), field_path = a.value("field");
   if (!matrix_path == !field_path) throw UsageError("give exactly one of --matrix and --field");
   if (a.flag("raw-matrix") && !matrix_path) throw UsageError("--raw-matrix goes with --matrix");
+  // --paper denkena: the optical-compensation source's recipe — its mirror
+  // vectors unsmoothed, the 3 points nearest the tool tip, 0.5 mm steps.
+  const std::string paper = a.value("paper").value_or("");
+  if (!paper.empty() && paper != "denkena")
+    throw UsageError("--paper must be denkena, not '" + paper + "'");
+  if (!paper.empty() && !matrix_path)
+    throw UsageError("--paper denkena goes with --matrix (the source has no field)");
+  const bool raw_matrix = a.flag("raw-matrix") || !paper.empty();
   const auto operation = a.value("operation");
   if (!operation) throw UsageError("--operation NAME is required");
   const auto type = a.value("type");
@@ -187,6 +198,7 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
   o.reach_mm = a.number("reach", 0, 1e-6, 1000);
   o.cutting_length_mm = a.number("cutting-length", 0, 1e-6, 10000);
   o.smoothing_radius_mm = a.number("smooth", 0, 0, 1000);
+  if (!paper.empty()) o.placement = interp::MatrixPlacement::kTip;
   if (auto p = a.value("placement")) {
     if (*p == "every-pass")
       o.placement = interp::MatrixPlacement::kEveryPass;
@@ -222,7 +234,7 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
       add_input("matrix", *matrix_path, bytes);
       const auto matrix = interp::parse_compensation_matrix(
           bytes, *matrix_path,
-          a.flag("raw-matrix") ? interp::MatrixVectors::kRaw : interp::MatrixVectors::kSmoothed);
+          raw_matrix ? interp::MatrixVectors::kRaw : interp::MatrixVectors::kSmoothed);
       result = interp::rewrite_program(program, in_path, matrix, o);
     } else {
       const std::string bytes = read_bytes(*field_path, "correction field");

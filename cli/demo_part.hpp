@@ -30,6 +30,12 @@ struct DemoOptions {
   double dexel_spacing_mm = 0;  // 0: 0.1 for the implant, 0.3 for the larger parts
   int iterations = 2;           // real-time iterations (1 or 2)
   bool rewrite = true;
+  // benchmark004: also machine the program its generator makes for the first
+  // field's adapted.stl (the model-adaptation source's route).
+  bool adapted_route = true;
+  // Also the sources' own recipes on the same scan (truecut field --paper):
+  // stages paper_denkena and paper_sortino.
+  bool paper_routes = false;
   // Also machine the program on the error-free machine (machine_ideal.json),
   // uncompensated: the deviation the program itself leaves (scallops, the
   // cutting model), which no compensation of the machine can remove.
@@ -38,7 +44,7 @@ struct DemoOptions {
 };
 
 struct DemoStage {
-  std::string key;    // uncompensated, realtime, rewrite, realtime_2, ideal
+  std::string key;    // uncompensated, realtime, rewrite, adapted, realtime_2, ideal
   std::string title;  // for people
   std::filesystem::path dir;
   std::vector<sim::measure::CmmMeasurement> cmm;

@@ -190,6 +190,55 @@ TEST(FieldCli, RefusesAboveMaxCorrectionUnlessForced) {
   EXPECT_GT(audit["max_correction"]["max_mm"].get<double>(), 0.02);
 }
 
+// Issue 24: --paper sets every stage's default to the source's recipe, an
+// option given explicitly still wins, and the audit records what was used.
+TEST(FieldCli, PaperSetsTheSourcesRecipeAndExplicitOptionsWin) {
+  const fs::path root = scratch_dir();
+  const Part p = make_part_and_scan(root, 0.05);
+  const auto parameters = [&](const std::string& name, std::vector<std::string> extra) {
+    std::vector<std::string> args = field_args(p, root / name);
+    args.insert(args.end(), extra.begin(), extra.end());
+    const ProcessResult r = truecut(args);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return nlohmann::json::parse(read_file(root / name / "audit.json"))["parameters"];
+  };
+  const nlohmann::json sortino = parameters("sortino", {"--paper", "sortino"});
+  EXPECT_EQ(sortino["method"], "sphere");
+  EXPECT_EQ(sortino["sphere"]["radius_mm"], 1.0);
+  EXPECT_EQ(sortino["sphere"]["plane_fit"], "parallel");
+  EXPECT_EQ(sortino["sphere"]["max_points_per_sphere"], 0);
+  EXPECT_EQ(sortino["sphere"]["max_facets_per_sphere"], 0);
+  EXPECT_EQ(sortino["truss"]["stiffness"], "axial_bars");
+  EXPECT_EQ(sortino["truss"]["kb_over_kc_used"], 0.2);
+  EXPECT_TRUE(sortino["remove_rigid_body_motion"].get<bool>());
+  EXPECT_EQ(sortino["significance"]["level"], 0.0);
+  EXPECT_EQ(sortino["icp"]["significance_level"], 0.0);
+
+  const nlohmann::json mixed =
+      parameters("mixed", {"--paper", "sortino", "--sphere-radius", "1.5", "--truss", "springs"});
+  EXPECT_EQ(mixed["sphere"]["radius_mm"], 1.5);
+  EXPECT_EQ(mixed["truss"]["stiffness"], "zero_length_springs");
+  EXPECT_EQ(mixed["sphere"]["plane_fit"], "parallel");
+
+  const nlohmann::json denkena = parameters("denkena", {"--paper", "denkena"});
+  EXPECT_EQ(denkena["method"], "ray");
+  EXPECT_EQ(denkena["significance"]["level"], 0.0);
+  EXPECT_FALSE(denkena["remove_rigid_body_motion"].get<bool>());
+
+  const nlohmann::json ours = parameters("ours", {});
+  EXPECT_EQ(ours["method"], "ray");
+  EXPECT_GT(ours["significance"]["level"].get<double>(), 0.0);
+  EXPECT_EQ(ours["sphere"]["radius_mm"], 1.5);
+
+  std::vector<std::string> args = field_args(p, root / "bad");
+  args.insert(args.end(), {"--paper", "smith"});
+  const ProcessResult r = truecut(args);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--paper must be sortino or denkena, not 'smith'"), std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(root / "bad"));
+}
+
 // A CAD export with a zero-area facet (two corners the same) in the middle of
 // the nominal, and part.json numbering the file's facets: by default the
 // facet is dropped, named on stderr and in audit.json, and the result is the

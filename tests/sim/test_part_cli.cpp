@@ -46,6 +46,56 @@ TEST(PartCli, Benchmark004WritesAllFilesTheProgramInterpretsAndTheMachineReadsBa
   EXPECT_DOUBLE_EQ(machine.machine.effects.tool_radius_error.params.radius_mm, -0.1);
 }
 
+// Issue 24: --adapted regenerates benchmark004's program for an adapted
+// geometry. Given the nominal itself, the passes stay on the nominal (as G1
+// moves); a mesh of another part or another mesh edge is refused by name.
+TEST(PartCli, AdaptedRegeneratesTheProgramAndRefusesAForeignMesh) {
+  const auto root = scratch_dir();
+  const auto part = [&](const std::string& name, const std::string& out,
+                        std::vector<std::string> extra, const std::string& edge_mm = "3") {
+    std::vector<std::string> args{cli_path().string(),
+                                  "part",
+                                  name,
+                                  "--out",
+                                  (root / out).string(),
+                                  "--mesh-edge",
+                                  edge_mm,
+                                  "--stepover",
+                                  "2",
+                                  "--point-spacing",
+                                  "2",
+                                  "--step-down",
+                                  "5"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return run_process(args);
+  };
+  ASSERT_EQ(0, part("benchmark004", "nominal", {}).exit_code);
+  const std::string nominal_stl = (root / "nominal" / "nominal.stl").string();
+  const auto r = part("benchmark004", "driven", {"--adapted", nominal_stl});
+  ASSERT_EQ(0, r.exit_code) << r.err;
+  EXPECT_NE(std::string::npos, r.out.find("found no facet (offset 0)")) << r.out;
+  const std::string program = read_file(root / "driven" / "program.ngc");
+  EXPECT_NE(std::string::npos, program.find("tool path driven by an adapted geometry"));
+  EXPECT_EQ(std::string::npos, program.find("G2 X45.0000 Y0 Z15.0000 I-45.0000 J0"))
+      << "the walls are G1 moves, not circles";
+  EXPECT_EQ(read_file(root / "driven" / "nominal.stl"), read_file(root / "nominal" / "nominal.stl"))
+      << "the nominal stays the nominal";
+
+  const auto other_edge = part("benchmark004", "x", {"--adapted", nominal_stl}, "2");
+  EXPECT_EQ(2, other_edge.exit_code);
+  EXPECT_NE(std::string::npos, other_edge.err.find(nominal_stl + ": ")) << other_edge.err;
+  EXPECT_NE(std::string::npos, other_edge.err.find("must come from this nominal"))
+      << other_edge.err;
+  const auto implant = part("implant", "y", {"--adapted", nominal_stl});
+  EXPECT_EQ(2, implant.exit_code);
+  EXPECT_NE(std::string::npos, implant.err.find("only benchmark004")) << implant.err;
+  const auto missing = part("benchmark004", "z", {"--adapted", (root / "none.stl").string()});
+  EXPECT_EQ(2, missing.exit_code);
+  EXPECT_NE(std::string::npos, missing.err.find("none.stl")) << missing.err;
+  for (const char* out : {"x", "y", "z"})
+    EXPECT_FALSE(std::filesystem::exists(root / out)) << out;
+}
+
 TEST(PartCli, BadArgumentsAreUsageErrorsAndWriteNothing) {
   const auto out = scratch_dir() / "x";
   auto bogus = run_process({cli_path().string(), "part", "bogus", "--out", out.string()});

@@ -13,6 +13,7 @@
 #include "parts/program_writer.hpp"
 #include "parts/revolved_mesh.hpp"
 #include "parts/revolved_stock.hpp"
+#include "truecut/sim/drive_surface.hpp"
 
 namespace truecut::sim::parts {
 namespace {
@@ -146,10 +147,32 @@ void circle(ProgramWriter& w, double x, double z) {
   w.line("G2 X" + number(x) + " Y0 Z" + number(z) + " I" + number(-x) + " J0");
 }
 
+// A pass driven by the adapted geometry (DriveSurface): the offset of the
+// surface the tool cuts varies around the part, so a circle becomes G1 moves
+// at most point_spacing_mm apart. Angles of a clockwise turn from ψ = 0:
+// 0, −2π/n, …, −2π (the last point is the first).
+std::vector<double> clockwise_turn_rad(double radius_mm, double point_spacing_mm) {
+  const int n = std::max(
+      8, static_cast<int>(std::ceil(2 * std::numbers::pi * radius_mm / point_spacing_mm - 1e-9)));
+  std::vector<double> psi(n + 1);
+  for (int k = 0; k <= n; ++k)
+    psi[k] = -2 * std::numbers::pi * k / n;
+  return psi;
+}
+
+// The drive surface's offset at a nominal point (0 without a drive surface).
+double drive_offset_mm(const DriveSurface* drive, const Eigen::Vector3d& p_mm,
+                       const Eigen::Vector3d& n) {
+  return drive ? drive->offset_mm(p_mm, n) : 0.0;
+}
+
 // Peripheral milling of the three walls, top down, each in levels of at most
 // step_down_mm down to the face below it; tangential lead in along −Y at
-// y = +kLeadMm, lead out to y = −kLeadMm.
-void walls(ProgramWriter& w, const PartTool& tool, const PartOptions& o) {
+// y = +kLeadMm, lead out to y = −kLeadMm. Driven by an adapted geometry, a
+// level's flank sits at the mean offset of the adapted wall over the band
+// [z, level above] that this level is the first to reach.
+void walls(ProgramWriter& w, const PartTool& tool, const PartOptions& o,
+           const DriveSurface* drive) {
   w.operation("WALLS");
   change_tool(w, tool, kEndMillRpm);
   struct Wall {
@@ -166,39 +189,92 @@ void walls(ProgramWriter& w, const PartTool& tool, const PartOptions& o) {
       zs.push_back(z);
     }
     zs.push_back(wall.bottom);
+    double band_top = wall.top;
     for (double z : zs) {
-      w.move("G0", {rc, kLeadMm, kSafeZMm});
-      w.move("G0", {rc, kLeadMm, z + 1});
-      w.move("G1", {rc, kLeadMm, z}, kPlungeFeed);
-      w.move("G1", {rc, 0, z}, kWallFeed);
-      circle(w, rc, z);
-      w.move("G1", {rc, -kLeadMm, z});
-      w.move("G0", {rc, -kLeadMm, kSafeZMm});
+      std::vector<Eigen::Vector3d> turn;  // driven: the pass's points, ψ = 0 first
+      if (drive) {
+        const auto psis = clockwise_turn_rad(rc, o.point_spacing_mm);
+        for (std::size_t k = 0; k + 1 < psis.size(); ++k) {
+          const Eigen::Vector3d n(std::cos(psis[k]), std::sin(psis[k]), 0);
+          double sum = 0;
+          for (double f : {1.0 / 6, 0.5, 5.0 / 6}) {
+            const Eigen::Vector3d p =
+                wall.radius * n + Eigen::Vector3d(0, 0, z + f * (band_top - z));
+            sum += drive_offset_mm(drive, p, n);
+          }
+          turn.push_back((rc + sum / 3) * n + Eigen::Vector3d(0, 0, z));
+        }
+      }
+      const double x0 = drive ? turn.front().x() : rc;
+      w.move("G0", {x0, kLeadMm, kSafeZMm});
+      w.move("G0", {x0, kLeadMm, z + 1});
+      w.move("G1", {x0, kLeadMm, z}, kPlungeFeed);
+      w.move("G1", {x0, 0, z}, kWallFeed);
+      if (drive) {
+        for (std::size_t k = 1; k < turn.size(); ++k)
+          w.move("G1", turn[k]);
+        w.move("G1", turn.front());
+      } else {
+        circle(w, rc, z);
+      }
+      w.move("G1", {x0, -kLeadMm, z});
+      w.move("G0", {x0, -kLeadMm, kSafeZMm});
+      band_top = z;
     }
   }
 }
 
 // Face milling of the two step faces: concentric clockwise circles from the
 // outside in, the first reached by one helical turn down from 1.5 mm above.
-void step_faces(ProgramWriter& w, const PartTool& tool, const PartOptions& o) {
+// Driven by an adapted geometry, the tool's bottom sits at the mean offset of
+// the adapted face under it (its centre and eight points at 0.6 r, those on
+// the face at least kFaceMarginMm inside its edges).
+void step_faces(ProgramWriter& w, const PartTool& tool, const PartOptions& o,
+                const DriveSurface* drive) {
   w.operation("STEP_FACES");
   const double r = tool.radius_mm;
+  constexpr double kFaceMarginMm = 0.3;
   struct Face {
-    double z, rc_outer, rc_inner;
+    double z, rc_outer, rc_inner, rho_min, rho_max;
+  };
+  const auto tip = [&](const Face& f, double rho_c, double psi) {
+    const Eigen::Vector2d c = rho_c * Eigen::Vector2d(std::cos(psi), std::sin(psi));
+    double sum = 0;
+    int n = 0;
+    for (int k = -1; k < 8 && drive; ++k) {
+      const double a = 2 * std::numbers::pi * k / 8;
+      const Eigen::Vector2d q =
+          k < 0 ? c : Eigen::Vector2d(c + 0.6 * r * Eigen::Vector2d(std::cos(a), std::sin(a)));
+      if (q.norm() < f.rho_min + kFaceMarginMm || q.norm() > f.rho_max - kFaceMarginMm) continue;
+      sum += drive_offset_mm(drive, {q.x(), q.y(), f.z}, Eigen::Vector3d::UnitZ());
+      ++n;
+    }
+    return Eigen::Vector3d(c.x(), c.y(), f.z + (n > 0 ? sum / n : 0.0));
   };
   // Step 2: between the collar (flank at ρ = 20) and the step-1 wall (40).
   // Step 1: from the step-1 wall (flank at 40) past the open outer edge.
-  for (const Face& f : {Face{kStep2ZMm, kStepRadiusMm - r, kCollarRadiusMm + r},
-                        Face{kStep1ZMm, kBaseRadiusMm, kStepRadiusMm + r}}) {
+  for (const Face& f :
+       {Face{kStep2ZMm, kStepRadiusMm - r, kCollarRadiusMm + r, kCollarRadiusMm, kStepRadiusMm},
+        Face{kStep1ZMm, kBaseRadiusMm, kStepRadiusMm + r, kStepRadiusMm, kBaseRadiusMm}}) {
     const auto radii = lines(f.rc_outer, f.rc_inner, o.stepover_mm);
+    const Eigen::Vector3d first = tip(f, radii.front(), 0);
     w.move("G0", {radii.front(), 0, kSafeZMm});
     w.move("G0", {radii.front(), 0, f.z + 1.5});
-    w.line("G2 X" + number(radii.front()) + " Y0 Z" + number(f.z) + " I" + number(-radii.front()) +
-           " J0 F" + number(kPlungeFeed, 0));
+    w.line("G2 X" + number(radii.front()) + " Y0 Z" + number(first.z()) + " I" +
+           number(-radii.front()) + " J0 F" + number(kPlungeFeed, 0));
     w.line("F" + number(kFaceFeed, 0));
     for (std::size_t k = 0; k < radii.size(); ++k) {
-      if (k > 0) w.move("G1", {radii[k], 0, f.z});
-      circle(w, radii[k], f.z);
+      if (!drive) {
+        if (k > 0) w.move("G1", {radii[k], 0, f.z});
+        circle(w, radii[k], f.z);
+        continue;
+      }
+      const auto psis = clockwise_turn_rad(radii[k], o.point_spacing_mm);
+      const Eigen::Vector3d start = tip(f, radii[k], 0);
+      if (k > 0) w.move("G1", start);
+      for (std::size_t i = 1; i + 1 < psis.size(); ++i)
+        w.move("G1", tip(f, radii[k], psis[i]));
+      w.move("G1", start);
     }
     w.move("G0", {radii.back(), 0, kSafeZMm});
   }
@@ -210,19 +286,23 @@ Eigen::Vector3d unit(double phi_rad, double psi_rad) {
 }
 
 // Ball end mill, 3-axis: one clockwise ring per polar angle from the equator
-// up to the cap edge; the ball centre runs on the sphere of radius R + r_b.
-// Between rings the tool climbs along the meridian at ψ = 0 in steps of at
-// most point_spacing_mm.
-void hemisphere_3axis(ProgramWriter& w, const PartTool& ball, const PartOptions& o) {
+// up to the cap edge; the ball centre runs on the sphere of radius R + r_b
+// (driven by an adapted geometry: R + offset + r_b along the normal of the
+// contact point). Between rings the tool climbs along the meridian at ψ = 0
+// in steps of at most point_spacing_mm.
+void hemisphere_3axis(ProgramWriter& w, const PartTool& ball, const PartOptions& o,
+                      const DriveSurface* drive) {
   w.operation("HEMISPHERE_3AXIS");
   change_tool(w, ball, kBallRpm);
   const double rb = ball.radius_mm, rc = kSphereRadiusMm + rb;
-  const auto tip = [&](double phi_deg) {
-    const Eigen::Vector3d c = Eigen::Vector3d(0, 0, kSphereCentreZMm) + rc * unit(rad(phi_deg), 0);
-    return Eigen::Vector3d(c.x(), 0, c.z() - rb);
+  const Eigen::Vector3d centre(0, 0, kSphereCentreZMm);
+  const auto tip = [&](double phi_deg, double psi_rad) {
+    const Eigen::Vector3d u = unit(rad(phi_deg), psi_rad);
+    const double d = drive_offset_mm(drive, centre + kSphereRadiusMm * u, u);
+    return Eigen::Vector3d(centre + (rc + d) * u - Eigen::Vector3d(0, 0, rb));
   };
   const auto phis = lines(90.0, kCapDeg, deg(o.stepover_mm / kSphereRadiusMm));
-  const Eigen::Vector3d start = tip(phis.front());
+  const Eigen::Vector3d start = tip(phis.front(), 0);
   w.move("G0", {start.x(), kLeadMm, kSafeZMm});
   w.move("G0", {start.x(), kLeadMm, start.z() + 1});
   w.move("G1", {start.x(), kLeadMm, start.z()}, kPlungeFeed);
@@ -231,12 +311,19 @@ void hemisphere_3axis(ProgramWriter& w, const PartTool& ball, const PartOptions&
     if (k > 0) {
       const auto steps = lines(phis[k - 1], phis[k], deg(o.point_spacing_mm / rc));
       for (std::size_t i = 1; i < steps.size(); ++i)
-        w.move("G1", tip(steps[i]));
+        w.move("G1", tip(steps[i], 0));
     }
-    const Eigen::Vector3d p = tip(phis[k]);
-    circle(w, p.x(), p.z());
+    const Eigen::Vector3d p = tip(phis[k], 0);
+    if (!drive) {
+      circle(w, p.x(), p.z());
+      continue;
+    }
+    const auto psis = clockwise_turn_rad(p.x(), o.point_spacing_mm);
+    for (std::size_t i = 1; i + 1 < psis.size(); ++i)
+      w.move("G1", tip(phis[k], psis[i]));
+    w.move("G1", p);
   }
-  const Eigen::Vector3d end = tip(phis.back());
+  const Eigen::Vector3d end = tip(phis.back(), 0);
   w.move("G1", {end.x(), -kLeadMm, end.z()});
   w.move("G0", {end.x(), -kLeadMm, kSafeZMm});
 }
@@ -245,7 +332,8 @@ void hemisphere_3axis(ProgramWriter& w, const PartTool& ball, const PartOptions&
 // contact point from the cap edge to the pole, one turn per stepover; the
 // tool axis lies in the meridian plane, kTiltDeg further from the pole than
 // the surface normal (A = φ + τ, C = 90° − ψ, turning on continuously).
-void hemisphere_cap_5axis(ProgramWriter& w, const PartTool& ball, const PartOptions& o) {
+void hemisphere_cap_5axis(ProgramWriter& w, const PartTool& ball, const PartOptions& o,
+                          const DriveSurface* drive) {
   w.operation("HEMISPHERE_CAP_5AXIS");
   w.line("TRAORI");
   const double rb = ball.radius_mm, r = kSphereRadiusMm;
@@ -264,8 +352,9 @@ void hemisphere_cap_5axis(ProgramWriter& w, const PartTool& ball, const PartOpti
     const double psi = -2 * std::numbers::pi * turns * t;
     Pose p;
     p.axis = unit(phi + rad(kTiltDeg), psi);
-    const Eigen::Vector3d centre =
-        Eigen::Vector3d(0, 0, kSphereCentreZMm) + (r + rb) * unit(phi, psi);
+    const Eigen::Vector3d u = unit(phi, psi), sphere_centre(0, 0, kSphereCentreZMm);
+    const double d = drive_offset_mm(drive, sphere_centre + r * u, u);
+    const Eigen::Vector3d centre = sphere_centre + (r + rb + d) * u;
     p.tip = centre - rb * p.axis;
     p.a_deg = deg(phi) + kTiltDeg;
     p.c_deg = 90.0 - deg(psi);
@@ -290,7 +379,7 @@ void hemisphere_cap_5axis(ProgramWriter& w, const PartTool& ball, const PartOpti
 
 }  // namespace
 
-BenchmarkPart make_benchmark004(const PartOptions& options) {
+BenchmarkPart make_benchmark004(const PartOptions& options, const DriveSurface* drive) {
   BenchmarkPart part;
   part.id = PartId::kBenchmark004;
   part.options = options;
@@ -302,10 +391,14 @@ BenchmarkPart make_benchmark004(const PartOptions& options) {
 
   ProgramWriter w;
   start_program(w, part.metadata);
-  walls(w, part.metadata.tools[0], options);
-  step_faces(w, part.metadata.tools[0], options);
-  hemisphere_3axis(w, part.metadata.tools[1], options);
-  hemisphere_cap_5axis(w, part.metadata.tools[1], options);
+  if (drive)
+    w.comment(
+        "tool path driven by an adapted geometry: every finishing pass placed on the adapted "
+        "surface, circles as G1 moves; docs/parts.md");
+  walls(w, part.metadata.tools[0], options, drive);
+  step_faces(w, part.metadata.tools[0], options, drive);
+  hemisphere_3axis(w, part.metadata.tools[1], options, drive);
+  hemisphere_cap_5axis(w, part.metadata.tools[1], options, drive);
   end_program(w);
   part.program = w.text();
   return part;

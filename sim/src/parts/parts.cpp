@@ -92,6 +92,15 @@ BenchmarkPart make_part(PartId id, const PartOptions& options) {
   throw std::invalid_argument("unknown PartId");
 }
 
+BenchmarkPart make_part(PartId id, const PartOptions& options, const DriveSurface& drive) {
+  check_options(options);
+  if (id != PartId::kBenchmark004)
+    throw std::invalid_argument(std::string(part_name(id)) +
+                                ": only benchmark004's tool path can be driven by an adapted "
+                                "geometry so far");
+  return parts::make_benchmark004(options, &drive);
+}
+
 std::string tool_table_text(const PartMetadata& m) {
   std::string out;
   int pocket = 1;

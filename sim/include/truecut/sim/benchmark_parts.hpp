@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "truecut/offline/mesh.hpp"
+#include "truecut/sim/drive_surface.hpp"
 #include "truecut/sim/machine_description.hpp"
 #include "truecut/sim/part_metadata.hpp"
 
@@ -41,6 +42,11 @@ struct BenchmarkPart {
 // Deterministic: the same id and options give byte-identical outputs.
 // Throws std::invalid_argument on a non-positive or absurd resolution.
 BenchmarkPart make_part(PartId id, const PartOptions& options = {});
+// The part with its program generated for the adapted geometry `drive`
+// instead of the nominal (the nominal mesh and metadata are unchanged).
+// Only benchmark004's generator can be driven so far: other parts throw
+// std::invalid_argument naming the part.
+BenchmarkPart make_part(PartId id, const PartOptions& options, const DriveSurface& drive);
 
 // Tool table in LinuxCNC's format (`T1 P1 D2.000 Z30.000 ;...`).
 std::string tool_table_text(const PartMetadata& metadata);
