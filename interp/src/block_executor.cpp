@@ -475,7 +475,7 @@ void BlockExecutor::non_modal() {
   const int code = codes_.g[group(GGroup::kNonModal)];
   if (code == 100) coord_system_data();
   if (code == 280 || code == 300 || code == 281 || code == 301) go_home(code);
-  if (code >= 920 && code <= 923) g92_offsets(code);
+  if ((code >= 920 && code <= 923) || code == 520) g92_offsets(code);
 }
 
 void BlockExecutor::coord_system_data() {
@@ -497,12 +497,13 @@ void BlockExecutor::coord_system_data() {
   const int base = coord_system_base(index);
   const Axes6 prog = s_.program_position();
   const Axes6 g5x = s_.to_program(s_.g5x_mm);
-  const Axes6 g92 = s_.to_program(s_.g92_mm);
   for (int i = 0; i < 6; ++i) {
     const char letter = kAxisLetters[i];
     if (!b_->has(letter)) continue;
     const double v = b_->value(letter);
-    params_.set(base + i, l == 2 ? v : prog[i] + g5x[i] + g92[i] - v);
+    // L20: the origin that puts the tool at v with the G92/G52 offset still
+    // applied on top, as rs274 computes it.
+    params_.set(base + i, l == 2 ? v : prog[i] + g5x[i] - v);
   }
   axes_used_ = true;
   if (index == s_.coord_index) {
@@ -516,7 +517,29 @@ void BlockExecutor::coord_system_data() {
 }
 
 void BlockExecutor::g92_offsets(int code) {
-  if (code == 920) {
+  if (code == 520 || code == 920) {
+    const int motion_code = codes_.g[kMotion];
+    if (motion_code >= 0 && motion_code != 800)
+      fail(codes_.g_column[kMotion],
+           std::string(code == 520 ? "G52" : "G92") +
+               " and a motion code on one line: both use the axis words");
+  }
+  if (code == 520) {
+    // G52 (LinuxCNC 2.9): the given axes' offsets are the words, in G90 and
+    // G91 alike; the others keep the offsets in force (0 after G92.1/G92.2).
+    bool any = false;
+    for (int i = 0; i < 6; ++i) {
+      const char letter = kAxisLetters[i];
+      if (!b_->has(letter)) continue;
+      any = true;
+      s_.g92_mm[i] = s_.to_machine(i, b_->value(letter));
+    }
+    if (!any) fail(codes_.g_column[0], "G52 needs at least one axis word");
+    axes_used_ = true;
+    for (int i = 0; i < 6; ++i)
+      params_.set(kG92Offsets + i, s_.to_program(i, s_.g92_mm[i]));
+    params_.set(kG92Enabled, 1);
+  } else if (code == 920) {
     bool any = false;
     const Axes6 prog = s_.program_position();
     for (int i = 0; i < 6; ++i) {
@@ -613,8 +636,8 @@ void BlockExecutor::check_polar(Plane plane_before) const {
                              static_cast<char>(std::toupper(l)) +
                              " word on one line: use one form");
   const int nm = codes_.g[group(GGroup::kNonModal)];
-  if (nm == 100 || nm == 280 || nm == 300 || nm == 920)
-    fail(col, "polar coordinates (@ ^) are for motion only, not for G10, G28, G30 or G92");
+  if (nm == 100 || nm == 280 || nm == 300 || nm == 920 || nm == 520)
+    fail(col, "polar coordinates (@ ^) are for motion only, not for G10, G28, G30, G52 or G92");
   if (b_->has_g(530)) fail(col, "polar coordinates (@ ^) with G53");
 }
 

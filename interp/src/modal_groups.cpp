@@ -53,7 +53,7 @@ constexpr GInfo kGCodes[] = {
     {431, GGroup::kToolLength, "dynamic tool length offset (G43.1)"},
     {432, GGroup::kToolLength, "additional tool length offset (G43.2)"},
     {490, GGroup::kToolLength, nullptr},
-    {520, GGroup::kNonModal, "local offsets (G52)"},
+    {520, GGroup::kNonModal, nullptr},
     {530, GGroup::kNonModal, nullptr},
     {540, GGroup::kCoordSystem, nullptr},
     {550, GGroup::kCoordSystem, nullptr},

@@ -286,6 +286,22 @@ TEST(Rs274Oracle, SyncMotionAndProbingErrorsAtTheSameLine) {
   expect_refused_at_the_same_line(*o, "sync_errors", "G21 F100 S500\nG0 X-5 Y-5 Z5\n", kCases);
 }
 
+// Local offsets, tool table edits, dynamic tool length, I/O codes and
+// Fanuc-style subprograms (docs/gcode.md): the programs rs274 refuses,
+// refused by truecut at the same line.
+TEST(Rs274Oracle, OffsetToolAndIoErrorsAtTheSameLine) {
+  REQUIRE_ORACLE(o);
+  static const char* kCases[] = {
+      "G52 @1 ^2 (polar words)",
+      "G0 G52 X1 (with a motion code)",
+      "G92 X1 G0 (G92 with a motion code)",
+      "G52 X1 R2 (R word)",
+      "G52 X1 G10 L2 P1 (two non-modal codes)",
+      "G41 D1 G1 X10 Y0\nG52 X1 (under cutter compensation)",
+  };
+  expect_refused_at_the_same_line(*o, "offset_errors", "G21 F100 T1 M6\nG0 X-5 Y-5\n", kCases);
+}
+
 // Random profiles under G41/G42 in G17 and G18 (lines, R and I/J/K arcs,
 // G0 moves, moves along the tool axis only, the tool table's D or G41.1 D):
 // rs274 and truecut must agree on each, call for call or refusing it at the
