@@ -133,8 +133,6 @@ void read_word(Cursor& c, Block& b, const Parameters& params, bool has_b) {
     case 'v':
     case 'w':
       c.fail("unknown word " + describe_letter(l) + ": this machine has axes X Y Z A C");
-    case 'e':
-      c.fail("word E is not supported");
     case 'o':
       c.fail("O-word must start the line");
     default:
