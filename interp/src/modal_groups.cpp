@@ -105,43 +105,41 @@ struct MInfo {
   const char* unsupported;
 };
 
-constexpr MInfo kMCodes[] = {
-    {0, MGroup::kStop, nullptr},
-    {10, MGroup::kStop, nullptr},
-    {20, MGroup::kStop, nullptr},
-    {30, MGroup::kSpindle, nullptr},
-    {40, MGroup::kSpindle, nullptr},
-    {50, MGroup::kSpindle, nullptr},
-    {60, MGroup::kToolChange, nullptr},
-    {70, MGroup::kCoolant, nullptr},
-    {80, MGroup::kCoolant, nullptr},
-    {90, MGroup::kCoolant, nullptr},
-    {190, MGroup::kSpindle, nullptr},
-    {300, MGroup::kStop, nullptr},
-    {480, MGroup::kOverride, nullptr},
-    {490, MGroup::kOverride, nullptr},
-    {500, MGroup::kOverride, nullptr},
-    {510, MGroup::kOverride, nullptr},
-    {520, MGroup::kOverride, nullptr},
-    {530, MGroup::kOverride, nullptr},
-    {600, MGroup::kStop, "pallet change pause (M60)"},
-    {610, MGroup::kToolChange, nullptr},
-    {620, MGroup::kUser, nullptr},
-    {630, MGroup::kUser, nullptr},
-    {640, MGroup::kUser, nullptr},
-    {650, MGroup::kUser, nullptr},
-    {660, MGroup::kUser, nullptr},
-    {670, MGroup::kUser, nullptr},
-    {680, MGroup::kUser, nullptr},
-    // M70-M73 share the spindle's group, as in LinuxCNC 2.9
-    {700, MGroup::kSpindle, nullptr},
-    {710, MGroup::kSpindle, nullptr},
-    {720, MGroup::kSpindle, nullptr},
-    {730, MGroup::kSpindle, nullptr},
-    // LinuxCNC 2.9's rs274 runs Fanuc-style subprograms
-    // (M98 P L, O-number blocks, M99); truecut not yet.
-    {980, MGroup::kStop, "Fanuc-style subprogram call (M98; use O-word sub/call)"},
-    {990, MGroup::kStop, "Fanuc-style subprogram return (M99; use O-word endsub/return)"}};
+constexpr MInfo kMCodes[] = {{0, MGroup::kStop, nullptr},
+                             {10, MGroup::kStop, nullptr},
+                             {20, MGroup::kStop, nullptr},
+                             {30, MGroup::kSpindle, nullptr},
+                             {40, MGroup::kSpindle, nullptr},
+                             {50, MGroup::kSpindle, nullptr},
+                             {60, MGroup::kToolChange, nullptr},
+                             {70, MGroup::kCoolant, nullptr},
+                             {80, MGroup::kCoolant, nullptr},
+                             {90, MGroup::kCoolant, nullptr},
+                             {190, MGroup::kSpindle, nullptr},
+                             {300, MGroup::kStop, nullptr},
+                             {480, MGroup::kOverride, nullptr},
+                             {490, MGroup::kOverride, nullptr},
+                             {500, MGroup::kOverride, nullptr},
+                             {510, MGroup::kOverride, nullptr},
+                             {520, MGroup::kOverride, nullptr},
+                             {530, MGroup::kOverride, nullptr},
+                             {600, MGroup::kStop, "pallet change pause (M60)"},
+                             {610, MGroup::kToolChange, nullptr},
+                             {620, MGroup::kUser, nullptr},
+                             {630, MGroup::kUser, nullptr},
+                             {640, MGroup::kUser, nullptr},
+                             {650, MGroup::kUser, nullptr},
+                             {660, MGroup::kUser, nullptr},
+                             {670, MGroup::kUser, nullptr},
+                             {680, MGroup::kUser, nullptr},
+                             // M70-M73 share the spindle's group, as in LinuxCNC 2.9
+                             {700, MGroup::kSpindle, nullptr},
+                             {710, MGroup::kSpindle, nullptr},
+                             {720, MGroup::kSpindle, nullptr},
+                             {730, MGroup::kSpindle, nullptr},
+                             // Fanuc-style subprograms: ProgramRunner runs M98 and M99 lines.
+                             {980, MGroup::kStop, nullptr},
+                             {990, MGroup::kStop, nullptr}};
 
 std::string code_text(char letter, int code) {
   char buf[32];

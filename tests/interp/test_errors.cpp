@@ -157,10 +157,16 @@ INSTANTIATE_TEST_SUITE_P(
         Case{"M3 S100\nG33.1 Z-3 K-1\nM2\n", 2, 11, "must be greater than 0"},
         Case{"M3 S100\nG33.1 Z-3 A5 K1\nM2\n", 2, 11, "A word with G33.1"},
         Case{"G0 Z5\nG93 G38.2 Z-3 F1\nM2\n", 2, 5, "G38.2 with inverse-time feed (G93)"},
-        // rs274 runs Fanuc-style subprograms; truecut refuses them by name.
-        Case{"G0 Z5\nM98 P100\nM2\nO100\nG1 X1 F100\nM99\n", 2, 1,
-             "M98 Fanuc-style subprogram call (M98; use O-word sub/call) is not supported"},
-        Case{"G0 Z5\nM99\n", 2, 1, "Fanuc-style subprogram return (M99"}),
+        // Fanuc-style subprograms: what truecut refuses where rs274 ignores
+        // words or reports another line (docs/gcode.md).
+        Case{"G0 Z5\nM98 P100 F200\nM2\nO100\nG1 X1 F100\nM99\n", 2, 1,
+             "M98 must be alone on its line (with P and L)"},
+        Case{"G0 Z5\nM98 P300\nM2\nO100\nG1 X1 F100\nM99\n", 2, 1,
+             "M98 P300: no subprogram O300 in the program"},
+        Case{"G0 Z5\no100 call\nM2\no100 sub\nM99\no100 endsub\n", 5, 1,
+             "M99 in the O-word subroutine o100 (use endsub)"},
+        Case{"G0 Z5\nM98 P100\nM2\nO100\no100 endsub\n", 5, 1,
+             "endsub in the subprogram O100 (called by M98: use M99)"}),
     case_name);
 
 // Polar coordinates (docs/gcode.md "Polar coordinates"): the programs

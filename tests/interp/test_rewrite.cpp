@@ -763,6 +763,19 @@ TEST(Rewrite, ModalStateLinesAreCopiedAndG5SplinesRefusedByName) {
                                  o)
                 .find("M62 beside a move"),
             std::string::npos);
+  // A Fanuc-style subprogram run once is rewritten in place; run twice (L2)
+  // its lines are refused like those of a loop.
+  const std::string m98 =
+      "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X-4 Y0 Z1\nG1 Z0 F100\nM98 P100\n"
+      "G0 Z1\nM30\nO100\nG1 X0 F40\nG1 X4\nM99\n";
+  const RewriteResult r98 = rewrite_program(m98, "m98.ngc", m, o);
+  EXPECT_NE(r98.text.find("\nM98 P100\n"), std::string::npos) << r98.text;
+  EXPECT_NE(r98.text.find("\nO100\n"), std::string::npos) << r98.text;
+  EXPECT_GT(r98.summary.moves_rewritten, 0);
+  std::string twice = m98;
+  twice.replace(twice.find("M98 P100"), 8, "M98 P100 L2");
+  EXPECT_NE(error_of<GcodeError>(twice, o).find("bad.ngc:11"), std::string::npos)
+      << error_of<GcodeError>(twice, o);
   const std::string spline =
       "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X0 Y0 Z0\nG5.1 X4 Y0 I2 J2 F100\nM30\n";
   EXPECT_EQ(error_of<GcodeError>(spline, o),

@@ -42,7 +42,6 @@ const std::map<std::string, std::string>& out_of_scope() {
       {"ncfiles/lathe_g7x_quadrants.ngc", "lathe cycles G70-G72"},
       {"ncfiles/lathe_pawn.ngc", "lathe radius/diameter mode G7/G8"},
       {"millturn/example.ngc", "lathe radius/diameter mode G7/G8"},
-      {"ncfiles/x-trim.ngc", "M66 (wait on input) in the touchoff subroutine"},
       {"ncfiles/systems.ngc", "quadratic B-spline G5.1"},
       {"nc_files/tcdemo.ngc", "quadratic B-spline G5.1"}};
   return kList;
@@ -286,10 +285,9 @@ TEST(Rs274Oracle, SyncMotionAndProbingErrorsAtTheSameLine) {
   expect_refused_at_the_same_line(*o, "sync_errors", "G21 F100 S500\nG0 X-5 Y-5 Z5\n", kCases);
 }
 
-// Local offsets, tool table edits, dynamic tool length, I/O codes and
-// Fanuc-style subprograms (docs/gcode.md): the programs rs274 refuses,
-// refused by truecut at the same line.
-TEST(Rs274Oracle, OffsetToolAndIoErrorsAtTheSameLine) {
+// Local offsets, tool table edits, dynamic tool length, M98/M99 (docs/gcode.md):
+// the programs rs274 refuses, refused by truecut at the same line.
+TEST(Rs274Oracle, OffsetToolAndSubprogramErrorsAtTheSameLine) {
   REQUIRE_ORACLE(o);
   static const char* kCases[] = {
       "G52 @1 ^2 (polar words)",
@@ -313,6 +311,22 @@ TEST(Rs274Oracle, OffsetToolAndIoErrorsAtTheSameLine) {
       "G43.1 H1 Z1 (G43.1 with H)",
       "G43.2 H50 (tool not in the table)",
       "G41 D1 G1 X10 Y0\nG43.1 Z1 (G43.1 under cutter compensation)",
+      "G1 M98 P100 (M98 with a G code)\nM2\nO100\nG1 X1\nM99",
+      "M98 (no P)\nM2\nO100\nG1 X1\nM99",
+      "M98 P100 L1.5 (fraction L)\nM2\nO100\nG1 X1\nM99",
+      "M98 P100\nM2\nO100\nM98 P100 L-1 (negative L)\nM99",
+      "M98 P100\nM2\nO100\nG0 X2 M99 (M99 with a move)",
+      "M98 P100\nM2\nO100 G1 X1 (words after the number)\nM99",
+      "M98 P100\nM2\nO100\nM98 P100 L1 (recursion)\nM99",
+  };
+  expect_refused_at_the_same_line(*o, "offset_errors", "G21 F100 T1 M6\nG0 X-5 Y-5\n", kCases);
+}
+
+// M62-M68, M19, M48-M53 (docs/gcode.md): the programs rs274
+// refuses, refused by truecut at the same line.
+TEST(Rs274Oracle, IoCodeErrorsAtTheSameLine) {
+  REQUIRE_ORACLE(o);
+  static const char* kCases[] = {
       "M62 (no P)",
       "M62 E1 (E without M66-M68)",
       "M67 Q1 (no E)",
@@ -329,7 +343,7 @@ TEST(Rs274Oracle, OffsetToolAndIoErrorsAtTheSameLine) {
       "M19 R400 (angle above 360)",
       "M19 M3 (orient and spindle on one line)",
   };
-  expect_refused_at_the_same_line(*o, "offset_errors", "G21 F100 T1 M6\nG0 X-5 Y-5\n", kCases);
+  expect_refused_at_the_same_line(*o, "io_errors", "G21 F100 T1 M6\nG0 X-5 Y-5\n", kCases);
 }
 
 // Random profiles under G41/G42 in G17 and G18 (lines, R and I/J/K arcs,
