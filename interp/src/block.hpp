@@ -43,7 +43,8 @@ enum class OKeyword {
   kRepeat,
   kEndrepeat,
   kBreak,
-  kContinue
+  kContinue,
+  kFanucSub  // "O100" alone: a Fanuc-style subprogram (M98 P100 calls it, M99 returns)
 };
 
 struct OWord {

@@ -102,9 +102,12 @@ bool BlockExecutor::execute(const Block& block, const LexedLine& line) {
     }
   }
   feed_and_speed();
-  tool_words();
+  tool_select();
+  io_codes();
+  tool_change();
   modal_state_codes();
   spindle_and_coolant();
+  override_codes();
   if (codes_.g[group(GGroup::kNonModal)] == 40) {
     if (!block.has('p')) fail(codes_.g_column[0], "G4 (dwell) needs P (seconds)");
     if (block.value('p') < 0) fail(column_of('p'), "dwell time P must not be negative");
@@ -240,7 +243,7 @@ void BlockExecutor::feed_and_speed() {
   }
 }
 
-void BlockExecutor::tool_words() {
+void BlockExecutor::tool_select() {
   if (b_->has('t')) {
     const double t = b_->value('t');
     if (t < 0 || t != std::floor(t))
@@ -253,6 +256,9 @@ void BlockExecutor::tool_words() {
     s_.selected_tool = tool;
     out_.emit(SelectTool{tool});
   }
+}
+
+void BlockExecutor::tool_change() {
   const int change = codes_.m[group(MGroup::kToolChange)];
   if (change == 60) {
     out_.emit(StartChange{});
@@ -260,6 +266,7 @@ void BlockExecutor::tool_words() {
     s_.spindle = 0;
     const auto slot = tools_.slot_of(s_.selected_tool);
     s_.tool = s_.selected_tool;
+    s_.spindle_slot = slot.value_or(0);
     out_.emit(ChangeTool{s_.tool, slot.value_or(0)});
   } else if (change == 610) {
     if (!b_->has('q'))
@@ -272,7 +279,8 @@ void BlockExecutor::tool_words() {
     if (tool != 0 && !tools_.find(tool))
       fail(column_of('q'), "tool " + std::to_string(tool) + " is not in the tool table");
     s_.tool = s_.selected_tool = tool;
-    out_.emit(ChangeToolNumber{tool});
+    s_.spindle_slot = tools_.slot_of(tool).value_or(0);
+    out_.emit(ChangeToolNumber{tool, s_.spindle_slot});
   }
 }
 
@@ -289,6 +297,9 @@ void BlockExecutor::spindle_and_coolant() {
     case 50:
       s_.spindle = 0;
       out_.emit(StopSpindle{});
+      break;
+    case 190:
+      spindle_orient();
       break;
     default:
       break;
@@ -446,6 +457,7 @@ void BlockExecutor::tool_length_offset() {
     out_.emit(UseToolLengthOffset{Axes6{}});
     return;
   }
+  if (code == 431 || code == 432) return dynamic_tool_length(code);
   if (code != 430) {
     if (b_->has('h')) fail(column_of('h'), "H word without G43 to use it");
     return;
@@ -456,7 +468,7 @@ void BlockExecutor::tool_length_offset() {
     if (h < 0 || h != std::floor(h)) fail(column_of('h'), "H must be a whole number >= 0");
     if (h > kLargestWholeWord)
       fail(column_of('h'), "H" + rt::format_shortest(h) + ": no such tool in the tool table");
-    tool = static_cast<int>(h);
+    if (h != 0) tool = static_cast<int>(h);  // H0: the tool in the spindle, as rs274
   }
   Axes6 offset;
   if (tool != 0) {
@@ -471,22 +483,70 @@ void BlockExecutor::tool_length_offset() {
   out_.emit(UseToolLengthOffset{s_.to_program(offset)});
 }
 
+void BlockExecutor::dynamic_tool_length(int code) {
+  const int col = codes_.g_column[group(GGroup::kToolLength)];
+  bool axis_words = false;
+  for (char l : kAxisLetters)
+    axis_words = axis_words || b_->has(l);
+  Axes6 offset = s_.tool_offset_mm;
+  if (code == 431) {
+    // G43.1: the given axes' offsets are the words (in G91 too); the others
+    // stay as they are.
+    if (b_->has('h')) fail(column_of('h'), "H word with G43.1 (the offsets are the axis words)");
+    for (int i = 0; i < 6; ++i)
+      if (b_->has(kAxisLetters[i])) offset[i] = s_.to_machine(i, b_->value(kAxisLetters[i]));
+    // rs274: without a motion code on the line the words are G43.1's only;
+    // with one, the move takes them too.
+    if (codes_.g[kMotion] < 0) axes_used_ = true;
+  } else {
+    // G43.2 H: tool H's offsets are added to those in force.
+    if (axis_words)
+      fail(col, "G43.2 with axis words: truecut and rs274 take only H (a tool to add)");
+    if (!b_->has('h')) fail(col, "G43.2 needs H (the tool whose offsets are added)");
+    const double h = b_->value('h');
+    if (h < 0 || h != std::floor(h)) fail(column_of('h'), "H must be a whole number >= 0");
+    if (h > kLargestWholeWord)
+      fail(column_of('h'), "H" + rt::format_shortest(h) + ": no such tool in the tool table");
+    const int tool = h == 0 ? s_.tool : static_cast<int>(h);  // H0: the tool in the spindle
+    if (tool != 0) {
+      const ToolEntry* e = tools_.find(tool);
+      if (!e)
+        fail(column_of('h'),
+             "tool " + std::to_string(tool) + " for G43.2 is not in the tool table");
+      for (int i = 0; i < 6; ++i)
+        offset[i] += e->offset_mm[i];
+    }
+  }
+  for (int i = 0; i < 6; ++i)
+    if (!std::isfinite(offset[i])) fail(col, "the tool length offset is not a finite number");
+  s_.tool_offset_mm = offset;
+  // rs274 saves and restores G43.1/G43.2 as G43 (M70-M73).
+  s_.tool_length_code = 430;
+  out_.emit(UseToolLengthOffset{s_.to_program(offset)});
+}
+
 void BlockExecutor::non_modal() {
   const int code = codes_.g[group(GGroup::kNonModal)];
+  if (code == 100 || code == 520 || code == 920) {
+    const int motion_code = codes_.g[kMotion];
+    if (motion_code >= 0 && motion_code != 800)
+      fail(codes_.g_column[kMotion], std::string(code == 100   ? "G10"
+                                                 : code == 520 ? "G52"
+                                                               : "G92") +
+                                         " and a motion code on one line: both use the axis words");
+  }
   if (code == 100) coord_system_data();
   if (code == 280 || code == 300 || code == 281 || code == 301) go_home(code);
-  if (code >= 920 && code <= 923) g92_offsets(code);
+  if ((code >= 920 && code <= 923) || code == 520) g92_offsets(code);
 }
 
 void BlockExecutor::coord_system_data() {
   const int col = codes_.g_column[0];
-  if (!b_->has('l')) fail(col, "G10 needs L (L2 or L20 are supported)");
+  if (!b_->has('l')) fail(col, "G10 needs L (L1, L10, L11, L2 or L20)");
   const double l = b_->value('l');
-  if (l != 2 && l != 20) {
-    if (l == 1 || l == 10 || l == 11)
-      fail(column_of('l'), "G10 L1/L10/L11 (tool table edits) are not supported");
-    fail(column_of('l'), "G10 supports L2 and L20");
-  }
+  if (l == 1 || l == 10 || l == 11) return tool_table_edit(static_cast<int>(l));
+  if (l == 0) fail(column_of('l'), "G10 L0 (reload the tool table) is not supported");
+  if (l != 2 && l != 20) fail(column_of('l'), "G10 supports L1, L10, L11, L2 and L20");
   if (!b_->has('p')) fail(col, "G10 L2/L20 needs P (coordinate system 0..9)");
   const double pv = b_->value('p');
   if (pv < 0 || pv > 9 || pv != std::floor(pv))
@@ -497,12 +557,13 @@ void BlockExecutor::coord_system_data() {
   const int base = coord_system_base(index);
   const Axes6 prog = s_.program_position();
   const Axes6 g5x = s_.to_program(s_.g5x_mm);
-  const Axes6 g92 = s_.to_program(s_.g92_mm);
   for (int i = 0; i < 6; ++i) {
     const char letter = kAxisLetters[i];
     if (!b_->has(letter)) continue;
     const double v = b_->value(letter);
-    params_.set(base + i, l == 2 ? v : prog[i] + g5x[i] + g92[i] - v);
+    // L20: the origin that puts the tool at v with the G92/G52 offset still
+    // applied on top, as rs274 computes it.
+    params_.set(base + i, l == 2 ? v : prog[i] + g5x[i] - v);
   }
   axes_used_ = true;
   if (index == s_.coord_index) {
@@ -516,7 +577,22 @@ void BlockExecutor::coord_system_data() {
 }
 
 void BlockExecutor::g92_offsets(int code) {
-  if (code == 920) {
+  if (code == 520) {
+    // G52 (LinuxCNC 2.9): the given axes' offsets are the words, in G90 and
+    // G91 alike; the others keep the offsets in force (0 after G92.1/G92.2).
+    bool any = false;
+    for (int i = 0; i < 6; ++i) {
+      const char letter = kAxisLetters[i];
+      if (!b_->has(letter)) continue;
+      any = true;
+      s_.g92_mm[i] = s_.to_machine(i, b_->value(letter));
+    }
+    if (!any) fail(codes_.g_column[0], "G52 needs at least one axis word");
+    axes_used_ = true;
+    for (int i = 0; i < 6; ++i)
+      params_.set(kG92Offsets + i, s_.to_program(i, s_.g92_mm[i]));
+    params_.set(kG92Enabled, 1);
+  } else if (code == 920) {
     bool any = false;
     const Axes6 prog = s_.program_position();
     for (int i = 0; i < 6; ++i) {
@@ -613,8 +689,8 @@ void BlockExecutor::check_polar(Plane plane_before) const {
                              static_cast<char>(std::toupper(l)) +
                              " word on one line: use one form");
   const int nm = codes_.g[group(GGroup::kNonModal)];
-  if (nm == 100 || nm == 280 || nm == 300 || nm == 920)
-    fail(col, "polar coordinates (@ ^) are for motion only, not for G10, G28, G30 or G92");
+  if (nm == 100 || nm == 280 || nm == 300 || nm == 920 || nm == 520)
+    fail(col, "polar coordinates (@ ^) are for motion only, not for G10, G28, G30, G52 or G92");
   if (b_->has_g(530)) fail(col, "polar coordinates (@ ^) with G53");
 }
 
@@ -657,9 +733,15 @@ void BlockExecutor::check_unused_words(int motion_code) const {
                            motion_code == 860 || motion_code == 880 || motion_code == 890;
   const bool peck_cycle = motion_code == 730 || motion_code == 830;
   const int nm = codes_.g[0];
+  const int io = codes_.m[group(MGroup::kUser)];
+  const int spindle = codes_.m[group(MGroup::kSpindle)];
+  const int override_code = codes_.m[group(MGroup::kOverride)];
+  const bool orient = spindle == 190;
+  const bool tool_edit = nm == 100 && b_->has('l') &&
+                         (b_->value('l') == 1 || b_->value('l') == 10 || b_->value('l') == 11);
   for (char l : {'i', 'j', 'k', 'r'})
-    if (b_->has(l) && !arc && !(l == 'r' && (nm == 100 || cycle)) &&
-        !(l != 'r' && motion_code == 870) &&
+    if (b_->has(l) && !arc && !(l == 'r' && (nm == 100 || cycle || orient)) &&
+        !(tool_edit && (l == 'i' || l == 'j')) && !(l != 'r' && motion_code == 870) &&
         !(l == 'k' && (motion_code == 330 || motion_code == 331))) {
       if (cycle)
         fail(column_of(l), std::string(1, static_cast<char>(std::toupper(l))) +
@@ -668,15 +750,21 @@ void BlockExecutor::check_unused_words(int motion_code) const {
            std::string(1, static_cast<char>(std::toupper(l))) + " word with no G2 or G3 to use it");
     }
   if (b_->has('p') && !arc && !dwell_cycle && nm != 40 && nm != 100 &&
-      codes_.g[group(GGroup::kPathControl)] != 640)
+      codes_.g[group(GGroup::kPathControl)] != 640 && !orient && override_code < 500 &&
+      !(io >= 620 && io <= 660))
     fail(column_of('p'),
-         "P word with no G code that uses it (G4, G10, G64, G2/G3, G74/G82/G84/G86/G88/G89)");
+         "P word with no code that uses it (G4, G10, G64, G2/G3, G74/G82/G84/G86/G88/G89, M19, "
+         "M50-M53, M62-M66)");
   if (b_->has('q') && !peck_cycle && codes_.g[group(GGroup::kPathControl)] != 640 &&
-      codes_.m[group(MGroup::kToolChange)] != 610)
-    fail(column_of('q'), "Q word with no code that uses it (G64, M61, G73/G83)");
+      codes_.m[group(MGroup::kToolChange)] != 610 && !orient && !(io >= 660 && io <= 680) &&
+      !tool_edit)
+    fail(column_of('q'),
+         "Q word with no code that uses it (G10 L1, G64, M61, G73/G83, M19, M66-M68)");
+  if (b_->has('e') && !(io >= 660 && io <= 680))
+    fail(column_of('e'), "E word with no M66, M67 or M68 to use it");
   const int comp = codes_.g[group(GGroup::kCutterComp)];
-  if (b_->has('l') && nm != 100 && !cycle && comp != 411 && comp != 421)
-    fail(column_of('l'), "L word with no G10 or canned cycle to use it");
+  if (b_->has('l') && nm != 100 && !cycle && comp != 411 && comp != 421 && io != 660)
+    fail(column_of('l'), "L word with no G10, canned cycle or M66 to use it");
   if (b_->has('d') && comp != 410 && comp != 411 && comp != 420 && comp != 421)
     fail(column_of('d'), "D word with no G41, G41.1, G42 or G42.1 to use it");
 }
@@ -890,6 +978,10 @@ void BlockExecutor::end_program(bool pallet_shuttle) {
   out_.emit(SetFeedMode{s_.feed_mode});
   s_.feed = 0;
   out_.emit(SetFeedRate{0});
+  if (!s_.feed_override) {
+    s_.feed_override = true;
+    out_.emit(FeedOverride{true});
+  }
   s_.spindle = 0;
   out_.emit(StopSpindle{});
   out_.emit(SetSpindleMode{0});

@@ -25,6 +25,7 @@ inline constexpr double kLargestWholeWord = 2147483647.0;
 
 class BlockExecutor {
  public:
+  // Keeps its own copy of `tools`: G10 L1/L10/L11 edit it.
   BlockExecutor(InterpState& state, Parameters& params, const ToolTable& tools, Emitter& out)
       : s_(state), params_(params), tools_(tools), out_(out) {}
 
@@ -45,15 +46,25 @@ class BlockExecutor {
   int column_of(char letter) const;
   void comments();
   void feed_and_speed();
-  void tool_words();
+  void tool_select();
+  void tool_change();
+  // M62-M68, M19, M48-M53 (io_codes.cpp).
+  void io_codes();
+  void spindle_orient();
+  void override_codes();
+  // The block's `letter` as a whole number 0..largest, else a located error
+  // naming `what`.
+  int whole_word(char letter, double largest, const std::string& what) const;
   void spindle_and_coolant();
   void modal_state_codes();  // M70-M73 (modal_state.cpp)
   void modal_settings();
   void set_units(LengthUnits units);
   void select_coord_system(int index);
   void tool_length_offset();
+  void dynamic_tool_length(int code);  // G43.1, G43.2
   void non_modal();
   void coord_system_data();
+  void tool_table_edit(int l);  // G10 L1 L10 L11 (tool_table_edit.cpp)
   void g92_offsets(int code);
   void go_home(int code);
   void motion();
@@ -111,7 +122,7 @@ class BlockExecutor {
 
   InterpState& s_;
   Parameters& params_;
-  const ToolTable& tools_;
+  ToolTable tools_;
   Emitter& out_;
   const Block* b_ = nullptr;
   const LexedLine* line_ = nullptr;

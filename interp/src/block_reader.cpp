@@ -46,6 +46,11 @@ OWord read_oword_head(Cursor& c) {
     size_t nz = o.label.find_first_not_of('0');
     o.label = nz == std::string::npos ? "0" : o.label.substr(nz);
   }
+  // A number alone (comments may follow): a Fanuc-style subprogram start.
+  if (o.label.front() != '<' && (c.at_end() || c.peek() == '(' || c.peek() == ';')) {
+    o.keyword = OKeyword::kFanucSub;
+    return o;
+  }
   for (const auto& k : kOKeywords) {
     if (c.starts_with(k.text)) {
       o.keyword = k.keyword;
@@ -133,8 +138,6 @@ void read_word(Cursor& c, Block& b, const Parameters& params, bool has_b) {
     case 'v':
     case 'w':
       c.fail("unknown word " + describe_letter(l) + ": this machine has axes X Y Z A C");
-    case 'e':
-      c.fail("word E is not supported");
     case 'o':
       c.fail("O-word must start the line");
     default:

@@ -32,11 +32,24 @@ const char* call_name(const CanonOp& op) {
         if constexpr (std::is_same_v<T, StartChange>) return "START_CHANGE";
         if constexpr (std::is_same_v<T, ChangeTool>) return "CHANGE_TOOL";
         if constexpr (std::is_same_v<T, ChangeToolNumber>) return "CHANGE_TOOL_NUMBER";
+        if constexpr (std::is_same_v<T, SetToolTableEntry>) return "SET_TOOL_TABLE_ENTRY";
         if constexpr (std::is_same_v<T, SetSpindleSpeed>) return "SET_SPINDLE_SPEED";
         if constexpr (std::is_same_v<T, StartSpindle>)
           return c.clockwise ? "START_SPINDLE_CLOCKWISE" : "START_SPINDLE_COUNTERCLOCKWISE";
         if constexpr (std::is_same_v<T, StopSpindle>) return "STOP_SPINDLE_TURNING";
         if constexpr (std::is_same_v<T, OrientSpindle>) return "ORIENT_SPINDLE";
+        if constexpr (std::is_same_v<T, WaitOrientComplete>)
+          return "SPINDLE.0.WAIT_ORIENT_COMPLETE";
+        if constexpr (std::is_same_v<T, OutputBit>) {
+          if (c.synchronized) return c.on ? "SET_MOTION_OUTPUT_BIT" : "CLEAR_MOTION_OUTPUT_BIT";
+          return c.on ? "SET_AUX_OUTPUT_BIT" : "CLEAR_AUX_OUTPUT_BIT";
+        }
+        if constexpr (std::is_same_v<T, OutputValue>)
+          return c.synchronized ? "SET_MOTION_OUTPUT_VALUE" : "SET_AUX_OUTPUT_VALUE";
+        if constexpr (std::is_same_v<T, AdaptiveFeed>)
+          return c.enabled ? "ENABLE_ADAPTIVE_FEED" : "DISABLE_ADAPTIVE_FEED";
+        if constexpr (std::is_same_v<T, FeedHold>)
+          return c.enabled ? "ENABLE_FEED_HOLD" : "DISABLE_FEED_HOLD";
         if constexpr (std::is_same_v<T, FeedOverride>)
           return c.enabled ? "ENABLE_FEED_OVERRIDE" : "DISABLE_FEED_OVERRIDE";
         if constexpr (std::is_same_v<T, SpeedOverride>)

@@ -181,8 +181,8 @@ void BlockExecutor::check_comp_codes() const {
     fail(codes_.g_column[static_cast<int>(GGroup::kPathControl)],
          "cannot change the path control mode (G61/G61.1/G64) with cutter radius compensation "
          "on (G40 first)");
-  if (nm == 920)
-    fail(nm_col, "cannot change axis offsets (G92) with cutter radius compensation on");
+  if (nm == 920 || nm == 520)
+    fail(nm_col, "cannot change axis offsets (G52/G92) with cutter radius compensation on");
   if (nm == 280 || nm == 300)
     fail(nm_col, "cannot use G28 or G30 with cutter radius compensation on");
   if (nm == 100 && b_->has('l') && (b_->value('l') == 2 || b_->value('l') == 20) && b_->has('p') &&

@@ -46,8 +46,12 @@ struct InterpState {
   double speed = 0;            // rpm
   int spindle = 0;             // 1 cw, -1 ccw, 0 stopped
   bool mist = false, flood = false;
-  int tool = 0;                // in the spindle
-  int selected_tool = 0;       // by the last T word
+  bool feed_override = true;  // M48/M49/M50 (M2 switches it back on)
+  int tool = 0;               // in the spindle
+  int selected_tool = 0;      // by the last T word
+  // The tool table row (1-based) rs274 takes as the spindle's for G10 L1's
+  // spindle copy: M6/M61 set it (0 for T0); standalone rs274 starts at 1.
+  int spindle_slot = 1;
   int coord_index = 1;         // 1 = G54 ... 9 = G59.3
   int tool_length_code = 490;  // G43 (430) or G49 (490) in force
   Axes6 g5x_mm, g92_mm, tool_offset_mm;

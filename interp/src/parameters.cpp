@@ -38,10 +38,17 @@ void Parameters::push_call(const std::vector<double>& args) {
   frames_.push_back(std::move(f));
 }
 
+void Parameters::push_shared_call() {
+  Frame f;
+  f.restores_numbered = false;
+  frames_.push_back(std::move(f));
+}
+
 void Parameters::pop_call() {
   if (frames_.size() <= 1) return;
-  for (int i = 0; i < kLocalCount; ++i)
-    numbered_[i + 1] = frames_.back().saved[i];
+  if (frames_.back().restores_numbered)
+    for (int i = 0; i < kLocalCount; ++i)
+      numbered_[i + 1] = frames_.back().saved[i];
   frames_.pop_back();
 }
 

@@ -31,6 +31,9 @@ class Parameters {
   // Subroutine call: saves #1..#30 and the named locals, then sets the
   // arguments (missing ones 0).
   void push_call(const std::vector<double>& args);
+  // M98 (a Fanuc-style subprogram): a new call level with its own named
+  // locals; #1..#30 are shared with the caller, as in rs274.
+  void push_shared_call();
   void pop_call();
   int call_level() const { return static_cast<int>(frames_.size()) - 1; }
 
@@ -40,6 +43,7 @@ class Parameters {
   struct Frame {
     std::array<double, kLocalCount> saved{};
     std::map<std::string, double, std::less<>> locals;
+    bool restores_numbered = true;
   };
   std::vector<double> numbered_;
   std::map<std::string, double, std::less<>> globals_;

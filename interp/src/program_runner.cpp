@@ -54,6 +54,8 @@ const char* keyword_name(OKeyword k) {
       return "break";
     case OKeyword::kContinue:
       return "continue";
+    case OKeyword::kFanucSub:
+      return "(subprogram)";
   }
   return "";
 }
@@ -125,6 +127,8 @@ int ProgramRunner::add_file(SourceFile source) {
     file.owords[i] = scan_oword(file.lines[i]);
     if (file.owords[i] && file.owords[i]->keyword == OKeyword::kSub)
       subs_.emplace(file.owords[i]->label, std::make_pair(index, i));
+    if (index == 0 && file.owords[i] && file.owords[i]->keyword == OKeyword::kFanucSub)
+      fanuc_subs_.emplace(file.owords[i]->label, std::make_pair(index, i));
   }
   return index;
 }
@@ -235,8 +239,89 @@ bool ProgramRunner::step() {
     control(*block.o, line);
     return true;
   }
+  bool ends = false;
+  if (fanuc_call_or_return(block, line, ends)) return !ends;
   ++frame.pc;
   return !executor_.execute(block, line);
+}
+
+bool ProgramRunner::fanuc_call_or_return(const Block& block, const LexedLine& line, bool& ends) {
+  const bool call = block.has_m(980), back = block.has_m(990);
+  if (!call && !back) return false;
+  const int col = block.m.front().column;
+  // rs274 ignores the other words of an M98 line (or refuses them) and
+  // fails on an M99 line with anything else: truecut refuses both.
+  bool others =
+      !block.g.empty() || block.m.size() != 1 || block.has_polar() || !block.sinumerik.empty();
+  for (char l = 'a'; l <= 'z'; ++l)
+    if (block.has(l) && l != 'n' && !(call && (l == 'p' || l == 'l'))) others = true;
+  const char* name = call ? "M98" : "M99";
+  if (others)
+    fail(line, col,
+         std::string(name) + " must be alone on its line" + (call ? " (with P and L)" : "") +
+             ": rs274 ignores or refuses the other words");
+  Frame& frame = frames_.back();
+  if (back) {
+    if (frames_.size() == 1) {  // M99 in the main program ends it, as M2 in rs274
+      ++frame.pc;
+      executor_.end_program(false);
+      ends = true;
+      return true;
+    }
+    if (!frame.fanuc)
+      fail(line, col, "M99 in the O-word subroutine " + label_text(frame.label) + " (use endsub)");
+    if (frame.repeats_left >= 1) {  // M98 L: run the body again
+      frame.repeats_left -= 1;
+      frame.pc = frame.start;
+      return true;
+    }
+    executor_.return_from_call(params_.call_level());  // M73
+    params_.pop_call();
+    frames_.pop_back();
+    return true;
+  }
+  if (!block.has('p')) fail(line, col, "M98 needs P (the subprogram number)");
+  const double p = block.value('p');
+  if (p < 0 || p != std::floor(p) || p > 1e15)
+    fail(line, col, "M98 P (the subprogram number) must be a whole number >= 0");
+  double repeats = 1;
+  if (block.has('l')) {
+    repeats = block.value('l');
+    if (repeats < 0 || repeats != std::floor(repeats))
+      fail(line, col, "M98 L (the repeat count) must be a whole number >= 0");
+  }
+  char digits[32];
+  std::snprintf(digits, sizeof digits, "%.0f", p);
+  const std::string label = digits;
+  const auto where = fanuc_subs_.find(label);
+  if (where == fanuc_subs_.end()) {
+    // rs274 reads the lines after the call looking for the subprogram and
+    // stops at the first O-word it cannot read: that line's error first.
+    const File& main = files_[0];
+    for (size_t i = frame.file == 0 ? frame.pc + 1 : 0; i < main.end; ++i) {
+      const std::string& text = main.lines[i].text;
+      size_t k = 0;
+      if (k < text.size() && text[k] == '/') ++k;
+      if (k < text.size() && text[k] == 'n')
+        while (++k < text.size() &&
+               (std::isdigit(static_cast<unsigned char>(text[k])) || text[k] == '.')) {
+        }
+      if (k < text.size() && text[k] == 'o' && !main.owords[i])
+        read_block(main.lines[i], params_, options_.has_b);  // throws the located error
+    }
+    fail(line, col, "M98 P" + label + ": no subprogram O" + label + " in the program");
+  }
+  ++frame.pc;
+  if (repeats == 0) return true;
+  if (frames_.size() > kMaxCallDepth)
+    fail(line, col, "subprogram calls nested too deep (recursion?)");
+  params_.push_shared_call();
+  Frame sub{where->second.first, where->second.second + 1, label, {}};
+  sub.fanuc = true;
+  sub.repeats_left = repeats - 1;
+  sub.start = sub.pc;
+  frames_.push_back(sub);
+  return true;
 }
 
 void ProgramRunner::control(const OWord& o, const LexedLine& line) {
@@ -249,6 +334,10 @@ void ProgramRunner::control(const OWord& o, const LexedLine& line) {
     return -1;
   };
   switch (o.keyword) {
+    case OKeyword::kFanucSub:
+      // Met in the flow of the program: a label, as in rs274.
+      frame.pc = pc + 1;
+      return;
     case OKeyword::kSub: {
       // A definition met in the flow of the program is skipped.
       frame.pc = find_forward(fi, pc + 1, o.label, {OKeyword::kEndsub}, line) + 1;
@@ -269,6 +358,10 @@ void ProgramRunner::control(const OWord& o, const LexedLine& line) {
       if (frames_.size() == 1)
         fail(line, o.column,
              label_text(o.label) + " " + keyword_name(o.keyword) + " outside a subroutine call");
+      if (frame.fanuc)
+        fail(line, o.column,
+             label_text(o.label) + " " + keyword_name(o.keyword) + " in the subprogram O" +
+                 frame.label + " (called by M98: use M99)");
       executor_.return_from_call(params_.call_level());  // M73
       params_.pop_call();
       frames_.pop_back();

@@ -40,6 +40,9 @@ class ProgramRunner {
     size_t pc = 0;
     std::string label;  // subroutine label, "" at top level
     std::vector<Loop> loops;
+    bool fanuc = false;       // called by M98: returns at M99
+    double repeats_left = 0;  // M98 L: runs still to go after this one
+    size_t start = 0;         // first line of the M98 subprogram's body
   };
 
   int add_file(SourceFile source);
@@ -50,6 +53,9 @@ class ProgramRunner {
   bool step();
   void control(const OWord& o, const LexedLine& line);
   void assign(const Block& block, const LexedLine& line);
+  // M98 P.. [L..] and M99 (Fanuc-style subprograms); false when the line
+  // has neither. `ends` is set when M99 ends the main program.
+  bool fanuc_call_or_return(const Block& block, const LexedLine& line, bool& ends);
   [[noreturn]] void fail(const LexedLine& line, int column, const std::string& message) const;
 
   const InterpreterOptions& options_;
@@ -64,6 +70,7 @@ class ProgramRunner {
   std::deque<File> files_;
   std::vector<Frame> frames_;
   std::map<std::string, std::pair<int, size_t>> subs_;
+  std::map<std::string, std::pair<int, size_t>> fanuc_subs_;  // "O100" lines, the first of each
   std::int64_t blocks_ = 0;
 };
 

@@ -106,10 +106,19 @@ std::string format_rs274(const CanonOp& op, const FormatOptions& options) {
           const Axes6& o = c.offset;
           args = p.num(o.x) + " " + p.num(o.y) + " " + p.num(o.z) + ", " + p.num(o.a) + " " +
                  p.num(o.b) + " " + p.num(o.c) + ", " + p.num(0) + " " + p.num(0) + " " + p.num(0);
-        } else if constexpr (std::is_same_v<T, SelectTool> || std::is_same_v<T, ChangeToolNumber>) {
+        } else if constexpr (std::is_same_v<T, SelectTool>) {
           args = std::to_string(c.tool);
-        } else if constexpr (std::is_same_v<T, ChangeTool>) {
+        } else if constexpr (std::is_same_v<T, ChangeTool> || std::is_same_v<T, ChangeToolNumber>) {
           args = std::to_string(c.slot);
+        } else if constexpr (std::is_same_v<T, SetToolTableEntry>) {
+          // rs274: pocket, tool, X Y Z A B C U V W, front and back angle,
+          // orientation (the diameter is not printed).
+          const Axes6& o = c.offset;
+          args = std::to_string(c.pocket) + ", " + std::to_string(c.tool) + ", " + p.num(o.x) +
+                 " " + p.num(o.y) + " " + p.num(o.z) + " " + p.num(o.a) + " " + p.num(o.b) + " " +
+                 p.num(o.c) + " " + p.num(0) + " " + p.num(0) + " " + p.num(0) + ", " +
+                 p.num(c.front_angle_deg) + ", " + p.num(c.back_angle_deg) + ", " +
+                 std::to_string(c.orientation);
         } else if constexpr (std::is_same_v<T, SetSpindleSpeed>) {
           args = "0, " + p.num(c.rpm);
         } else if constexpr (std::is_same_v<T, StartSpindle> || std::is_same_v<T, StopSpindle>) {
@@ -118,7 +127,16 @@ std::string format_rs274(const CanonOp& op, const FormatOptions& options) {
           args = "0";
         } else if constexpr (std::is_same_v<T, OrientSpindle>) {
           // LinuxCNC's CANON_DIRECTION: 2 clockwise, 3 counter-clockwise.
-          args = "0, " + p.num(c.degrees) + ", " + (c.clockwise ? "2" : "3");
+          args = "0, " + p.num(c.degrees) + ", " +
+                 (c.m19_direction >= 0 ? std::to_string(c.m19_direction)
+                                       : std::string(c.clockwise ? "2" : "3"));
+        } else if constexpr (std::is_same_v<T, WaitOrientComplete>) {
+          args = p.num(c.timeout_s);
+        } else if constexpr (std::is_same_v<T, OutputBit>) {
+          args = std::to_string(c.index);
+        } else if constexpr (std::is_same_v<T, OutputValue>) {
+          // rs274: "%d,%f" (no space, six decimals).
+          args = std::to_string(c.index) + "," + Printer::fixed(c.value, options.decimals + 2);
         } else if constexpr (std::is_same_v<T, SetSpindleMode>) {
           args = "0 " + p.num(c.css_max_rpm);
         } else if constexpr (std::is_same_v<T, Comment> || std::is_same_v<T, Message>) {

@@ -71,6 +71,12 @@ const ToolEntry* ToolTable::find(int number) const {
   return nullptr;
 }
 
+ToolEntry* ToolTable::find(int number) {
+  for (auto& e : entries_)
+    if (e.number == number) return &e;
+  return nullptr;
+}
+
 std::optional<int> ToolTable::slot_of(int number) const {
   for (size_t i = 0; i < entries_.size(); ++i)
     if (entries_[i].number == number) return static_cast<int>(i) + 1;
@@ -136,8 +142,12 @@ ToolTable ToolTable::parse(std::string_view text, const std::string& name, Lengt
         case 'U':
         case 'V':
         case 'W':
+          break;
         case 'I':
         case 'J':
+          check_range(v, -kMaxAngleDeg, kMaxAngleDeg, key == 'I' ? "front angle I" : "back angle J",
+                      name, line, i);
+          (key == 'I' ? e.front_angle_deg : e.back_angle_deg) = v;
           break;
         case 'Q':
           e.orientation = whole_number(v, "orientation Q", name, line, i);

@@ -76,7 +76,8 @@ TEST(CanonCli, UsageErrors) {
   EXPECT_EQ(none.exit_code, 2);
   auto missing = run_process({cli_path().string(), "canon", "/nonexistent/p.ngc"});
   EXPECT_EQ(missing.exit_code, 2);
-  EXPECT_NE(missing.err.find("/nonexistent/p.ngc: cannot open the program file"), std::string::npos);
+  EXPECT_NE(missing.err.find("/nonexistent/p.ngc: cannot open the program file"),
+            std::string::npos);
   const auto dir = scratch_dir();
   const auto tools = write(dir, "t.tbl", "T1 P1 Zx\n");
   const auto prog = write(dir, "p.ngc", "M2\n");

@@ -130,7 +130,7 @@ INSTANTIATE_TEST_SUITE_P(
         Case{"M3 S100\nG0 Z10\nG88 X1 Z-3 R2 P1 F100\nM5\nX2\nM2\n", 5, 1,
              "G88 needs the spindle turning"},
         Case{"G0 Z10\nG81 X1 Z-3 R2 Q1 F100\nM2\n", 2, 15, "Q word with no code that uses it"},
-        Case{"G0 Z10\nG81 X1 Z-3 R2 P1 F100\nM2\n", 2, 15, "P word with no G code"},
+        Case{"G0 Z10\nG81 X1 Z-3 R2 P1 F100\nM2\n", 2, 15, "P word with no code that uses it"},
         Case{"G0 Z10\nG81 X1 Z-3 R2 I1 F100\nM2\n", 2, 15, "I word in a canned cycle"},
         // The sticky R and Z belong to the cycle that set them.
         Case{"G0 Z10\nG81 X1 Z-3 R2 F100\nG82 X2 P1\nM2\n", 3, 1, "G82 needs R"},
@@ -157,10 +157,16 @@ INSTANTIATE_TEST_SUITE_P(
         Case{"M3 S100\nG33.1 Z-3 K-1\nM2\n", 2, 11, "must be greater than 0"},
         Case{"M3 S100\nG33.1 Z-3 A5 K1\nM2\n", 2, 11, "A word with G33.1"},
         Case{"G0 Z5\nG93 G38.2 Z-3 F1\nM2\n", 2, 5, "G38.2 with inverse-time feed (G93)"},
-        // rs274 runs Fanuc-style subprograms; truecut refuses them by name.
-        Case{"G0 Z5\nM98 P100\nM2\nO100\nG1 X1 F100\nM99\n", 2, 1,
-             "M98 Fanuc-style subprogram call (M98; use O-word sub/call) is not supported"},
-        Case{"G0 Z5\nM99\n", 2, 1, "Fanuc-style subprogram return (M99"}),
+        // Fanuc-style subprograms: what truecut refuses where rs274 ignores
+        // words or reports another line (docs/gcode.md).
+        Case{"G0 Z5\nM98 P100 F200\nM2\nO100\nG1 X1 F100\nM99\n", 2, 1,
+             "M98 must be alone on its line (with P and L)"},
+        Case{"G0 Z5\nM98 P300\nM2\nO100\nG1 X1 F100\nM99\n", 2, 1,
+             "M98 P300: no subprogram O300 in the program"},
+        Case{"G0 Z5\no100 call\nM2\no100 sub\nM99\no100 endsub\n", 5, 1,
+             "M99 in the O-word subroutine o100 (use endsub)"},
+        Case{"G0 Z5\nM98 P100\nM2\nO100\no100 endsub\n", 5, 1,
+             "endsub in the subprogram O100 (called by M98: use M99)"}),
     case_name);
 
 // Polar coordinates (docs/gcode.md "Polar coordinates"): the programs
@@ -282,6 +288,30 @@ TEST(BadInput, NotTextIsRejectedBeforeAnything) {
   } catch (const GcodeError& e) {
     EXPECT_EQ(e.where().line, 2);
     EXPECT_NE(e.message().find("not a text file"), std::string::npos);
+  }
+}
+
+// M62-M68, M19, M50-M53: words rs274 takes (it rounds a fraction, passes a
+// negative output number on, reads a missing Q as -1, any P but 0 as on)
+// and truecut refuses at their column (docs/gcode.md).
+TEST(BadInput, IoWordsRs274PassesOnAreRefused) {
+  const Case cases[] = {
+      {"M62 P1.5\nM2\n", 1, 5, "M62 P (the output number) must be a whole number"},
+      {"M64 P-1\nM2\n", 1, 5, "M64 P (the output number) must be a whole number"},
+      {"M67 E0\nM2\n", 1, 1, "M67 needs Q"},
+      {"M68 E1.5 Q1\nM2\n", 1, 5, "M68 E (the output number)"},
+      {"M50 P2\nM2\n", 1, 5, "M50 P (0 off, 1 on)"},
+      {"M66 P0 L5 Q1\nM2\n", 1, 8, "M66 L (the wait mode) must be a whole number from 0 to 4"},
+      {"M19 R10 P3\nM2\n", 1, 9, "M19 P (the direction)"},
+      {"M19 R10 Q-1\nM2\n", 1, 9, "M19 Q (the timeout) must not be negative"},
+      {"G0 X1 E2\nM2\n", 1, 7, "E word with no M66, M67 or M68"},
+      {"M19 L2\nM2\n", 1, 5, "L word with no G10"},
+  };
+  for (const Case& c : cases) {
+    GcodeError e = error_of(c.text);
+    EXPECT_EQ(e.where().line, c.line) << c.text << e.what();
+    EXPECT_EQ(e.where().column, c.column) << c.text << e.what();
+    EXPECT_NE(e.message().find(c.message_part), std::string::npos) << e.what();
   }
 }
 

@@ -79,9 +79,31 @@ TEST(Offsets, G28GoesThroughTheGivenPointToHome) {
   EXPECT_EQ(m[5], "STRAIGHT_TRAVERSE(1.0000, 2.0000, 3.0000, 0.0000, 0.0000, 0.0000)");
 }
 
+// G10 L1 edits the interpreter's copy of the tool table: the next G43 takes
+// the new length, the table passed in stays as it was for the next run.
+TEST(Offsets, G10L1EditsTheToolTableOfThisRun) {
+  InterpreterOptions o;
+  o.tools = sample_tools();
+  const double before = o.tools.find(1)->offset_mm.z;
+  auto p = run("T1 M6\nG10 L1 P1 Z25 R3\nG43\nG0 Z0\nM2\n", o);
+  EXPECT_EQ(calls_named(p, {"USE_TOOL_LENGTH_OFFSET"}).at(0),
+            "USE_TOOL_LENGTH_OFFSET(0.0000 0.0000 25.0000, 0.0000 0.0000 0.0000, 0.0000 0.0000 "
+            "0.0000)");
+  EXPECT_EQ(o.tools.find(1)->offset_mm.z, before);
+  auto again = run("T1 M6\nG43\nG0 Z0\nM2\n", o);
+  int traverses = 0;
+  for (const auto& c : again.calls)
+    if (std::holds_alternative<StraightTraverse>(c.op)) {
+      ++traverses;
+      EXPECT_NEAR(c.context.tool_offset_mm.z, before, 1e-12);
+    }
+  EXPECT_EQ(traverses, 1);
+}
+
 TEST(Offsets, G10Errors) {
   EXPECT_NE(error_of("G10 L2 X1\nM2\n").message().find("needs P"), std::string::npos);
-  EXPECT_NE(error_of("G10 L1 P1 Z1\nM2\n").message().find("tool table"), std::string::npos);
+  EXPECT_NE(error_of("G10 L1 P5 Z1\nM2\n").message().find("not in the tool table"),
+            std::string::npos);
   EXPECT_NE(error_of("G10 L2 P1 R30\nM2\n").message().find("rotation"), std::string::npos);
   EXPECT_NO_THROW(run("G10 L2 P1 R0 X1\nM2\n"));
 }

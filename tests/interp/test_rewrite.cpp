@@ -749,6 +749,33 @@ TEST(Rewrite, ModalStateLinesAreCopiedAndG5SplinesRefusedByName) {
   EXPECT_EQ(before, (std::vector<double>{100, 40, 100}));
   EXPECT_EQ(after.back(), 100);  // restored by M72 for the last pass
   EXPECT_EQ(std::set<double>(after.begin(), after.end()), (std::set<double>{40, 100}));
+  // A G52 line is copied as written; an output code on a rewritten move's
+  // line is refused by name.
+  const std::string g52 =
+      "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG52 X1 Y0.5\nG0 X-4 Y0 Z1\nG1 Z0 F100\n"
+      "G1 X0 F40\nM62 P1\nG1 X4\nG0 Z1\nM30\n";
+  const RewriteResult r52 = rewrite_program(g52, "g52.ngc", m, o);
+  EXPECT_NE(r52.text.find("\nG52 X1 Y0.5\n"), std::string::npos) << r52.text;
+  EXPECT_NE(r52.text.find("\nM62 P1\n"), std::string::npos) << r52.text;
+  EXPECT_GT(r52.summary.moves_rewritten, 0);
+  EXPECT_NE(error_of<GcodeError>("G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X-4 Y0 Z1\n"
+                                 "G1 Z0 F100\nG1 X0 M62 P1\nM30\n",
+                                 o)
+                .find("M62 beside a move"),
+            std::string::npos);
+  // A Fanuc-style subprogram run once is rewritten in place; run twice (L2)
+  // its lines are refused like those of a loop.
+  const std::string m98 =
+      "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X-4 Y0 Z1\nG1 Z0 F100\nM98 P100\n"
+      "G0 Z1\nM30\nO100\nG1 X0 F40\nG1 X4\nM99\n";
+  const RewriteResult r98 = rewrite_program(m98, "m98.ngc", m, o);
+  EXPECT_NE(r98.text.find("\nM98 P100\n"), std::string::npos) << r98.text;
+  EXPECT_NE(r98.text.find("\nO100\n"), std::string::npos) << r98.text;
+  EXPECT_GT(r98.summary.moves_rewritten, 0);
+  std::string twice = m98;
+  twice.replace(twice.find("M98 P100"), 8, "M98 P100 L2");
+  EXPECT_NE(error_of<GcodeError>(twice, o).find("bad.ngc:11"), std::string::npos)
+      << error_of<GcodeError>(twice, o);
   const std::string spline =
       "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X0 Y0 Z0\nG5.1 X4 Y0 I2 J2 F100\nM30\n";
   EXPECT_EQ(error_of<GcodeError>(spline, o),
@@ -792,6 +819,12 @@ TEST(Rewrite, ToolMissingFromTheTableOrNotSelectedIsRefusedWithItsLine) {
                                  o),
             "bad.ngc:4: feed move of operation 'FACE' with no tool in the spindle: the tool radius "
             "comes from the tool table (select the tool with T.. M6 before the move)");
+  // G10 L1/L10/L11 edit the table while the program runs: refused by name.
+  EXPECT_EQ(error_of<GcodeError>("G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG10 L1 P2 R2\n"
+                                 "G0 X0 Y0 Z1\nG1 Z0 F100\nG1 X1\nM30\n",
+                                 o)
+                .substr(0, 60),
+            "bad.ngc:4: G10 L1/L10/L11 (tool table edit) in the program: ");
   // A ball end mill whose table row has no diameter.
   RewriteOptions ball = options("FACE", CutType::kBall);
   ball.interpreter.tools = ToolTable::parse("T1 P1 D2 Z35\nT2 P2 Z40\n", "tools.tbl");

@@ -42,7 +42,6 @@ const std::map<std::string, std::string>& out_of_scope() {
       {"ncfiles/lathe_g7x_quadrants.ngc", "lathe cycles G70-G72"},
       {"ncfiles/lathe_pawn.ngc", "lathe radius/diameter mode G7/G8"},
       {"millturn/example.ngc", "lathe radius/diameter mode G7/G8"},
-      {"ncfiles/x-trim.ngc", "M66 (wait on input) in the touchoff subroutine"},
       {"ncfiles/systems.ngc", "quadratic B-spline G5.1"},
       {"nc_files/tcdemo.ngc", "quadratic B-spline G5.1"}};
   return kList;
@@ -284,6 +283,67 @@ TEST(Rs274Oracle, SyncMotionAndProbingErrorsAtTheSameLine) {
       "G38.6 Z-3 (no such probe)",
   };
   expect_refused_at_the_same_line(*o, "sync_errors", "G21 F100 S500\nG0 X-5 Y-5 Z5\n", kCases);
+}
+
+// Local offsets, tool table edits, dynamic tool length, M98/M99 (docs/gcode.md):
+// the programs rs274 refuses, refused by truecut at the same line.
+TEST(Rs274Oracle, OffsetToolAndSubprogramErrorsAtTheSameLine) {
+  REQUIRE_ORACLE(o);
+  static const char* kCases[] = {
+      "G52 @1 ^2 (polar words)",
+      "G0 G52 X1 (with a motion code)",
+      "G92 X1 G0 (G92 with a motion code)",
+      "G52 X1 R2 (R word)",
+      "G52 X1 G10 L2 P1 (two non-modal codes)",
+      "G41 D1 G1 X10 Y0\nG52 X1 (under cutter compensation)",
+      "G10 L1 P50 Z1 (tool not in the table)",
+      "G10 L1 Z1 (no P)",
+      "G10 L10 P0 Z1 (P0)",
+      "G10 L11 Z1 (L11 without P)",
+      "G10 L1 P3 Z1 G0 (with a motion code)",
+      "G10 L2 P1 X1 G1 (G10 L2 with a motion code)",
+      "G10 L1 P3 Q10 (orientation above 9)",
+      "G10 L3 P1 X1 (no such L)",
+      "G10 L1 P3 Z1 H2 (H word)",
+      "G10 L1 P3 X1 @1 (polar word)",
+      "G43.2 Z0.5 (G43.2 without H)",
+      "G43.2 H1 Z1 (G43.2 with H and axis words)",
+      "G43.1 H1 Z1 (G43.1 with H)",
+      "G43.2 H50 (tool not in the table)",
+      "G41 D1 G1 X10 Y0\nG43.1 Z1 (G43.1 under cutter compensation)",
+      "G1 M98 P100 (M98 with a G code)\nM2\nO100\nG1 X1\nM99",
+      "M98 (no P)\nM2\nO100\nG1 X1\nM99",
+      "M98 P100 L1.5 (fraction L)\nM2\nO100\nG1 X1\nM99",
+      "M98 P100\nM2\nO100\nM98 P100 L-1 (negative L)\nM99",
+      "M98 P100\nM2\nO100\nG0 X2 M99 (M99 with a move)",
+      "M98 P100\nM2\nO100 G1 X1 (words after the number)\nM99",
+      "M98 P100\nM2\nO100\nM98 P100 L1 (recursion)\nM99",
+  };
+  expect_refused_at_the_same_line(*o, "offset_errors", "G21 F100 T1 M6\nG0 X-5 Y-5\n", kCases);
+}
+
+// M62-M68, M19, M48-M53 (docs/gcode.md): the programs rs274
+// refuses, refused by truecut at the same line.
+TEST(Rs274Oracle, IoCodeErrorsAtTheSameLine) {
+  REQUIRE_ORACLE(o);
+  static const char* kCases[] = {
+      "M62 (no P)",
+      "M62 E1 (E without M66-M68)",
+      "M67 Q1 (no E)",
+      "M66 P1 L1 (wait without a timeout)",
+      "M66 P0 L1 Q-1 (negative timeout)",
+      "M66 L0 (neither P nor E)",
+      "M66 P1 E1 L0 (both P and E)",
+      "M66 E2 L4 Q1 (analog input with a wait)",
+      "M62 P1 M65 P2 (two output codes)",
+      "M68 E0 Q1 M62 P0 (output codes of one group)",
+      "M48 M49 (two override codes)",
+      "G4 P2 M62 P1 (two P words)",
+      "M19 R-10 (angle below 0)",
+      "M19 R400 (angle above 360)",
+      "M19 M3 (orient and spindle on one line)",
+  };
+  expect_refused_at_the_same_line(*o, "io_errors", "G21 F100 T1 M6\nG0 X-5 Y-5\n", kCases);
 }
 
 // Random profiles under G41/G42 in G17 and G18 (lines, R and I/J/K arcs,

@@ -320,7 +320,8 @@ struct Builder {
       return;
     }
     if (std::holds_alternative<Comment>(c.op) || std::holds_alternative<Message>(c.op) ||
-        std::holds_alternative<LogFile>(c.op) || std::holds_alternative<SetFeedMode>(c.op))
+        std::holds_alternative<LogFile>(c.op) || std::holds_alternative<SetFeedMode>(c.op) ||
+        std::holds_alternative<OutputBit>(c.op) || std::holds_alternative<OutputValue>(c.op))
       return;  // do not interrupt a spline
     flush_spline();
     if (const auto* t = std::get_if<StraightTraverse>(&c.op)) {

@@ -209,6 +209,15 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
         (list.empty() ? std::string("no (OPERATION: NAME) comments") : "operations: " + list) +
         ")");
   }
+  // G10 L1/L10/L11 change the tool table while the program runs; the
+  // rewrite takes each tool's radius from the table given, so it refuses
+  // them by name rather than correct with a radius the program replaced.
+  for (const CanonCall& c : program.calls)
+    if (std::holds_alternative<SetToolTableEntry>(c.op))
+      throw GcodeError({file_of(program, c.context, name), c.context.line, 0},
+                       "G10 L1/L10/L11 (tool table edit) in the program: the rewrite takes the "
+                       "tool radii from the tool table given and cannot follow an edit; put the "
+                       "values into the tool table file instead");
   const std::map<int, double> radius_by_tool = tool_radii(program, name, o);
   std::vector<double> radii;
   for (const auto& [tool, radius] : radius_by_tool)

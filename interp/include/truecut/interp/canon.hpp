@@ -128,6 +128,19 @@ struct ChangeTool {  // M6
 };
 struct ChangeToolNumber {  // M61 Q
   int tool = 0;
+  int slot = 0;  // 1-based row of the tool in the tool table (rs274 prints it)
+};
+// G10 L1/L10/L11: a tool table entry changed. `pocket` is the tool's row
+// in the table (1-based, rs274's number; 0: the tool in the spindle, sent
+// after the row when the edited tool is in the spindle). Offsets and the
+// diameter in program units (degrees for A B C).
+struct SetToolTableEntry {
+  int pocket = 0;
+  int tool = 0;
+  Axes6 offset;
+  double diameter = 0;
+  double front_angle_deg = 0, back_angle_deg = 0;
+  int orientation = 0;
 };
 struct SetSpindleSpeed {
   double rpm = 0;
@@ -136,11 +149,39 @@ struct StartSpindle {
   bool clockwise = true;
 };
 struct StopSpindle {};
-// Stops the spindle at an angle (G87 before it enters and leaves the hole);
-// `clockwise`: the direction it turned in, as rs274 passes it on.
+// Stops the spindle at an angle (G87 before it enters and leaves the hole,
+// M19); `clockwise`: the direction it turned in, as rs274 passes it on for
+// G87. M19 passes its P (0 either way, 1 clockwise, 2 counter-clockwise) as
+// `m19_direction` instead.
 struct OrientSpindle {
   double degrees = 0;
   bool clockwise = true;
+  int m19_direction = -1;  // >= 0: M19's P
+};
+// M19 Q: wait up to `timeout_s` for the orientation (rs274 prints
+// SPINDLE.0.WAIT_ORIENT_COMPLETE).
+struct WaitOrientComplete {
+  double timeout_s = 0;
+};
+// M62-M65: a digital output, with the next motion (`synchronized`: M62 M63)
+// or at once (M64 M65).
+struct OutputBit {
+  int index = 0;
+  bool on = false;
+  bool synchronized = false;
+};
+// M67 (with the next motion) and M68 (at once): an analog output.
+struct OutputValue {
+  int index = 0;
+  double value = 0;
+  bool synchronized = false;
+};
+// M52 (adaptive feed) and M53 (feed hold switch) P1 / P0.
+struct AdaptiveFeed {
+  bool enabled = true;
+};
+struct FeedHold {
+  bool enabled = true;
 };
 // The feed and spindle speed overrides switched off and on again around the
 // tapping cycles G74/G84, as LinuxCNC does.
@@ -194,7 +235,8 @@ using CanonOp =
                  ProbeSwitch, StraightProbe, SetFeedRate, SetFeedMode, SelectPlane, UseLengthUnits,
                  SetMotionControlMode, SetNaivecamTolerance, SetG5xOffset, SetG92Offset,
                  SetXYRotation, UseToolLengthOffset, SelectTool, StartChange, ChangeTool,
-                 ChangeToolNumber, SetSpindleSpeed, StartSpindle, StopSpindle, OrientSpindle,
+                 ChangeToolNumber, SetToolTableEntry, SetSpindleSpeed, StartSpindle, StopSpindle,
+                 OrientSpindle, WaitOrientComplete, OutputBit, OutputValue, AdaptiveFeed, FeedHold,
                  FeedOverride, SpeedOverride, SetSpindleMode, Coolant, Comment, Message, LogFile,
                  ProgramStop, PalletShuttle, ProgramEnd, Finish, SetFeedReference, OnReset, SetTcp,
                  SetSplineMode>;

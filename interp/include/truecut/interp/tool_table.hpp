@@ -22,6 +22,7 @@ struct ToolEntry {
   Axes6 offset_mm;  // length offsets per axis (Z is the usual one)
   double diameter_mm = 0;
   int orientation = 0;  // Q: a lathe tool's orientation 1-8 (0 or 9: a mill)
+  double front_angle_deg = 0, back_angle_deg = 0;  // I, J (lathe tools)
   std::string comment;
 };
 
@@ -35,6 +36,7 @@ class ToolTable {
   void add(ToolEntry entry);
   const std::vector<ToolEntry>& entries() const { return entries_; }
   const ToolEntry* find(int number) const;
+  ToolEntry* find(int number);  // G10 L1/L10/L11 edit the entry
   // 1-based row of the tool in the table, as LinuxCNC numbers its slots.
   std::optional<int> slot_of(int number) const;
 

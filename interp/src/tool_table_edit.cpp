@@ -1,0 +1,75 @@
+// G10 L1, L10 and L11: tool table edits during the program, as LinuxCNC
+// 2.9's rs274 makes them (docs/gcode.md "Tool table edits G10 L1/L10/L11").
+#include <cmath>
+
+#include "block_executor.hpp"
+#include "system_parameters.hpp"
+#include "truecut/rt/number_format.hpp"
+
+namespace truecut::interp {
+
+namespace {
+
+constexpr char kAxisLetters[6] = {'x', 'y', 'z', 'a', 'b', 'c'};
+constexpr int kG593 = 9;  // G59.3: L11's fixture
+
+}  // namespace
+
+void BlockExecutor::tool_table_edit(int l) {
+  const int col = codes_.g_column[0];
+  const std::string name = "G10 L" + std::to_string(l);
+  if (!b_->has('p')) fail(col, name + " needs P (the tool number)");
+  const double pv = b_->value('p');
+  if (pv < 1 || pv != std::floor(pv))
+    fail(column_of('p'), name + " P (the tool number) must be a whole number >= 1");
+  if (pv > kLargestWholeWord)
+    fail(column_of('p'), "tool " + rt::format_shortest(pv) + " is not in the tool table");
+  const int tool = static_cast<int>(pv);
+  ToolEntry* e = tools_.find(tool);
+  if (!e) fail(column_of('p'), "tool " + std::to_string(tool) + " is not in the tool table");
+  if (b_->has('q')) {
+    const double q = b_->value('q');
+    if (q < 0 || q > 9 || q != std::floor(q))
+      fail(column_of('q'), name + " Q (the tool orientation) must be a whole number 0..9");
+  }
+  if (b_->has('r') && !std::isfinite(2 * b_->value('r')))
+    fail(column_of('r'), name + " R: the diameter is not a finite number");
+  // L10: the offset that puts the tool, with it applied, at the word in the
+  // active system (G5x and G92/G52 applied). L11: the same with G59.3's
+  // origin instead and no G92/G52 offset.
+  const Axes6 prog = s_.program_position();
+  Axes6 fixture;
+  for (int i = 0; i < 6; ++i)
+    fixture[i] = params_.get(coord_system_base(kG593) + i);
+  for (int i = 0; i < 6; ++i) {
+    const char letter = kAxisLetters[i];
+    if (!b_->has(letter)) continue;
+    const double v = b_->value(letter);
+    double offset = v;  // L1: the word itself
+    if (l == 10) offset = prog[i] + s_.to_program(i, s_.tool_offset_mm[i]) - v;
+    if (l == 11)
+      offset = prog[i] + s_.to_program(i, s_.g5x_mm[i] + s_.g92_mm[i] + s_.tool_offset_mm[i]) -
+               fixture[i] - v;
+    e->offset_mm[i] = s_.to_machine(i, offset);
+  }
+  if (b_->has('r')) e->diameter_mm = s_.to_machine(0, 2 * b_->value('r'));
+  if (b_->has('i')) e->front_angle_deg = b_->value('i');
+  if (b_->has('j')) e->back_angle_deg = b_->value('j');
+  if (b_->has('q')) e->orientation = static_cast<int>(b_->value('q'));
+  axes_used_ = true;
+  SetToolTableEntry entry;
+  entry.pocket = tools_.slot_of(tool).value_or(0);
+  entry.tool = tool;
+  entry.offset = s_.to_program(e->offset_mm);
+  entry.diameter = s_.to_program(0, e->diameter_mm);
+  entry.front_angle_deg = e->front_angle_deg;
+  entry.back_angle_deg = e->back_angle_deg;
+  entry.orientation = e->orientation;
+  out_.emit(entry);
+  if (entry.pocket == s_.spindle_slot) {  // the spindle's copy too, as rs274
+    entry.pocket = 0;
+    out_.emit(entry);
+  }
+}
+
+}  // namespace truecut::interp
