@@ -12,12 +12,14 @@
 #include <numbers>
 #include <set>
 
+#include "benchmark004_drawing.hpp"
 #include "part_test_support.hpp"
 #include "test_paths.hpp"
 #include "truecut/interp/operations.hpp"
 #include "truecut/sim/benchmark_parts.hpp"
 
 using namespace truecut::sim;
+using namespace truecut::sim::test::benchmark004;
 using truecut::interp::ArcFeed;
 using truecut::interp::CanonCall;
 using truecut::interp::CanonProgram;
@@ -27,14 +29,6 @@ using truecut::sim::test::interpret;
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-// The drawing (docs/parts.md), independent of the generator's constants.
-constexpr double kBaseR = 50, kStep1Z = 15, kStepR = 40, kStep2Z = 30, kCollarR = 20, kSphereZ = 35,
-                 kSphereR = 20;
-const Eigen::Vector3d kSphereCentre(0, 0, kSphereZ);
-
-PartOptions coarse() {
-  return {2.0, 0.8, 1.0, 2.0};
-}
 
 double analytic_volume() {
   return kPi * (kBaseR * kBaseR * kStep1Z + kStepR * kStepR * (kStep2Z - kStep1Z) +

@@ -17,12 +17,14 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "benchmark004_drawing.hpp"
 #include "part_test_support.hpp"
 #include "truecut/interp/operations.hpp"
 #include "truecut/sim/benchmark_parts.hpp"
 #include "truecut/sim/drive_surface.hpp"
 
 using namespace truecut::sim;
+using namespace truecut::sim::test::benchmark004;
 using truecut::interp::ArcFeed;
 using truecut::interp::CanonCall;
 using truecut::interp::StraightFeed;
@@ -32,14 +34,6 @@ using truecut::sim::test::interpret;
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-// The drawing (docs/parts.md).
-constexpr double kBaseR = 50, kStep1Z = 15, kStepR = 40, kStep2Z = 30, kCollarR = 20, kSphereZ = 35,
-                 kSphereR = 20;
-const Eigen::Vector3d kSphereCentre(0, 0, kSphereZ);
-
-PartOptions coarse() {
-  return {2.0, 0.8, 1.0, 2.0};
-}
 
 struct Planted {
   double s, b;
