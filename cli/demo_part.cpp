@@ -110,10 +110,15 @@ DemoPartResult run_demo_part(const std::string& part, const DemoOptions& o) {
   uint64_t seed = o.seed * 100;
   auto next_seed = [&] { return std::to_string(++seed); };
 
-  s.run("generate the part",
-        {"part", part, "--out", "part", "--mesh-edge",
-         rt::format_printf("%g", per_part(o.mesh_edge_mm, part, 0.5, 1.0)), "--stepover",
-         rt::format_printf("%g", per_part(o.stepover_mm, part, 0.5, 1.0))});
+  // `truecut part` for this part and these options, into DIR.
+  const auto part_command = [&](const std::string& dir) {
+    return std::vector<std::string>{
+        "part",        part,
+        "--out",       dir,
+        "--mesh-edge", rt::format_printf("%g", per_part(o.mesh_edge_mm, part, 0.5, 1.0)),
+        "--stepover",  rt::format_printf("%g", per_part(o.stepover_mm, part, 0.5, 1.0))};
+  };
+  s.run("generate the part", part_command("part"));
   const PartInfo info = read_part_info(r.dir / "part" / "part.json");
   r.surfaces = info.surfaces;
   const std::vector<std::string> part_files{"--nominal",      "part/nominal.stl", "--part",
@@ -211,11 +216,9 @@ DemoPartResult run_demo_part(const std::string& part, const DemoOptions& o) {
   }
   // Regenerates the program for FIELD_DIR/adapted.stl into PART_DIR.
   auto regenerate = [&](const std::string& field_dir, const std::string& part_dir) {
-    s.run("regenerate the program for the adapted geometry of " + field_dir,
-          {"part", part, "--out", part_dir, "--mesh-edge",
-           rt::format_printf("%g", per_part(o.mesh_edge_mm, part, 0.5, 1.0)), "--stepover",
-           rt::format_printf("%g", per_part(o.stepover_mm, part, 0.5, 1.0)), "--adapted",
-           field_dir + "/adapted.stl", "--quiet"});
+    std::vector<std::string> args = part_command(part_dir);
+    args.insert(args.end(), {"--adapted", field_dir + "/adapted.stl", "--quiet"});
+    s.run("regenerate the program for the adapted geometry of " + field_dir, args);
   };
 
   if (o.ideal_reference)
