@@ -301,6 +301,9 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
        ", \"step_mm\": " + rt::format_printf("%.17g", o.step_mm) +
        ", \"reach_mm\": " + rt::format_printf("%.17g", s.reach_mm) +
        ", \"placement\": " + json_string(interp::to_string(o.placement)) +
+       ", \"matrix_vectors\": " +
+       (matrix_path ? json_string(raw_matrix ? "raw" : "smoothed") : std::string("null")) +
+       ", \"paper\": " + (paper.empty() ? std::string("null") : json_string(paper)) +
        ", \"cutting_length_mm\": " + rt::format_printf("%.17g", o.cutting_length_mm) +
        ", \"smoothing_radius_mm\": " + rt::format_printf("%.17g", o.smoothing_radius_mm) +
        ", \"surfaces\": [";

@@ -83,7 +83,62 @@ TEST(CliRewriteMatrix, RewriteAcceptsTheOfflineMatrix) {
       << test::read_file(dir / "o.ngc");
 }
 
-// A 5 mm compensation (a matrix in the wrong unit, say) was applied without
+// Issue 24: --paper denkena is the source's recipe — the raw mirror columns,
+// the 3 points at the tool tip — recorded in the audit; it needs a matrix.
+TEST(CliRewriteMatrix, PaperDenkenaReadsTheRawColumnsAtTheTip) {
+  const auto dir = test::scratch_dir();
+  write_flat_face_case(dir, 0.01, 1);
+  {
+    // The same face with raw vectors of 0.03 mm beside the smoothed 0.01.
+    offline::CompensationMatrix m;
+    for (int i = -10; i <= 10; ++i)
+      for (int j = -4; j <= 4; ++j) {
+        m.positions_mm.emplace_back(0.5 * i, 0.5 * j, 0.0);
+        m.vectors_mm.emplace_back(0.0, 0.0, 0.01);
+        m.raw_vectors_mm.emplace_back(0.0, 0.0, 0.03);
+        m.valid.push_back(1);
+        m.surface_ids.push_back(1);
+      }
+    offline::write_compensation_matrix(dir / "comp.csv", m, "flat face, raw beside smoothed");
+  }
+  const auto rewrite = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args{test::cli_path().string(),
+                                  "rewrite",
+                                  "p.ngc",
+                                  "--operation",
+                                  "FACE",
+                                  "--type",
+                                  "face",
+                                  "--tools",
+                                  "t.tbl",
+                                  "--out",
+                                  "o.ngc"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return test::run_process(args, dir);
+  };
+  auto r = rewrite({"--matrix", "comp.csv"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(test::read_file(dir / "o.ngc").find("X4.0000 Y0.0000 Z0.0100\n"), std::string::npos);
+  EXPECT_NE(test::read_file(dir / "o.ngc.audit.json").find("\"matrix_vectors\": \"smoothed\""),
+            std::string::npos);
+  r = rewrite({"--matrix", "comp.csv", "--paper", "denkena"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(test::read_file(dir / "o.ngc").find("X4.0000 Y0.0000 Z0.0300\n"), std::string::npos)
+      << test::read_file(dir / "o.ngc");
+  const std::string audit = test::read_file(dir / "o.ngc.audit.json");
+  EXPECT_NE(audit.find("\"placement\": \"tip\""), std::string::npos) << audit;
+  EXPECT_NE(audit.find("\"matrix_vectors\": \"raw\""), std::string::npos) << audit;
+  EXPECT_NE(audit.find("\"paper\": \"denkena\""), std::string::npos) << audit;
+  EXPECT_NE(audit.find("\"step_mm\": 0.5"), std::string::npos) << audit;
+
+  r = rewrite({"--field", "comp.csv", "--paper", "denkena"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--paper denkena goes with --matrix"), std::string::npos) << r.err;
+  r = rewrite({"--matrix", "comp.csv", "--paper", "sortino"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--paper must be denkena, not 'sortino'"), std::string::npos) << r.err;
+}
+
 // a word; above --max-correction (default 0.2 mm, as truecut field) it is
 // refused with exit 1 and nothing written, and --force writes it and says so.
 TEST(CliRewriteMatrix, ACompensationAboveMaxCorrectionIsRefusedUnlessForced) {
