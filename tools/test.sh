@@ -20,7 +20,7 @@ cmake --build "$dir" -j"$(nproc)" --target $target
 # The suite, then (normal build only) the comparisons with LinuxCNC itself,
 # which run LinuxCNC in real time (about 15 s on 2 cores on their own,
 # docs/linuxcnc.md), and the diagnosis cases on recordings from the
-# independent planted generator (about 22 s, docs/diagnosis.md,
+# independent planted generator (about 50 s on 2 cores, docs/diagnosis.md,
 # "Independent planted recordings").
 ctest --test-dir "$dir" --output-on-failure -j"$(nproc)" --timeout 600 -LE "planted|linuxcnc"
 if [ "${1:-}" != "--sanitize" ]; then
