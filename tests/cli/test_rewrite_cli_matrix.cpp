@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -51,14 +52,17 @@ TEST(CliRewriteMatrix, OfflineWriterAndRewriteReaderAgreeBitForBit) {
   }
 }
 
-// A face 10 x 4 mm at z = 0 whose compensation is dz everywhere, a
-// face-milling operation across it at safe height z_safe, and a tool table.
-void write_flat_face_case(const std::filesystem::path& dir, double dz, int z_safe) {
+// A face 10 x 4 mm at z = 0 whose compensation is dz everywhere (and, when
+// given, raw columns of raw_dz beside it), a face-milling operation across
+// it at safe height z_safe, and a tool table.
+void write_flat_face_case(const std::filesystem::path& dir, double dz, int z_safe,
+                          std::optional<double> raw_dz = {}) {
   offline::CompensationMatrix m;
   for (int i = -10; i <= 10; ++i)
     for (int j = -4; j <= 4; ++j) {
       m.positions_mm.emplace_back(0.5 * i, 0.5 * j, 0.0);
       m.vectors_mm.emplace_back(0.0, 0.0, dz);
+      if (raw_dz) m.raw_vectors_mm.emplace_back(0.0, 0.0, *raw_dz);
       m.valid.push_back(1);
       m.surface_ids.push_back(1);
     }
@@ -87,20 +91,7 @@ TEST(CliRewriteMatrix, RewriteAcceptsTheOfflineMatrix) {
 // the 3 points at the tool tip — recorded in the audit; it needs a matrix.
 TEST(CliRewriteMatrix, PaperDenkenaReadsTheRawColumnsAtTheTip) {
   const auto dir = test::scratch_dir();
-  write_flat_face_case(dir, 0.01, 1);
-  {
-    // The same face with raw vectors of 0.03 mm beside the smoothed 0.01.
-    offline::CompensationMatrix m;
-    for (int i = -10; i <= 10; ++i)
-      for (int j = -4; j <= 4; ++j) {
-        m.positions_mm.emplace_back(0.5 * i, 0.5 * j, 0.0);
-        m.vectors_mm.emplace_back(0.0, 0.0, 0.01);
-        m.raw_vectors_mm.emplace_back(0.0, 0.0, 0.03);
-        m.valid.push_back(1);
-        m.surface_ids.push_back(1);
-      }
-    offline::write_compensation_matrix(dir / "comp.csv", m, "flat face, raw beside smoothed");
-  }
+  write_flat_face_case(dir, 0.01, 1, 0.03);  // raw vectors of 0.03 mm beside the smoothed
   const auto rewrite = [&](std::vector<std::string> extra) {
     std::vector<std::string> args{test::cli_path().string(),
                                   "rewrite",
