@@ -86,6 +86,9 @@ const char* kFieldHelp =
     "  --tool-rotation       also fit a rotation of the tool about its tip where a\n"
     "                        flank's error changes along the tool axis (field\n"
     "                        channels rx ry rz; docs/offline.md, Tool rotation)\n"
+    "  --rotary-kinematics K  what tilts the machine gives --tool-rotation: ac-table\n"
+    "                        (default: a table-table A/C, whose standing tool\n"
+    "                        tilts only along A) or any (every tilt)\n"
     "  --remove-rbm          remove the rigid-body motion left in the error vectors\n"
     "  --sphere-radius MM    sphere method radius Rs (default 1.5)\n"
     "  --sphere-max-points N  sphere method: where the median sphere holds more scan\n"
@@ -423,6 +426,14 @@ offline::FieldPipelineOptions pipeline_options(const ParsedArgs& a, const Inputs
       a.number("max-scan-outliers", o.scan_check.max_off_percent, 0.0, 100.0);
   o.remove_rigid_body_motion = a.flag("remove-rbm") || sortino;
   o.tool_rotation = a.flag("tool-rotation");
+  if (auto k = a.value("rotary-kinematics")) {
+    if (*k == "ac-table")
+      o.rotation.kinematics = offline::RotaryKinematics::kAcTableTable;
+    else if (*k == "any")
+      o.rotation.kinematics = offline::RotaryKinematics::kAnyOrientation;
+    else
+      throw UsageError("--rotary-kinematics must be ac-table or any, not '" + *k + "'");
+  }
   o.sphere.radius_mm = a.number("sphere-radius", o.sphere.radius_mm, 0.01, 100.0);
   o.sphere.max_points_per_sphere = static_cast<std::size_t>(a.integer(
       "sphere-max-points", static_cast<long>(o.sphere.max_points_per_sphere), 0, 100000000));
@@ -630,6 +641,7 @@ int cmd_field(const std::vector<std::string>& argv) {
                       {"no-register", false},
                       {"remove-rbm", false},
                       {"tool-rotation", false},
+                      {"rotary-kinematics", true},
                       {"max-scan-offset", true},
                       {"max-points", true},
                       {"max-grid-nodes", true},

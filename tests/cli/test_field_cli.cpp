@@ -237,6 +237,21 @@ TEST(FieldCli, PaperSetsTheSourcesRecipeAndExplicitOptionsWin) {
   EXPECT_NE(r.err.find("--paper must be sortino or denkena, not 'smith'"), std::string::npos)
       << r.err;
   EXPECT_FALSE(fs::exists(root / "bad"));
+
+  // The tool rotation's machine: recorded, and a wrong name refused.
+  EXPECT_EQ(ours["tool_rotation"]["kinematics"], "ac-table");
+  EXPECT_FALSE(ours["tool_rotation"]["enabled"].get<bool>());
+  const nlohmann::json any = parameters("any", {"--tool-rotation", "--rotary-kinematics", "any"});
+  EXPECT_EQ(any["tool_rotation"]["kinematics"], "any");
+  EXPECT_TRUE(any["tool_rotation"]["enabled"].get<bool>());
+  args = field_args(p, root / "bad_kinematics");
+  args.insert(args.end(), {"--tool-rotation", "--rotary-kinematics", "head"});
+  const ProcessResult rk = truecut(args);
+  EXPECT_EQ(rk.exit_code, 2);
+  EXPECT_NE(rk.err.find("--rotary-kinematics must be ac-table or any, not 'head'"),
+            std::string::npos)
+      << rk.err;
+  EXPECT_FALSE(fs::exists(root / "bad_kinematics"));
 }
 
 // A CAD export with a zero-area facet (two corners the same) in the middle of

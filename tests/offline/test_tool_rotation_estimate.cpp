@@ -38,6 +38,20 @@ void add_wall(std::vector<PlacedVector>& out, std::uint32_t sample, const Vector
   }
 }
 
+// The estimate's geometry on its own: a machine that gives every tilt.
+ToolRotationOptions any_tilt() {
+  ToolRotationOptions o;
+  o.kinematics = RotaryKinematics::kAnyOrientation;
+  return o;
+}
+
+// The tool axis of a table-table A/C machine in the workpiece frame
+// (docs/offline.md, tool_path.hpp), written out here, and its turns by
+// central differences.
+Vector3d axis_at(double a_rad, double c_rad) {
+  return {std::sin(a_rad) * std::sin(c_rad), std::sin(a_rad) * std::cos(c_rad), std::cos(a_rad)};
+}
+
 }  // namespace
 
 TEST(ToolRotationEstimate, ALinearTrendAlongTheFlankBecomesARotationAboutTheTip) {
@@ -51,7 +65,7 @@ TEST(ToolRotationEstimate, ALinearTrendAlongTheFlankBecomesARotationAboutTheTip)
     for (const double b : {-7e-4, 3e-4, 1.2e-3}) {
       std::vector<PlacedVector> placed;
       add_wall(placed, 4, Vector3d(1, 2, 3), c.k, c.n, 0.03, b, 16.0, 40);
-      const ToolRotationEstimate e = estimate_tool_rotation(placed);
+      const ToolRotationEstimate e = estimate_tool_rotation(placed, any_tilt());
       ASSERT_EQ(1u, e.rotations.size());
       EXPECT_EQ(1, e.tilted_samples);
       const Vector3d w = e.rotations[0].vector_mm;
@@ -101,10 +115,73 @@ TEST(ToolRotationEstimate, NoiseLeavesTheSlopeWithinItsStandardError) {
     std::vector<PlacedVector> placed;
     add_wall(placed, 0, Vector3d::Zero(), Vector3d::UnitZ(), Vector3d::UnitX(), 0.02, b, 16.0, 40,
              sigma, seed);
-    const ToolRotationEstimate e = estimate_tool_rotation(placed);
+    const ToolRotationEstimate e = estimate_tool_rotation(placed, any_tilt());
     const double got = e.rotations[0].vector_mm.cross(Vector3d::UnitZ()).dot(Vector3d::UnitX());
     if (std::abs(got - b) <= 3.0 * se) ++within_3se;
   }
   // 99.7 % within 3 standard errors: at most 1 of 50 outside by chance.
   EXPECT_GE(within_3se, 49);
+}
+
+TEST(RealisableRotation, ATableTableMachineTiltsAlongAAndSidewaysOnlyOnceATiltsTheTable) {
+  const double h = 1e-6;
+  for (const double a_deg : {0.0, 1.0, 3.0, 30.0, -45.0}) {
+    for (const double c_deg : {0.0, 90.0, -135.0, 20.0}) {
+      const double a = a_deg * M_PI / 180.0, c = c_deg * M_PI / 180.0;
+      const Vector3d k = axis_at(a, c);
+      const Vector3d along_a = (axis_at(a + h, c) - axis_at(a - h, c)) / (2 * h);
+      const Vector3d along_c = (axis_at(a, c + h) - axis_at(a, c - h)) / (2 * h);
+      // C turns the axis sideways by sin A per radian; below sin 2 deg the
+      // component would damp that away, so the field must not ask for it.
+      const bool sideways = along_c.norm() >= std::sin(2.0 * M_PI / 180.0);
+      for (const Vector3d& w :
+           {Vector3d(4e-4, 0, 0), Vector3d(0, -7e-4, 0), Vector3d(2e-4, 3e-4, 5e-4)}) {
+        const Vector3d dk = w.cross(k);
+        const Vector3d want_a = dk.dot(along_a.normalized()) * along_a.normalized();
+        const Vector3d want_c = along_c.norm() > 1e-9
+                                    ? Vector3d(dk.dot(along_c.normalized()) * along_c.normalized())
+                                    : Vector3d::Zero();
+        const Vector3d kept_tilt = want_a + (sideways ? want_c : Vector3d::Zero());
+        const Vector3d got = realisable_rotation(w, k, c_deg, RotaryKinematics::kAcTableTable);
+        SCOPED_TRACE(testing::Message()
+                     << "A " << a_deg << " C " << c_deg << " w " << w.transpose());
+        EXPECT_NEAR(0.0, (got.cross(k) - kept_tilt).norm(), 1e-9);
+        EXPECT_NEAR(0.0, got.dot(k), 1e-15);
+        // A machine with every tilt keeps the whole tilt.
+        const Vector3d any = realisable_rotation(w, k, c_deg, RotaryKinematics::kAnyOrientation);
+        EXPECT_NEAR(0.0, (any.cross(k) - dk).norm(), 1e-15);
+      }
+    }
+  }
+}
+
+TEST(ToolRotationEstimate, ATiltTheMachineCannotGiveLeavesTheMeanShiftOfTheFlank) {
+  // A standing tool (A = 0, C = 0) on a wall facing +x would need a tilt
+  // towards x: only C could give it, and C does nothing at A = 0. The same
+  // tool on a wall facing -y tilts along A.
+  for (const bool facing_x : {true, false}) {
+    const Vector3d n = facing_x ? Vector3d(1, 0, 0) : Vector3d(0, -1, 0);
+    const double a = 0.03, b = 8e-4, height = 16.0;
+    std::vector<PlacedVector> placed;
+    add_wall(placed, 0, Vector3d::Zero(), Vector3d::UnitZ(), n, a, b, height, 41);
+    const ToolRotationEstimate e = estimate_tool_rotation(placed);  // the default: A/C table
+    ASSERT_EQ(1u, e.rotations.size());
+    EXPECT_EQ(1, e.tilted_samples);
+    EXPECT_EQ(facing_x ? 1 : 0, e.cut_samples);
+    if (facing_x) {
+      EXPECT_EQ(Vector3d::Zero(), e.rotations[0].vector_mm);
+      EXPECT_NEAR(b * Vector3d::UnitZ().cross(n).norm(), e.max_left_out_rad, 1e-15);
+      // No rotation: each point keeps its own vector, and their mean, the
+      // flank's best constant shift, is a + b h_mean.
+      Vector3d mean = Vector3d::Zero();
+      for (std::size_t i = 0; i < placed.size(); ++i) {
+        EXPECT_EQ(placed[i].vector_mm, e.translations_mm[i]);
+        mean += e.translations_mm[i] / double(placed.size());
+      }
+      EXPECT_NEAR(0.0, (mean - (a + b * height / 2) * n).norm(), 1e-12);
+    } else {
+      for (const Vector3d& t : e.translations_mm)
+        EXPECT_NEAR(0.0, (t - a * n).norm(), 1e-12);
+    }
+  }
 }

@@ -7,7 +7,28 @@
 #include <cmath>
 #include <numeric>
 
+#include "truecut/rt/core/joint_mode.hpp"
+
 namespace truecut::offline {
+
+Eigen::Vector3d realisable_rotation(const Eigen::Vector3d& w_rad, const Eigen::Vector3d& axis,
+                                    double c_deg, RotaryKinematics kinematics) {
+  const Eigen::Vector3d k = axis.normalized();
+  if (kinematics == RotaryKinematics::kAnyOrientation) return w_rad - w_rad.dot(k) * k;
+  const double sin_a = std::hypot(k.x(), k.y());
+  // (sin C, cos C): from the axis where A has tilted it, else the C word.
+  double sin_c = std::sin(c_deg * M_PI / 180.0), cos_c = std::cos(c_deg * M_PI / 180.0);
+  if (sin_a > 1e-12) {
+    sin_c = k.x() / sin_a;
+    cos_c = k.y() / sin_a;
+  }
+  const Eigen::Vector3d along_a(k.z() * sin_c, k.z() * cos_c, -sin_a);  // d k / dA, unit
+  const Eigen::Vector3d along_c(cos_c, -sin_c, 0.0);                    // d k / dC / sin A
+  const Eigen::Vector3d dk = w_rad.cross(k);
+  Eigen::Vector3d kept = dk.dot(along_a) * along_a;
+  if (sin_a >= rt::comp::kRotaryDampingStart) kept += dk.dot(along_c) * along_c;
+  return k.cross(kept);
+}
 
 ToolRotationEstimate estimate_tool_rotation(std::span<const PlacedVector> placed,
                                             const ToolRotationOptions& options) {
@@ -62,7 +83,13 @@ ToolRotationEstimate estimate_tool_rotation(std::span<const PlacedVector> placed
         const double m = count, var = shh - sh * sh / m;
         if (var > 0.0) {
           const double b = (shs - sh * ss / m) / var;
-          w = b * k.cross(n);
+          const Eigen::Vector3d wanted = b * k.cross(n);
+          w = realisable_rotation(wanted, k, first.c_deg, options.kinematics);
+          const double left_out = (wanted - w).norm();
+          if (left_out > 1e-9 * wanted.norm()) {
+            ++out.cut_samples;
+            out.max_left_out_rad = std::max(out.max_left_out_rad, left_out);
+          }
           ++out.tilted_samples;
         }
       }

@@ -66,6 +66,13 @@ json parameters_json(const FieldPipelineOptions& o, const AuditContext& c, doubl
       {"datum_surfaces", o.datum_surfaces},
       {"register_scan", o.register_scan},
       {"remove_rigid_body_motion", o.remove_rigid_body_motion},
+      {"tool_rotation",
+       {{"enabled", o.tool_rotation},
+        {"kinematics",
+         o.rotation.kinematics == RotaryKinematics::kAcTableTable ? "ac-table" : "any"},
+        {"min_height_spread_mm", o.rotation.min_height_spread_mm},
+        {"min_points", o.rotation.min_points},
+        {"max_normal_spread_deg", o.rotation.max_normal_spread_deg}}},
       {"icp",
        {{"max_iterations", o.icp.max_iterations},
         {"samples", o.icp.samples},
@@ -267,6 +274,10 @@ std::string audit_json(const FieldPipelineResult& r, const FieldPipelineOptions&
                     {"rapid_moves", r.path.rapid_moves},
                     {"skipped_rotated_moves", r.path.skipped_rotated_moves}};
   j["placement"] = {{"points", r.points.size()}, {"uncut_points", r.placement.uncut_points}};
+  if (o.tool_rotation)
+    j["tool_rotation"] = {{"tilted_samples", r.rotation_tilted_samples},
+                          {"samples_cut_to_the_machine", r.rotation_cut_samples},
+                          {"max_left_out_rad", r.rotation_max_left_out_rad}};
   j["field"] = {{"origin_mm", vec(g.origin_mm)},
                 {"spacing_mm", vec(g.spacing_mm)},
                 {"dims", {g.dims[0], g.dims[1], g.dims[2]}},

@@ -1,5 +1,6 @@
 #include "fit_with_rotation.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 #include <utility>
 
@@ -21,12 +22,16 @@ FieldFitResult fit_with_tool_rotation(FieldPipelineResult& r, const FieldPipelin
       p.sample = pp.sample;
       p.tcp_mm = pp.tcp_mm;
       p.axis = pp.axis;
+      p.c_deg = r.path.samples[pp.sample].c_deg;
       p.point_mm = r.points.positions_mm[pp.point];
       p.normal = r.points.normals[pp.point];
       p.vector_mm = ts.samples[k++].vector_mm;
       placed.push_back(p);
     }
     const ToolRotationEstimate e = estimate_tool_rotation(placed, opt.rotation);
+    r.rotation_tilted_samples += e.tilted_samples;
+    r.rotation_cut_samples += e.cut_samples;
+    r.rotation_max_left_out_rad = std::max(r.rotation_max_left_out_rad, e.max_left_out_rad);
     for (std::size_t i = 0; i < placed.size(); ++i)
       ts.samples[i].vector_mm = e.translations_mm[i];
     ToolSamples rs;

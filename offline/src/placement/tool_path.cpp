@@ -128,6 +128,7 @@ class Sampler {
     ToolPathSample s;
     s.tip_mm = {p.x, p.y, p.z};
     s.axis = ctx.tcp ? axis_from_ac(p.a, p.c) : Eigen::Vector3d::UnitZ();
+    s.c_deg = ctx.tcp ? p.c : 0.0;
     s.tool = ctx.tool;
     s.line = ctx.line;
     s.operation = op;

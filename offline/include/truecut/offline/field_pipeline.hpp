@@ -162,8 +162,14 @@ struct FieldPipelineResult {
   std::vector<Eigen::Vector3d> smoothed_matrix_mm;
   ToolPath path;
   PlacementResult placement;
-  std::vector<ToolSamples> tool_samples;     // what the fit got, per tool
-  std::optional<FieldFitResult> fit;         // set when the pipeline returns
+  std::vector<ToolSamples> tool_samples;  // what the fit got, per tool
+  std::optional<FieldFitResult> fit;      // set when the pipeline returns
+  // With tool_rotation: over all tools, the estimate's counts
+  // (tool_rotation.hpp): samples given a rotation, samples whose rotation
+  // the machine could not give in full, and the most left out of one, rad.
+  std::int64_t rotation_tilted_samples = 0;
+  std::int64_t rotation_cut_samples = 0;
+  double rotation_max_left_out_rad = 0.0;
   VectorStatistics error_statistics;         // raw error vectors
   VectorStatistics compensation_statistics;  // field_vectors_mm over the valid points
   // Largest correction the outputs apply: over the field samples and the

@@ -24,6 +24,7 @@ namespace truecut::offline {
 struct ToolPathSample {
   Eigen::Vector3d tip_mm = Eigen::Vector3d::Zero();  // programmed point, workpiece frame
   Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();   // unit, from the tip towards the spindle
+  double c_deg = 0.0;  // the C word under TRAORI (0 outside): at A = 0 the axis alone lacks it
   std::int32_t tool = 0;
   std::int32_t line = 0;        // program line of the move
   std::int32_t operation = -1;  // index into ToolPath::operations, -1 = none
