@@ -89,6 +89,9 @@ const char* kFieldHelp =
     "  --rotary-kinematics K  what tilts the machine gives --tool-rotation: ac-table\n"
     "                        (default: a table-table A/C, whose standing tool\n"
     "                        tilts only along A) or any (every tilt)\n"
+    "  --rotation-significance Z  --tool-rotation: a pass's slope must stand Z\n"
+    "                        standard errors out of the scan's noise (default 2;\n"
+    "                        0: every slope)\n"
     "  --remove-rbm          remove the rigid-body motion left in the error vectors\n"
     "  --sphere-radius MM    sphere method radius Rs (default 1.5)\n"
     "  --sphere-max-points N  sphere method: where the median sphere holds more scan\n"
@@ -426,6 +429,8 @@ offline::FieldPipelineOptions pipeline_options(const ParsedArgs& a, const Inputs
       a.number("max-scan-outliers", o.scan_check.max_off_percent, 0.0, 100.0);
   o.remove_rigid_body_motion = a.flag("remove-rbm") || sortino;
   o.tool_rotation = a.flag("tool-rotation");
+  o.rotation.min_slope_significance =
+      a.number("rotation-significance", o.rotation.min_slope_significance, 0.0, 10.0);
   if (auto k = a.value("rotary-kinematics")) {
     if (*k == "ac-table")
       o.rotation.kinematics = offline::RotaryKinematics::kAcTableTable;
@@ -642,6 +647,7 @@ int cmd_field(const std::vector<std::string>& argv) {
                       {"remove-rbm", false},
                       {"tool-rotation", false},
                       {"rotary-kinematics", true},
+                      {"rotation-significance", true},
                       {"max-scan-offset", true},
                       {"max-points", true},
                       {"max-grid-nodes", true},

@@ -4,7 +4,8 @@
 // rotary_location), so at A = 0 the table leans about the A line and the
 // shaft's ±Y faces come out sloped by 600 µrad along their height. A field
 // of translations alone can move the tool but not lean it; with
-// `--tool-rotation` the component in joint mode turns A back. The judge is
+// `--tool-rotation` the component in joint mode turns A back. The control:
+// translations alone leave more than half of the tilt on one face. The judge is
 // the virtual CMM (truth): the slope of each Y face's deviation over its
 // height, against that of the same program on the error-free machine.
 //
@@ -121,7 +122,7 @@ TEST(PlantedTableTilt, TheFieldsToolRotationTurnsAPlantedAZeroOffsetBack) {
   // σ = 20 µm the per-pass slopes drown in the scan's noise: docs/offline.md).
   run({"scan", (d / "uncompensated" / "machined.stl").string(), "--out", (d / "scan.ply").string(),
        "--mesh-out", (d / "scan_mesh.ply").string(), "--sigma-um", "5", "--seed", "103"});
-  auto field = [&](const std::string& out, bool rotation) {
+  auto field = [&](const std::string& out, std::vector<std::string> rotation) {
     std::vector<std::string> a = {"field",
                                   part + "/nominal.stl",
                                   (d / "scan_mesh.ply").string(),
@@ -143,30 +144,37 @@ TEST(PlantedTableTilt, TheFieldsToolRotationTurnsAPlantedAZeroOffsetBack) {
                                   (d / "ideal" / "machined.stl").string(),
                                   "--out",
                                   (d / out).string()};
-    if (rotation) a.push_back("--tool-rotation");
+    a.insert(a.end(), rotation.begin(), rotation.end());
     run(a);
     return (d / out / "field.tcf").string();
   };
-  machine_part("machine_tilt.json", "translation", field("field_translation", false), 104);
-  machine_part("machine_tilt.json", "rotation", field("field_rotation", true), 104);
+  machine_part("machine_tilt.json", "translation", field("field_translation", {}), 104);
+  // Every pass's slope used: the scan at σ = 5 µm resolves them.
+  machine_part("machine_tilt.json", "rotation",
+               field("field_rotation", {"--tool-rotation", "--rotation-significance", "0"}), 104);
+  // The default keeps only slopes two standard errors out of the noise.
+  machine_part("machine_tilt.json", "rotation_default",
+               field("field_rotation_default", {"--tool-rotation"}), 104);
   if (HasFatalFailure()) return;
 
   const auto ideal = slopes_urad(d / "ideal" / "cmm.csv");
   const auto before = slopes_urad(d / "uncompensated" / "cmm.csv");
   const auto translation = slopes_urad(d / "translation" / "cmm.csv");
   const auto rotation = slopes_urad(d / "rotation" / "cmm.csv");
+  const auto rotation_default = slopes_urad(d / "rotation_default" / "cmm.csv");
   for (const int face : {kYPos, kYNeg}) {
     SCOPED_TRACE("surface " + std::to_string(face));
     const double sign = face == kYPos ? 1.0 : -1.0;  // the lean tips +Y out, −Y in
     // The planted tilt is there, and what the program leaves is not it.
     EXPECT_NEAR(sign * kPlantedTiltUrad, before.at(face) - ideal.at(face), 0.25 * kPlantedTiltUrad);
-    // The control: translations alone leave at least half of it on one face
-    // at least (checked below, over both).
     // With the rotation at most a quarter of it is left on each face: one
     // standard error of a CMM slope here is about 70 µrad (35 points at
     // σ = 2 µm over 17 mm), so 150 µrad is two of them.
     EXPECT_LT(std::abs(rotation.at(face) - ideal.at(face)), 0.25 * kPlantedTiltUrad)
         << "translation only: " << translation.at(face) - ideal.at(face) << " µrad";
+    // The default's gate leaves more of it, but less than translations do.
+    EXPECT_LT(std::abs(rotation_default.at(face) - ideal.at(face)),
+              std::abs(translation.at(face) - ideal.at(face)));
   }
   const double left_by_translation = std::max(std::abs(translation.at(kYPos) - ideal.at(kYPos)),
                                               std::abs(translation.at(kYNeg) - ideal.at(kYNeg)));

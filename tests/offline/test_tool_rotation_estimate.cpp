@@ -38,10 +38,12 @@ void add_wall(std::vector<PlacedVector>& out, std::uint32_t sample, const Vector
   }
 }
 
-// The estimate's geometry on its own: a machine that gives every tilt.
+// The estimate's geometry on its own: a machine that gives every tilt, and
+// every slope used however small.
 ToolRotationOptions any_tilt() {
   ToolRotationOptions o;
   o.kinematics = RotaryKinematics::kAnyOrientation;
+  o.min_slope_significance = 0.0;
   return o;
 }
 
@@ -184,4 +186,53 @@ TEST(ToolRotationEstimate, ATiltTheMachineCannotGiveLeavesTheMeanShiftOfTheFlank
         EXPECT_NEAR(0.0, (t - a * n).norm(), 1e-12);
     }
   }
+}
+
+TEST(ToolRotationEstimate, ASlopeWithinTheScansCorrelatedNoiseGivesNoRotation) {
+  // 100 points over 16 mm with no trend, their error an AR(1) series along
+  // the flank (rho 0.7, stationary sigma 20 um): a scan whose error is
+  // correlated over its mesh's facets. Treated as independent, the slope's
+  // standard error would be sqrt(1.7 / 0.3) = 2.4 times too small, and one
+  // flank in five would show a "significant" tilt at three of them.
+  const int n = 100;
+  const double rho = 0.7, sigma = 0.02;
+  ToolRotationOptions three_se;
+  three_se.min_slope_significance = 3.0;
+  int tilted = 0;
+  for (unsigned seed = 1; seed <= 200; ++seed) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> g(0.0, 1.0);
+    std::vector<PlacedVector> placed;
+    add_wall(placed, 0, Vector3d::Zero(), Vector3d::UnitZ(), -Vector3d::UnitY(), 0.03, 0.0, 16.0,
+             n);
+    double e = sigma * g(rng);
+    for (PlacedVector& p : placed) {
+      p.vector_mm += e * p.normal;
+      e = rho * e + std::sqrt(1 - rho * rho) * sigma * g(rng);
+    }
+    const ToolRotationEstimate est = estimate_tool_rotation(placed, three_se);
+    tilted += est.tilted_samples;
+    EXPECT_EQ(est.tilted_samples + est.insignificant_samples, 1);
+  }
+  // At three standard errors 0.27 % would pass by chance; the correlation
+  // is estimated from the same 100 points, so allow 2 %.
+  EXPECT_LE(tilted, 4);
+
+  // A trend of 20 um over the same flank under noise of 4 um (the slope six
+  // of its standard errors) is kept.
+  int kept = 0;
+  for (unsigned seed = 1; seed <= 50; ++seed) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> g(0.0, 1.0);
+    std::vector<PlacedVector> placed;
+    add_wall(placed, 0, Vector3d::Zero(), Vector3d::UnitZ(), -Vector3d::UnitY(), 0.03, 0.02 / 16.0,
+             16.0, n);
+    double e = 0.2 * sigma * g(rng);
+    for (PlacedVector& p : placed) {
+      p.vector_mm += e * p.normal;
+      e = rho * e + std::sqrt(1 - rho * rho) * 0.2 * sigma * g(rng);
+    }
+    kept += estimate_tool_rotation(placed, three_se).tilted_samples;
+  }
+  EXPECT_GE(kept, 49);
 }

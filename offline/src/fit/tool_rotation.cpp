@@ -7,9 +7,56 @@
 #include <cmath>
 #include <numeric>
 
+#include <boost/math/distributions/normal.hpp>
+#include <boost/math/distributions/students_t.hpp>
+
 #include "truecut/rt/core/joint_mode.hpp"
 
 namespace truecut::offline {
+
+namespace {
+
+// Standard error of the slope b of the line s = a + b h fitted through
+// (h, s), with the residuals' serial correlation taken in: a scan's error
+// is correlated over the size of its mesh's facets, so neighbouring points
+// along the flank do not count as independent. Lag-1 autocorrelation rho of
+// the residuals in order of h, n_eff = n (1 - rho) / (1 + rho) (AR(1)), and
+// var(b) = s^2 / Sxx * n / n_eff.
+struct SlopeError {
+  double standard_error = 0.0;
+  double n_eff = 0.0;
+};
+SlopeError slope_standard_error(std::vector<std::pair<double, double>>& hs, double a, double b,
+                                double sxx) {
+  std::sort(hs.begin(), hs.end());
+  const auto n = static_cast<double>(hs.size());
+  double rss = 0.0, lag = 0.0, prev = 0.0;
+  for (std::size_t i = 0; i < hs.size(); ++i) {
+    const double r = hs[i].second - (a + b * hs[i].first);
+    rss += r * r;
+    if (i > 0) lag += r * prev;
+    prev = r;
+  }
+  if (!(rss > 0.0) || hs.size() < 3) return {};
+  const double rho = std::clamp(lag / rss, 0.0, 0.99);
+  const double n_eff = std::max(1.0, n * (1.0 - rho) / (1.0 + rho));
+  const double s2 = rss / (n - 2.0);
+  return {std::sqrt(s2 / sxx * n / n_eff), n_eff};
+}
+
+// |b| / se that a slope must reach: the two-sided quantile of Student's t
+// with n_eff - 2 degrees of freedom (at least 1) at the level that z
+// standard errors give under a normal law (z = 3: 0.27 %). With few
+// effective points the standard error is itself uncertain and t's tails
+// are heavy.
+double slope_threshold(double z, double n_eff) {
+  if (!(z > 0.0)) return 0.0;
+  const double tail = boost::math::cdf(boost::math::complement(boost::math::normal(), z));
+  const boost::math::students_t t(std::max(n_eff - 2.0, 1.0));
+  return boost::math::quantile(boost::math::complement(t, tail));
+}
+
+}  // namespace
 
 Eigen::Vector3d realisable_rotation(const Eigen::Vector3d& w_rad, const Eigen::Vector3d& axis,
                                     double c_deg, RotaryKinematics kinematics) {
@@ -72,6 +119,8 @@ ToolRotationEstimate estimate_tool_rotation(std::span<const PlacedVector> placed
       if (one_way) {
         // Least-squares line s = a + b h through the normal components.
         double sh = 0, ss = 0, shh = 0, shs = 0;
+        std::vector<std::pair<double, double>> hs;
+        hs.reserve(end - begin);
         for (std::size_t i = begin; i < end; ++i) {
           const PlacedVector& p = placed[order[i]];
           const double h = height[order[i]], s = p.vector_mm.dot(n);
@@ -79,10 +128,16 @@ ToolRotationEstimate estimate_tool_rotation(std::span<const PlacedVector> placed
           ss += s;
           shh += h * h;
           shs += h * s;
+          hs.emplace_back(h, s);
         }
         const double m = count, var = shh - sh * sh / m;
-        if (var > 0.0) {
-          const double b = (shs - sh * ss / m) / var;
+        const double b = var > 0.0 ? (shs - sh * ss / m) / var : 0.0;
+        const SlopeError se =
+            var > 0.0 ? slope_standard_error(hs, (ss - b * sh) / m, b, var) : SlopeError{};
+        if (var > 0.0 && std::abs(b) < slope_threshold(options.min_slope_significance, se.n_eff) *
+                                           se.standard_error) {
+          ++out.insignificant_samples;
+        } else if (var > 0.0) {
           const Eigen::Vector3d wanted = b * k.cross(n);
           w = realisable_rotation(wanted, k, first.c_deg, options.kinematics);
           const double left_out = (wanted - w).norm();

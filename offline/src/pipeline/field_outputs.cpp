@@ -72,7 +72,8 @@ json parameters_json(const FieldPipelineOptions& o, const AuditContext& c, doubl
          o.rotation.kinematics == RotaryKinematics::kAcTableTable ? "ac-table" : "any"},
         {"min_height_spread_mm", o.rotation.min_height_spread_mm},
         {"min_points", o.rotation.min_points},
-        {"max_normal_spread_deg", o.rotation.max_normal_spread_deg}}},
+        {"max_normal_spread_deg", o.rotation.max_normal_spread_deg},
+        {"min_slope_significance", o.rotation.min_slope_significance}}},
       {"icp",
        {{"max_iterations", o.icp.max_iterations},
         {"samples", o.icp.samples},
@@ -276,6 +277,7 @@ std::string audit_json(const FieldPipelineResult& r, const FieldPipelineOptions&
   j["placement"] = {{"points", r.points.size()}, {"uncut_points", r.placement.uncut_points}};
   if (o.tool_rotation)
     j["tool_rotation"] = {{"tilted_samples", r.rotation_tilted_samples},
+                          {"samples_within_noise", r.rotation_insignificant_samples},
                           {"samples_cut_to_the_machine", r.rotation_cut_samples},
                           {"max_left_out_rad", r.rotation_max_left_out_rad}};
   j["field"] = {{"origin_mm", vec(g.origin_mm)},

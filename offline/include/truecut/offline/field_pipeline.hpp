@@ -168,6 +168,7 @@ struct FieldPipelineResult {
   // (tool_rotation.hpp): samples given a rotation, samples whose rotation
   // the machine could not give in full, and the most left out of one, rad.
   std::int64_t rotation_tilted_samples = 0;
+  std::int64_t rotation_insignificant_samples = 0;  // slope within the noise: left to the fit
   std::int64_t rotation_cut_samples = 0;
   double rotation_max_left_out_rad = 0.0;
   VectorStatistics error_statistics;         // raw error vectors

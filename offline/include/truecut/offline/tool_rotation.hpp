@@ -12,10 +12,12 @@
 //   s(h) = a + b h.
 // Where the points span at least min_height_spread_mm along the axis and
 // face one way (every normal within max_normal_spread_deg of their mean),
-// the slope becomes the rotation w = b (k x n) (rad; k the axis, n the mean
+// and the slope stands out of its noise (min_slope_significance), the
+// slope becomes the rotation w = b (k x n) (rad; k the axis, n the mean
 // normal across the axis, unit): a rotation that moves the flank at height h
 // by b h along n. Elsewhere the rotation is 0 (a face cut by the tip, a
-// corner): a sample that pins the field's rotation to zero there. Each
+// corner, a slope within the scan's noise): a sample that pins the field's
+// rotation to zero there. Each
 // point's translation is what is left at the tip: its vector minus
 // w x (h k).
 //
@@ -51,6 +53,10 @@ struct ToolRotationOptions {
   double min_height_spread_mm = 1.0;
   int min_points = 3;
   double max_normal_spread_deg = 20.0;
+  // A slope smaller than this many of its standard errors (the residuals'
+  // serial correlation taken in; Student's t at the same level) is taken
+  // for noise: no rotation there. 0: every slope is used.
+  double min_slope_significance = 2.0;
 };
 
 // One compensation point as placed at a tool-path sample.
@@ -66,13 +72,15 @@ struct PlacedVector {
 
 struct ToolRotationEstimate {
   // One per tool-path sample with points: position = the tip, vector_mm =
-  // the rotation (rad), whole-vector samples.
+  // the rotation (rad), whole-vector samples (zero where the slope is
+  // within the noise).
   std::vector<FitSample> rotations;
   // Per placed point (same order): the translation at the tip.
   std::vector<Eigen::Vector3d> translations_mm;
   std::int64_t tilted_samples = 0;  // samples given a rotation (slope fitted)
   // Samples whose fitted rotation the machine cannot give in full, and the
   // largest part of one left out, rad.
+  std::int64_t insignificant_samples = 0;  // a slope within the noise: no rotation
   std::int64_t cut_samples = 0;
   double max_left_out_rad = 0.0;
 };
@@ -87,6 +95,21 @@ struct ToolRotationEstimate {
 // k. kAnyOrientation returns w's part perpendicular to k.
 Eigen::Vector3d realisable_rotation(const Eigen::Vector3d& w_rad, const Eigen::Vector3d& axis,
                                     double c_deg, RotaryKinematics kinematics);
+
+// Each point's translation at the tip under the rotation `rotation_of(sample
+// tip, axis, c_deg)` of its sample (what the fitted field gives there): its
+// vector minus w x (h k).
+template <class RotationAt>
+std::vector<Eigen::Vector3d> translations_at_tip(std::span<const PlacedVector> placed,
+                                                 RotationAt&& rotation_of) {
+  std::vector<Eigen::Vector3d> out(placed.size());
+  for (std::size_t i = 0; i < placed.size(); ++i) {
+    const PlacedVector& p = placed[i];
+    const Eigen::Vector3d w = rotation_of(p);
+    out[i] = p.vector_mm - w.cross((p.point_mm - p.tcp_mm).dot(p.axis) * p.axis);
+  }
+  return out;
+}
 
 // Deterministic; O(points log points).
 ToolRotationEstimate estimate_tool_rotation(std::span<const PlacedVector> placed,
