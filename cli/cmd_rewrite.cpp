@@ -240,6 +240,12 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
       const std::string bytes = read_bytes(*field_path, "correction field");
       add_input("field", *field_path, bytes);
       const auto field = rt::decode_field_file(bytes, *field_path);
+      // A and C turn the table about the machine's pivots: without them the
+      // program's X Y Z would follow pivots at 0.
+      if (field.field.has_rotation() && !a.value("machine"))
+        throw interp::RewriteError(*field_path +
+                                   ": the field turns the tool (rotation channels rx ry rz); give "
+                                   "--machine MACHINE.json, whose pivots A and C turn about");
       result = interp::rewrite_program(program, in_path, field.field, o);
     }
   } catch (const interp::GcodeError& e) {
@@ -326,6 +332,10 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
        std::to_string(s.blend_points[3]) +
        "], \"max_compensation_mm\": " + rt::format_printf("%.17g", s.max_compensation_mm) +
        ", \"mean_compensation_mm\": " + rt::format_printf("%.17g", s.mean_compensation_mm) +
+       ", \"points_rotated\": " + std::to_string(s.points_rotated) +
+       ", \"max_rotation_rad\": " + rt::format_printf("%.17g", s.max_rotation_rad) +
+       ", \"max_rotation_shortfall_rad\": " +
+       rt::format_printf("%.17g", s.max_rotation_shortfall_rad) +
        ", \"lines_in\": " + std::to_string(s.lines_in) +
        ", \"lines_out\": " + std::to_string(s.lines_out) + ", \"tools\": [" + tools_json +
        "]}\n}\n";
@@ -357,6 +367,9 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
                 s.blend_points[3], s.blend_points[2], s.blend_points[1], s.blend_points[0]);
   std::printf("  max compensation      %.4f mm\n", s.max_compensation_mm);
   std::printf("  mean compensation     %.4f mm\n", s.mean_compensation_mm);
+  if (s.points_rotated > 0)
+    std::printf("  tool turned (A, C)    %ld points, up to %.3f mrad, %.3f mrad not given\n",
+                s.points_rotated, s.max_rotation_rad * 1e3, s.max_rotation_shortfall_rad * 1e3);
   std::printf("  lines                 %d -> %d\n", s.lines_in, s.lines_out);
   std::printf("wrote %s and %s\n", out_path->c_str(), audit_path.c_str());
   return kExitOk;

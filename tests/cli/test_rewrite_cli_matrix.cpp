@@ -187,3 +187,56 @@ TEST(CliRewriteMatrix, FieldWithoutALayerForTheOperationsToolIsRefused) {
   EXPECT_FALSE(std::filesystem::exists(dir / "o.ngc"));
   EXPECT_FALSE(std::filesystem::exists(dir / "o.ngc.audit.json"));
 }
+
+// Issue 19: a field that turns the tool needs the machine's pivots (A and C
+// turn the table about them); without --machine it is refused, with it the
+// rewritten moves carry A and C and the audit counts them.
+TEST(CliRewriteMatrix, AFieldThatTurnsTheToolNeedsTheMachine) {
+  const auto dir = test::scratch_dir();
+  rt::FieldGrid g;
+  g.origin_mm = Vector3d(-10, -10, -10);
+  g.spacing_mm = Vector3d(1, 1, 1);
+  g.dims = {21, 21, 21};
+  rt::FieldLayer layer;
+  layer.tool = 2;
+  layer.nodes.assign(static_cast<std::size_t>(g.node_count()), rt::FieldNode{0, 0, 0.01, 1});
+  layer.rotation_rad.assign(static_cast<std::size_t>(g.node_count()), Vector3d(4e-4, 0, 0));
+  rt::write_field_file(dir / "f.tcf", rt::CorrectionField(g, {layer}), {"", "test"});
+  std::ofstream(dir / "p.ngc") << "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X-4 Y0 Z1\n"
+                                  "G1 Z0 F100\nG1 X4 F500\nG0 Z5\nM30\n";
+  std::ofstream(dir / "t.tbl") << "T1 P1 D2 Z30\nT2 P2 D4 Z40\n";
+  const std::vector<std::string> args = {test::cli_path().string(),
+                                         "rewrite",
+                                         "p.ngc",
+                                         "--field",
+                                         "f.tcf",
+                                         "--operation",
+                                         "FACE",
+                                         "--type",
+                                         "face",
+                                         "--tools",
+                                         "t.tbl",
+                                         "--out",
+                                         "o.ngc"};
+  const auto refused = test::run_process(args, dir);
+  EXPECT_EQ(refused.exit_code, 2);
+  EXPECT_NE(refused.err.find("f.tcf: the field turns the tool (rotation channels rx ry rz); give "
+                             "--machine MACHINE.json"),
+            std::string::npos)
+      << refused.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "o.ngc"));
+
+  const auto made = test::run_process({test::cli_path().string(), "part", "implant", "--out",
+                                       (dir / "implant").string(), "--mesh-edge", "1"},
+                                      dir);
+  ASSERT_EQ(made.exit_code, 0) << made.err;
+  std::vector<std::string> with_machine = args;
+  with_machine.insert(with_machine.end(), {"--machine", "implant/machine.json"});
+  const auto r = test::run_process(with_machine, dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string out = test::read_file(dir / "o.ngc");
+  EXPECT_NE(out.find(" A-0.0229"), std::string::npos) << out;  // -4e-4 rad in degrees
+  const std::string audit = test::read_file(dir / "o.ngc.audit.json");
+  EXPECT_NE(audit.find("\"points_rotated\": "), std::string::npos) << audit;
+  EXPECT_EQ(audit.find("\"points_rotated\": 0,"), std::string::npos) << audit;
+}

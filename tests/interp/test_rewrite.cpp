@@ -3,6 +3,7 @@
 // G93 feeds, field vs matrix, and the bad-input cases.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -350,6 +351,63 @@ TEST(Rewrite, FieldAndMatrixAgreeOnAConstantOffset) {
   g.origin_mm = V(100, 100, 100);
   const rt::CorrectionField away(g, layers);
   EXPECT_EQ(rewrite_program(kThreeOps, "p.ngc", away, o).text, kThreeOps);
+}
+
+// Issue 19: a field that turns the tool. In joint space (no TRAORI, A = C = 0
+// in the program) the rewriter turns A and C as truecut_comp does in joint
+// mode and moves X Y Z so that the tip lands where the translation says,
+// about the machine's pivots (here 100 mm below the part); the rapid after
+// the operation brings A and C back. The oracle is the forward kinematics:
+// the written joints give the tilted axis normalise(z + r x z) and the
+// original tip plus the translation.
+TEST(Rewrite, AFieldRotationTurnsAAndKeepsTheTipOnItsTarget) {
+  const char* prog =
+      "G21 G17 G90 G94\n(OPERATION: SIDE)\nT1 M6\nG43 H1\nG0 X0 Y0 Z5\n"
+      "G1 X0 Y0 Z0 F100\nG1 X4 F500\n(OPERATION: AFTER)\nG0 Z10\nG0 X8\nM30\n";
+  const V rotation(5e-4, 0, 0), translation(0.01, 0, -0.004);
+  rt::FieldGrid g;
+  g.origin_mm = V(-20, -10, -10);
+  g.spacing_mm = V(1, 1, 1);
+  g.dims = {41, 21, 21};
+  std::vector<rt::FieldLayer> layers(1);
+  layers[0].tool = 1;
+  layers[0].nodes.assign(g.node_count(),
+                         rt::FieldNode{translation.x(), translation.y(), translation.z(), 1.0});
+  layers[0].rotation_rad.assign(g.node_count(), rotation);
+  const rt::CorrectionField field(g, layers);
+  RewriteOptions o = options("SIDE", CutType::kPeripheral);
+  o.decimals = 7;
+  o.kinematics.z_rot_point_mm = -100;
+  const RewriteResult r = rewrite_program(prog, "side.ngc", field, o);
+  EXPECT_GT(r.summary.points_rotated, 0);
+  EXPECT_NEAR(r.summary.max_rotation_rad, rotation.norm(), 1e-15);
+  EXPECT_LT(r.summary.max_rotation_shortfall_rad, 1e-9);  // A gives a lean about X whole
+  rt::AcTrtParams k = o.kinematics;
+  k.tool_length_mm = 35;
+  const V wanted_axis = (V(0, 0, 1) + rotation.cross(V(0, 0, 1))).normalized();
+  const auto pts = feeds_of(r.text, "SIDE");
+  ASSERT_GE(pts.size(), 8u);
+  double last_x = -1;
+  for (const Axes6& p : pts) {
+    const rt::ToolPose pose = rt::forward_ac(k, {p.x, p.y, p.z + 35, p.a, p.c});
+    EXPECT_NEAR(0.0, (pose.axis - wanted_axis).norm(), 1e-8) << p.a;
+    EXPECT_NE(p.a, 0.0);
+    // The tip: on the programmed path, shifted by the translation.
+    const V tip = pose.tcp_mm - translation;
+    EXPECT_NEAR(tip.y(), 0.0, 1e-6);
+    if (tip.z() > 1e-6) continue;  // the plunge
+    EXPECT_NEAR(tip.z(), 0.0, 1e-6);
+    EXPECT_GE(tip.x(), last_x - 1e-6);
+    last_x = tip.x();
+  }
+  EXPECT_NEAR(last_x, 4.0, 1e-6);
+  // The retract after the operation names A and C again: back to 0.
+  const std::string after = "(OPERATION: AFTER)\n";
+  const auto retract = r.text.find(after + "G0 ") + after.size();
+  ASSERT_GT(retract, after.size()) << r.text;
+  const std::string line = r.text.substr(retract, r.text.find('\n', retract) - retract);
+  EXPECT_NE(line.find(" A0"), std::string::npos) << line;
+  EXPECT_NE(line.find(" C0"), std::string::npos) << line;
 }
 
 // A wall x = 0 (material at x < 0) cut by the flank of a flat end mill R 1

@@ -46,6 +46,7 @@ namespace {
 
 struct Correction {
   Eigen::Vector3d shift_mm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d rotation_rad = Eigen::Vector3d::Zero();  // field mode: the tool's lean
   bool compensated = false;
   std::array<int, 4> blends{};  // matrix mode: blends by points used; [0] none at all
 };
@@ -279,6 +280,9 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
   int line_file = -1, line_no = -1;
   int orig_mode = -1, out_mode = -1;
   bool displaced = false;  // the output's position differs from the original's
+  // ... in A or C (a field's rotation): the next rapid, in the operation or
+  // after it, brings them back.
+  bool turned = false;
 
   for (const CanonCall& c : program.calls) {
     const CallContext& ctx = c.context;
@@ -352,9 +356,10 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     }
     const bool follows_comp = after_comp;  // starts from a compensated point
     after_comp = ctx.cutter_comp;
-    if (in_op && !feed && displaced) {
-      // A rapid after a compensated point: written with all of X Y Z, so
-      // the axes it does not name come back to the original position.
+    if ((in_op || turned) && !feed && displaced) {
+      // A rapid after a compensated point: written with all of X Y Z (and A
+      // and C when they were turned), so the axes it does not name come
+      // back to the original position.
       if (ctx.file == 0 && motions_per_line[ctx.line] != 1) refuse_canned_cycle(file, ctx.line);
       if (ctx.file != 0 || motions_per_line[ctx.line] != 1)
         throw GcodeError({file, ctx.line, 0},
@@ -371,8 +376,8 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       std::string line = words.block_delete ? "/G0" : "G0";
       const char letters[] = {'X', 'Y', 'Z', 'A', 'B', 'C'};
       for (int ax : {0, 1, 2, 3, 5}) {
-        if (ax == 3 && !words.has_a) continue;
-        if (ax == 5 && !words.has_c) continue;
+        if (ax == 3 && !words.has_a && !turned) continue;
+        if (ax == 5 && !words.has_c && !turned) continue;
         const std::string v = exact(end[ax]);
         line += std::string(" ") + letters[ax] + v;
         expect[ax] = std::strtod(v.c_str(), nullptr);
@@ -385,6 +390,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       path.finish(move);
       out_mode = 0;
       displaced = false;
+      turned = false;
       continue;
     }
     if (!in_op || !feed) {
@@ -414,14 +420,24 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
         std::max(pieces_for_step(path, move, ctx, o, radius_mm), pieces_for_chord(move, o));
     std::vector<Vec5> points(n);
     std::vector<Correction> corrections(n);
-    bool all_zero = true;
+    bool all_zero = true, rotated = false;
     for (int k = 1; k <= n; ++k) {
       const Vec5 p = ToolPath::at(move, static_cast<double>(k) / n);
       const Correction corr = correction(path.tool_point(p, ctx), ctx, radius_mm);
       corrections[k - 1] = corr;
-      if (corr.shift_mm != Eigen::Vector3d::Zero()) all_zero = false;
-      points[k - 1] =
-          corr.shift_mm == Eigen::Vector3d::Zero() ? p : path.shifted(p, ctx, corr.shift_mm);
+      if (corr.shift_mm != Eigen::Vector3d::Zero() || corr.rotation_rad != Eigen::Vector3d::Zero())
+        all_zero = false;
+      if (corr.rotation_rad != Eigen::Vector3d::Zero()) {
+        double shortfall_rad = 0.0;
+        points[k - 1] = path.corrected(p, ctx, corr.shift_mm, corr.rotation_rad, shortfall_rad);
+        rotated = rotated || points[k - 1][3] != p[3] || points[k - 1][4] != p[4];
+        ++s.points_rotated;
+        s.max_rotation_rad = std::max(s.max_rotation_rad, corr.rotation_rad.norm());
+        s.max_rotation_shortfall_rad = std::max(s.max_rotation_shortfall_rad, shortfall_rad);
+      } else {
+        points[k - 1] =
+            corr.shift_mm == Eigen::Vector3d::Zero() ? p : path.shifted(p, ctx, corr.shift_mm);
+      }
     }
     const std::string& source = raw[ctx.line - 1].content;
     if (o.keep_unchanged_moves && all_zero && !displaced && !ctx.cutter_comp && !follows_comp) {
@@ -455,8 +471,9 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     const Axes6 original_end = end_of(c.op);
     const Axes6 start_prog = path.to_program(move.start, ctx);
     const Axes6 end_prog = path.to_program(move.end, ctx);
-    const bool write_a = words.has_a || start_prog.a != end_prog.a;
-    const bool write_c = words.has_c || start_prog.c != end_prog.c;
+    // A turned A or C (a field's rotation) is written on every point.
+    const bool write_a = words.has_a || start_prog.a != end_prog.a || rotated;
+    const bool write_c = words.has_c || start_prog.c != end_prog.c || rotated;
     const bool inverse_time = ctx.feed_mode == FeedMode::kInverseTime;
     for (int k = 0; k < n; ++k) {
       const Axes6 q = path.to_program(points[k], ctx);
@@ -497,6 +514,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     rdst.expected.insert(rdst.expected.end(), rl.expected.begin(), rl.expected.end());
     out_mode = 1;
     displaced = points.back() != move.end;
+    turned = points.back()[3] != move.end[3] || points.back()[4] != move.end[4];
     path.finish(move);
   }
   s.mean_compensation_mm = s.points_compensated > 0 ? sum_mm / s.points_compensated : 0.0;
@@ -620,6 +638,7 @@ RewriteResult rewrite_program(std::string_view text, const std::string& name,
     rewrite::Correction c;
     if (s.status == rt::FieldStatus::kOk && s.weight > 0) {
       c.shift_mm = s.correction_mm;
+      c.rotation_rad = s.rotation_rad;
       c.compensated = true;
     }
     return c;

@@ -1,5 +1,7 @@
 #include "tool_path.hpp"
 
+#include "truecut/rt/core/joint_mode.hpp"
+
 #include <cmath>
 
 namespace truecut::interp::rewrite {
@@ -64,6 +66,36 @@ Vec5 ToolPath::shifted(const Vec5& p, const CallContext& ctx,
   for (int i = 0; i < 3; ++i)
     out[i] += d[i];
   return out;
+}
+
+Vec5 ToolPath::corrected(const Vec5& p, const CallContext& ctx, const Eigen::Vector3d& shift_mm,
+                         const Eigen::Vector3d& rotation_rad, double& shortfall_rad) const {
+  shortfall_rad = 0.0;
+  if (rotation_rad.isZero(0.0)) return shifted(p, ctx, shift_mm);
+  const rt::AcTrtParams k = kinematics(ctx);
+  const rt::comp::JointLimits limits;  // A and C at their default bounds, X Y Z free
+  if (tcp_) {
+    // Under TRAORI X Y Z are the tip: A and C turn, the tip is shifted.
+    const rt::AcJoints j{0.0, 0.0, 0.0, p[3], p[4]};
+    rt::ToolPose pose = rt::forward_ac(k, j);
+    pose.tcp_mm = tool_point(p, ctx).tip_mm;
+    const rt::comp::RotaryCorrection rc =
+        rt::comp::rotary_correction(k, j, pose, rotation_rad, limits);
+    shortfall_rad = rc.shortfall_rad;
+    Vec5 out = p;
+    for (int i = 0; i < 3; ++i)
+      out[i] += shift_mm[i];
+    out[3] += rc.da_deg;
+    out[4] += rc.dc_deg;
+    return out;
+  }
+  const rt::AcJoints j{p[0], p[1], p[2], p[3], p[4]};
+  const rt::ToolPose pose = rt::forward_ac(k, j);
+  const rt::comp::RotaryCorrection rc =
+      rt::comp::rotary_correction(k, j, pose, rotation_rad, limits);
+  shortfall_rad = rc.shortfall_rad;
+  const rt::AcJoints out = rt::comp::correct_joints(k, j, pose, shift_mm, rc);
+  return {out.x_mm, out.y_mm, out.z_mm, out.a_deg, out.c_deg};
 }
 
 void ToolPath::rebase(const CallContext& ctx) {

@@ -39,6 +39,14 @@ class ToolPath {
   // The planning point whose tip is shifted by `shift_mm` (workpiece
   // frame) with A and C unchanged.
   Vec5 shifted(const Vec5& p, const CallContext& ctx, const Eigen::Vector3d& shift_mm) const;
+  // The planning point whose tip is shifted by `shift_mm` and whose tool is
+  // turned about it by `rotation_rad` (a rotation vector, workpiece frame),
+  // as truecut_comp does in joint mode (rt::comp::rotary_correction: A and
+  // C by least squares, damped where A is near 0, each at most
+  // rt::comp::kDefaultMaxRotaryCorrectionDeg); `shortfall_rad` gets what
+  // they could not give.
+  Vec5 corrected(const Vec5& p, const CallContext& ctx, const Eigen::Vector3d& shift_mm,
+                 const Eigen::Vector3d& rotation_rad, double& shortfall_rad) const;
 
   // Points of the move from current() at fractions k/n, k = 1..n, and the
   // point at a fraction in [0, 1].

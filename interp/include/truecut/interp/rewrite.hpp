@@ -102,7 +102,13 @@ struct RewriteSummary {
   std::array<long, 4> blend_points{};
   double max_compensation_mm = 0;
   double mean_compensation_mm = 0;  // over compensated points
-  double reach_mm = 0;              // the reach used
+  // Field mode with a rotation (issue 19): points whose A and C were turned
+  // to lean the tool, the largest rotation asked for, and the largest part
+  // of one A and C could not give (as truecut_comp in joint mode), rad.
+  long points_rotated = 0;
+  double max_rotation_rad = 0;
+  double max_rotation_shortfall_rad = 0;
+  double reach_mm = 0;  // the reach used
   // The tools of the operation's feed moves and their radii (tool table
   // D / 2), by tool number.
   std::vector<std::pair<int, double>> tool_radii_mm;
