@@ -55,6 +55,7 @@ struct InterpState {
   int coord_index = 1;         // 1 = G54 ... 9 = G59.3
   int tool_length_code = 490;  // G43 (430) or G49 (490) in force
   Axes6 g5x_mm, g92_mm, tool_offset_mm;
+  double rotation_deg = 0;     // XY rotation of the active system (G10 L2 R, #5230 ...)
   Axes6 position_mm;           // controlled point in machine coordinates
   bool retract_old_z = false;  // G98 (else G99)
   CycleState cycle;
@@ -69,8 +70,11 @@ struct InterpState {
   double to_program(int axis, double mm) const { return axis < 3 ? mm / scale() : mm; }
   double to_machine(int axis, double value) const { return axis < 3 ? value * scale() : value; }
   Axes6 to_program(const Axes6& mm) const;
-  // Position `machine` expressed in the work coordinate system.
+  // Position `machine` expressed in the work coordinate system:
+  // program XY = rotation^-1 x (machine - G5x - tool) - G92.
   Axes6 program_position(const Axes6& machine) const;
+  // Machine position of program position `program` (the inverse).
+  Axes6 machine_position(const Axes6& program) const;
   Axes6 program_position() const { return program_position(position_mm); }
 };
 

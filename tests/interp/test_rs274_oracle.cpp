@@ -173,6 +173,21 @@ TEST(Rs274Oracle, OwnCorpusMatches) {
   EXPECT_GE(compared, 6);
 }
 
+// Rotated coordinate systems (G10 L2 R, docs/gcode.md): arcs in all planes,
+// G91, G92/G52, G53, G10 L20, G28/G30, canned cycles, cutter compensation,
+// polar words, M70/M72, a #5230 write, M2; and in inches with XY tool
+// offsets, G10 L10/L11, probing and G33.
+TEST(Rs274Oracle, RotatedCoordinateSystemsMatch) {
+  REQUIRE_ORACLE(o);
+  for (const char* name : {"rotated_coordinates.ngc", "rotated_coordinates_inch.ngc"}) {
+    const fs::path p = source_dir() / "tests/interp/corpus" / name;
+    const Outcome r = run_both(*o, p);
+    EXPECT_TRUE(r.rs274_runs) << p << ": rs274 rejects the program: " << r.rs274_error;
+    EXPECT_TRUE(r.truecut_runs) << p << ": " << r.truecut_error;
+    EXPECT_EQ(r.difference, std::nullopt) << p;
+  }
+}
+
 // Each case, after `prefix` and before M2, is refused by rs274 and truecut
 // at the same line. Each program's offending line is unique; rs274 prints
 // it after its message.
@@ -318,6 +333,9 @@ TEST(Rs274Oracle, OffsetToolAndSubprogramErrorsAtTheSameLine) {
       "M98 P100\nM2\nO100\nG0 X2 M99 (M99 with a move)",
       "M98 P100\nM2\nO100 G1 X1 (words after the number)\nM99",
       "M98 P100\nM2\nO100\nM98 P100 L1 (recursion)\nM99",
+      "G10 L2 P1 R30\nG10 L20 P1 X0 R45 (R with L20)",
+      "G10 L2 P1 R30\nG41 D1 G1 X10 Y0\nG10 L2 P0 R10 (rotating the active system under "
+      "compensation)",
   };
   expect_refused_at_the_same_line(*o, "offset_errors", "G21 F100 T1 M6\nG0 X-5 Y-5\n", kCases);
 }

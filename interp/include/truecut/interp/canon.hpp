@@ -260,6 +260,9 @@ struct CallContext {
   bool cutter_comp = false;
   // Offsets in mm (degrees for A B C) that turn positions into machine ones.
   Axes6 g5x_mm, g92_mm, tool_offset_mm;
+  // XY rotation of the active coordinate system (G10 L2 R), degrees
+  // counter-clockwise: machine XY = G5x + rotation x (program + G92) + tool.
+  double xy_rotation_deg = 0;
 };
 
 struct CanonCall {
@@ -279,7 +282,10 @@ using CanonSink = std::function<void(const CanonCall& call, const std::vector<st
 const char* call_name(const CanonOp& op);
 bool is_motion(const CanonOp& op);  // traverse, feed or arc
 
-// Machine position (mm, degrees) of a programmed position under `ctx`.
+// Machine position (mm, degrees) of a programmed position under `ctx`:
+// X Y Z as program + G92, turned by the XY rotation, + G5x + tool offset.
 Axes6 machine_position_mm(const Axes6& program_position, const CallContext& ctx);
+// Turns (x, y) counter-clockwise by `degrees` about the origin.
+void rotate_xy_deg(double& x, double& y, double degrees);
 
 }  // namespace truecut::interp
