@@ -158,16 +158,28 @@ struct Builder {
     cur = target;
   }
 
+  // Planning space turned about Z by `degrees` (X Y only).
+  static Vec5 turned(Vec5 v, double degrees) {
+    if (degrees != 0) rotate_xy_deg(v[0], v[1], degrees);
+    return v;
+  }
+
+  // Under an XY rotation (G10 L2 R) the arc is built in planning space
+  // turned back by the rotation, where its plane is a coordinate plane
+  // again (a G18/G19 arc stands in a turned vertical plane), and turned
+  // forward after: centre, e1, e2 and drift.
   void add_arc(const ArcFeed& arc, const CallContext& ctx) {
     rebase(ctx);
     const path_geometry::PlaneAxes axes = path_geometry::plane_axes(arc.plane);
     const int first = axes.first, second = axes.second;
-    const Vec5 end = to_planning(arc.end, ctx);
+    const double turn = ctx.xy_rotation_deg;
+    cur = turned(cur, -turn);
+    const Vec5 end = turned(to_planning(arc.end, ctx), -turn);
     // The centre in the plane, through the same offsets as the end point.
     Axes6 cprog = arc.end;
     cprog[first] = arc.center[first];
     cprog[second] = arc.center[second];
-    const Vec5 cplan = to_planning(cprog, ctx);
+    const Vec5 cplan = turned(to_planning(cprog, ctx), -turn);
     const path_geometry::PlaneArc geo =
         path_geometry::plane_arc(cur[first], cur[second], end[first], end[second], cplan[first],
                                  cplan[second], arc.rotation);
@@ -201,6 +213,12 @@ struct Builder {
     const double arc_len = path_geometry::plane_length_mm(geo);
     p.length = std::sqrt(arc_len * arc_len + off2);
     set_feed(m, ctx, std::sqrt(arc_len * arc_len + off_xyz2));
+    if (turn != 0) {
+      p.a = turned(p.a, turn);
+      p.b = turned(p.b, turn);
+      p.c = turned(p.c, turn);
+      p.d = turned(p.d, turn);
+    }
     out.moves.push_back(m);
     cur = evaluate(p, p.length);
   }
