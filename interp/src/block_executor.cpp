@@ -213,7 +213,22 @@ std::string BlockExecutor::substitute_parameters(const std::string& text) const 
 }
 
 void BlockExecutor::feed_and_speed() {
-  if (codes_.g[group(GGroup::kSpindleMode)] == 970) out_.emit(SetSpindleMode{0});
+  const int spindle_mode = codes_.g[group(GGroup::kSpindleMode)];
+  if (spindle_mode == 970) {
+    s_.css = false;
+    s_.css_max_rpm = 0;
+    out_.emit(SetSpindleMode{0});
+  } else if (spindle_mode == 960) {
+    if (!b_->has('s'))
+      fail(codes_.g_column[group(GGroup::kSpindleMode)],
+           "G96 (constant surface speed) needs S (the surface speed)");
+    // rs274 takes |D| and, without D, no limit (1e30).
+    s_.css = true;
+    s_.css_max_rpm = b_->has('d') ? std::abs(b_->value('d')) : kNoCssLimit;
+    if (!std::isfinite(s_.css_max_rpm))
+      fail(column_of('d'), "G96 D: the speed limit is not a finite number");
+    out_.emit(SetSpindleMode{s_.css_max_rpm, true});
+  }
   const int feed_mode = codes_.g[group(GGroup::kFeedMode)];
   if (feed_mode == 930) {
     out_.emit(Comment{"interpreter: feed mode set to inverse time"});
@@ -226,10 +241,16 @@ void BlockExecutor::feed_and_speed() {
     out_.emit(SetFeedMode{s_.feed_mode});
     s_.feed = 0;
     out_.emit(SetFeedRate{0});
+  } else if (feed_mode == 950) {
+    out_.emit(Comment{"interpreter: feed mode set to units per revolution"});
+    s_.feed_mode = FeedMode::kUnitsPerRevolution;
+    out_.emit(SetFeedMode{s_.feed_mode});
+    s_.feed = 0;
+    out_.emit(SetFeedRate{0});
   }
   if (b_->has('f')) {
     if (b_->value('f') < 0) fail(column_of('f'), "negative feed rate F");
-    if (s_.feed_mode == FeedMode::kUnitsPerMinute) {
+    if (s_.feed_mode != FeedMode::kInverseTime) {
       s_.feed = b_->value('f');
       out_.emit(SetFeedRate{s_.feed});
     }
@@ -783,6 +804,8 @@ void BlockExecutor::check_feed(int column) const {
     if (b_->value('f') <= 0) fail(column_of('f'), "inverse-time F must be greater than zero");
   } else if (s_.feed <= 0) {
     fail(column, "feed move with a zero feed rate: program F before or on this line");
+  } else if (s_.feed_mode == FeedMode::kUnitsPerRevolution && s_.speed == 0) {
+    fail(column, "feed per revolution (G95) with spindle speed S0: the move would not advance");
   }
 }
 
@@ -825,8 +848,9 @@ void BlockExecutor::check_unused_words(int motion_code) const {
   const int comp = codes_.g[group(GGroup::kCutterComp)];
   if (b_->has('l') && nm != 100 && !cycle && comp != 411 && comp != 421 && io != 660)
     fail(column_of('l'), "L word with no G10, canned cycle or M66 to use it");
-  if (b_->has('d') && comp != 410 && comp != 411 && comp != 420 && comp != 421)
-    fail(column_of('d'), "D word with no G41, G41.1, G42 or G42.1 to use it");
+  if (b_->has('d') && comp != 410 && comp != 411 && comp != 420 && comp != 421 &&
+      codes_.g[group(GGroup::kSpindleMode)] != 960)
+    fail(column_of('d'), "D word with no G41, G41.1, G42, G42.1 or G96 to use it");
 }
 
 void BlockExecutor::motion() {
@@ -1049,6 +1073,8 @@ void BlockExecutor::end_program(bool pallet_shuttle) {
   }
   s_.spindle = 0;
   out_.emit(StopSpindle{});
+  s_.css = false;
+  s_.css_max_rpm = 0;
   out_.emit(SetSpindleMode{0});
   if (s_.mist) out_.emit(Coolant{Coolant::kMist, false});
   if (s_.flood) out_.emit(Coolant{Coolant::kFlood, false});

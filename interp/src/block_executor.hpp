@@ -103,6 +103,7 @@ class BlockExecutor {
   // The modal state M70/M73 save (LinuxCNC 2.9's list) and M72 restores.
   struct ModalSnapshot {
     LengthUnits units;
+    bool css;
     FeedMode feed_mode;
     double feed, speed;
     int spindle;

@@ -9,6 +9,8 @@
 namespace truecut::interp {
 
 constexpr double kMmPerInch = 25.4;
+// G96 without D: rs274's "no limit" (printed as 1e30).
+constexpr double kNoCssLimit = 1e30;
 
 // The canned cycles' memory between blocks (G73, G81-G83, G85, G86, G88, G89).
 struct CycleState {
@@ -43,7 +45,9 @@ struct InterpState {
   double blend_tolerance = 0;  // the last G64 P
   double naive_tolerance = 0;  // the last G64 Q
   double feed = 0;             // program units per minute (G94)
-  double speed = 0;            // rpm
+  double speed = 0;            // rpm (m/min, ft/min in G20 under G96)
+  bool css = false;            // G96 constant surface speed (else G97)
+  double css_max_rpm = 0;      // G96's D (1e30 without D)
   int spindle = 0;             // 1 cw, -1 ccw, 0 stopped
   bool mist = false, flood = false;
   bool feed_override = true;  // M48/M49/M50 (M2 switches it back on)

@@ -188,6 +188,20 @@ TEST(Rs274Oracle, RotatedCoordinateSystemsMatch) {
   }
 }
 
+// G95 feed per revolution, G96/G97 constant surface speed (docs/gcode.md):
+// SET_FEED_MODE(0, 1), SET_SPINDLE_MODE with D or 1e30, M70/M72, canned
+// cycles and G33 under G95, inches.
+TEST(Rs274Oracle, FeedPerRevolutionAndSurfaceSpeedMatch) {
+  REQUIRE_ORACLE(o);
+  for (const char* name : {"feed_per_rev_css.ngc"}) {
+    const fs::path p = source_dir() / "tests/interp/corpus" / name;
+    const Outcome r = run_both(*o, p);
+    EXPECT_TRUE(r.rs274_runs) << p << ": rs274 rejects the program: " << r.rs274_error;
+    EXPECT_TRUE(r.truecut_runs) << p << ": " << r.truecut_error;
+    EXPECT_EQ(r.difference, std::nullopt) << p;
+  }
+}
+
 // Each case, after `prefix` and before M2, is refused by rs274 and truecut
 // at the same line. Each program's offending line is unique; rs274 prints
 // it after its message.
@@ -338,6 +352,22 @@ TEST(Rs274Oracle, OffsetToolAndSubprogramErrorsAtTheSameLine) {
       "compensation)",
   };
   expect_refused_at_the_same_line(*o, "offset_errors", "G21 F100 T1 M6\nG0 X-5 Y-5\n", kCases);
+}
+
+// G95/G96 (docs/gcode.md): the programs rs274 refuses, refused by truecut
+// at the same line.
+TEST(Rs274Oracle, FeedAndSpindleModeErrorsAtTheSameLine) {
+  REQUIRE_ORACLE(o);
+  static const char* kCases[] = {
+      "G96 D2000 (G96 without S)",
+      "G97 S500 D100 (D without G96)",
+      "G95\nG1 X10 (G95 resets F to 0)",
+      "G95 F0.1 S0\nG1 X11 (S0 in G95)",
+      "G95 F0.1 S0\nG2 X2 I1 (S0 in G95, arc)",
+      "G95 F0.2\nG38.3 Z0 (probing in G95)",
+  };
+  expect_refused_at_the_same_line(*o, "feed_mode_errors", "G21 F100\nG0 X0 Y0 Z5\nM3 S1000\n",
+                                  kCases);
 }
 
 // M62-M68, M19, M48-M53 (docs/gcode.md): the programs rs274

@@ -27,7 +27,8 @@ struct Axes6 {
 
 enum class Plane { kXY, kYZ, kXZ };  // G17, G19, G18
 enum class LengthUnits { kMm, kInch };
-enum class FeedMode { kUnitsPerMinute, kInverseTime };        // G94, G93
+// G94, G93, G95 (F in program units per spindle revolution).
+enum class FeedMode { kUnitsPerMinute, kInverseTime, kUnitsPerRevolution };
 enum class PathMode { kExactStop, kExactPath, kContinuous };  // G61.1, G61, G64
 // Sinumerik spline interpolation, in the motion group with G0..G3.
 enum class SplineMode { kNone, kBspline, kCspline };
@@ -79,7 +80,8 @@ struct StraightProbe {
 };
 
 // Feed and motion settings.
-// Feed in program units per minute. In inverse-time mode (G93) the
+// Feed in program units per minute, or per spindle revolution under G95
+// (CallContext::feed_mode). In inverse-time mode (G93) the
 // interpreter converts each move's F into the equivalent rate, like LinuxCNC;
 // CallContext::inverse_time_f keeps the programmed value.
 struct SetFeedRate {
@@ -191,8 +193,11 @@ struct FeedOverride {
 struct SpeedOverride {
   bool enabled = true;
 };
-struct SetSpindleMode {  // G97 (the only spindle mode supported)
+// G96 (constant surface speed: the S words that follow are m/min, ft/min
+// in G20, up to `css_max_rpm`, D; 1e30 without D, as rs274) or G97 (0).
+struct SetSpindleMode {
   double css_max_rpm = 0;
+  bool constant_surface_speed = false;  // G96 (rs274 prints css_max_rpm only)
 };
 struct Coolant {
   enum Kind { kMist, kFlood } kind = kFlood;
