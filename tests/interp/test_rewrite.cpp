@@ -843,6 +843,35 @@ TEST(Rewrite, ToolMissingFromTheTableOrNotSelectedIsRefusedWithItsLine) {
             "bad.ngc:15: tool T2 has diameter 0 in the tool table: a ball");
 }
 
+// G95/G96: the mode lines and the F and S words are copied; the densified
+// pieces of a move keep its F, which means the same per revolution, and run
+// under the same modes (the rewritten program's calls keep G95's context).
+TEST(Rewrite, FeedPerRevolutionProgramsKeepTheirModes) {
+  const std::string text =
+      "G21 G90 G17\n(OPERATION: FACE)\nT2 M6\nG96 S200 D6000 M3\nG95 F0.05\nG0 X-8 Y0 Z1\n"
+      "G1 Z0\nG1 X8\nG0 Z5\nM30\n";
+  RewriteOptions o = options("FACE", CutType::kFace);
+  o.reach_mm = 0.6;
+  const RewriteResult r =
+      rewrite_program(text, "p.ngc", plane_matrix(-10, 10, -4, 4, 0, 0.5, V(0, 0, 0.05)), o);
+  EXPECT_NE(r.text.find("G96 S200 D6000 M3\n"), std::string::npos) << r.text;
+  EXPECT_NE(r.text.find("G95 F0.05\n"), std::string::npos) << r.text;
+  InterpreterOptions io;
+  io.tools = ToolTable::parse(kTools, "tools.tbl");
+  const auto prog = Interpreter(io).run_text(r.text, "r.ngc");
+  int feeds = 0;
+  for (const auto& c : prog.calls) {
+    if (const auto* f = std::get_if<SetFeedRate>(&c.op)) {
+      EXPECT_TRUE(f->units_per_minute == 0 || f->units_per_minute == 0.05);
+    }
+    if (std::holds_alternative<StraightFeed>(c.op)) {
+      ++feeds;
+      EXPECT_EQ(c.context.feed_mode, FeedMode::kUnitsPerRevolution);
+    }
+  }
+  EXPECT_GT(feeds, 10);  // densified
+}
+
 TEST(Rewrite, GivenToolRadiusThatDiffersFromTheTableIsRefused) {
   RewriteOptions o = options("FACE", CutType::kFace);
   o.reach_mm = 100;
