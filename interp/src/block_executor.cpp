@@ -587,9 +587,28 @@ void BlockExecutor::coord_system_data() {
   }
   axes_used_ = true;
   if (index == s_.coord_index) {
+    const Axes6 old_g5x = s_.g5x_mm, program = s_.program_position();
+    const double old_rotation = s_.rotation_deg;
     for (int i = 0; i < 6; ++i)
       s_.g5x_mm[i] = s_.to_machine(i, params_.get(base + i));
     s_.rotation_deg = params_.get(base + kCoordSystemRotation);
+    if (s_.rotation_deg != old_rotation && (s_.g92_mm.x != 0 || s_.g92_mm.y != 0)) {
+      // rs274 turns the program position into the new frame without the
+      // G92/G52 offset: p' = R(-new) (R(old) p + old origin - new origin).
+      // The machine has not moved, but rs274 continues from p' (its next
+      // incremental moves and arc starts), so truecut does too.
+      double x = s_.to_machine(0, program.x), y = s_.to_machine(1, program.y);
+      rotate_xy_deg(x, y, old_rotation);
+      x += old_g5x.x - s_.g5x_mm.x;
+      y += old_g5x.y - s_.g5x_mm.y;
+      rotate_xy_deg(x, y, -s_.rotation_deg);
+      Axes6 p = s_.program_position();
+      p.x = s_.to_program(0, x);
+      p.y = s_.to_program(1, y);
+      const Axes6 m = s_.machine_position(p);
+      s_.position_mm.x = m.x;
+      s_.position_mm.y = m.y;
+    }
     out_.emit(SetG5xOffset{s_.coord_index, s_.to_program(s_.g5x_mm)});
     out_.emit(SetXYRotation{s_.rotation_deg});
   } else {
