@@ -81,7 +81,7 @@ void BlockExecutor::start_program() {
   out_.emit(UseLengthUnits{s_.units});
   out_.emit(SetG5xOffset{s_.coord_index, s_.to_program(s_.g5x_mm)});
   out_.emit(SetG92Offset{s_.to_program(s_.g92_mm)});
-  out_.emit(SetXYRotation{0});
+  out_.emit(SetXYRotation{s_.rotation_deg});
   out_.emit(SetFeedReference{});
   out_.emit(OnReset{});
 }
@@ -120,9 +120,7 @@ bool BlockExecutor::execute(const Block& block, const LexedLine& line) {
   if (change == 60 || change == 610) {
     // LinuxCNC re-reads the position from the machine after a tool change:
     // the last commanded numbers, now under the new offsets.
-    for (int i = 0; i < 6; ++i)
-      s_.position_mm[i] = s_.to_machine(i, last_program_position_[i]) + s_.g5x_mm[i] +
-                          s_.g92_mm[i] + s_.tool_offset_mm[i];
+    s_.position_mm = s_.machine_position(last_program_position_);
   }
   const int stop = codes_.m[group(MGroup::kStop)];
   if (stop == 0 || stop == 10 || stop == 20 || stop == 300) comp_flush();
@@ -215,7 +213,22 @@ std::string BlockExecutor::substitute_parameters(const std::string& text) const 
 }
 
 void BlockExecutor::feed_and_speed() {
-  if (codes_.g[group(GGroup::kSpindleMode)] == 970) out_.emit(SetSpindleMode{0});
+  const int spindle_mode = codes_.g[group(GGroup::kSpindleMode)];
+  if (spindle_mode == 970) {
+    s_.css = false;
+    s_.css_max_rpm = 0;
+    out_.emit(SetSpindleMode{0});
+  } else if (spindle_mode == 960) {
+    if (!b_->has('s'))
+      fail(codes_.g_column[group(GGroup::kSpindleMode)],
+           "G96 (constant surface speed) needs S (the surface speed)");
+    // rs274 takes |D| and, without D, no limit (1e30).
+    s_.css = true;
+    s_.css_max_rpm = b_->has('d') ? std::abs(b_->value('d')) : kNoCssLimit;
+    if (!std::isfinite(s_.css_max_rpm))
+      fail(column_of('d'), "G96 D: the speed limit is not a finite number");
+    out_.emit(SetSpindleMode{s_.css_max_rpm, true});
+  }
   const int feed_mode = codes_.g[group(GGroup::kFeedMode)];
   if (feed_mode == 930) {
     out_.emit(Comment{"interpreter: feed mode set to inverse time"});
@@ -228,10 +241,16 @@ void BlockExecutor::feed_and_speed() {
     out_.emit(SetFeedMode{s_.feed_mode});
     s_.feed = 0;
     out_.emit(SetFeedRate{0});
+  } else if (feed_mode == 950) {
+    out_.emit(Comment{"interpreter: feed mode set to units per revolution"});
+    s_.feed_mode = FeedMode::kUnitsPerRevolution;
+    out_.emit(SetFeedMode{s_.feed_mode});
+    s_.feed = 0;
+    out_.emit(SetFeedRate{0});
   }
   if (b_->has('f')) {
     if (b_->value('f') < 0) fail(column_of('f'), "negative feed rate F");
-    if (s_.feed_mode == FeedMode::kUnitsPerMinute) {
+    if (s_.feed_mode != FeedMode::kInverseTime) {
       s_.feed = b_->value('f');
       out_.emit(SetFeedRate{s_.feed});
     }
@@ -437,13 +456,14 @@ void BlockExecutor::set_units(LengthUnits units) {
 void BlockExecutor::emit_offsets() {
   out_.emit(SetG5xOffset{s_.coord_index, s_.to_program(s_.g5x_mm)});
   out_.emit(SetG92Offset{s_.to_program(s_.g92_mm)});
-  out_.emit(SetXYRotation{0});
+  out_.emit(SetXYRotation{s_.rotation_deg});
 }
 
 void BlockExecutor::select_coord_system(int index) {
   const int base = coord_system_base(index);
   for (int i = 0; i < 6; ++i)
     s_.g5x_mm[i] = s_.to_machine(i, params_.get(base + i));
+  s_.rotation_deg = params_.get(base + kCoordSystemRotation);
   s_.coord_index = index;
   params_.set(kCoordSystemIndex, index);
   emit_offsets();
@@ -551,29 +571,84 @@ void BlockExecutor::coord_system_data() {
   const double pv = b_->value('p');
   if (pv < 0 || pv > 9 || pv != std::floor(pv))
     fail(column_of('p'), "G10 P must be a coordinate system 0..9 (0 = active)");
-  if (b_->has('r') && b_->value('r') != 0)
-    fail(column_of('r'), "G10 R (coordinate system rotation) is not supported");
+  if (l == 20 && b_->has('r'))
+    fail(column_of('r'),
+         "G10 L20 does not take R: a coordinate system's rotation is set with G10 L2 R");
+  if (b_->has('r') && !std::isfinite(b_->value('r')))
+    fail(column_of('r'), "G10 L2 R: the rotation is not a finite number");
   const int index = pv == 0 ? s_.coord_index : static_cast<int>(pv);
   const int base = coord_system_base(index);
-  const Axes6 prog = s_.program_position();
-  const Axes6 g5x = s_.to_program(s_.g5x_mm);
-  for (int i = 0; i < 6; ++i) {
-    const char letter = kAxisLetters[i];
-    if (!b_->has(letter)) continue;
-    const double v = b_->value(letter);
-    // L20: the origin that puts the tool at v with the G92/G52 offset still
-    // applied on top, as rs274 computes it.
-    params_.set(base + i, l == 2 ? v : prog[i] + g5x[i] - v);
+  if (l == 2) {
+    for (int i = 0; i < 6; ++i)
+      if (b_->has(kAxisLetters[i])) params_.set(base + i, b_->value(kAxisLetters[i]));
+    if (b_->has('r')) params_.set(base + kCoordSystemRotation, b_->value('r'));
+  } else {
+    set_origin_at_tool(base);
   }
   axes_used_ = true;
   if (index == s_.coord_index) {
+    const Axes6 old_g5x = s_.g5x_mm, program = s_.program_position();
+    const double old_rotation = s_.rotation_deg;
     for (int i = 0; i < 6; ++i)
       s_.g5x_mm[i] = s_.to_machine(i, params_.get(base + i));
+    s_.rotation_deg = params_.get(base + kCoordSystemRotation);
+    if (s_.rotation_deg != old_rotation && (s_.g92_mm.x != 0 || s_.g92_mm.y != 0)) {
+      // rs274 turns the program position into the new frame without the
+      // G92/G52 offset: p' = R(-new) (R(old) p + old origin - new origin).
+      // The machine has not moved, but rs274 continues from p' (its next
+      // incremental moves and arc starts), so truecut does too.
+      double x = s_.to_machine(0, program.x), y = s_.to_machine(1, program.y);
+      rotate_xy_deg(x, y, old_rotation);
+      x += old_g5x.x - s_.g5x_mm.x;
+      y += old_g5x.y - s_.g5x_mm.y;
+      rotate_xy_deg(x, y, -s_.rotation_deg);
+      Axes6 p = s_.program_position();
+      p.x = s_.to_program(0, x);
+      p.y = s_.to_program(1, y);
+      const Axes6 m = s_.machine_position(p);
+      s_.position_mm.x = m.x;
+      s_.position_mm.y = m.y;
+    }
     out_.emit(SetG5xOffset{s_.coord_index, s_.to_program(s_.g5x_mm)});
-    out_.emit(SetXYRotation{0});
+    out_.emit(SetXYRotation{s_.rotation_deg});
   } else {
     out_.emit_now(Comment{"interpreter: setting coordinate system origin"});
   }
+}
+
+// G10 L20: the origin of the system at `base` that puts the tool at the
+// words with the G92/G52 offset still applied on top, as rs274 computes it.
+// Under a rotation (the target system's) X and Y are set together: the
+// tool's position in the target system (its old origin, its rotation),
+// with the given words replaced, fixes both.
+void BlockExecutor::set_origin_at_tool(int base) {
+  const double rotation = params_.get(base + kCoordSystemRotation);
+  if (rotation == 0 && s_.rotation_deg == 0) {
+    const Axes6 prog = s_.program_position();
+    const Axes6 g5x = s_.to_program(s_.g5x_mm);
+    for (int i = 0; i < 6; ++i)
+      if (b_->has(kAxisLetters[i]))
+        params_.set(base + i, prog[i] + g5x[i] - b_->value(kAxisLetters[i]));
+    return;
+  }
+  const Axes6& m = s_.position_mm;
+  for (int i = 2; i < 6; ++i)
+    if (b_->has(kAxisLetters[i]))
+      params_.set(base + i, s_.to_program(i, m[i] - s_.g92_mm[i] - s_.tool_offset_mm[i]) -
+                                b_->value(kAxisLetters[i]));
+  if (!b_->has('x') && !b_->has('y')) return;
+  double x = m.x - s_.tool_offset_mm.x - s_.to_machine(0, params_.get(base));
+  double y = m.y - s_.tool_offset_mm.y - s_.to_machine(1, params_.get(base + 1));
+  rotate_xy_deg(x, y, -rotation);
+  x -= s_.g92_mm.x;
+  y -= s_.g92_mm.y;
+  if (b_->has('x')) x = s_.to_machine(0, b_->value('x'));
+  if (b_->has('y')) y = s_.to_machine(1, b_->value('y'));
+  x += s_.g92_mm.x;
+  y += s_.g92_mm.y;
+  rotate_xy_deg(x, y, rotation);
+  params_.set(base, s_.to_program(0, m.x - s_.tool_offset_mm.x - x));
+  params_.set(base + 1, s_.to_program(1, m.y - s_.tool_offset_mm.y - y));
 }
 
 void BlockExecutor::g92_offsets(int code) {
@@ -642,6 +717,18 @@ void BlockExecutor::go_home(int code) {
   Axes6 home = via;
   for (int i = 0; i < 6; ++i)
     if (!any || b_->has(kAxisLetters[i])) home[i] = s_.to_machine(i, params_.get(base + i));
+  if (s_.rotation_deg != 0) {
+    // rs274 takes the home's program coordinates for the programmed axes
+    // (in the rotated frame) and keeps the others'.
+    Axes6 all;
+    for (int i = 0; i < 6; ++i)
+      all[i] = s_.to_machine(i, params_.get(base + i));
+    const Axes6 home_program = s_.program_position(all);
+    Axes6 p = s_.program_position(via);
+    for (int i = 0; i < 6; ++i)
+      if (!any || b_->has(kAxisLetters[i])) p[i] = home_program[i];
+    home = s_.machine_position(p);
+  }
   out_.emit(StraightTraverse{s_.program_position(home)});
   last_program_position_ = s_.program_position(home);
   s_.position_mm = home;
@@ -652,15 +739,28 @@ Axes6 BlockExecutor::move_base() const {
   Axes6 base = s_.position_mm;
   // Under cutter compensation, LinuxCNC measures from the programmed point,
   // not from where the compensated tool is.
-  if (s_.comp.active() && !s_.comp.first_move)
+  if (s_.comp.active() && !s_.comp.first_move) {
+    const Axes6 programmed = s_.machine_position(s_.comp.programmed);
     for (int i = 0; i < 3; ++i)
-      base[i] = s_.to_machine(i, s_.comp.programmed[i]) + s_.g5x_mm[i] + s_.g92_mm[i] +
-                s_.tool_offset_mm[i];
+      base[i] = programmed[i];
+  }
   return base;
 }
 
 Axes6 BlockExecutor::target_position(bool machine_coords) const {
   const Axes6 base = move_base();
+  if (s_.rotation_deg != 0 && !machine_coords) {
+    // In the rotated frame: program coordinates, then back to the machine.
+    Axes6 p = s_.program_position(base);
+    for (int i = 0; i < 6; ++i) {
+      const char letter = kAxisLetters[i];
+      if (b_->has(letter)) p[i] = (s_.incremental ? p[i] : 0) + b_->value(letter);
+    }
+    Axes6 t = s_.machine_position(p);
+    for (int i = 2; i < 6; ++i)
+      if (!b_->has(kAxisLetters[i])) t[i] = base[i];
+    return t;
+  }
   Axes6 t = base;
   for (int i = 0; i < 6; ++i) {
     const char letter = kAxisLetters[i];
@@ -723,6 +823,8 @@ void BlockExecutor::check_feed(int column) const {
     if (b_->value('f') <= 0) fail(column_of('f'), "inverse-time F must be greater than zero");
   } else if (s_.feed <= 0) {
     fail(column, "feed move with a zero feed rate: program F before or on this line");
+  } else if (s_.feed_mode == FeedMode::kUnitsPerRevolution && s_.speed == 0) {
+    fail(column, "feed per revolution (G95) with spindle speed S0: the move would not advance");
   }
 }
 
@@ -765,8 +867,9 @@ void BlockExecutor::check_unused_words(int motion_code) const {
   const int comp = codes_.g[group(GGroup::kCutterComp)];
   if (b_->has('l') && nm != 100 && !cycle && comp != 411 && comp != 421 && io != 660)
     fail(column_of('l'), "L word with no G10, canned cycle or M66 to use it");
-  if (b_->has('d') && comp != 410 && comp != 411 && comp != 420 && comp != 421)
-    fail(column_of('d'), "D word with no G41, G41.1, G42 or G42.1 to use it");
+  if (b_->has('d') && comp != 410 && comp != 411 && comp != 420 && comp != 421 &&
+      codes_.g[group(GGroup::kSpindleMode)] != 960)
+    fail(column_of('d'), "D word with no G41, G41.1, G42, G42.1 or G96 to use it");
 }
 
 void BlockExecutor::motion() {
@@ -825,8 +928,12 @@ void BlockExecutor::motion() {
     const Axes6 here = s_.program_position(move_base());
     double x = here[0], y = here[1];
     polar_point(x, y);
-    target[0] = s_.to_machine(0, x) + s_.g5x_mm[0] + s_.g92_mm[0] + s_.tool_offset_mm[0];
-    target[1] = s_.to_machine(1, y) + s_.g5x_mm[1] + s_.g92_mm[1] + s_.tool_offset_mm[1];
+    Axes6 p = s_.program_position(target);
+    p.x = x;
+    p.y = y;
+    const Axes6 m = s_.machine_position(p);
+    target.x = m.x;
+    target.y = m.y;
   }
   if (code == 330 || code == 331) {
     sync_motion(code, target, motion_column ? motion_column : 1, axis_words);
@@ -966,9 +1073,10 @@ void BlockExecutor::end_program(bool pallet_shuttle) {
   const int base = coord_system_base(1);
   for (int i = 0; i < 6; ++i)
     s_.g5x_mm[i] = s_.to_machine(i, params_.get(base + i));
+  s_.rotation_deg = params_.get(base + kCoordSystemRotation);
   s_.coord_index = 1;
   out_.emit(SetG5xOffset{1, s_.to_program(s_.g5x_mm)});
-  out_.emit(SetXYRotation{0});
+  out_.emit(SetXYRotation{s_.rotation_deg});
   if (s_.plane != Plane::kXY) {
     s_.plane = Plane::kXY;
     out_.emit(SelectPlane{s_.plane});
@@ -984,6 +1092,8 @@ void BlockExecutor::end_program(bool pallet_shuttle) {
   }
   s_.spindle = 0;
   out_.emit(StopSpindle{});
+  s_.css = false;
+  s_.css_max_rpm = 0;
   out_.emit(SetSpindleMode{0});
   if (s_.mist) out_.emit(Coolant{Coolant::kMist, false});
   if (s_.flood) out_.emit(Coolant{Coolant::kFlood, false});

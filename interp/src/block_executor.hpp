@@ -66,6 +66,7 @@ class BlockExecutor {
   void coord_system_data();
   void tool_table_edit(int l);  // G10 L1 L10 L11 (tool_table_edit.cpp)
   void g92_offsets(int code);
+  void set_origin_at_tool(int base);
   void go_home(int code);
   void motion();
   Axes6 target_position(bool machine_coords) const;
@@ -102,6 +103,7 @@ class BlockExecutor {
   // The modal state M70/M73 save (LinuxCNC 2.9's list) and M72 restores.
   struct ModalSnapshot {
     LengthUnits units;
+    bool css;
     FeedMode feed_mode;
     double feed, speed;
     int spindle;

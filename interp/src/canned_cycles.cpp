@@ -180,8 +180,9 @@ void BlockExecutor::canned_cycle(int code, int column) {
     at[ib] = pb;
     at[ic] = pc;
     Axes6 target = s_.position_mm;
+    const Axes6 m = s_.machine_position(at);
     for (int i = 0; i < 3; ++i)
-      target[i] = s_.to_machine(i, at[i]) + s_.g5x_mm[i] + s_.g92_mm[i] + s_.tool_offset_mm[i];
+      target[i] = m[i];
     straight(rapid, target, 0);
   };
 
@@ -250,8 +251,7 @@ void BlockExecutor::canned_cycle(int code, int column) {
         out_.emit(ProgramStop{false});
         out_.emit(StartSpindle{s_.spindle > 0});
         at[ic] = clear;
-        s_.position_mm[ic] =
-            s_.to_machine(ic, clear) + s_.g5x_mm[ic] + s_.g92_mm[ic] + s_.tool_offset_mm[ic];
+        s_.position_mm[ic] = s_.machine_position(at)[ic];
         break;
       case 890:
         move(false, a, b, bottom);

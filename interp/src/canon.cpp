@@ -1,5 +1,6 @@
 #include "truecut/interp/canon.hpp"
 
+#include <cmath>
 #include <type_traits>
 
 namespace truecut::interp {
@@ -97,7 +98,21 @@ Axes6 machine_position_mm(const Axes6& p, const CallContext& ctx) {
   Axes6 out;
   for (int i = 0; i < 6; ++i)
     out[i] = (i < 3 ? p[i] * scale : p[i]) + ctx.g5x_mm[i] + ctx.g92_mm[i] + ctx.tool_offset_mm[i];
+  if (ctx.xy_rotation_deg != 0) {
+    double x = p.x * scale + ctx.g92_mm.x, y = p.y * scale + ctx.g92_mm.y;
+    rotate_xy_deg(x, y, ctx.xy_rotation_deg);
+    out.x = x + ctx.g5x_mm.x + ctx.tool_offset_mm.x;
+    out.y = y + ctx.g5x_mm.y + ctx.tool_offset_mm.y;
+  }
   return out;
+}
+
+void rotate_xy_deg(double& x, double& y, double degrees) {
+  const double t = degrees * (3.14159265358979323846 / 180.0);
+  const double c = std::cos(t), s = std::sin(t);
+  const double xx = x, yy = y;
+  x = xx * c - yy * s;
+  y = xx * s + yy * c;
 }
 
 }  // namespace truecut::interp

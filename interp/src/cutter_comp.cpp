@@ -144,9 +144,9 @@ void BlockExecutor::comp_off() {
     comp_flush();
     // LinuxCNC takes the programmed point as the current one: the next
     // move (which must be straight) starts from where the tool is.
+    const Axes6 programmed = s_.machine_position(c.programmed);
     for (int i = 0; i < 3; ++i)
-      s_.position_mm[i] =
-          s_.to_machine(i, c.programmed[i]) + s_.g5x_mm[i] + s_.g92_mm[i] + s_.tool_offset_mm[i];
+      s_.position_mm[i] = programmed[i];
     c.arc_not_allowed = true;
   }
   c.side = 0;
@@ -352,9 +352,7 @@ void BlockExecutor::comp_straight(bool rapid, const Axes6& target, int column) {
 }
 
 void BlockExecutor::set_compensated_position(const Axes6& program_point) {
-  for (int i = 0; i < 6; ++i)
-    s_.position_mm[i] =
-        s_.to_machine(i, program_point[i]) + s_.g5x_mm[i] + s_.g92_mm[i] + s_.tool_offset_mm[i];
+  s_.position_mm = s_.machine_position(program_point);
   last_program_position_ = program_point;
 }
 

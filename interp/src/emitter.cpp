@@ -31,6 +31,7 @@ CanonCall Emitter::make(CanonOp op, double inverse_time_f) const {
   call.context.g5x_mm = state_.g5x_mm;
   call.context.g92_mm = state_.g92_mm;
   call.context.tool_offset_mm = state_.tool_offset_mm;
+  call.context.xy_rotation_deg = state_.rotation_deg;
   call.op = std::move(op);
   return call;
 }

@@ -9,6 +9,8 @@
 namespace truecut::interp {
 
 constexpr double kMmPerInch = 25.4;
+// G96 without D: rs274's "no limit" (printed as 1e30).
+constexpr double kNoCssLimit = 1e30;
 
 // The canned cycles' memory between blocks (G73, G81-G83, G85, G86, G88, G89).
 struct CycleState {
@@ -43,7 +45,9 @@ struct InterpState {
   double blend_tolerance = 0;  // the last G64 P
   double naive_tolerance = 0;  // the last G64 Q
   double feed = 0;             // program units per minute (G94)
-  double speed = 0;            // rpm
+  double speed = 0;            // rpm (m/min, ft/min in G20 under G96)
+  bool css = false;            // G96 constant surface speed (else G97)
+  double css_max_rpm = 0;      // G96's D (1e30 without D)
   int spindle = 0;             // 1 cw, -1 ccw, 0 stopped
   bool mist = false, flood = false;
   bool feed_override = true;  // M48/M49/M50 (M2 switches it back on)
@@ -55,6 +59,7 @@ struct InterpState {
   int coord_index = 1;         // 1 = G54 ... 9 = G59.3
   int tool_length_code = 490;  // G43 (430) or G49 (490) in force
   Axes6 g5x_mm, g92_mm, tool_offset_mm;
+  double rotation_deg = 0;     // XY rotation of the active system (G10 L2 R, #5230 ...)
   Axes6 position_mm;           // controlled point in machine coordinates
   bool retract_old_z = false;  // G98 (else G99)
   CycleState cycle;
@@ -69,8 +74,11 @@ struct InterpState {
   double to_program(int axis, double mm) const { return axis < 3 ? mm / scale() : mm; }
   double to_machine(int axis, double value) const { return axis < 3 ? value * scale() : value; }
   Axes6 to_program(const Axes6& mm) const;
-  // Position `machine` expressed in the work coordinate system.
+  // Position `machine` expressed in the work coordinate system:
+  // program XY = rotation^-1 x (machine - G5x - tool) - G92.
   Axes6 program_position(const Axes6& machine) const;
+  // Machine position of program position `program` (the inverse).
+  Axes6 machine_position(const Axes6& program) const;
   Axes6 program_position() const { return program_position(position_mm); }
 };
 

@@ -22,11 +22,22 @@ int flood_slot(bool flood) {
 }  // namespace
 
 BlockExecutor::ModalSnapshot BlockExecutor::snapshot() const {
-  return {s_.units,           s_.feed_mode,   s_.feed,
-          s_.speed,           s_.spindle,     s_.mist,
-          s_.flood,           s_.plane,       s_.tool_length_code,
-          s_.coord_index,     s_.path,        s_.blend_tolerance,
-          s_.naive_tolerance, s_.incremental, s_.arc_absolute,
+  return {s_.units,
+          s_.css,
+          s_.feed_mode,
+          s_.feed,
+          s_.speed,
+          s_.spindle,
+          s_.mist,
+          s_.flood,
+          s_.plane,
+          s_.tool_length_code,
+          s_.coord_index,
+          s_.path,
+          s_.blend_tolerance,
+          s_.naive_tolerance,
+          s_.incremental,
+          s_.arc_absolute,
           s_.retract_old_z};
 }
 
@@ -87,19 +98,27 @@ void BlockExecutor::restore(const ModalSnapshot& saved) {
   // The rest as one block of the codes that differ, compared before it
   // runs, in the order of execution.
   const ModalSnapshot now = snapshot();
+  if (saved.css != now.css) {
+    // rs274 does not save G96's D: a restored G96 has no limit.
+    s_.css = saved.css;
+    s_.css_max_rpm = saved.css ? kNoCssLimit : 0;
+    out_.emit(SetSpindleMode{s_.css_max_rpm, s_.css});
+  }
   if (saved.feed_mode != now.feed_mode) {
     s_.feed_mode = saved.feed_mode;
     if (saved.feed_mode == FeedMode::kInverseTime) {
       out_.emit(Comment{"interpreter: feed mode set to inverse time"});
       out_.emit(SetFeedMode{s_.feed_mode});
     } else {
-      out_.emit(Comment{"interpreter: feed mode set to units per minute"});
+      out_.emit(Comment{saved.feed_mode == FeedMode::kUnitsPerRevolution
+                            ? "interpreter: feed mode set to units per revolution"
+                            : "interpreter: feed mode set to units per minute"});
       out_.emit(SetFeedMode{s_.feed_mode});
       out_.emit(SetFeedRate{0});
     }
     s_.feed = 0;
   }
-  if (saved.feed != now.feed && s_.feed_mode == FeedMode::kUnitsPerMinute) {
+  if (saved.feed != now.feed && s_.feed_mode != FeedMode::kInverseTime) {
     s_.feed = saved.feed;
     out_.emit(SetFeedRate{s_.feed});
   }

@@ -44,6 +44,8 @@ void BlockExecutor::probe(int code, const Axes6& target, int column, bool axis_w
     fail(column, "cannot probe (" + name + ") with cutter radius compensation on (G40 first)");
   if (s_.feed_mode == FeedMode::kInverseTime)
     fail(column, name + " with inverse-time feed (G93): program G94 and F");
+  if (s_.feed_mode == FeedMode::kUnitsPerRevolution)
+    fail(column, "cannot probe (" + name + ") with feed per revolution (G95): program G94 and F");
   if (s_.feed <= 0) fail(column, name + " with a zero feed rate: program F before or on this line");
   bool moves = false;
   for (int i = 0; i < 6; ++i)

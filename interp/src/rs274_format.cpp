@@ -83,8 +83,8 @@ std::string format_rs274(const CanonOp& op, const FormatOptions& options) {
           args = p.num(c.units_per_minute);
         } else if constexpr (std::is_same_v<T, SetFeedMode>) {
           // LinuxCNC's canonical feed mode stays units/minute under G93: the
-          // interpreter turns each inverse-time F into a rate.
-          args = "0, 0";
+          // interpreter turns each inverse-time F into a rate. G95: 1.
+          args = c.mode == FeedMode::kUnitsPerRevolution ? "0, 1" : "0, 0";
         } else if constexpr (std::is_same_v<T, SelectPlane>) {
           args = plane_text(c.plane);
         } else if constexpr (std::is_same_v<T, UseLengthUnits>) {

@@ -41,7 +41,7 @@ std::optional<double> predefined_parameter(const InterpState& s, const Parameter
   if (n == "incremental") return flag(s.incremental);
   if (n == "inverse_time") return flag(s.feed_mode == FeedMode::kInverseTime);
   if (n == "units_per_minute") return flag(s.feed_mode == FeedMode::kUnitsPerMinute);
-  if (n == "units_per_rev") return 0.0;
+  if (n == "units_per_rev") return flag(s.feed_mode == FeedMode::kUnitsPerRevolution);
   if (n == "coord_system") {
     static const double kCodes[] = {540, 550, 560, 570, 580, 590, 591, 592, 593};
     return kCodes[s.coord_index - 1];
@@ -76,8 +76,8 @@ std::optional<double> predefined_parameter(const InterpState& s, const Parameter
   if (n == "ccomp") return 400.0;
   if (n == "retract_r_plane") return flag(!s.retract_old_z);
   if (n == "retract_old_z") return flag(s.retract_old_z);
-  if (n == "spindle_rpm_mode") return 1.0;
-  if (n == "spindle_css_mode") return 0.0;
+  if (n == "spindle_rpm_mode") return flag(!s.css);
+  if (n == "spindle_css_mode") return flag(s.css);
   if (n == "ijk_absolute_mode") return flag(s.arc_absolute);
   if (n == "lathe_diameter_mode") return 0.0;
   if (n == "lathe_radius_mode") return 1.0;

@@ -22,6 +22,9 @@ constexpr int kDebugSwitch = 5599;  // (DEBUG,...) messages shown when non-zero
 constexpr int coord_system_base(int n) {
   return 5201 + 20 * n;
 }
+// The XY rotation (degrees, G10 L2 R) of a system: coord_system_base + 9
+// (#5230 for G54, #5250 for G55, ...).
+constexpr int kCoordSystemRotation = 9;
 
 // Writes the read-only state parameters (#5220, #5400.., #5420..).
 void sync_state_parameters(const InterpState& state, Parameters& params);

@@ -41,6 +41,7 @@ void BlockExecutor::tool_table_edit(int l) {
   Axes6 fixture;
   for (int i = 0; i < 6; ++i)
     fixture[i] = params_.get(coord_system_base(kG593) + i);
+  const bool rotated = s_.rotation_deg != 0;
   for (int i = 0; i < 6; ++i) {
     const char letter = kAxisLetters[i];
     if (!b_->has(letter)) continue;
@@ -48,9 +49,21 @@ void BlockExecutor::tool_table_edit(int l) {
     double offset = v;  // L1: the word itself
     if (l == 10) offset = prog[i] + s_.to_program(i, s_.tool_offset_mm[i]) - v;
     if (l == 11)
-      offset = prog[i] + s_.to_program(i, s_.g5x_mm[i] + s_.g92_mm[i] + s_.tool_offset_mm[i]) -
+      offset = (rotated ? s_.to_program(i, s_.position_mm[i])
+                        : prog[i] + s_.to_program(
+                                        i, s_.g5x_mm[i] + s_.g92_mm[i] + s_.tool_offset_mm[i])) -
                fixture[i] - v;
     e->offset_mm[i] = s_.to_machine(i, offset);
+  }
+  if (l == 10 && rotated && (b_->has('x') || b_->has('y'))) {
+    // Under an XY rotation X and Y go together, as in rs274: the offset
+    // that puts the tool at the words (the current position for a missing
+    // one) in the rotated frame.
+    double x = s_.to_machine(0, b_->has('x') ? b_->value('x') : prog.x) + s_.g92_mm.x;
+    double y = s_.to_machine(1, b_->has('y') ? b_->value('y') : prog.y) + s_.g92_mm.y;
+    rotate_xy_deg(x, y, s_.rotation_deg);
+    e->offset_mm.x = s_.position_mm.x - s_.g5x_mm.x - x;
+    e->offset_mm.y = s_.position_mm.y - s_.g5x_mm.y - y;
   }
   if (b_->has('r')) e->diameter_mm = s_.to_machine(0, 2 * b_->value('r'));
   if (b_->has('i')) e->front_angle_deg = b_->value('i');

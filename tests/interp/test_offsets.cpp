@@ -104,8 +104,37 @@ TEST(Offsets, G10Errors) {
   EXPECT_NE(error_of("G10 L2 X1\nM2\n").message().find("needs P"), std::string::npos);
   EXPECT_NE(error_of("G10 L1 P5 Z1\nM2\n").message().find("not in the tool table"),
             std::string::npos);
-  EXPECT_NE(error_of("G10 L2 P1 R30\nM2\n").message().find("rotation"), std::string::npos);
+  EXPECT_NE(error_of("G10 L20 P1 R30\nM2\n").message().find("G10 L20 does not take R"),
+            std::string::npos);
   EXPECT_NO_THROW(run("G10 L2 P1 R0 X1\nM2\n"));
+}
+
+// G10 L2 R: the calls stay in the rotated frame (as rs274 prints them, see
+// Rs274Oracle.RotatedCoordinateSystemsMatch); the context carries the
+// rotation, so machine_position_mm gives G5x + rotation x (program + G92).
+TEST(Offsets, RotatedSystemMachinePositions) {
+  auto p =
+      run("G10 L2 P1 X10 Y5 R90\nG0 X1 Y0 Z2\nG1 X1 Y2 F100\n#1 = #5230\n"
+          "G0 X#1\nG53 G0 X0 Y0\nM2\n");
+  std::vector<Axes6> machine;
+  for (const auto& c : p.calls)
+    if (const auto* t = std::get_if<StraightTraverse>(&c.op)) {
+      EXPECT_EQ(c.context.xy_rotation_deg, 90);
+      machine.push_back(machine_position_mm(t->end, c.context));
+    } else if (const auto* f = std::get_if<StraightFeed>(&c.op)) {
+      machine.push_back(machine_position_mm(f->end, c.context));
+    }
+  ASSERT_EQ(machine.size(), 4u);
+  // Program (1, 0) turned by 90 degrees is (0, 1); + G5x (10, 5).
+  EXPECT_NEAR(machine[0].x, 10, 1e-12);
+  EXPECT_NEAR(machine[0].y, 6, 1e-12);
+  EXPECT_NEAR(machine[0].z, 2, 1e-12);
+  EXPECT_NEAR(machine[1].x, 8, 1e-12);
+  EXPECT_NEAR(machine[1].y, 6, 1e-12);
+  EXPECT_NEAR(machine[2].y, 95, 1e-12);  // X#5230 = X90
+  EXPECT_NEAR(machine[3].x, 0, 1e-12);   // G53: machine coordinates
+  EXPECT_NEAR(machine[3].y, 0, 1e-12);
+  EXPECT_EQ(moves(p).back(), "STRAIGHT_TRAVERSE(-5.0000, 10.0000, 2.0000, 0.0000, 0.0000, 0.0000)");
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 // Feed: the programmed F along the path (TCP path under TRAORI), LinuxCNC's
 // rules for rotary moves, inverse time (G93) and G0.
+#include <numbers>
+
 #include "planner_test_util.hpp"
 
 namespace truecut::interp::testing {
@@ -87,6 +89,45 @@ TEST(PlannerFeed, InverseTimeSequenceKeepsEachMovesRate) {
 TEST(PlannerFeed, RapidRunsAtTheAxisLimit) {
   const auto s = sample_plan(plan_text("G0 X150\nM2\n"), 0.001);
   EXPECT_NEAR(200.0, profile(s, 1).max, 1e-6);
+}
+
+// G95: F per spindle revolution, feed = F x S; inches per revolution in G20.
+TEST(PlannerFeed, FeedPerRevolutionIsFTimesTheSpindleSpeed) {
+  const auto s = sample_plan(
+      plan_text("M3 S1200\nG95 F0.25\nG1 X100\nS600\nG1 X200\nG20 F0.01\nG1 X10\nM2\n"), 0.001);
+  EXPECT_NEAR(0.25 * 1200 / 60, profile(s, 3).cruise, 1e-6);  // 300 mm/min
+  EXPECT_NEAR(0.25 * 600 / 60, profile(s, 5).cruise, 1e-6);
+  EXPECT_NEAR(0.01 * 25.4 * 600 / 60, profile(s, 7).cruise, 1e-6);
+  // The spindle stopped: the move would never advance.
+  try {
+    plan_text("M3 S1000\nG95 F0.1\nG1 X10\nM5\nG1 X20\nM2\n");
+    ADD_FAILURE() << "G95 with the spindle stopped was planned";
+  } catch (const GcodeError& e) {
+    EXPECT_EQ(e.where().line, 5);
+    EXPECT_NE(std::string(e.what()).find("feed per revolution (G95) with the spindle stopped"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// G96 on a mill: the spindle speed keeps the surface speed S (m/min) at the
+// tool's X distance from the work origin at the start of each move, at
+// most D; with G95 the feed follows that speed.
+TEST(PlannerFeed, ConstantSurfaceSpeedSetsTheSpindleSpeedFromX) {
+  const auto s = sample_plan(plan_text("G0 X50\nM3 G96 S100 D5000\nG95 F0.1\nG1 X60\n"
+                                       "G0 X1\nG1 X0.5\nG97 S800\nG1 X2\nM2\n"),
+                             0.001);
+  const double at_50 = 100000 / (2 * std::numbers::pi * 50);  // 318.3 rpm
+  double rpm4 = -1, rpm6 = -1, rpm8 = -1;
+  for (const CycleOutput& c : s) {
+    if (c.line == 4) rpm4 = c.spindle_rpm;
+    if (c.line == 6) rpm6 = c.spindle_rpm;
+    if (c.line == 8) rpm8 = c.spindle_rpm;
+  }
+  EXPECT_NEAR(at_50, rpm4, 1e-9);
+  EXPECT_NEAR(0.1 * at_50 / 60, profile(s, 4).cruise, 1e-6);
+  EXPECT_EQ(5000.0, rpm6);  // 1 mm from the origin: 15915 rpm, capped by D
+  EXPECT_EQ(800.0, rpm8);   // G97
 }
 
 TEST(PlannerFeed, InchProgramsFeedInInchesPerMinute) {

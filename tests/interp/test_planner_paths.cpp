@@ -226,5 +226,46 @@ TEST(PlannerPaths, CutterCompensationRunsTheOffsetPath) {
   }
 }
 
+// G10 L2 R: the machine runs the program turned about Z. A G18 arc stands
+// in the turned vertical plane, a G17 circle keeps its radius about the
+// turned centre (machine XY = G5x + rotation x program).
+TEST(PlannerPaths, RotatedCoordinateSystemTurnsLinesAndArcs) {
+  const auto s = sample_plan(plan_text("G21 G61\nG10 L2 P1 X10 Y5 R30\nG0 X0 Y0 Z0\n"
+                                       "G18 G2 X10 Z0 I5 K0 F600\nG17 G2 X10 Y0 I-5 J0\n"
+                                       "G1 X0 Y0\nM2\n"),
+                             0.001);
+  ASSERT_FALSE(s.empty());
+  EXPECT_TRUE(s.back().done);
+  const double c30 = std::cos(std::numbers::pi / 6), s30 = std::sin(std::numbers::pi / 6);
+  auto machine = [&](double x, double y) {
+    return P3{10 + c30 * x - s30 * y, 5 + s30 * x + c30 * y, 0};
+  };
+  const P3 centre = machine(5, 0);
+  double z0 = 0, top = 0;
+  int on_arc = 0, on_circle = 0;
+  for (const auto& c : s) {
+    if (c.line == 3) z0 = c.tcp_mm[2];
+    if (c.line == 4) {
+      ++on_arc;
+      const double dx = c.tcp_mm[0] - centre[0], dy = c.tcp_mm[1] - centre[1];
+      const double dz = c.tcp_mm[2] - z0;
+      EXPECT_NEAR(std::sqrt(dx * dx + dy * dy + dz * dz), 5, 1e-6);
+      EXPECT_NEAR(-s30 * dx + c30 * dy, 0, 1e-6);  // in the turned XZ plane
+      top = std::max(top, std::abs(dz));
+    }
+    if (c.line == 5) {
+      ++on_circle;
+      EXPECT_NEAR(std::hypot(c.tcp_mm[0] - centre[0], c.tcp_mm[1] - centre[1]), 5, 1e-6);
+      EXPECT_NEAR(c.tcp_mm[2], z0, 1e-9);
+    }
+  }
+  EXPECT_GT(on_arc, 10);
+  EXPECT_GT(on_circle, 10);
+  EXPECT_NEAR(top, 5, 1e-3);
+  const P3 end = machine(0, 0);
+  EXPECT_NEAR(s.back().tcp_mm[0], end[0], 1e-9);
+  EXPECT_NEAR(s.back().tcp_mm[1], end[1], 1e-9);
+}
+
 }  // namespace
 }  // namespace truecut::interp::testing

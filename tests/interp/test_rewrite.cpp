@@ -883,11 +883,51 @@ TEST(Rewrite, ToolMissingFromTheTableOrNotSelectedIsRefusedWithItsLine) {
                                  o)
                 .substr(0, 60),
             "bad.ngc:4: G10 L1/L10/L11 (tool table edit) in the program: ");
+  // A rotated coordinate system (G10 L2 R) is refused by name at the line
+  // that puts it in force, here the G55 that selects it; R0 passes.
+  EXPECT_EQ(error_of<GcodeError>("G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG10 L2 P2 R30\nG55\n"
+                                 "G0 X0 Y0 Z1\nG1 Z0 F100\nG1 X1\nM30\n",
+                                 o)
+                .substr(0, 62),
+            "bad.ngc:5: rotated coordinate system (G10 L2 R, 30 degrees) in");
+  EXPECT_NO_THROW(
+      rewrite_program("G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG10 L2 P1 R0\n"
+                      "G0 X0 Y0 Z1\nG1 Z0 F100\nG1 X1\nM30\n",
+                      "ok.ngc", plane_matrix(-10, 10, -4, 4, 0, 0.5, V(0, 0, 0.01)), o));
   // A ball end mill whose table row has no diameter.
   RewriteOptions ball = options("FACE", CutType::kBall);
   ball.interpreter.tools = ToolTable::parse("T1 P1 D2 Z35\nT2 P2 Z40\n", "tools.tbl");
   EXPECT_EQ(error_of<GcodeError>(kThreeOps, ball).substr(0, 60),
             "bad.ngc:15: tool T2 has diameter 0 in the tool table: a ball");
+}
+
+// G95/G96: the mode lines and the F and S words are copied; the densified
+// pieces of a move keep its F, which means the same per revolution, and run
+// under the same modes (the rewritten program's calls keep G95's context).
+TEST(Rewrite, FeedPerRevolutionProgramsKeepTheirModes) {
+  const std::string text =
+      "G21 G90 G17\n(OPERATION: FACE)\nT2 M6\nG96 S200 D6000 M3\nG95 F0.05\nG0 X-8 Y0 Z1\n"
+      "G1 Z0\nG1 X8\nG0 Z5\nM30\n";
+  RewriteOptions o = options("FACE", CutType::kFace);
+  o.reach_mm = 0.6;
+  const RewriteResult r =
+      rewrite_program(text, "p.ngc", plane_matrix(-10, 10, -4, 4, 0, 0.5, V(0, 0, 0.05)), o);
+  EXPECT_NE(r.text.find("G96 S200 D6000 M3\n"), std::string::npos) << r.text;
+  EXPECT_NE(r.text.find("G95 F0.05\n"), std::string::npos) << r.text;
+  InterpreterOptions io;
+  io.tools = ToolTable::parse(kTools, "tools.tbl");
+  const auto prog = Interpreter(io).run_text(r.text, "r.ngc");
+  int feeds = 0;
+  for (const auto& c : prog.calls) {
+    if (const auto* f = std::get_if<SetFeedRate>(&c.op)) {
+      EXPECT_TRUE(f->units_per_minute == 0 || f->units_per_minute == 0.05);
+    }
+    if (std::holds_alternative<StraightFeed>(c.op)) {
+      ++feeds;
+      EXPECT_EQ(c.context.feed_mode, FeedMode::kUnitsPerRevolution);
+    }
+  }
+  EXPECT_GT(feeds, 10);  // densified
 }
 
 TEST(Rewrite, GivenToolRadiusThatDiffersFromTheTableIsRefused) {

@@ -173,6 +173,124 @@ TEST(Rs274Oracle, OwnCorpusMatches) {
   EXPECT_GE(compared, 6);
 }
 
+// Rotated coordinate systems (G10 L2 R, docs/gcode.md): arcs in all planes,
+// G91, G92/G52, G53, G10 L20, G28/G30, canned cycles, cutter compensation,
+// polar words, M70/M72, a #5230 write, M2; and in inches with XY tool
+// offsets, G10 L10/L11, probing and G33.
+TEST(Rs274Oracle, RotatedCoordinateSystemsMatch) {
+  REQUIRE_ORACLE(o);
+  for (const char* name : {"rotated_coordinates.ngc", "rotated_coordinates_inch.ngc"}) {
+    const fs::path p = source_dir() / "tests/interp/corpus" / name;
+    const Outcome r = run_both(*o, p);
+    EXPECT_TRUE(r.rs274_runs) << p << ": rs274 rejects the program: " << r.rs274_error;
+    EXPECT_TRUE(r.truecut_runs) << p << ": " << r.truecut_error;
+    EXPECT_EQ(r.difference, std::nullopt) << p;
+  }
+}
+
+// Random programs under rotated coordinate systems: G10 L2 R of the active
+// and of other systems, G10 L20, G54/G55/G56, G92/G92.1/G52, G53, G28/G30,
+// absolute and incremental lines, full and half circles in G17 and G18, a
+// canned cycle, and the position read back (#5420, #5421) in between.
+TEST(Rs274Oracle, RandomRotatedProgramsAgree) {
+  REQUIRE_ORACLE(o);
+  const fs::path dir = o->work / "rotation_random";
+  fs::create_directories(dir);
+  std::mt19937 rng(20261128);
+  auto u = [&](double lo, double hi) {
+    return lo + (hi - lo) * (static_cast<double>(rng()) / static_cast<double>(rng.max()));
+  };
+  auto pick = [&](unsigned m) { return static_cast<unsigned>(rng() % m); };
+  int matched = 0;
+  for (int n = 0; n < 60; ++n) {
+    std::string text = pick(4) == 0 ? "G20 F20\n" : "G21 F300\n";
+    text += "G0 X1 Y2 Z3\n";
+    char buf[200];
+    const int blocks = 6 + static_cast<int>(pick(10));
+    for (int k = 0; k < blocks; ++k) {
+      switch (pick(14)) {
+        case 0:
+        case 1:
+          std::snprintf(buf, sizeof buf, "G10 L2 P%u X%.3f Y%.3f R%.3f", pick(4), u(-20, 20),
+                        u(-20, 20), u(-180, 180));
+          break;
+        case 2:
+          std::snprintf(buf, sizeof buf, "G10 L2 P%u R%.3f", pick(4), u(-90, 90));
+          break;
+        case 3: {
+          const unsigned w = pick(3);
+          std::snprintf(buf, sizeof buf, "G10 L20 P%u%s%s Z%.3f", pick(4),
+                        w != 1 ? (" X" + std::to_string(u(-5, 5)).substr(0, 6)).c_str() : "",
+                        w != 0 ? (" Y" + std::to_string(u(-5, 5)).substr(0, 6)).c_str() : "",
+                        u(1, 5));
+          break;
+        }
+        case 4:
+          std::snprintf(buf, sizeof buf, "%s", pick(3) == 0 ? "G54" : pick(2) ? "G55" : "G56");
+          break;
+        case 5:
+          std::snprintf(buf, sizeof buf, "%s",
+                        pick(3) == 0 ? "G92.1"
+                        : pick(2)    ? "G92 X1.5 Y-2"
+                                     : "G52 X-3 Y0.5");
+          break;
+        case 6:
+          std::snprintf(buf, sizeof buf, "G53 G0 X%.3f Y%.3f", u(-10, 10), u(-10, 10));
+          break;
+        case 7:
+          std::snprintf(buf, sizeof buf, "%s", pick(2) ? "G28" : "G30 X1");
+          break;
+        case 8:
+          std::snprintf(buf, sizeof buf, "G%u X%.3f Y%.3f", pick(2), u(-20, 20), u(-20, 20));
+          break;
+        case 9:
+          std::snprintf(buf, sizeof buf, "G91 G1 X%.3f Y%.3f\nG90", u(-5, 5), u(-5, 5));
+          break;
+        case 10:
+          std::snprintf(buf, sizeof buf, "G91 G%u X0 Y0 I%.3f J%.3f\nG90", 2 + pick(2), u(-4, 4),
+                        u(-4, 4));
+          break;
+        case 11:
+          std::snprintf(buf, sizeof buf, "G91 G18 G%u X%.3f Z0 I%.3f K0\nG17 G90", 2 + pick(2), 6.0,
+                        3.0);
+          break;
+        case 12:
+          std::snprintf(buf, sizeof buf, "G81 X%.3f Y%.3f Z-1 R4\nG80", u(-5, 5), u(-5, 5));
+          break;
+        default:
+          std::snprintf(buf, sizeof buf, "(DEBUG, #5420 #5421 #5230 #5250)");
+          break;
+      }
+      text += std::string(buf) + "\n";
+    }
+    text += "G0 X0 Y0\nM2\n";
+    const fs::path program = dir / ("r" + std::to_string(n) + ".ngc");
+    std::ofstream(program) << text;
+    const Outcome r = run_both(*o, program);
+    ASSERT_EQ(r.rs274_runs, r.truecut_runs)
+        << text << "rs274: " << r.rs274_error << "\ntruecut: " << r.truecut_error;
+    if (!r.rs274_runs) continue;
+    EXPECT_EQ(r.difference, std::nullopt) << text;
+    if (!r.difference) ++matched;
+  }
+  std::printf("random rotated programs: %d of 60 match\n", matched);
+  EXPECT_GE(matched, 50) << "too few programs ran";
+}
+
+// G95 feed per revolution, G96/G97 constant surface speed (docs/gcode.md):
+// SET_FEED_MODE(0, 1), SET_SPINDLE_MODE with D or 1e30, M70/M72, canned
+// cycles and G33 under G95, inches.
+TEST(Rs274Oracle, FeedPerRevolutionAndSurfaceSpeedMatch) {
+  REQUIRE_ORACLE(o);
+  for (const char* name : {"feed_per_rev_css.ngc"}) {
+    const fs::path p = source_dir() / "tests/interp/corpus" / name;
+    const Outcome r = run_both(*o, p);
+    EXPECT_TRUE(r.rs274_runs) << p << ": rs274 rejects the program: " << r.rs274_error;
+    EXPECT_TRUE(r.truecut_runs) << p << ": " << r.truecut_error;
+    EXPECT_EQ(r.difference, std::nullopt) << p;
+  }
+}
+
 // Each case, after `prefix` and before M2, is refused by rs274 and truecut
 // at the same line. Each program's offending line is unique; rs274 prints
 // it after its message.
@@ -318,8 +436,27 @@ TEST(Rs274Oracle, OffsetToolAndSubprogramErrorsAtTheSameLine) {
       "M98 P100\nM2\nO100\nG0 X2 M99 (M99 with a move)",
       "M98 P100\nM2\nO100 G1 X1 (words after the number)\nM99",
       "M98 P100\nM2\nO100\nM98 P100 L1 (recursion)\nM99",
+      "G10 L2 P1 R30\nG10 L20 P1 X0 R45 (R with L20)",
+      "G10 L2 P1 R30\nG41 D1 G1 X10 Y0\nG10 L2 P0 R10 (rotating the active system under "
+      "compensation)",
   };
   expect_refused_at_the_same_line(*o, "offset_errors", "G21 F100 T1 M6\nG0 X-5 Y-5\n", kCases);
+}
+
+// G95/G96 (docs/gcode.md): the programs rs274 refuses, refused by truecut
+// at the same line.
+TEST(Rs274Oracle, FeedAndSpindleModeErrorsAtTheSameLine) {
+  REQUIRE_ORACLE(o);
+  static const char* kCases[] = {
+      "G96 D2000 (G96 without S)",
+      "G97 S500 D100 (D without G96)",
+      "G95\nG1 X10 (G95 resets F to 0)",
+      "G95 F0.1 S0\nG1 X11 (S0 in G95)",
+      "G95 F0.1 S0\nG2 X2 I1 (S0 in G95, arc)",
+      "G95 F0.2\nG38.3 Z0 (probing in G95)",
+  };
+  expect_refused_at_the_same_line(*o, "feed_mode_errors", "G21 F100\nG0 X0 Y0 Z5\nM3 S1000\n",
+                                  kCases);
 }
 
 // M62-M68, M19, M48-M53 (docs/gcode.md): the programs rs274

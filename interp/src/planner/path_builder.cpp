@@ -1,6 +1,7 @@
 // Canonical calls -> moves in the planning space.
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <stdexcept>
 
 #include "output_map.hpp"
@@ -43,8 +44,12 @@ struct Builder {
   Vec5 cur{};                     // planning-space position (joint space at start)
   double feed_upm = 0;
   double unsynced_feed_upm = 0;  // F while G33/G33.1 feed at K per revolution
-  double spindle_rpm = 0;        // last S word
+  double spindle_rpm = 0;        // last S word (G96: surface speed, m/min or ft/min)
   bool spindle_on = false;       // M3/M4 until M5
+  bool css = false;              // G96 constant surface speed
+  double css_max_rpm = 0;        // its D
+  bool synced = false;           // between G33/G33.1's sync on and off
+  bool spline_feeds = false;     // flush_spline: feed_upm is already per minute
   PathMode mode = PathMode::kContinuous;
   double tolerance_mm = 0;
 
@@ -114,6 +119,31 @@ struct Builder {
     tcp_tool_length_mm = kin.tool_length_mm;
   }
 
+  // The spindle speed now (rpm): S, or under G96 the speed that keeps the
+  // surface speed S at the tool's X distance from the work origin (at
+  // the start of the move), at most D.
+  double spindle_rpm_now(const CallContext& ctx) const {
+    if (!spindle_on) return 0;
+    if (!css) return spindle_rpm;
+    const double surface_mm_per_min =
+        spindle_rpm * (ctx.units == LengthUnits::kInch ? 304.8 : 1000);
+    double x0 = ctx.g5x_mm.x + ctx.g92_mm.x;
+    if (!tcp) x0 += ctx.tool_offset_mm.x;
+    const double radius_mm = std::abs(cur[0] - x0);
+    const double rpm = radius_mm > kMinLength
+                           ? surface_mm_per_min / (2 * std::numbers::pi * radius_mm)
+                           : std::numeric_limits<double>::infinity();
+    // rs274's 1e30 (G96 without D) is no limit: at X 0 the speed is infinite.
+    return css_max_rpm < 1e30 ? std::min(rpm, css_max_rpm) : rpm;
+  }
+
+  // The feed in program units per minute: G95's F per revolution times the
+  // spindle speed at the start of the move (G33's sync sets its own).
+  double feed_upm_now(const CallContext& ctx) const {
+    if (ctx.feed_mode != FeedMode::kUnitsPerRevolution || synced || spline_feeds) return feed_upm;
+    return feed_upm * spindle_rpm_now(ctx);
+  }
+
   Move base_move(const CallContext& ctx, bool rapid) {
     Move m;
     m.tcp = tcp;
@@ -124,8 +154,9 @@ struct Builder {
     m.line = ctx.line;
     m.tool = ctx.tool;
     m.operation = operation_id(ctx.operation);
-    m.programmed_feed_mm_per_s = rapid ? 0 : feed_upm * scale(ctx) / 60.0;
-    m.spindle_rpm = spindle_on ? spindle_rpm : 0.0;
+    m.programmed_feed_mm_per_s = rapid ? 0 : feed_upm_now(ctx) * scale(ctx) / 60.0;
+    const double rpm = spindle_rpm_now(ctx);
+    m.spindle_rpm = std::isfinite(rpm) ? rpm : 0.0;  // G96 without D at X 0: unknown
     return m;
   }
 
@@ -137,7 +168,15 @@ struct Builder {
       if (m.metric == FeedMetric::kRotary) m.feed = std::numeric_limits<double>::infinity();
       return;
     }
-    const double f = feed_upm / 60.0;
+    const double f = feed_upm_now(ctx) / 60.0;
+    if (ctx.feed_mode == FeedMode::kUnitsPerRevolution && !synced && !spline_feeds) {
+      if (!spindle_on)
+        fail(ctx, "feed per revolution (G95) with the spindle stopped: the move would not advance");
+      if (!std::isfinite(f))
+        fail(ctx,
+             "feed per revolution (G95) under constant surface speed (G96) without D at X 0 (the "
+             "work origin): the spindle speed and the feed are unbounded; program G96 with D");
+    }
     if (!(f > 0)) fail(ctx, "feed move with zero feed rate");
     m.feed = m.metric == FeedMetric::kXyz ? f * scale(ctx) : f;
   }
@@ -158,30 +197,42 @@ struct Builder {
     cur = target;
   }
 
+  // Planning space turned about Z by `degrees` (X Y only).
+  static Vec5 turned(Vec5 v, double degrees) {
+    if (degrees != 0) rotate_xy_deg(v[0], v[1], degrees);
+    return v;
+  }
+
+  // Under an XY rotation (G10 L2 R) the arc is built in planning space
+  // turned back by the rotation, where its plane is a coordinate plane
+  // again (a G18/G19 arc stands in a turned vertical plane), and turned
+  // forward after: centre, e1, e2 and drift.
   void add_arc(const ArcFeed& arc, const CallContext& ctx) {
     rebase(ctx);
     const path_geometry::PlaneAxes axes = path_geometry::plane_axes(arc.plane);
     const int first = axes.first, second = axes.second;
-    const Vec5 end = to_planning(arc.end, ctx);
+    const double turn = ctx.xy_rotation_deg;
+    const Vec5 start = turned(cur, -turn);
+    const Vec5 end = turned(to_planning(arc.end, ctx), -turn);
     // The centre in the plane, through the same offsets as the end point.
     Axes6 cprog = arc.end;
     cprog[first] = arc.center[first];
     cprog[second] = arc.center[second];
-    const Vec5 cplan = to_planning(cprog, ctx);
+    const Vec5 cplan = turned(to_planning(cprog, ctx), -turn);
     const path_geometry::PlaneArc geo =
-        path_geometry::plane_arc(cur[first], cur[second], end[first], end[second], cplan[first],
+        path_geometry::plane_arc(start[first], start[second], end[first], end[second], cplan[first],
                                  cplan[second], arc.rotation);
     const double r0 = geo.start_radius_mm, r1 = geo.end_radius_mm;
     if (r0 < kMinLength) fail(ctx, "arc with zero radius");
     const double sweep = geo.sweep_rad;
-    const double sx = cur[first] - cplan[first], sy = cur[second] - cplan[second];
+    const double sx = start[first] - cplan[first], sy = start[second] - cplan[second];
     Move m = base_move(ctx, false);
     PathPiece& p = m.piece;
     p.kind = PathPiece::kArc;
     p.radius = r0;
     p.radius_end = r1;
     p.sweep_rad = sweep;
-    p.a = cur;  // off-plane coordinates start where the arc starts
+    p.a = start;  // off-plane coordinates start where the arc starts
     p.a[first] = cplan[first];
     p.a[second] = cplan[second];
     p.b = {};
@@ -193,7 +244,7 @@ struct Builder {
     double off2 = 0, off_xyz2 = 0;
     for (int i = 0; i < 5; ++i) {
       if (i == first || i == second) continue;
-      const double d = end[i] - cur[i];
+      const double d = end[i] - start[i];
       p.d[i] = d / sweep;
       off2 += d * d;
       if (i < 3) off_xyz2 += d * d;
@@ -201,6 +252,12 @@ struct Builder {
     const double arc_len = path_geometry::plane_length_mm(geo);
     p.length = std::sqrt(arc_len * arc_len + off2);
     set_feed(m, ctx, std::sqrt(arc_len * arc_len + off_xyz2));
+    if (turn != 0) {
+      p.a = turned(p.a, turn);
+      p.b = turned(p.b, turn);
+      p.c = turned(p.c, turn);
+      p.d = turned(p.d, turn);
+    }
     out.moves.push_back(m);
     cur = evaluate(p, p.length);
   }
@@ -245,6 +302,7 @@ struct Builder {
     out.splines.push_back(report);
     const double saved = feed_upm;
     feed_upm = feed;
+    spline_feeds = true;
     for (const CubicSpan& span : fit.spans) {
       PathPiece piece;
       if (!cubic_piece(span, piece)) continue;
@@ -256,6 +314,7 @@ struct Builder {
       out.moves.push_back(m);
     }
     feed_upm = saved;
+    spline_feeds = false;
     cur = spline.back().p;
     spline.clear();
   }
@@ -272,10 +331,10 @@ struct Builder {
       rebase(ctx);
       spline_mode = ctx.spline;
       spline_ctx = ctx;
-      spline.push_back({cur, ctx.line, feed_upm});
+      spline.push_back({cur, ctx.line, feed_upm_now(ctx)});
     }
     if (norm(sub(target, spline.back().p)) < kMinLength) return;
-    spline.push_back({target, ctx.line, feed_upm});
+    spline.push_back({target, ctx.line, feed_upm_now(ctx)});
   }
 
   void set_tcp(bool on, const CallContext& ctx) {
@@ -306,7 +365,12 @@ struct Builder {
     }
     if (std::holds_alternative<SetFeedRate>(c.op)) {
       feed_upm = std::get<SetFeedRate>(c.op).units_per_minute;
-      if (!spline.empty()) spline.back().feed = std::min(spline.back().feed, feed_upm);
+      if (!spline.empty()) spline.back().feed = std::min(spline.back().feed, feed_upm_now(ctx));
+      return;
+    }
+    if (const auto* sm = std::get_if<SetSpindleMode>(&c.op)) {
+      css = sm->constant_surface_speed;
+      css_max_rpm = sm->css_max_rpm;
       return;
     }
     // The spindle changes with the motion (no stop), as on a machine whose
@@ -341,6 +405,7 @@ struct Builder {
       } else {
         feed_upm = unsynced_feed_upm;
       }
+      synced = sync->on;
     } else if (const auto* tap = std::get_if<RigidTap>(&c.op)) {
       // In to the end, reverse, out to where the tap started.
       rebase(ctx);

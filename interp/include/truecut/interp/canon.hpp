@@ -27,7 +27,8 @@ struct Axes6 {
 
 enum class Plane { kXY, kYZ, kXZ };  // G17, G19, G18
 enum class LengthUnits { kMm, kInch };
-enum class FeedMode { kUnitsPerMinute, kInverseTime };        // G94, G93
+// G94, G93, G95 (F in program units per spindle revolution).
+enum class FeedMode { kUnitsPerMinute, kInverseTime, kUnitsPerRevolution };
 enum class PathMode { kExactStop, kExactPath, kContinuous };  // G61.1, G61, G64
 // Sinumerik spline interpolation, in the motion group with G0..G3.
 enum class SplineMode { kNone, kBspline, kCspline };
@@ -79,7 +80,8 @@ struct StraightProbe {
 };
 
 // Feed and motion settings.
-// Feed in program units per minute. In inverse-time mode (G93) the
+// Feed in program units per minute, or per spindle revolution under G95
+// (CallContext::feed_mode). In inverse-time mode (G93) the
 // interpreter converts each move's F into the equivalent rate, like LinuxCNC;
 // CallContext::inverse_time_f keeps the programmed value.
 struct SetFeedRate {
@@ -191,8 +193,11 @@ struct FeedOverride {
 struct SpeedOverride {
   bool enabled = true;
 };
-struct SetSpindleMode {  // G97 (the only spindle mode supported)
+// G96 (constant surface speed: the S words that follow are m/min, ft/min
+// in G20, up to `css_max_rpm`, D; 1e30 without D, as rs274) or G97 (0).
+struct SetSpindleMode {
   double css_max_rpm = 0;
+  bool constant_surface_speed = false;  // G96 (rs274 prints css_max_rpm only)
 };
 struct Coolant {
   enum Kind { kMist, kFlood } kind = kFlood;
@@ -260,6 +265,9 @@ struct CallContext {
   bool cutter_comp = false;
   // Offsets in mm (degrees for A B C) that turn positions into machine ones.
   Axes6 g5x_mm, g92_mm, tool_offset_mm;
+  // XY rotation of the active coordinate system (G10 L2 R), degrees
+  // counter-clockwise: machine XY = G5x + rotation x (program + G92) + tool.
+  double xy_rotation_deg = 0;
 };
 
 struct CanonCall {
@@ -279,7 +287,10 @@ using CanonSink = std::function<void(const CanonCall& call, const std::vector<st
 const char* call_name(const CanonOp& op);
 bool is_motion(const CanonOp& op);  // traverse, feed or arc
 
-// Machine position (mm, degrees) of a programmed position under `ctx`.
+// Machine position (mm, degrees) of a programmed position under `ctx`:
+// X Y Z as program + G92, turned by the XY rotation, + G5x + tool offset.
 Axes6 machine_position_mm(const Axes6& program_position, const CallContext& ctx);
+// Turns (x, y) counter-clockwise by `degrees` about the origin.
+void rotate_xy_deg(double& x, double& y, double degrees);
 
 }  // namespace truecut::interp
