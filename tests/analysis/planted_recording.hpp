@@ -64,6 +64,7 @@ struct Spec {
   double act_noise_mm = 0.0;
   int iso_cycles = 2;                             // bidirectional ISO 230-2 cycles (1 or 2)
   double circle_turns = 1.5;                      // turns in each direction
+  double circle_radius_mm = 20.0;                 // at 40 mm/s whatever the radius
   bool meas = true;                               // record <j>_meas
   std::array<bool, 3> record{true, true, false};  // axes written to the file
   unsigned seed = 1;
