@@ -13,7 +13,7 @@
 //                           v_ref = ff1 · (c_k − c_{k−1}) / T + Kv · (c_k − enc_k)
 //                         driving a PI velocity loop on the axis' mass with
 //                         Coulomb friction (stick when the drive force is
-//                         below F_c), integrated in sub-steps of T / 20
+//                         below F_c), integrated in sub-steps of T / 200
 //   encoder enc           = p quantised to the encoder resolution (`<j>_act`)
 //   table q               lost motion b between motor and table:
 //                         q ← min(max(q, p − b/2), p + b/2)
