@@ -200,6 +200,8 @@ inline Case sweep_case(Effect e, int m, unsigned seed) {
       break;
     case Effect::kSquareness:
       c.spec.path = PathKind::kCircleXY;
+      c.spec.circle_radius_mm = 40;
+      c.spec.circle_turns = 1.0;
       c.plant.axes[0] = servo(40, 0.9);
       c.plant.axes[1] = servo(35, 0.85);
       c.plant.xy_urad = mag;

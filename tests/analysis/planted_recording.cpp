@@ -85,9 +85,10 @@ const Stepper& iso_stepper(int cycles) {
   return cycles == 1 ? one : two;
 }
 
-// Circles in XY (centre (30, 20), R 20 mm, 40 mm/s): 1.5 turns counter-
-// clockwise from the bottom, a stop, 1.5 turns clockwise back. The angular
-// speed ramps in and out as (1 − cos)/2 over 0.6 s.
+// Circles in XY (centre (30, 20), R 20 mm unless the spec says otherwise,
+// 40 mm/s): 1.5 turns counter-clockwise from the bottom, a stop, 1.5 turns
+// clockwise back. The angular speed ramps in and out as (1 − cos)/2 over
+// 0.6 s.
 struct Circle {
   double cx = 30, cy = 20, R = 20, omega = 2.0, ramp = 0.6, turn_angle = 3 * kPi;
   double lead = 0.3, pause = 0.4, tail = 0.4;
@@ -180,6 +181,8 @@ struct Servo {
 Circle circle(const Spec& spec) {
   Circle c;
   c.turn_angle = 2 * kPi * spec.circle_turns;
+  c.omega = c.omega * c.R / spec.circle_radius_mm;  // the same feed
+  c.R = spec.circle_radius_mm;
   return c;
 }
 

@@ -13,7 +13,7 @@
 //                           v_ref = ff1 · (c_k − c_{k−1}) / T + Kv · (c_k − enc_k)
 //                         driving a PI velocity loop on the axis' mass with
 //                         Coulomb friction (stick when the drive force is
-//                         below F_c), integrated in sub-steps of T / 20
+//                         below F_c), integrated in sub-steps of T / 200
 //   encoder enc           = p quantised to the encoder resolution (`<j>_act`)
 //   table q               lost motion b between motor and table:
 //                         q ← min(max(q, p − b/2), p + b/2)
@@ -64,6 +64,7 @@ struct Spec {
   double act_noise_mm = 0.0;
   int iso_cycles = 2;                             // bidirectional ISO 230-2 cycles (1 or 2)
   double circle_turns = 1.5;                      // turns in each direction
+  double circle_radius_mm = 20.0;                 // at 40 mm/s whatever the radius
   bool meas = true;                               // record <j>_meas
   std::array<bool, 3> record{true, true, false};  // axes written to the file
   unsigned seed = 1;

@@ -2,9 +2,14 @@
 // every effect at three magnitudes over N seeds (default 20), a table per
 // effect and magnitude of the seeds passed and the worst relative error.
 // Not part of ctest (it takes minutes); run by hand:
-//   analysis_planted_sweep [SEEDS] [EFFECT-NAME] [-v] [-m MAGNITUDE-INDEX] [-s FIRST-SEED]
+//   analysis_planted_sweep [SEEDS] [EFFECT-NAME] [-v] [-m MAGNITUDE-INDEX] [-s FIRST-SEED] [-a]
+//                          [-n NOISE-UM]
 // (-m 0|1|2: one magnitude only; -s: seeds FIRST-SEED … FIRST-SEED + SEEDS − 1;
-// TRUECUT_DIAGNOSIS_VERBOSE=1 prints the diagnosis' progress lines).
+// -a: antithetic, every seed's noise with the opposite sign — the mean of a
+// seed's two estimates cancels the noise to first order and leaves the
+// estimator's bias; -n: σ of the measurement noise in µm instead of 1, a
+// small σ shows a case's bias directly; TRUECUT_DIAGNOSIS_VERBOSE=1 prints
+// the diagnosis' progress lines).
 #include <cctype>
 #include <chrono>
 #include <cstdio>
@@ -20,13 +25,18 @@ using namespace truecut::test::planted;
 int main(int argc, char** argv) {
   int seeds = 20;
   std::string only;
-  bool verbose = false;
+  bool verbose = false, antithetic = false;
   int only_magnitude = -1, first_seed = 1;
+  double noise_um = -1;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "-v") == 0)
       verbose = true;
+    else if (std::strcmp(argv[i], "-a") == 0)
+      antithetic = true;
     else if (std::strcmp(argv[i], "-m") == 0 && i + 1 < argc)
       only_magnitude = std::atoi(argv[++i]);
+    else if (std::strcmp(argv[i], "-n") == 0 && i + 1 < argc)
+      noise_um = std::atof(argv[++i]);
     else if (std::strcmp(argv[i], "-s") == 0 && i + 1 < argc)
       first_seed = std::atoi(argv[++i]);
     else if (std::isdigit(static_cast<unsigned char>(argv[i][0])))
@@ -47,7 +57,9 @@ int main(int argc, char** argv) {
       double worst = 0;
       std::string first_failure;
       for (int s = first_seed; s < first_seed + seeds; ++s) {
-        const Case c = sweep_case(e, m, unsigned(s));
+        Case c = sweep_case(e, m, unsigned(s));
+        if (noise_um >= 0) c.spec.noise_mm = noise_um * 1e-3;
+        if (antithetic) c.spec.noise_mm = -c.spec.noise_mm, c.name += "_antithetic";
         const auto t0 = std::chrono::steady_clock::now();
         const auto r = diagnose_case(c, dir);
         const Verdict v = judge(c, r);
