@@ -437,8 +437,7 @@ TEST(Rs274Oracle, OffsetToolAndSubprogramErrorsAtTheSameLine) {
       "M98 P100\nM2\nO100 G1 X1 (words after the number)\nM99",
       "M98 P100\nM2\nO100\nM98 P100 L1 (recursion)\nM99",
       "G10 L2 P1 R30\nG10 L20 P1 X0 R45 (R with L20)",
-      "G10 L2 P1 R30\nG41 D1 G1 X10 Y0\nG10 L2 P0 R10 (rotating the active system under "
-      "compensation)",
+      "G10 L2 P1 R30\nG41 D1 G1 X10 Y0\nG10 L2 P0 R10 (the active system turned, comp on)",
   };
   expect_refused_at_the_same_line(*o, "offset_errors", "G21 F100 T1 M6\nG0 X-5 Y-5\n", kCases);
 }
