@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -163,23 +164,50 @@ TEST(CliRewriteMatrix, ACompensationAboveMaxCorrectionIsRefusedUnlessForced) {
   EXPECT_TRUE(std::filesystem::exists(dir / "o.ngc"));
 }
 
-TEST(CliRewriteMatrix, FieldWithoutALayerForTheOperationsToolIsRefused) {
-  const auto dir = test::scratch_dir();
+namespace {
+
+// A face operation cut by T2 (p.ngc, t.tbl) and a field f.tcf whose one
+// layer, for `tool`, moves the tool 10 µm up everywhere on a 20 mm cube
+// (and turns it by `rotation_rad` when that is not zero).
+void write_face_job(const std::filesystem::path& dir, std::int32_t tool,
+                    const Vector3d& rotation_rad = Vector3d::Zero()) {
   rt::FieldGrid g;
   g.origin_mm = Vector3d(-10, -10, -10);
   g.spacing_mm = Vector3d(1, 1, 1);
   g.dims = {21, 21, 21};
   rt::FieldLayer layer;
-  layer.tool = 1;
+  layer.tool = tool;
   layer.nodes.assign(static_cast<std::size_t>(g.node_count()), rt::FieldNode{0, 0, 0.01, 1});
+  if (!rotation_rad.isZero()) layer.rotation_rad.assign(layer.nodes.size(), rotation_rad);
   rt::write_field_file(dir / "f.tcf", rt::CorrectionField(g, {layer}), {"", "test"});
   std::ofstream(dir / "p.ngc") << "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X-4 Y0 Z1\n"
                                   "G1 Z0 F100\nG1 X4 F500\nG0 Z5\nM30\n";
   std::ofstream(dir / "t.tbl") << "T1 P1 D2 Z30\nT2 P2 D4 Z40\n";
-  const auto r = test::run_process(
-      {test::cli_path().string(), "rewrite", "p.ngc", "--field", "f.tcf", "--operation", "FACE",
-       "--type", "face", "--tools", "t.tbl", "--out", "o.ngc"},
-      dir);
+}
+
+// `truecut rewrite` of that operation, with `extra` options.
+std::vector<std::string> face_rewrite(const std::vector<std::string>& extra) {
+  std::vector<std::string> args = {test::cli_path().string(),
+                                   "rewrite",
+                                   "p.ngc",
+                                   "--operation",
+                                   "FACE",
+                                   "--type",
+                                   "face",
+                                   "--tools",
+                                   "t.tbl",
+                                   "--out",
+                                   "o.ngc"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  return args;
+}
+
+}  // namespace
+
+TEST(CliRewriteMatrix, FieldWithoutALayerForTheOperationsToolIsRefused) {
+  const auto dir = test::scratch_dir();
+  write_face_job(dir, 1);
+  const auto r = test::run_process(face_rewrite({"--field", "f.tcf"}), dir);
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("the correction field has no layer for tool 2 (operation 'FACE')"),
             std::string::npos)
@@ -193,32 +221,8 @@ TEST(CliRewriteMatrix, FieldWithoutALayerForTheOperationsToolIsRefused) {
 // rewritten moves carry A and C and the audit counts them.
 TEST(CliRewriteMatrix, AFieldThatTurnsTheToolNeedsTheMachine) {
   const auto dir = test::scratch_dir();
-  rt::FieldGrid g;
-  g.origin_mm = Vector3d(-10, -10, -10);
-  g.spacing_mm = Vector3d(1, 1, 1);
-  g.dims = {21, 21, 21};
-  rt::FieldLayer layer;
-  layer.tool = 2;
-  layer.nodes.assign(static_cast<std::size_t>(g.node_count()), rt::FieldNode{0, 0, 0.01, 1});
-  layer.rotation_rad.assign(static_cast<std::size_t>(g.node_count()), Vector3d(4e-4, 0, 0));
-  rt::write_field_file(dir / "f.tcf", rt::CorrectionField(g, {layer}), {"", "test"});
-  std::ofstream(dir / "p.ngc") << "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X-4 Y0 Z1\n"
-                                  "G1 Z0 F100\nG1 X4 F500\nG0 Z5\nM30\n";
-  std::ofstream(dir / "t.tbl") << "T1 P1 D2 Z30\nT2 P2 D4 Z40\n";
-  const std::vector<std::string> args = {test::cli_path().string(),
-                                         "rewrite",
-                                         "p.ngc",
-                                         "--field",
-                                         "f.tcf",
-                                         "--operation",
-                                         "FACE",
-                                         "--type",
-                                         "face",
-                                         "--tools",
-                                         "t.tbl",
-                                         "--out",
-                                         "o.ngc"};
-  const auto refused = test::run_process(args, dir);
+  write_face_job(dir, 2, Vector3d(4e-4, 0, 0));
+  const auto refused = test::run_process(face_rewrite({"--field", "f.tcf"}), dir);
   EXPECT_EQ(refused.exit_code, 2);
   EXPECT_NE(refused.err.find("f.tcf: the field turns the tool (rotation channels rx ry rz); give "
                              "--machine MACHINE.json"),
@@ -230,9 +234,8 @@ TEST(CliRewriteMatrix, AFieldThatTurnsTheToolNeedsTheMachine) {
                                        (dir / "implant").string(), "--mesh-edge", "1"},
                                       dir);
   ASSERT_EQ(made.exit_code, 0) << made.err;
-  std::vector<std::string> with_machine = args;
-  with_machine.insert(with_machine.end(), {"--machine", "implant/machine.json"});
-  const auto r = test::run_process(with_machine, dir);
+  const auto r = test::run_process(
+      face_rewrite({"--field", "f.tcf", "--machine", "implant/machine.json"}), dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string out = test::read_file(dir / "o.ngc");
   EXPECT_NE(out.find(" A-0.0229"), std::string::npos) << out;  // -4e-4 rad in degrees
