@@ -20,6 +20,28 @@
 using namespace truecut;
 using Eigen::Vector3d;
 
+namespace {
+
+// `truecut rewrite` of the operation FACE of p.ngc (tools t.tbl, out o.ngc),
+// with `extra` options.
+std::vector<std::string> face_rewrite(const std::vector<std::string>& extra) {
+  std::vector<std::string> args = {test::cli_path().string(),
+                                   "rewrite",
+                                   "p.ngc",
+                                   "--operation",
+                                   "FACE",
+                                   "--type",
+                                   "face",
+                                   "--tools",
+                                   "t.tbl",
+                                   "--out",
+                                   "o.ngc"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  return args;
+}
+
+}  // namespace
+
 TEST(CliRewriteMatrix, OfflineWriterAndRewriteReaderAgreeBitForBit) {
   offline::CompensationMatrix m;
   // Awkward doubles: thirds, tiny and huge magnitudes, negative zero, values
@@ -93,20 +115,8 @@ TEST(CliRewriteMatrix, RewriteAcceptsTheOfflineMatrix) {
 TEST(CliRewriteMatrix, PaperDenkenaReadsTheRawColumnsAtTheTip) {
   const auto dir = test::scratch_dir();
   write_flat_face_case(dir, 0.01, 1, 0.03);  // raw vectors of 0.03 mm beside the smoothed
-  const auto rewrite = [&](std::vector<std::string> extra) {
-    std::vector<std::string> args{test::cli_path().string(),
-                                  "rewrite",
-                                  "p.ngc",
-                                  "--operation",
-                                  "FACE",
-                                  "--type",
-                                  "face",
-                                  "--tools",
-                                  "t.tbl",
-                                  "--out",
-                                  "o.ngc"};
-    args.insert(args.end(), extra.begin(), extra.end());
-    return test::run_process(args, dir);
+  const auto rewrite = [&](const std::vector<std::string>& extra) {
+    return test::run_process(face_rewrite(extra), dir);
   };
   auto r = rewrite({"--matrix", "comp.csv"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -136,19 +146,7 @@ TEST(CliRewriteMatrix, PaperDenkenaReadsTheRawColumnsAtTheTip) {
 TEST(CliRewriteMatrix, ACompensationAboveMaxCorrectionIsRefusedUnlessForced) {
   const auto dir = test::scratch_dir();
   write_flat_face_case(dir, 5.0, 10);  // 5 mm: a unit mix-up
-  std::vector<std::string> args{test::cli_path().string(),
-                                "rewrite",
-                                "p.ngc",
-                                "--matrix",
-                                "comp.csv",
-                                "--operation",
-                                "FACE",
-                                "--type",
-                                "face",
-                                "--tools",
-                                "t.tbl",
-                                "--out",
-                                "o.ngc"};
+  std::vector<std::string> args = face_rewrite({"--matrix", "comp.csv"});
   auto r = test::run_process(args, dir);
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_NE(r.err.find("the compensation reaches 5.0000 mm, above --max-correction 0.2 mm"),
@@ -183,23 +181,6 @@ void write_face_job(const std::filesystem::path& dir, std::int32_t tool,
   std::ofstream(dir / "p.ngc") << "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X-4 Y0 Z1\n"
                                   "G1 Z0 F100\nG1 X4 F500\nG0 Z5\nM30\n";
   std::ofstream(dir / "t.tbl") << "T1 P1 D2 Z30\nT2 P2 D4 Z40\n";
-}
-
-// `truecut rewrite` of that operation, with `extra` options.
-std::vector<std::string> face_rewrite(const std::vector<std::string>& extra) {
-  std::vector<std::string> args = {test::cli_path().string(),
-                                   "rewrite",
-                                   "p.ngc",
-                                   "--operation",
-                                   "FACE",
-                                   "--type",
-                                   "face",
-                                   "--tools",
-                                   "t.tbl",
-                                   "--out",
-                                   "o.ngc"};
-  args.insert(args.end(), extra.begin(), extra.end());
-  return args;
 }
 
 }  // namespace
