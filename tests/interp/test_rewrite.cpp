@@ -410,6 +410,46 @@ TEST(Rewrite, AFieldRotationTurnsAAndKeepsTheTipOnItsTarget) {
   EXPECT_NE(line.find(" C0"), std::string::npos) << line;
 }
 
+// Under TRAORI the tip stays on its target and A and C turn the axis as
+// the machine's forward kinematics says: point for point against the same
+// rewrite without the rotation, the written A and C give that rewrite's
+// axis tilted by r, at A 20..30 degrees both ways of leaning.
+TEST(Rewrite, AFieldRotationUnderTraoriTurnsAAndCAboutTheTip) {
+  const V rotation(3e-4, -2e-4, 1e-4), translation(0.01, -0.02, 0.005);
+  rt::FieldGrid g;
+  g.origin_mm = V(-20, -10, -10);
+  g.spacing_mm = V(1, 1, 1);
+  g.dims = {41, 21, 41};
+  auto field_with = [&](const V& r) {
+    std::vector<rt::FieldLayer> layers(1);
+    layers[0].tool = 1;
+    layers[0].nodes.assign(g.node_count(),
+                           rt::FieldNode{translation.x(), translation.y(), translation.z(), 1.0});
+    layers[0].rotation_rad.assign(g.node_count(), r);
+    return rt::CorrectionField(g, layers);
+  };
+  RewriteOptions o = options("FIVE", CutType::kBall);
+  o.decimals = 9;
+  const RewriteResult turned = rewrite_program(kTraori, "five.ngc", field_with(rotation), o);
+  const RewriteResult plain = rewrite_program(kTraori, "five.ngc", field_with(V::Zero()), o);
+  EXPECT_LT(turned.summary.max_rotation_shortfall_rad, 1e-9);
+  const auto a = feeds_of(turned.text, "FIVE"), b = feeds_of(plain.text, "FIVE");
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_GT(a.size(), 40u);
+  const rt::AcTrtParams k = o.kinematics;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_NEAR(0.0, (V(a[i].x, a[i].y, a[i].z) - V(b[i].x, b[i].y, b[i].z)).norm(), 1e-8);
+    const V plain_axis = rt::forward_ac(k, {0, 0, 0, b[i].a, b[i].c}).axis;
+    const V turned_axis = rt::forward_ac(k, {0, 0, 0, a[i].a, a[i].c}).axis;
+    const V wanted = (plain_axis + rotation.cross(plain_axis)).normalized();
+    EXPECT_NEAR(0.0, (turned_axis - wanted).norm(), 1e-8) << i;
+  }
+  // The retract inside the operation brings A and C back.
+  EXPECT_NE(turned.text.find("G0 X6 Y0 Z20.000000000000 A30.000000000000 C-10.000000000000"),
+            std::string::npos)
+      << turned.text;
+}
+
 // A wall x = 0 (material at x < 0) cut by the flank of a flat end mill R 1
 // in five levels from the top down (tip z = 4, 3, 2, 1, 0), each level one
 // G1 along Y; compensation points on the wall every 0.1 mm up to z = 8 with
