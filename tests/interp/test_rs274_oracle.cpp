@@ -188,6 +188,12 @@ TEST(Rs274Oracle, RotatedCoordinateSystemsMatch) {
   }
 }
 
+// A number in [lo, hi] from rng's raw output (the random-program cases keep
+// their fixed streams).
+double uniform_in(std::mt19937& rng, double lo, double hi) {
+  return lo + (hi - lo) * (static_cast<double>(rng()) / static_cast<double>(rng.max()));
+}
+
 // Random programs under rotated coordinate systems: G10 L2 R of the active
 // and of other systems, G10 L20, G54/G55/G56, G92/G92.1/G52, G53, G28/G30,
 // absolute and incremental lines, full and half circles in G17 and G18, a
@@ -197,9 +203,7 @@ TEST(Rs274Oracle, RandomRotatedProgramsAgree) {
   const fs::path dir = o->work / "rotation_random";
   fs::create_directories(dir);
   std::mt19937 rng(20261128);
-  auto u = [&](double lo, double hi) {
-    return lo + (hi - lo) * (static_cast<double>(rng()) / static_cast<double>(rng.max()));
-  };
+  auto u = [&](double lo, double hi) { return uniform_in(rng, lo, hi); };
   auto pick = [&](unsigned m) { return static_cast<unsigned>(rng() % m); };
   int matched = 0;
   for (int n = 0; n < 60; ++n) {
@@ -492,9 +496,7 @@ TEST(Rs274Oracle, RandomCutterCompProfilesAgree) {
   const fs::path dir = o->work / "comp_random";
   fs::create_directories(dir);
   std::mt19937 rng(20261127);
-  auto uniform = [&](double lo, double hi) {
-    return lo + (hi - lo) * (static_cast<double>(rng()) / static_cast<double>(rng.max()));
-  };
+  auto uniform = [&](double lo, double hi) { return uniform_in(rng, lo, hi); };
   int matched = 0, refused = 0;
   for (int n = 0; n < 150; ++n) {
     const bool xz = rng() % 3 == 0;
