@@ -153,11 +153,6 @@ TEST(CliRewrite, UnsupportedWordNamesTheLine) {
   prog.replace(prog.find("G1 X8 F600"), 10, "G1 X[4*2] F600");
   write(c.dir / "p.ngc", prog);
   expect_refused(c, c.run(kArgs), "p.ngc:8:4: word X with a parameter or expression");
-  // A rotated coordinate system (G10 L2 R) is refused by name at its line.
-  prog = kProgram;
-  prog.replace(prog.find("G43 H2"), 6, "G43 H2 G10 L2 P1 R15");
-  write(c.dir / "p.ngc", prog);
-  expect_refused(c, c.run(kArgs), "p.ngc:5: rotated coordinate system (G10 L2 R, 15 degrees)");
 }
 
 TEST(CliRewrite, UsageErrors) {

@@ -923,17 +923,6 @@ TEST(Rewrite, ToolMissingFromTheTableOrNotSelectedIsRefusedWithItsLine) {
                                  o)
                 .substr(0, 60),
             "bad.ngc:4: G10 L1/L10/L11 (tool table edit) in the program: ");
-  // A rotated coordinate system (G10 L2 R) is refused by name at the line
-  // that puts it in force, here the G55 that selects it; R0 passes.
-  EXPECT_EQ(error_of<GcodeError>("G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG10 L2 P2 R30\nG55\n"
-                                 "G0 X0 Y0 Z1\nG1 Z0 F100\nG1 X1\nM30\n",
-                                 o)
-                .substr(0, 62),
-            "bad.ngc:5: rotated coordinate system (G10 L2 R, 30 degrees) in");
-  EXPECT_NO_THROW(
-      rewrite_program("G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG10 L2 P1 R0\n"
-                      "G0 X0 Y0 Z1\nG1 Z0 F100\nG1 X1\nM30\n",
-                      "ok.ngc", plane_matrix(-10, 10, -4, 4, 0, 0.5, V(0, 0, 0.01)), o));
   // A ball end mill whose table row has no diameter.
   RewriteOptions ball = options("FACE", CutType::kBall);
   ball.interpreter.tools = ToolTable::parse("T1 P1 D2 Z35\nT2 P2 Z40\n", "tools.tbl");

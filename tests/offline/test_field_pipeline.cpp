@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
 #include <cmath>
 #include <functional>
 #include <numbers>
@@ -174,6 +176,32 @@ TEST(ToolPath, ArcsRotariesAndUnsupportedMoves) {
   }
   EXPECT_EQ(path.skipped_rotated_moves, 1);  // the G1 with C at 30° outside TRAORI
   EXPECT_EQ(path.first_skipped_line, 9);
+}
+
+// The samples lie where the controller puts the tool: the program's G5x
+// origin, G52 offset and G10 L2 R rotation applied (the same frame the
+// real-time component and the rewriter look the field up in). The expected
+// points are the same program without those lines, moved here by the
+// offsets written in it.
+TEST(ToolPath, OffsetsAndRotationOfTheProgramPlaceTheSamples) {
+  const std::string moves =
+      "G0 X-8 Y-2 Z5\nG1 Z0 F200\nG1 X8\nG3 X8 Y2 I0 J2\nG18 G2 X10 Z0 I1 K0\nG17\nG0 Z5\n"
+      "M30\n";
+  const std::string tools = "T1 P1 D6 Z60\n";
+  const ToolPath plain = sample_tool_path(run(kHeader + "T1 M6\nG43 H1\n" + moves, tools));
+  const ToolPath placed = sample_tool_path(run(
+      kHeader + "T1 M6\nG43 H1\nG10 L2 P1 X20 Y-10 Z3 R30\nG54\nG52 X1 Y2 Z-0.5\n" + moves, tools));
+  ASSERT_EQ(placed.samples.size(), plain.samples.size());
+  ASSERT_GT(plain.samples.size(), 100u);
+  const Eigen::Matrix3d turn =
+      Eigen::AngleAxisd(30.0 * std::numbers::pi / 180.0, Eigen::Vector3d::UnitZ())
+          .toRotationMatrix();
+  const Eigen::Vector3d g5x(20, -10, 3), g52(1, 2, -0.5);
+  for (std::size_t k = 0; k < plain.samples.size(); ++k) {
+    const Eigen::Vector3d expect = g5x + turn * (plain.samples[k].tip_mm + g52);
+    EXPECT_LE((placed.samples[k].tip_mm - expect).norm(), 1e-9) << k;
+    EXPECT_EQ(placed.samples[k].axis, Eigen::Vector3d::UnitZ());
+  }
 }
 
 // --- the whole pipeline ------------------------------------------------------

@@ -219,15 +219,6 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
                        "G10 L1/L10/L11 (tool table edit) in the program: the rewrite takes the "
                        "tool radii from the tool table given and cannot follow an edit; put the "
                        "values into the tool table file instead");
-  // G10 L2 R turns the program frame; the rewrite writes its corrections
-  // in unturned program coordinates, so it refuses a rotation in force.
-  for (const CanonCall& c : program.calls)
-    if (const auto* r = std::get_if<SetXYRotation>(&c.op); r != nullptr && r->degrees != 0)
-      throw GcodeError({file_of(program, c.context, name), c.context.line, 0},
-                       "rotated coordinate system (G10 L2 R, " + rt::format_shortest(r->degrees) +
-                           " degrees) in force: the rewrite does not turn its corrections into a "
-                           "rotated program frame; rotate the program in the CAM instead, or "
-                           "set R0");
   const std::map<int, double> radius_by_tool = tool_radii(program, name, o);
   std::vector<double> radii;
   for (const auto& [tool, radius] : radius_by_tool)

@@ -23,11 +23,15 @@ Vec5 ToolPath::to_planning(const Axes6& p, const CallContext& ctx) const {
 
 Axes6 ToolPath::to_program(const Vec5& p, const CallContext& ctx) const {
   const double scale = ctx.units == LengthUnits::kInch ? 25.4 : 1.0;
+  // The inverse of machine_position_mm: machine XY = G5x + rotation ×
+  // (program + G92) + tool.
+  double v[3];
+  for (int i = 0; i < 3; ++i)
+    v[i] = p[i] - ctx.g5x_mm[i] - (tcp_ ? 0.0 : ctx.tool_offset_mm[i]);
+  if (ctx.xy_rotation_deg != 0) rotate_xy_deg(v[0], v[1], -ctx.xy_rotation_deg);
   Axes6 out;
-  for (int i = 0; i < 3; ++i) {
-    const double tool = tcp_ ? 0.0 : ctx.tool_offset_mm[i];
-    out[i] = (p[i] - ctx.g5x_mm[i] - ctx.g92_mm[i] - tool) / scale;
-  }
+  for (int i = 0; i < 3; ++i)
+    out[i] = (v[i] - ctx.g92_mm[i]) / scale;
   out.a = p[3] - ctx.g5x_mm.a - ctx.g92_mm.a - ctx.tool_offset_mm.a;
   out.c = p[4] - ctx.g5x_mm.c - ctx.g92_mm.c - ctx.tool_offset_mm.c;
   return out;
@@ -153,8 +157,24 @@ ToolPath::Move ToolPath::arc_to(const ArcFeed& arc, const CallContext& ctx) cons
   Axes6 cprog = arc.end;
   cprog[first] = arc.center[first];
   cprog[second] = arc.center[second];
-  const Vec5 centre = to_planning(cprog, ctx);
-  m.plane = path_geometry::plane_arc(cur_[first], cur_[second], m.end[first], m.end[second],
+  Vec5 centre = to_planning(cprog, ctx);
+  Vec5 start = m.start, end = m.end;
+  // A rotated coordinate system (G10 L2 R) turns the arc's plane about Z:
+  // the arc is built in the frame turned back, as the planner does, and
+  // its points turned forward (see at()).
+  if (ctx.xy_rotation_deg != 0) {
+    m.rotation_deg = ctx.xy_rotation_deg;
+    for (int i = 0; i < 3; ++i)
+      m.offset_mm[i] = ctx.g5x_mm[i] + (tcp_ ? 0.0 : ctx.tool_offset_mm[i]);
+    for (Vec5* v : {&start, &end, &centre}) {
+      for (int i = 0; i < 3; ++i)
+        (*v)[i] -= m.offset_mm[i];
+      rotate_xy_deg((*v)[0], (*v)[1], -m.rotation_deg);
+    }
+    m.turned_start = start;
+    m.turned_end = end;
+  }
+  m.plane = path_geometry::plane_arc(start[first], start[second], end[first], end[second],
                                      centre[first], centre[second], arc.rotation);
   return m;
 }
@@ -162,7 +182,13 @@ ToolPath::Move ToolPath::arc_to(const ArcFeed& arc, const CallContext& ctx) cons
 Vec5 ToolPath::at(const Move& m, double f) {
   if (f >= 1.0) return m.end;
   if (!m.arc) return path_geometry::line_point_at(m.start, m.end, f, 5);
-  return path_geometry::arc_point_at(m.axes, m.plane, m.start, m.end, f, 5);
+  if (m.rotation_deg == 0)
+    return path_geometry::arc_point_at(m.axes, m.plane, m.start, m.end, f, 5);
+  Vec5 p = path_geometry::arc_point_at(m.axes, m.plane, m.turned_start, m.turned_end, f, 5);
+  rotate_xy_deg(p[0], p[1], m.rotation_deg);
+  for (int i = 0; i < 3; ++i)
+    p[i] += m.offset_mm[i];
+  return p;
 }
 
 }  // namespace truecut::interp::rewrite

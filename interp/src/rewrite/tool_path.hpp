@@ -56,6 +56,12 @@ class ToolPath {
     // arc: its plane axes, and the arc in their coordinates
     path_geometry::PlaneAxes axes;
     path_geometry::PlaneArc plane;
+    // an arc under a rotated coordinate system: `plane` is in the frame
+    // turned back by rotation_deg about Z after removing offset_mm (G5x,
+    // and the tool length outside TRAORI), where its ends are turned_*
+    double rotation_deg = 0;
+    std::array<double, 3> offset_mm{};
+    Vec5 turned_start{}, turned_end{};
   };
   Move line_to(const Axes6& end, const CallContext& ctx) const;
   Move arc_to(const ArcFeed& arc, const CallContext& ctx) const;

@@ -98,7 +98,8 @@ class Sampler {
   // tip distance is measured along pos on a fine pre-sampling.
   void emit_move(const interp::CallContext& ctx, const Axes6& start, const Axes6& end,
                  const std::function<Axes6(double)>& pos) {
-    if (!ctx.tcp && (!rotary_at_zero(start) || !rotary_at_zero(end))) {
+    if (!ctx.tcp && (!rotary_at_zero(in_workpiece_frame(start, ctx)) ||
+                     !rotary_at_zero(in_workpiece_frame(end, ctx)))) {
       if (out_.skipped_rotated_moves++ == 0) out_.first_skipped_line = ctx.line;
       need_start_ = true;
       return;
@@ -124,7 +125,23 @@ class Sampler {
       push(ctx, op, pos(double(i) / n));
   }
 
-  void push(const interp::CallContext& ctx, std::int32_t op, const Axes6& p) {
+  // Program point (mm) → where the controller puts it in the workpiece
+  // frame (the machine frame at A = C = 0, as the real-time component and
+  // the rewriter see it): X Y Z as interp::machine_position_mm without the
+  // tool length (this is the tip), A and C with their offsets.
+  static Axes6 in_workpiece_frame(Axes6 p, const interp::CallContext& ctx) {
+    double x = p.x + ctx.g92_mm.x, y = p.y + ctx.g92_mm.y;
+    if (ctx.xy_rotation_deg != 0) interp::rotate_xy_deg(x, y, ctx.xy_rotation_deg);
+    p.x = x + ctx.g5x_mm.x;
+    p.y = y + ctx.g5x_mm.y;
+    p.z += ctx.g92_mm.z + ctx.g5x_mm.z;
+    for (int i = 3; i < 6; ++i)
+      p[i] += ctx.g5x_mm[i] + ctx.g92_mm[i] + ctx.tool_offset_mm[i];
+    return p;
+  }
+
+  void push(const interp::CallContext& ctx, std::int32_t op, const Axes6& program_point) {
+    const Axes6 p = in_workpiece_frame(program_point, ctx);
     ToolPathSample s;
     s.tip_mm = {p.x, p.y, p.z};
     s.axis = ctx.tcp ? axis_from_ac(p.a, p.c) : Eigen::Vector3d::UnitZ();

@@ -2,8 +2,11 @@
 // axis in the workpiece frame, per tool (docs/offline.md, "Tool-centre
 // placement"). Input: the canonical calls of truecut's interpreter.
 //
-// Conventions (docs/parts.md): the program's work coordinates are the
-// workpiece frame; the programmed point is the tool tip (G43 active, or
+// Conventions (docs/parts.md): the workpiece frame is the machine frame at
+// A = C = 0, where the real-time component and the rewriter look the field
+// up; a programmed point is placed in it as the controller places it, with
+// the program's G5x origin, G92/G52 offsets and G10 L2 R rotation (all zero
+// unless the program sets them). The programmed point is the tool tip (G43 active, or
 // TRAORI, where X Y Z are the tip in the workpiece frame and A C set the tool
 // axis (sin A sin C, sin A cos C, cos A)). Outside TRAORI the axis is +Z and
 // the rotary axes must be at 0: with A or C turned the table carries the
@@ -22,7 +25,7 @@
 namespace truecut::offline {
 
 struct ToolPathSample {
-  Eigen::Vector3d tip_mm = Eigen::Vector3d::Zero();  // programmed point, workpiece frame
+  Eigen::Vector3d tip_mm = Eigen::Vector3d::Zero();  // programmed point in the workpiece frame
   Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();   // unit, from the tip towards the spindle
   double c_deg = 0.0;  // the C word under TRAORI (0 outside): at A = 0 the axis alone lacks it
   std::int32_t tool = 0;
