@@ -11,6 +11,7 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "output_spool.hpp"
+#include "parameter_file_args.hpp"
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/interpreter.hpp"
 #include "truecut/interp/operations.hpp"
@@ -34,7 +35,8 @@ const char* kCanonHelp =
     "options:\n"
     "  --tool-table FILE   tool table in LinuxCNC format\n"
     "  --tool-units mm|inch  units of the tool table's offsets and diameters (default mm;\n"
-    "                      LinuxCNC's are in [TRAJ]LINEAR_UNITS, rs274's without an INI in inch)\n"
+    "                      LinuxCNC's are in [TRAJ]LINEAR_UNITS, rs274's without an INI in inch)\n";
+const char* kCanonHelpOptions =
     "  --block-delete      skip lines starting with '/' (switch on)\n"
     "  --b-axis            accept B words (default: the X Y Z A C machine rejects them)\n"
     "  --decimals N        digits after the point (default 4, as rs274)\n"
@@ -83,6 +85,8 @@ int print_spline_report(const interp::CanonProgram& program, const ParsedArgs& a
 int cmd_canon(const std::vector<std::string>& argv) {
   ParsedArgs a(argv, {{"tool-table", true},
                       {"tool-units", true},
+                      {"var-file", true},
+                      {"var-units", true},
                       {"block-delete", false},
                       {"b-axis", false},
                       {"decimals", true},
@@ -94,7 +98,7 @@ int cmd_canon(const std::vector<std::string>& argv) {
                       {"quiet", false},
                       {"help", false}});
   if (a.flag("help")) {
-    std::fputs(kCanonHelp, stdout);
+    std::fputs((std::string(kCanonHelp) + kVarFileHelp + kCanonHelpOptions).c_str(), stdout);
     return kExitOk;
   }
   if (a.positionals().size() != 1) throw UsageError("expected one PROGRAM.ngc file");
@@ -121,6 +125,7 @@ int cmd_canon(const std::vector<std::string>& argv) {
   try {
     interp::InterpreterOptions options;
     if (auto t = a.value("tool-table")) options.tools = interp::ToolTable::load(*t, tool_units);
+    if (auto p = parameter_file_from_args(a)) options.parameters = std::move(*p);
     options.block_delete = a.flag("block-delete");
     options.has_b = a.flag("b-axis");
     if (!whole_program)

@@ -15,6 +15,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "parameter_file_args.hpp"
 #include "side_by_side.hpp"
 #include "stage_progress.hpp"
 #include "truecut/interp/error.hpp"
@@ -343,6 +344,7 @@ Inputs read_inputs(const ParsedArgs& a, const fs::path& program_file, const fs::
           interp::InterpreterOptions io;
           in.tools = interp::ToolTable::load(tools_file);
           io.tools = in.tools;
+          if (auto p = parameter_file_from_args(a)) io.parameters = std::move(*p);
           in.program = interp::Interpreter(std::move(io)).run_file(program_file);
         } catch (const interp::GcodeError& e) {
           throw InputError(e.what());
@@ -365,6 +367,7 @@ Inputs read_inputs(const ParsedArgs& a, const fs::path& program_file, const fs::
     in.digests.push_back(
         offline::digest_file(i == 0 ? "program" : "subroutine", in.program.files[i]));
   in.digests.push_back(offline::digest_file("tools", tools_file));
+  if (auto v = a.value("var-file")) in.digests.push_back(offline::digest_file("parameters", *v));
   if (auto p = a.value("part")) in.digests.push_back(offline::digest_file("part", *p));
   if (auto e = a.value("expected")) {
     in.expected = read_input_mesh(*e, "expected", strict, in.meshes);
@@ -677,9 +680,11 @@ int cmd_field(const std::vector<std::string>& argv) {
                       {"quiet", false},
                       {"verbose", false},
                       {"strict-mesh", false},
+                      {"var-file", true},
+                      {"var-units", true},
                       {"help", false}});
   if (a.flag("help")) {
-    std::fputs(kFieldHelp, stdout);
+    std::fputs((std::string(kFieldHelp) + kVarFileHelp).c_str(), stdout);
     return kExitOk;
   }
   try {

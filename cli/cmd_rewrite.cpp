@@ -10,6 +10,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "parameter_file_args.hpp"
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/rewrite.hpp"
 #include "truecut/interp/sha256.hpp"
@@ -138,15 +139,16 @@ struct Input {
 }  // namespace
 
 int cmd_rewrite(const std::vector<std::string>& argv) {
-  ParsedArgs a(argv, {{"matrix", true},  {"field", true},          {"operation", true},
-                      {"type", true},    {"tool-radius", true},    {"step", true},
-                      {"reach", true},   {"surfaces", true},       {"placement", true},
-                      {"smooth", true},  {"raw-matrix", false},    {"max-correction", true},
-                      {"force", false},  {"cutting-length", true}, {"tools", true},
-                      {"machine", true}, {"decimals", true},       {"rewrite-all", false},
-                      {"out", true},     {"paper", true},          {"help", false}});
+  ParsedArgs a(argv, {{"matrix", true},   {"field", true},          {"operation", true},
+                      {"type", true},     {"tool-radius", true},    {"step", true},
+                      {"reach", true},    {"surfaces", true},       {"placement", true},
+                      {"smooth", true},   {"raw-matrix", false},    {"max-correction", true},
+                      {"force", false},   {"cutting-length", true}, {"tools", true},
+                      {"machine", true},  {"decimals", true},       {"rewrite-all", false},
+                      {"out", true},      {"paper", true},          {"help", false},
+                      {"var-file", true}, {"var-units", true}});
   if (a.flag("help")) {
-    std::fputs(kRewriteHelp, stdout);
+    std::fputs((std::string(kRewriteHelp) + kVarFileHelp).c_str(), stdout);
     return kExitOk;
   }
   if (a.positionals().size() != 1) throw UsageError("expected one program IN.ngc");
@@ -222,6 +224,9 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
   try {
     add_input("tools", *tools_path, read_bytes(*tools_path, "tool table"));
     o.interpreter.tools = interp::ToolTable::load(*tools_path);
+    if (auto var = a.value("var-file"))
+      add_input("parameters", *var, read_bytes(*var, "parameter file"));
+    if (auto p = parameter_file_from_args(a)) o.interpreter.parameters = std::move(*p);
     if (auto m = a.value("machine")) {
       add_input("machine", *m, read_bytes(*m, "machine description"));
       const auto k = sim::read_machine_description(*m).machine.kinematics;

@@ -77,6 +77,19 @@ int BlockExecutor::column_of(char letter) const {
   return w ? w->column : 0;
 }
 
+void BlockExecutor::restore_setup() {
+  int index = static_cast<int>(params_.get(kCoordSystemIndex));
+  if (index < 1 || index > 9) index = 1;
+  const int base = coord_system_base(index);
+  for (int i = 0; i < 6; ++i)
+    s_.g5x_mm[i] = s_.to_machine(i, params_.get(base + i));
+  s_.rotation_deg = params_.get(base + kCoordSystemRotation);
+  s_.coord_index = index;
+  if (params_.get(kG92Enabled) == 1.0)
+    for (int i = 0; i < 6; ++i)
+      s_.g92_mm[i] = s_.to_machine(i, params_.get(kG92Offsets + i));
+}
+
 void BlockExecutor::start_program() {
   out_.emit(UseLengthUnits{s_.units});
   out_.emit(SetG5xOffset{s_.coord_index, s_.to_program(s_.g5x_mm)});

@@ -32,6 +32,9 @@ class BlockExecutor {
   // Answers the probing moves; null: standalone_probe.
   void set_probe(const ProbeFunction* probe) { probe_ = probe; }
   // Emits the calls LinuxCNC makes before the first block.
+  // The coordinate system, its rotation and the G92 offsets the parameters
+  // (a LinuxCNC parameter file) hold, as the controller starts.
+  void restore_setup();
   void start_program();
   // Returns true when the block ends the program (M2, M30).
   bool execute(const Block& block, const LexedLine& line);

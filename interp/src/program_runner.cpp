@@ -84,7 +84,13 @@ ProgramRunner::ProgramRunner(const InterpreterOptions& options, CanonProgram& ou
       emitter_(out, state_, &options.on_call),
       executor_(state_, params_, options.tools, emitter_) {
   if (options.probe) executor_.set_probe(&options_.probe);
-  params_.set(kDebugSwitch, 1.0);
+  for (const auto& [number, value] : options.parameters.values)
+    params_.set(number, value);
+  // Stored in program units, mm at the start (convert_offset_parameters).
+  if (options.parameters.units == LengthUnits::kInch)
+    convert_offset_parameters(params_, kMmPerInch);
+  params_.set(kDebugSwitch, 1.0);  // rs274 shows (DEBUG,...) whatever the file holds
+  executor_.restore_setup();
   params_.predefined = [this](std::string_view name) {
     return predefined_parameter(state_, params_, name);
   };

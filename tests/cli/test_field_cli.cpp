@@ -134,6 +134,37 @@ TEST(FieldCli, WritesOutputsWithAuditHashes) {
   EXPECT_EQ(read_file(out / "field.tcf").rfind("TRUECUT-FIELD 1\n", 0), 0u);
 }
 
+// The controller's parameter file places the program as the machine does:
+// with G54 at X+100 no tool of the program touches the part (refused,
+// nothing written); with G54 at 0 the field is built and the file is an
+// input of the audit.
+TEST(FieldCli, ParameterFilePlacesTheToolPath) {
+  const fs::path root = scratch_dir();
+  const Part p = make_part_and_scan(root, 0.05);
+  write_text(root / "away.var", "5220 1\n5221 100\n");
+  std::vector<std::string> away = field_args(p, root / "away");
+  away.insert(away.end(), {"--var-file", (root / "away.var").string()});
+  const ProcessResult r = truecut(away);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("no valid compensation point is cut by any tool of the program"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(root / "away"));
+  write_text(root / "zero.var", "5220 1\n5221 0\n");
+  std::vector<std::string> zero = field_args(p, root / "zero");
+  zero.insert(zero.end(), {"--var-file", (root / "zero.var").string()});
+  const ProcessResult z = truecut(zero);
+  ASSERT_EQ(z.exit_code, 0) << z.err;
+  const nlohmann::json audit = nlohmann::json::parse(read_file(root / "zero" / "audit.json"));
+  bool listed = false;
+  for (const auto& i : audit["inputs"])
+    if (i["role"] == "parameters") {
+      listed = true;
+      EXPECT_EQ(i["sha256"].get<std::string>(), sha256sum(root / "zero.var")) << i;
+    }
+  EXPECT_TRUE(listed) << audit["inputs"];
+}
+
 // Issue 20: the stage lines come with --verbose; by default one line of
 // totals (stderr is not a terminal here, so no progress line), and the
 // stages' times and memory are in audit.json either way.

@@ -116,6 +116,37 @@ TEST(CliRewrite, WritesProgramSummaryAndAudit) {
   EXPECT_EQ(canon.exit_code, 0) << canon.err;
 }
 
+// With the controller's parameter file the program runs where the machine
+// runs it: G54 at X+100 puts the face pass 100 mm from a matrix measured
+// at the program's coordinates, and onto one measured in the machine frame;
+// the corrected points are written in the program's coordinates.
+TEST(CliRewrite, ParameterFilePlacesTheProgramAsOnTheMachine) {
+  const Case c = setup();
+  write(c.dir / "m.var", "5220 1\n5221 100\n");
+  expect_refused(c, c.run(with(kArgs, "--var-units", "cm")), "--var-units must be mm or inch");
+  std::string shifted = face_matrix();
+  std::regex first_column(R"(\n(-?[0-9.]+),)");
+  std::string moved;
+  std::smatch m;
+  std::string rest = shifted;
+  while (std::regex_search(rest, m, first_column)) {
+    moved += m.prefix().str() + "\n" + std::to_string(std::stod(m[1].str()) + 100.0) + ",";
+    rest = m.suffix().str();
+  }
+  moved += rest;
+  write(c.dir / "m100.csv", moved);
+  const auto off = c.run(with(with(kArgs, "--var-file", "m.var"), "--out", "off.ngc"));
+  ASSERT_EQ(off.exit_code, 0) << off.err;
+  EXPECT_NE(off.out.find("  moves rewritten       0\n"), std::string::npos) << off.out;
+  const auto on = c.run(with(with(kArgs, "--var-file", "m.var"), "--matrix", "m100.csv"));
+  ASSERT_EQ(on.exit_code, 0) << on.err;
+  EXPECT_NE(on.out.find("  moves rewritten       2\n"), std::string::npos) << on.out;
+  const std::string out = read_file(c.dir / "out.ngc");
+  EXPECT_NE(out.find("X-6.5000 Y-2.0000 Z0.0500"), std::string::npos) << out;
+  const std::string audit = read_file(c.dir / "out.ngc.audit.json");
+  EXPECT_NE(audit.find("\"role\": \"parameters\""), std::string::npos) << audit;
+}
+
 TEST(CliRewrite, UnknownOperation) {
   const Case c = setup();
   expect_refused(c, c.run(with(kArgs, "--operation", "ROUGH")),

@@ -49,6 +49,30 @@ TEST(CanonCli, ToolTableDecimalsAndAnnotation) {
             "    1 N..... STRAIGHT_TRAVERSE(0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n");
 }
 
+TEST(CanonCli, ParameterFileSetsTheStartingSetup) {
+  const auto dir = scratch_dir();
+  const auto var = write(dir, "m.var", "5220 2\n5241 4\n5242 -1\n");
+  const auto prog = write(dir, "p.ngc", "G0 X1\nM2\n");
+  auto r = run_process({cli_path().string(), "canon", "--var-file", var.string(), "--var-units",
+                        "inch", prog.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("    2 N..... SET_G5X_OFFSET(2, 101.6000, -25.4000, 0.0000"),
+            std::string::npos)
+      << r.out;
+  const auto bad = write(dir, "bad.var", "5221 1\n5220 1\n");
+  auto b = run_process({cli_path().string(), "canon", "--var-file", bad.string(), prog.string()});
+  EXPECT_EQ(b.exit_code, 2);
+  EXPECT_EQ(b.out, "");
+  EXPECT_EQ(b.err.rfind(bad.string() + ":2:1: parameter 5220 after 5221 (line 1)", 0), 0u) << b.err;
+  auto units = run_process({cli_path().string(), "canon", "--var-units", "inch", prog.string()});
+  EXPECT_EQ(units.exit_code, 2);
+  EXPECT_NE(units.err.find("--var-units needs --var-file"), std::string::npos) << units.err;
+  auto missing = run_process(
+      {cli_path().string(), "canon", "--var-file", (dir / "none.var").string(), prog.string()});
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_NE(missing.err.find((dir / "none.var").string()), std::string::npos) << missing.err;
+}
+
 TEST(CanonCli, BadProgramGivesLocationAndNoOutput) {
   const auto dir = scratch_dir();
   const auto prog = write(dir, "bad.ngc", "G0 X1\nG1 X2 F100\nG2 X3 Y0\nM2\n");

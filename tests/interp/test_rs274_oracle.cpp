@@ -15,10 +15,12 @@
 #include <cstdio>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <random>
 #include <regex>
 #include <set>
 #include <sstream>
+#include <vector>
 
 #include "rs274_compare.hpp"
 #include "rs274_oracle.hpp"
@@ -107,19 +109,36 @@ fs::path without_kinematics_remaps(const Oracle& o, const fs::path& program) {
   return copy;
 }
 
-Outcome run_both(const Oracle& o, const fs::path& original) {
+// With a parameter file (LinuxCNC's .var, in inches as rs274 reads it
+// without an INI): rs274 gets a copy, since it writes the file back at exit.
+Outcome run_both(const Oracle& o, const fs::path& original,
+                 const std::optional<fs::path>& var_file = std::nullopt) {
   const fs::path program = without_kinematics_remaps(o, original);
   const fs::path dir = program.parent_path();
   Outcome out;
-  auto r = run_process({o.rs274.string(), "-g", "-t", (o.work / "tools-inch.tbl").string(),
-                        program.filename().string()},
-                       dir);
+  std::vector<std::string> rs274 = {o.rs274.string(), "-g", "-t",
+                                    (o.work / "tools-inch.tbl").string()};
+  std::vector<std::string> truecut = {cli_path().string(),
+                                      "canon",
+                                      "--decimals",
+                                      "8",
+                                      "--b-axis",
+                                      "--tool-units",
+                                      "inch",
+                                      "--tool-table",
+                                      (o.work / "tools-inch.tbl").string()};
+  if (var_file) {
+    const fs::path copy = o.work / "parameters.var";
+    fs::copy_file(*var_file, copy, fs::copy_options::overwrite_existing);
+    rs274.insert(rs274.end(), {"-v", copy.string()});
+    truecut.insert(truecut.end(), {"--var-file", var_file->string(), "--var-units", "inch"});
+  }
+  rs274.push_back(program.filename().string());
+  truecut.push_back(program.filename().string());
+  auto r = run_process(rs274, dir);
   out.rs274_runs = r.exit_code == 0;
   out.rs274_error = r.err.substr(0, 400);
-  auto t = run_process(
-      {cli_path().string(), "canon", "--decimals", "8", "--b-axis", "--tool-units", "inch",
-       "--tool-table", (o.work / "tools-inch.tbl").string(), program.filename().string()},
-      dir);
+  auto t = run_process(truecut, dir);
   out.truecut_runs = t.exit_code == 0;
   if (!out.truecut_runs) {
     out.truecut_error = t.err;
@@ -186,6 +205,20 @@ TEST(Rs274Oracle, RotatedCoordinateSystemsMatch) {
     EXPECT_TRUE(r.truecut_runs) << p << ": " << r.truecut_error;
     EXPECT_EQ(r.difference, std::nullopt) << p;
   }
+}
+
+// A setup held in the controller's parameter file (--var-file): G55 active
+// with a rotation and an A offset, G92 on, the G28/G30 homes, G54 rotated;
+// arcs in G17 and G18, a unit change. Without the file the same program
+// runs from zero offsets (OwnCorpusMatches).
+TEST(Rs274Oracle, ParameterFileSetupMatches) {
+  REQUIRE_ORACLE(o);
+  const fs::path dir = source_dir() / "tests/interp/corpus";
+  const Outcome r =
+      run_both(*o, dir / "parameter_file_setup.ngc", dir / "parameter_file_setup.var");
+  EXPECT_TRUE(r.rs274_runs) << "rs274 rejects the program: " << r.rs274_error;
+  EXPECT_TRUE(r.truecut_runs) << r.truecut_error;
+  EXPECT_EQ(r.difference, std::nullopt);
 }
 
 // A number in [lo, hi] from rng's raw output (the random-program cases keep

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "truecut/interp/canon.hpp"
+#include "truecut/interp/parameter_file.hpp"
 #include "truecut/interp/probe.hpp"
 #include "truecut/interp/tool_table.hpp"
 
@@ -18,6 +19,9 @@ namespace truecut::interp {
 
 struct InterpreterOptions {
   ToolTable tools;
+  // The controller's parameters at the start (its .var file): the work
+  // offsets, G92, G28/G30 homes. Empty: every parameter 0, G54 active.
+  ParameterFile parameters;
   // The block-delete switch: when on, lines starting with '/' are skipped
   // (LinuxCNC's rs274 starts with it off).
   bool block_delete = false;

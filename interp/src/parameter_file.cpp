@@ -1,0 +1,96 @@
+#include "truecut/interp/parameter_file.hpp"
+
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <string>
+
+#include "source_text.hpp"
+#include "system_parameters.hpp"
+#include "truecut/interp/error.hpp"
+#include "truecut/rt/input_file.hpp"
+
+namespace truecut::interp {
+
+namespace {
+
+bool is_blank(char c) {
+  return c == ' ' || c == '\t' || c == '\r';
+}
+
+}  // namespace
+
+ParameterFile ParameterFile::parse(std::string_view text, const std::string& name,
+                                   LengthUnits units) {
+  ParameterFile out;
+  out.units = units;
+  const SourceFile src = source_from_text(text, name);
+  int previous = 0;
+  int previous_line = 0;
+  for (size_t li = 0; li < src.lines.size(); ++li) {
+    const int line = static_cast<int>(li) + 1;
+    const std::string& s = src.lines[li];
+    size_t i = 0;
+    while (i < s.size() && is_blank(s[i]))
+      ++i;
+    const bool sign = i < s.size() && (s[i] == '-' || s[i] == '+');
+    const size_t digits = i + (sign ? 1 : 0);
+    if (digits >= s.size() || !std::isdigit(static_cast<unsigned char>(s[digits])))
+      continue;  // blank or a comment: LinuxCNC skips it too
+    size_t end = digits;
+    while (end < s.size() && std::isdigit(static_cast<unsigned char>(s[end])))
+      ++end;
+    const int column = static_cast<int>(i) + 1;
+    if (end < s.size() && !is_blank(s[end]))
+      throw GcodeError({name, line, column},
+                       "parameter number '" + s.substr(i, end + 1 - i) +
+                           "...' is not a whole number followed by white space");
+    const std::string number_text = s.substr(i, end - i);
+    const long number = end - digits > 6 ? 999999 : std::strtol(number_text.c_str(), nullptr, 10);
+    if (sign || number < 1 || number >= Parameters::kCount)
+      throw GcodeError({name, line, column},
+                       "parameter number " + number_text + " out of range 1..5601");
+    size_t v = end;
+    while (v < s.size() && is_blank(s[v]))
+      ++v;
+    size_t v_end = v;
+    while (v_end < s.size() && !is_blank(s[v_end]))
+      ++v_end;
+    const std::string value_text = s.substr(v, v_end - v);
+    if (value_text.empty())
+      throw GcodeError({name, line, column}, "parameter " + number_text + " has no value");
+    char* stop = nullptr;
+    const double value = std::strtod(value_text.c_str(), &stop);
+    if (stop != value_text.c_str() + value_text.size() || !std::isfinite(value))
+      throw GcodeError(
+          {name, line, static_cast<int>(v) + 1},
+          "parameter " + number_text + ": '" + value_text + "' is not a finite number");
+    if (number <= previous)
+      throw GcodeError({name, line, column},
+                       "parameter " + number_text + " after " + std::to_string(previous) +
+                           " (line " + std::to_string(previous_line) +
+                           "): the numbers must rise from line to line, as LinuxCNC requires "
+                           "(\"Parameter file out of order\")");
+    if (number == kCoordSystemIndex && (value != std::floor(value) || value < 1 || value > 9))
+      throw GcodeError({name, line, static_cast<int>(v) + 1},
+                       "parameter 5220 (the active coordinate system) must be 1..9 (G54..G59.3), "
+                       "got " +
+                           value_text);
+    out.values[static_cast<int>(number)] = value;
+    previous = static_cast<int>(number);
+    previous_line = line;
+  }
+  return out;
+}
+
+ParameterFile ParameterFile::load(const std::filesystem::path& file, LengthUnits units) {
+  std::string text;
+  try {
+    text = rt::read_input_file(file, "parameter file");
+  } catch (const rt::InputFileError& e) {
+    throw GcodeError({file.string(), 0, 0}, e.reason());
+  }
+  return parse(text, file.string(), units);
+}
+
+}  // namespace truecut::interp
