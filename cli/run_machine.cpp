@@ -37,6 +37,9 @@ const char* kHelp =
     "  --nominal FILE.stl     nominal part: where the cutting model's dexels sit\n"
     "  --part FILE.json       part.json: stock and tools\n"
     "  --tools FILE.tbl       LinuxCNC tool table\n"
+    "  --var-file FILE.var    the controller's parameter file (LinuxCNC .var): work\n"
+    "                         offsets, G92 and homes the program starts from\n"
+    "  --var-units mm|inch    its length units (default mm)\n"
     "options:\n"
     "  --out DIR              output folder (created)\n"
     "  --field FILE.tcf       correction field for truecut_comp (real-time compensation)\n"
@@ -80,6 +83,8 @@ int run_machine(const std::vector<std::string>& argv) {
                              {"nominal", true},
                              {"part", true},
                              {"tools", true},
+                             {"var-file", true},
+                             {"var-units", true},
                              {"field", true},
                              {"max-correction", true},
                              {"max-rate", true},
@@ -113,6 +118,16 @@ int run_machine(const std::vector<std::string>& argv) {
   if (auto f = a.value("field")) {
     if (!fs::is_regular_file(*f)) throw UsageError(*f + ": no such file");
     job.field = *f;
+  }
+  if (auto v = a.value("var-file")) {
+    if (!fs::is_regular_file(*v)) throw UsageError(*v + ": no such file");
+    job.parameters = *v;
+  }
+  if (auto u = a.value("var-units")) {
+    if (*u != "mm" && *u != "inch")
+      throw UsageError("--var-units must be mm or inch, not '" + *u + "'");
+    if (!job.parameters) throw UsageError("--var-units needs --var-file");
+    job.parameters_in_inches = *u == "inch";
   }
   job.out_dir = *out;
   job.period_us = a.number("period-us", 1000.0, 50.0, 100000.0);

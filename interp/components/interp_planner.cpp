@@ -149,6 +149,13 @@ extern "C" TC_COMPONENT_EXPORT int truecut_component_init(const tc_hal_api_t* ap
     if (!program) throw InitError("interp_planner needs program=FILE.ngc");
     InterpreterOptions iopt;
     if (auto table = args.take("tool-table")) iopt.tools = ToolTable::load(*table);
+    // parameter-file=FILE.var (empty: none) parameter-units=mm|inch
+    const std::string units = args.take_or("parameter-units", "mm");
+    if (units != "mm" && units != "inch")
+      throw InitError("parameter-units='" + units + "' must be mm or inch");
+    if (auto file = args.take("parameter-file"); file && !file->empty())
+      iopt.parameters =
+          ParameterFile::load(*file, units == "inch" ? LengthUnits::kInch : LengthUnits::kMm);
     const PlannerOptions popt = planner_options(args);
     auto names = instance_names(args, "interp_planner", 1);
     args.expect_consumed("interp_planner");

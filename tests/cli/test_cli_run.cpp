@@ -1,7 +1,11 @@
 // `truecut run` as a user runs it: exit codes, messages, outputs.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "run_process.hpp"
 #include "test_paths.hpp"
@@ -160,4 +164,61 @@ TEST(CliRun, ARecorderThatCannotCreateItsFileFailsTheLoad) {
       << r.err;
   EXPECT_NE(std::string::npos, r.err.find("No such file or directory")) << r.err;
   EXPECT_TRUE(std::filesystem::is_empty(dir / "out")) << "nothing half-written";
+}
+
+namespace {
+// The last row of a trace, as numbers.
+std::vector<double> last_row(const std::filesystem::path& trace) {
+  std::ifstream in(trace);
+  std::string line, last;
+  while (std::getline(in, line))
+    if (!line.empty()) last = line;
+  std::vector<double> out;
+  std::stringstream s(last);
+  std::string cell;
+  while (std::getline(s, cell, ','))
+    out.push_back(std::stod(cell));
+  return out;
+}
+}  // namespace
+
+// The controller's parameter file (--var-file) places the program as on the
+// machine: G54 at X+0.25 moves every commanded point by 0.25 mm in X (the
+// last one compared here), and an offset beyond the travel is refused
+// before anything runs.
+TEST(CliRun, ParameterFileOffsetsTheMachinedProgram) {
+  const auto dir = scratch_dir();
+  const auto part = dir / "part";
+  auto p = run_truecut({"part", "implant", "--out", part.string(), "--mesh-edge", "4", "--stepover",
+                        "5", "--step-down", "10"});
+  ASSERT_EQ(0, p.exit_code) << p.err;
+  std::ofstream(dir / "s.var") << "5220 1\n5221 0.25\n";
+  std::ofstream(dir / "far.var") << "5221 5000\n";
+  const std::vector<std::string> run = {"run", (part / "machine.json").string(),
+                                        (part / "program.ngc").string(), "--dexel-spacing", "1"};
+  auto with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> a = run;
+    a.insert(a.end(), extra.begin(), extra.end());
+    return run_truecut(a);
+  };
+  auto plain = with({"--out", (dir / "plain").string()});
+  ASSERT_EQ(0, plain.exit_code) << plain.err;
+  auto shifted =
+      with({"--out", (dir / "shifted").string(), "--var-file", (dir / "s.var").string()});
+  ASSERT_EQ(0, shifted.exit_code) << shifted.err;
+  const auto a = last_row(dir / "plain" / "trace.csv");
+  const auto b = last_row(dir / "shifted" / "trace.csv");
+  ASSERT_GE(a.size(), 4u);
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_NEAR(b[1] - a[1], 0.25, 1e-9);  // x_cmd
+  EXPECT_NEAR(b[2], a[2], 1e-9);         // y_cmd
+  EXPECT_NEAR(b[3], a[3], 1e-9);         // z_cmd
+  EXPECT_NE(read_file(dir / "shifted" / "run.ini").find("PARAMETER_FILE = "), std::string::npos);
+  auto far = with({"--out", (dir / "far").string(), "--var-file", (dir / "far.var").string()});
+  EXPECT_EQ(2, far.exit_code);
+  EXPECT_NE(far.err.find("program.ngc"), std::string::npos) << far.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "far"));
+  auto units = with({"--out", (dir / "u").string(), "--var-units", "inch"});
+  EXPECT_EQ(2, units.exit_code);
+  EXPECT_NE(units.err.find("--var-units needs --var-file"), std::string::npos) << units.err;
 }

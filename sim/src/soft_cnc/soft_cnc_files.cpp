@@ -75,6 +75,8 @@ std::string soft_cnc_ini_text(const SoftCncJob& job, const MachineDescription& m
   ini.set("RUN", "MACHINE", absolute_text(job.machine));
   ini.set("RUN", "PROGRAM", absolute_text(job.program));
   ini.set("RUN", "TOOL_TABLE", absolute_text(job.tools));
+  ini.set("RUN", "PARAMETER_FILE", job.parameters ? absolute_text(*job.parameters) : "");
+  ini.set("RUN", "PARAMETER_UNITS", job.parameters_in_inches ? "inch" : "mm");
   ini.set("RUN", "PART", absolute_text(job.part));
   ini.set("RUN", "NOMINAL", absolute_text(job.nominal));
   ini.set("RUN", "OUT_DIR", absolute_text(job.out_dir));

@@ -45,6 +45,10 @@ struct SoftCncJob {
   std::filesystem::path nominal;  // nominal part STL: where the cutting model's dexels sit
   std::filesystem::path part;     // part.json: stock and tools
   std::filesystem::path tools;    // LinuxCNC tool table
+  // The controller's parameter file (LinuxCNC .var: work offsets, G92,
+  // homes) the program starts from, and whether its lengths are in inches.
+  std::optional<std::filesystem::path> parameters;
+  bool parameters_in_inches = false;
   std::optional<std::filesystem::path> field;  // correction field for truecut_comp
   std::filesystem::path out_dir;
   double period_us = 1000.0;
