@@ -75,6 +75,7 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{"M60\nM2\n", 1, 1, "pallet change pause (M60) is not supported"},
                       Case{"M100\nM2\n", 1, 1, "user M code M100 is not supported"},
                       Case{"M199 P1\nM2\n", 1, 1, "user M code M199 is not supported"},
+                      Case{"M428\nM2\n", 1, 1, "unknown M code M428"},
                       Case{"#1 = 100\no[#1] call\nM2\no100 sub\no100 endsub\n", 2, 2,
                            "computed O-word labels (o[...]) are not supported"},
                       Case{"G1 U1 F100\nM2\n", 1, 4, "unknown word U"},
