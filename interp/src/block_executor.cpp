@@ -854,32 +854,36 @@ void BlockExecutor::check_unused_words(int motion_code) const {
   const bool orient = spindle == 190;
   const bool tool_edit = nm == 100 && b_->has('l') &&
                          (b_->value('l') == 1 || b_->value('l') == 10 || b_->value('l') == 11);
+  const bool g5 = motion_code == 50, g5_1 = motion_code == 51, nurbs = motion_code == 52;
   for (char l : {'i', 'j', 'k', 'r'})
     if (b_->has(l) && !arc && !(l == 'r' && (nm == 100 || cycle || orient)) &&
-        !(tool_edit && (l == 'i' || l == 'j')) && !(l != 'r' && motion_code == 870) &&
+        !((g5 || g5_1) && (l == 'i' || l == 'j')) && !(tool_edit && (l == 'i' || l == 'j')) &&
+        !(l != 'r' && motion_code == 870) &&
         !(l == 'k' && (motion_code == 330 || motion_code == 331))) {
       if (cycle)
         fail(column_of(l), std::string(1, static_cast<char>(std::toupper(l))) +
                                " word in a canned cycle (only G87 uses I, J, K)");
-      fail(column_of(l),
-           std::string(1, static_cast<char>(std::toupper(l))) + " word with no G2 or G3 to use it");
+      fail(column_of(l), std::string(1, static_cast<char>(std::toupper(l))) +
+                             " word with no G2 or G3 to use it (G5, G5.1 take I J)");
     }
-  if (b_->has('p') && !arc && !dwell_cycle && nm != 40 && nm != 100 &&
+  if (b_->has('p') && !arc && !dwell_cycle && nm != 40 && nm != 100 && !g5 && !nurbs &&
       codes_.g[group(GGroup::kPathControl)] != 640 && !orient && override_code < 500 &&
       !(io >= 620 && io <= 660))
-    fail(column_of('p'),
-         "P word with no code that uses it (G4, G10, G64, G2/G3, G74/G82/G84/G86/G88/G89, M19, "
-         "M50-M53, M62-M66)");
-  if (b_->has('q') && !peck_cycle && codes_.g[group(GGroup::kPathControl)] != 640 &&
+    fail(
+        column_of('p'),
+        "P word with no code that uses it (G4, G10, G64, G2/G3, G5, G5.2, G74/G82/G84/G86/G88/G89, "
+        "M19, "
+        "M50-M53, M62-M66)");
+  if (b_->has('q') && !peck_cycle && !g5 && codes_.g[group(GGroup::kPathControl)] != 640 &&
       codes_.m[group(MGroup::kToolChange)] != 610 && !orient && !(io >= 660 && io <= 680) &&
       !tool_edit)
     fail(column_of('q'),
-         "Q word with no code that uses it (G10 L1, G64, M61, G73/G83, M19, M66-M68)");
+         "Q word with no code that uses it (G10 L1, G64, G5, M61, G73/G83, M19, M66-M68)");
   if (b_->has('e') && !(io >= 660 && io <= 680))
     fail(column_of('e'), "E word with no M66, M67 or M68 to use it");
   const int comp = codes_.g[group(GGroup::kCutterComp)];
-  if (b_->has('l') && nm != 100 && !cycle && comp != 411 && comp != 421 && io != 660)
-    fail(column_of('l'), "L word with no G10, canned cycle or M66 to use it");
+  if (b_->has('l') && nm != 100 && !cycle && !nurbs && comp != 411 && comp != 421 && io != 660)
+    fail(column_of('l'), "L word with no G10, canned cycle, G5.2 or M66 to use it");
   if (b_->has('d') && comp != 410 && comp != 411 && comp != 420 && comp != 421 &&
       codes_.g[group(GGroup::kSpindleMode)] != 960)
     fail(column_of('d'), "D word with no G41, G41.1, G42, G42.1 or G96 to use it");
@@ -899,7 +903,15 @@ void BlockExecutor::motion() {
     axis_words = true;
     if (!first_axis_column) first_axis_column = b_->polar_column();
   }
-  if (explicit_code >= 0) {
+  // G5 and G5.1 leave the motion mode as it was (as in rs274).
+  const bool one_shot_spline = explicit_code == 50 || explicit_code == 51;
+  if (explicit_code >= 0 && explicit_code != 52 && explicit_code != 53)
+    check_nurbs_closed(codes_.g_column[kMotion],
+                       explicit_code >= 10000 ? std::string("a spline word")
+                       : explicit_code % 10   ? "G" + std::to_string(explicit_code / 10) + "." +
+                                                  std::to_string(explicit_code % 10)
+                                            : "G" + std::to_string(explicit_code / 10));
+  if (explicit_code >= 0 && !one_shot_spline) {
     const SplineMode before = s_.spline;
     s_.motion = explicit_code;
     s_.spline = explicit_code == kBsplineCode   ? SplineMode::kBspline
@@ -914,8 +926,13 @@ void BlockExecutor::motion() {
       s_.cycle.level_set = false;
     }
   }
-  const int code = (explicit_code >= 0 || (axis_words && !axes_used_)) ? s_.motion : -1;
+  const int code = one_shot_spline                                       ? explicit_code
+                   : (explicit_code >= 0 || (axis_words && !axes_used_)) ? s_.motion
+                                                                         : -1;
   check_unused_words(code);
+  if (explicit_code < 0 && axis_words && !axes_used_ && s_.motion == kMotionNone)
+    fail(first_axis_column,
+         "axis words with no motion mode (G5.3 ended the NURBS): program G0, G1, G2 or G3");
   if (g53) {
     if (code != 0 && code != 10) fail(b_->g[0].column, "G53 needs G0 or G1 on the line or active");
     if (s_.incremental) fail(b_->g[0].column, "G53 with incremental distance mode (G91)");
@@ -947,6 +964,10 @@ void BlockExecutor::motion() {
     const Axes6 m = s_.machine_position(p);
     target.x = m.x;
     target.y = m.y;
+  }
+  if (code >= 50 && code <= 53) {
+    spline(code, target, motion_column ? motion_column : 1, axis_words);
+    return;
   }
   if (code == 330 || code == 331) {
     sync_motion(code, target, motion_column ? motion_column : 1, axis_words);
@@ -1083,6 +1104,7 @@ void BlockExecutor::arc(bool clockwise, const Axes6& target) {
 }
 
 void BlockExecutor::end_program(bool pallet_shuttle) {
+  check_nurbs_closed(1, "the program end");
   const int base = coord_system_base(1);
   for (int i = 0; i < 6; ++i)
     s_.g5x_mm[i] = s_.to_machine(i, params_.get(base + i));

@@ -81,6 +81,13 @@ class BlockExecutor {
   void straight(bool rapid, const Axes6& target, int column);
   Axes6 move_base() const;  // where incremental and missing axis words count from
   void arc(bool clockwise, const Axes6& target);
+  // G5 G5.1 G5.2 G5.3 (splines.cpp).
+  void spline(int code, const Axes6& target, int column, bool axis_words);
+  void cubic_or_quadratic(int code, const Axes6& target, int column, bool axis_words);
+  void nurbs_point(const Axes6& target, int column, bool axis_words);
+  void nurbs_end(int column, bool axis_words);
+  // A G5.2 run left open when another motion code or the program end comes.
+  void check_nurbs_closed(int column, const std::string& what) const;
   void canned_cycle(int code, int column);  // canned_cycles.cpp
   // G33 G33.1 (sync_motion.cpp) and G38.2-G38.5 (probing.cpp) to `target`.
   void sync_motion(int code, const Axes6& target, int column, bool axis_words);

@@ -41,6 +41,8 @@ OWord read_oword_head(Cursor& c) {
   } else {
     while (std::isdigit(static_cast<unsigned char>(c.peek())))
       o.label.push_back(c.line->text[c.pos++]);
+    if (o.label.empty() && c.peek() == '[')
+      c.fail("computed O-word labels (o[...]) are not supported: write the number or <name>");
     if (o.label.empty()) c.fail("O-word needs a number or <name>");
     // o0100 and o100 are the same label.
     size_t nz = o.label.find_first_not_of('0');

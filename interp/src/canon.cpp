@@ -12,6 +12,7 @@ const char* call_name(const CanonOp& op) {
         if constexpr (std::is_same_v<T, StraightTraverse>) return "STRAIGHT_TRAVERSE";
         if constexpr (std::is_same_v<T, StraightFeed>) return "STRAIGHT_FEED";
         if constexpr (std::is_same_v<T, ArcFeed>) return "ARC_FEED";
+        if constexpr (std::is_same_v<T, NurbsFeed>) return "NURBS_FEED";
         if constexpr (std::is_same_v<T, Dwell>) return "DWELL";
         if constexpr (std::is_same_v<T, SpeedFeedSync>)
           return c.on ? "START_SPEED_FEED_SYNC" : "STOP_SPEED_FEED_SYNCH";
@@ -90,7 +91,7 @@ const char* call_name(const CanonOp& op) {
 
 bool is_motion(const CanonOp& op) {
   return std::holds_alternative<StraightTraverse>(op) || std::holds_alternative<StraightFeed>(op) ||
-         std::holds_alternative<ArcFeed>(op);
+         std::holds_alternative<ArcFeed>(op) || std::holds_alternative<NurbsFeed>(op);
 }
 
 Axes6 machine_position_mm(const Axes6& p, const CallContext& ctx) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "truecut/interp/canon.hpp"
 
@@ -34,8 +35,19 @@ struct CutterCompState {
   bool active() const { return side != 0 && radius > 0; }
 };
 
+// A G5.2 NURBS being collected until its G5.3 (splines.cpp).
+struct NurbsRun {
+  std::vector<NurbsControlPoint> points;  // program units; points[0]: where it starts
+  int order = 3;
+  int line = 0;  // the line of its first G5.2 block
+};
+
+// rs274's motion mode after G5.3: none (axis words alone are an error).
+constexpr int kMotionNone = -1;
+
 struct InterpState {
-  int motion = 800;  // active motion code x10 (G80: none), or a spline code
+  // Active motion code x10 (G80: none), a spline code, or kMotionNone.
+  int motion = 800;
   Plane plane = Plane::kXY;
   LengthUnits units = LengthUnits::kMm;
   bool incremental = false;   // G91
@@ -64,6 +76,7 @@ struct InterpState {
   bool retract_old_z = false;  // G98 (else G99)
   CycleState cycle;
   CutterCompState comp;
+  NurbsRun nurbs;
   int line = 0;  // source line being executed
   bool tcp = false;
   SplineMode spline = SplineMode::kNone;

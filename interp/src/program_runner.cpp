@@ -165,9 +165,11 @@ size_t ProgramRunner::find_forward(int file, size_t from, const std::string& lab
 std::optional<std::pair<int, size_t>> ProgramRunner::find_sub(const std::string& label,
                                                               const LexedLine& at) {
   if (auto it = subs_.find(label); it != subs_.end()) return it->second;
-  if (label.size() < 3 || label.front() != '<') return std::nullopt;
-  // o<name> call: look for name.ngc beside the program, then on the path.
-  const std::string name = label.substr(1, label.size() - 2);
+  // o<name> call and o123 call: look for name.ngc (123.ngc) beside the
+  // program, then on the path, as rs274 does.
+  const bool named = !label.empty() && label.front() == '<';
+  if (label.empty() || (named && label.size() < 3)) return std::nullopt;
+  const std::string name = named ? label.substr(1, label.size() - 2) : label;
   std::vector<std::filesystem::path> dirs;
   dirs.push_back(std::filesystem::path(files_[0].source.name).parent_path());
   for (const auto& d : options_.subroutine_path)

@@ -77,6 +77,9 @@ std::string format_rs274(const CanonOp& op, const FormatOptions& options) {
                  ", " + p.num(c.center[second]) + ", " + std::to_string(c.rotation) + ", " +
                  p.num(c.end[axis]) + ", " + p.num(c.end.a) + ", " + p.num(c.end.b) + ", " +
                  p.num(c.end.c);
+        } else if constexpr (std::is_same_v<T, NurbsFeed>) {
+          // rs274: the number of control points only.
+          args = std::to_string(c.points.size()) + ", ...";
         } else if constexpr (std::is_same_v<T, Dwell>) {
           args = p.num(c.seconds);
         } else if constexpr (std::is_same_v<T, SetFeedRate>) {

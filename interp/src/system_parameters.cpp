@@ -66,7 +66,10 @@ std::optional<double> predefined_parameter(const InterpState& s, const Parameter
         return 190.0;
     }
   }
-  if (n == "motion_mode") return s.motion >= 0 && s.motion < 10000 ? s.motion : 10.0;
+  if (n == "motion_mode") {
+    if (s.motion == kMotionNone) return -1;  // after G5.3, as rs274
+    return s.motion >= 0 && s.motion < 10000 ? s.motion : 10.0;
+  }
   if (n == "call_level") return static_cast<double>(params.call_level());
   if (n == "remap_level") return 0.0;
   if (n == "task") return 0.0;  // not running under a controller task

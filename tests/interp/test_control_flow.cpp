@@ -59,6 +59,16 @@ TEST(Subroutines, FromAFileBesideTheProgram) {
   EXPECT_TRUE(from_side) << "calls record the file they come from";
 }
 
+// o123 call with no o123 sub in the program loads 123.ngc, as rs274 does.
+TEST(Subroutines, NumberedFromAFileBesideTheProgram) {
+  const auto dir = truecut::test::scratch_dir();
+  std::ofstream(dir / "123.ngc") << "o123 sub\nG0 X#1\no123 endsub\nM2\n";
+  std::ofstream(dir / "main.ngc") << "o123 call [7]\nG0 Y1\nM2\n";
+  auto p = Interpreter(InterpreterOptions{}).run_file(dir / "main.ngc");
+  EXPECT_EQ(xs(p), (std::vector<double>{7, 7}));
+  ASSERT_EQ(p.files.size(), 2u);
+}
+
 TEST(ControlFlow, IfElseifElse) {
   const std::string sub =
       "o<c> sub\n o10 if [#1 GT 5]\n  G0 X3\n o10 elseif [#1 GT 2]\n  G0 X2\n"

@@ -52,6 +52,36 @@ INSTANTIATE_TEST_SUITE_P(Words, BadInput,
                                            Case{"G0 X1 Y2 % \nM2\n", 1, 10, "unknown character"}),
                          case_name);
 
+// LinuxCNC codes truecut refuses by name (docs/gcode.md, the code table):
+// lathe modes and cycles, the UVW planes, reloading the tool table, the
+// pallet change and user M codes.
+INSTANTIATE_TEST_SUITE_P(
+    RefusedByName, BadInput,
+    ::testing::Values(Case{"G7\nM2\n", 1, 1, "lathe diameter mode (G7) is not supported"},
+                      Case{"G8\nM2\n", 1, 1, "lathe radius mode (G8) is not supported"},
+                      Case{"G10 L0\nM2\n", 1, 5, "G10 L0 (reload the tool table)"},
+                      Case{"G17.1\nM2\n", 1, 1, "UV plane (G17.1) is not supported"},
+                      Case{"G18.1\nM2\n", 1, 1, "WU plane (G18.1) is not supported"},
+                      Case{"G19.1\nM2\n", 1, 1, "VW plane (G19.1) is not supported"},
+                      Case{"G70 Q1\nM2\n", 1, 1, "lathe finishing cycle (G70) is not supported"},
+                      Case{"G71 Q1\nM2\n", 1, 1, "lathe roughing cycle (G71) is not supported"},
+                      Case{"G71.1 Q1\nM2\n", 1, 1, "lathe roughing cycle (G71.1)"},
+                      Case{"G71.2 Q1\nM2\n", 1, 1, "lathe roughing cycle (G71.2)"},
+                      Case{"G72 Q1\nM2\n", 1, 1, "lathe facing cycle (G72) is not supported"},
+                      Case{"G72.1 Q1\nM2\n", 1, 1, "lathe facing cycle (G72.1)"},
+                      Case{"G72.2 Q1\nM2\n", 1, 1, "lathe facing cycle (G72.2)"},
+                      Case{"G76 P1 Z-1 I-0.1 J0.1 K0.2\nM2\n", 1, 1,
+                           "threading cycle (G76) is not supported"},
+                      Case{"M60\nM2\n", 1, 1, "pallet change pause (M60) is not supported"},
+                      Case{"M100\nM2\n", 1, 1, "user M code M100 is not supported"},
+                      Case{"M199 P1\nM2\n", 1, 1, "user M code M199 is not supported"},
+                      Case{"M428\nM2\n", 1, 1, "unknown M code M428"},
+                      Case{"#1 = 100\no[#1] call\nM2\no100 sub\no100 endsub\n", 2, 2,
+                           "computed O-word labels (o[...]) are not supported"},
+                      Case{"G1 U1 F100\nM2\n", 1, 4, "unknown word U"},
+                      Case{"G1 B1 F100\nM2\n", 1, 4, "B is rejected"}),
+    case_name);
+
 // Found by fuzz_gcode and fuzz_expression (tools/fuzz.sh): values too large
 // for an int were converted to one (undefined behaviour).
 INSTANTIATE_TEST_SUITE_P(

@@ -43,9 +43,7 @@ const std::map<std::string, std::string>& out_of_scope() {
       {"ncfiles/lathe_g7x_face_boring.ngc", "lathe cycles G70-G72"},
       {"ncfiles/lathe_g7x_quadrants.ngc", "lathe cycles G70-G72"},
       {"ncfiles/lathe_pawn.ngc", "lathe radius/diameter mode G7/G8"},
-      {"millturn/example.ngc", "lathe radius/diameter mode G7/G8"},
-      {"ncfiles/systems.ngc", "quadratic B-spline G5.1"},
-      {"nc_files/tcdemo.ngc", "quadratic B-spline G5.1"}};
+      {"millturn/example.ngc", "lathe radius/diameter mode G7/G8"}};
   return kList;
 }
 
@@ -219,6 +217,26 @@ TEST(Rs274Oracle, ParameterFileSetupMatches) {
   EXPECT_TRUE(r.rs274_runs) << "rs274 rejects the program: " << r.rs274_error;
   EXPECT_TRUE(r.truecut_runs) << r.truecut_error;
   EXPECT_EQ(r.difference, std::nullopt);
+}
+
+// G5, G5.1, G5.2/G5.3 (docs/gcode.md "Splines G5.x"), in mm and in
+// inches: rs274 prints each spline as NURBS_FEED(number of control
+// points, ...); the moves after them show where each spline ended.
+TEST(Rs274Oracle, SplinesMatch) {
+  REQUIRE_ORACLE(o);
+  for (const char* name : {"splines.ngc", "splines_inch.ngc"}) {
+    const fs::path p = source_dir() / "tests/interp/corpus" / name;
+    const Outcome r = run_both(*o, p);
+    EXPECT_TRUE(r.rs274_runs) << p << ": rs274 rejects the program: " << r.rs274_error;
+    EXPECT_TRUE(r.truecut_runs) << p << ": " << r.truecut_error;
+    EXPECT_EQ(r.difference, std::nullopt) << p;
+    const auto t =
+        run_process({cli_path().string(), "canon", "--tool-units", "inch", "--tool-table",
+                     (o->work / "tools-inch.tbl").string(), p.filename().string()},
+                    p.parent_path());
+    EXPECT_NE(t.out.find("NURBS_FEED(4, ...)"), std::string::npos) << p;
+    EXPECT_NE(t.out.find("NURBS_FEED(3, ...)"), std::string::npos) << p;
+  }
 }
 
 // A number in [lo, hi] from rng's raw output (the random-program cases keep
@@ -493,6 +511,55 @@ TEST(Rs274Oracle, FeedAndSpindleModeErrorsAtTheSameLine) {
   };
   expect_refused_at_the_same_line(*o, "feed_mode_errors", "G21 F100\nG0 X0 Y0 Z5\nM3 S1000\n",
                                   kCases);
+}
+
+// G5, G5.1, G5.2/G5.3 (docs/gcode.md "Splines G5.x"): the programs rs274
+// refuses, refused by truecut at the same line.
+TEST(Rs274Oracle, SplineErrorsAtTheSameLine) {
+  REQUIRE_ORACLE(o);
+  static const char* kCases[] = {
+      "G5 I1 X5 Y5 P1 Q1 (I without J)",
+      "G5 I1 J1 X5 Y5 P1 (P without Q)",
+      "G5 I1 J1 X5 Y5 Q1 (Q without P)",
+      "G5 I1 J1 P1 Q1 (no axis word)",
+      "G5 I1 J1 X5 Y5 Z1 P1 Q1 (Z word)",
+      "G5 I1 J1 X5 Y5 P1 Q1 A3 (A word)",
+      "G18 G5 I1 J1 X5 Y5 P1 Q1 (XZ plane)",
+      "G19\nG5 I1 J1 X5 Y5 P1 Q1 (YZ plane)",
+      "G41.1 D1 G1 X5\nG5 I1 J1 X5 Y5 P1 Q1 (cutter compensation)",
+      "G93 G5 I1 J1 X5 Y5 P1 Q1 (inverse time without F)",
+      "F0\nG5 I1 J1 X5 Y5 P1 Q1 (zero feed)",
+      "G5 I1 J1 X3 P1 Q1 R4 (R word)",
+      "G5 I1 J1 X3 P1 Q1 K4 (K word)",
+      "G5 I1 J1 X3 P1 Q1 L4 (L word)",
+      "G5 I1 J1 X3 P1 Q1\nX4 P1 Q1 (G5 is not modal)",
+      "G5.1 I1 X5 Y5 (G5.1 without J)",
+      "G5.1 J1 X5 Y5 (G5.1 without I)",
+      "G5.1 I1 J0 X3 P1 (P with G5.1)",
+      "G5.1 I1 J0 X3 Q1 (Q with G5.1)",
+      "G5.1 I1 J1 X5 Y5 Z2 (Z with G5.1)",
+      "G5.1 I1 J1 X3\nY3 I1 J2 (G5.1 is not modal)",
+      "G5.2 X1 P1\nX2 Y0 P1\nG5.3 (X without Y)",
+      "G5.2 Y1 P1\nX2 Y0 P1\nG5.3 (Y without X)",
+      "G5.2 X1 Y1 P1\nX2 Y0 (no weight)",
+      "G5.2 X1 Y1 P1\nX2 Y0 P0 (zero weight)",
+      "G5.2 X1 Y1 P1\nX2 Y0 P-2 (negative weight)",
+      "G5.2 X1 Y1 P1\nP3 (P alone after the first block)",
+      "F0\nG5.2 X1 Y1 P1 (zero feed)",
+      "G5.2 X1 Y1 P1 I1 (I word)",
+      "G5.2 X1 Y1 P1 Q1 (Q word)",
+      "G5.2 X1 Y1 P1 L2.5 (fraction L)",
+      "G5.2 X1 Y1 P1 @2 (polar word)\nG5.3",
+      "G5.2 X1 Y1 P1\nX2 Y2 P1 @3 ^45 (polar word later)\nG5.3",
+      "G5.2 X1 Y1 P1\nG5.3 (fewer points than the order 3)",
+      "G5.2 X1 Y1 P1 L4\nX2 Y0 P1\nG5.3 (fewer points than L4)",
+      "G5.2 X1 Y1 P1\nX2 Y0 P1 L5\nX3 Y0 P1\nG5.3 (fewer points than a later L5)",
+      "G5.3 (G5.3 without G5.2)",
+      "G5.2 X1 Y1 P1\nX2 Y2 P1\nG5.3 X1 (axis word on G5.3)",
+      "G5.2 X1 Y1 P1\nX2 Y2 P1\nG5.3\nX5 (axis words after G5.3)",
+      "G5 I1 J1 X3 P1 Q1\nG5.3 (G5.3 after G5)",
+  };
+  expect_refused_at_the_same_line(*o, "spline_errors", "G21 F100\nG0 X0 Y0 Z0\n", kCases);
 }
 
 // M62-M68, M19, M48-M53 (docs/gcode.md): the programs rs274

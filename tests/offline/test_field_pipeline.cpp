@@ -204,6 +204,33 @@ TEST(ToolPath, OffsetsAndRotationOfTheProgramPlaceTheSamples) {
   }
 }
 
+// G5.1 (LinuxCNC's quadratic B-spline, docs/gcode.md "Splines G5.x"): the
+// samples follow the curve x = 10 t, y = 20 t (1 - t) within the spline
+// tolerance, at most step_mm apart, and end at its end point.
+TEST(ToolPath, LinuxCncSplinesAreSampledOnTheCurve) {
+  const auto program =
+      run(kHeader + "T1 M6\nG43 H1\nG0 X0 Y0 Z0\nG5.1 I5 J10 X10 Y0 F300\nG0 Z5\nM30\n",
+          "T1 P1 D6 Z60\n");
+  const ToolPathOptions o;
+  const ToolPath path = sample_tool_path(program, o);
+  ASSERT_GT(path.samples.size(), 100u);  // about 16 mm of curve at 0.1 mm
+  double worst = 0;
+  for (const ToolPathSample& s : path.samples) {
+    double best = 1e300;
+    for (int i = 0; i <= 20000; ++i) {
+      const double t = i / 20000.0;
+      best = std::min(best, std::hypot(s.tip_mm.x() - 10 * t, s.tip_mm.y() - 20 * t * (1 - t)));
+    }
+    worst = std::max(worst, best);
+    EXPECT_NEAR(s.tip_mm.z(), 0.0, 1e-12);
+  }
+  EXPECT_LE(worst, o.spline_tolerance_mm);
+  for (size_t i = 1; i < path.samples.size(); ++i)
+    EXPECT_LE((path.samples[i].tip_mm - path.samples[i - 1].tip_mm).norm(), o.step_mm + 1e-12);
+  EXPECT_NEAR(path.samples.back().tip_mm.x(), 10.0, 1e-12);
+  EXPECT_NEAR(path.samples.back().tip_mm.y(), 0.0, 1e-12);
+}
+
 // --- the whole pipeline ------------------------------------------------------
 
 using Displacement = std::function<double(double, double)>;  // along +z, mm

@@ -99,6 +99,20 @@ TEST(ProgramTravel, ToolLengthOffsetCounts) {
   EXPECT_NEAR(t.first_excursion->position, 360.0, 1e-9);
 }
 
+// A LinuxCNC spline (G5.1, docs/gcode.md "Splines G5.x") is planned as
+// chords of its curve: from (240, -100) to (240, 100) with its control
+// point at (280, 0) it reaches x = 260 > 250 half way, the ends inside.
+TEST(ProgramTravel, FindsASplineThatBulgesOutBetweenEndsInside) {
+  const ProgramTravel t =
+      travel_of("G21 G90 G17\nG0 X240 Y-100 Z50\nG5.1 I40 J100 X240 Y100 F1000\nG0 X200\nM2\n",
+                demo_machine());
+  ASSERT_FALSE(t.inside());
+  EXPECT_EQ(t.first_excursion->line, 3);
+  EXPECT_EQ(t.first_excursion->joint, kX);
+  EXPECT_GT(t.first_excursion->position, 250.0);
+  EXPECT_NEAR(t.max[kX], 260.0, 0.03);  // within the planner's 0.025 mm chords
+}
+
 TEST(ProgramTravel, FindsAnArcThatBulgesOutBetweenEndsInside) {
   // Counter-clockwise about the origin from (240, −100) to (240, 100):
   // radius 260, through x = 260 > 250 at mid-arc.

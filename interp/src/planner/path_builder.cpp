@@ -8,6 +8,7 @@
 #include "path.hpp"
 #include "spline_piece.hpp"
 #include "truecut/interp/error.hpp"
+#include "truecut/interp/nurbs.hpp"
 #include "truecut/interp/path_geometry.hpp"
 
 namespace truecut::interp::plan {
@@ -337,6 +338,34 @@ struct Builder {
     spline.push_back({target, ctx.line, feed_upm_now(ctx)});
   }
 
+  // G5/G5.1/G5.2: the curve as straight feeds within spline_tolerance_mm
+  // (nurbs_polyline), each chord a move of its own. In G93 the whole curve
+  // takes 1/F minutes (F of its line): its length times F.
+  void add_nurbs(const NurbsFeed& n, const CallContext& ctx) {
+    const std::vector<NurbsPoint2> chords = nurbs_polyline(n, opt.spline_tolerance_mm / scale(ctx));
+    const double saved = feed_upm;
+    if (ctx.feed_mode == FeedMode::kInverseTime) {
+      if (!(ctx.inverse_time_f > 0))
+        fail(ctx,
+             "NURBS (G5.2 ... G5.3) in inverse-time feed (G93) without F on its G5.3 line: the "
+             "planner has no feed for it");
+      double length = 0, x = n.points.front().x, y = n.points.front().y;
+      for (const auto& c : chords) {
+        length += std::hypot(c[0] - x, c[1] - y);
+        x = c[0];
+        y = c[1];
+      }
+      feed_upm = length * ctx.inverse_time_f;
+    }
+    for (const auto& c : chords) {
+      Axes6 p = n.end;
+      p.x = c[0];
+      p.y = c[1];
+      add_line(to_planning(p, ctx), ctx, false);
+    }
+    feed_upm = saved;
+  }
+
   void set_tcp(bool on, const CallContext& ctx) {
     flush_spline();
     if (on == tcp) return;
@@ -393,6 +422,9 @@ struct Builder {
       ++out.programmed_moves;
     } else if (const auto* a = std::get_if<ArcFeed>(&c.op)) {
       add_arc(*a, ctx);
+      ++out.programmed_moves;
+    } else if (const auto* nurbs = std::get_if<NurbsFeed>(&c.op)) {
+      add_nurbs(*nurbs, ctx);
       ++out.programmed_moves;
     } else if (const auto* d = std::get_if<Dwell>(&c.op)) {
       add_dwell(d->seconds, ctx);

@@ -219,6 +219,13 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
                        "G10 L1/L10/L11 (tool table edit) in the program: the rewrite takes the "
                        "tool radii from the tool table given and cannot follow an edit; put the "
                        "values into the tool table file instead");
+  // G5/G5.1/G5.2: the rewrite corrects points on straight moves and arcs;
+  // it refuses a spline anywhere in the program by name (docs/rewrite.md).
+  for (const CanonCall& c : program.calls)
+    if (std::holds_alternative<NurbsFeed>(c.op))
+      throw GcodeError({file_of(program, c.context, name), c.context.line, 0},
+                       "G5/G5.1/G5.2 spline (NURBS_FEED) in the program: the rewrite cannot "
+                       "correct a spline's control points; have the CAM output lines or arcs");
   const std::map<int, double> radius_by_tool = tool_radii(program, name, o);
   std::vector<double> radii;
   for (const auto& [tool, radius] : radius_by_tool)

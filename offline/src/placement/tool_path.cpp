@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <variant>
 
+#include "truecut/interp/nurbs.hpp"
 #include "truecut/interp/path_geometry.hpp"
 #include "truecut/interp/spline.hpp"
 
@@ -64,6 +65,18 @@ class Sampler {
     } else if (const auto* a = std::get_if<interp::ArcFeed>(&c.op)) {
       ++out_.feed_moves;
       emit_arc(*a, c.context, k);
+    } else if (const auto* n = std::get_if<interp::NurbsFeed>(&c.op)) {
+      // G5/G5.1/G5.2: chords within the spline tolerance, each sampled.
+      ++out_.feed_moves;
+      for (const auto& chord : interp::nurbs_polyline(*n, opt_.spline_tolerance_mm / k)) {
+        const Axes6 start = cur_;
+        Axes6 end = to_mm(n->end, k);
+        end.x = chord[0] * k;
+        end.y = chord[1] * k;
+        emit_move(c.context, start, end,
+                  [&](double s) { return interp::path_geometry::line_point_at(start, end, s, 6); });
+        cur_ = end;
+      }
     } else if (std::holds_alternative<interp::ChangeTool>(c.op) ||
                std::holds_alternative<interp::ChangeToolNumber>(c.op) ||
                std::holds_alternative<interp::SetTcp>(c.op)) {

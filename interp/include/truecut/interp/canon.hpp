@@ -49,6 +49,22 @@ struct ArcFeed {
   Plane plane = Plane::kXY;
   int rotation = 1;
 };
+// G5 (cubic), G5.1 (quadratic) and G5.2 ... G5.3 (NURBS): a rational
+// B-spline in X and Y as LinuxCNC hands it to NURBS_FEED. `points` are the
+// control points in program units (the first is where the tool was) with
+// their weights; `order` k is 4 for G5, 3 for G5.1, L (at least 3) for G5.2.
+// The knots are LinuxCNC's: k times 0, then 1 ... n-k+1, then k times
+// n-k+2 for n+1 points (nurbs.hpp evaluates the curve). Z A B C do not
+// move; `end` is the position afterwards (X Y of the last control point).
+// rs274 prints NURBS_FEED(number of points, ...).
+struct NurbsControlPoint {
+  double x = 0, y = 0, weight = 1;
+};
+struct NurbsFeed {
+  std::vector<NurbsControlPoint> points;
+  int order = 3;
+  Axes6 end;
+};
 struct Dwell {
   double seconds = 0;
 };
@@ -236,7 +252,7 @@ struct SetSplineMode {  // BSPLINE, CSPLINE, or back to G1
 };
 
 using CanonOp =
-    std::variant<StraightTraverse, StraightFeed, ArcFeed, Dwell, SpeedFeedSync, RigidTap,
+    std::variant<StraightTraverse, StraightFeed, ArcFeed, NurbsFeed, Dwell, SpeedFeedSync, RigidTap,
                  ProbeSwitch, StraightProbe, SetFeedRate, SetFeedMode, SelectPlane, UseLengthUnits,
                  SetMotionControlMode, SetNaivecamTolerance, SetG5xOffset, SetG92Offset,
                  SetXYRotation, UseToolLengthOffset, SelectTool, StartChange, ChangeTool,
@@ -285,7 +301,7 @@ using CanonSink = std::function<void(const CanonCall& call, const std::vector<st
 
 // Name of the call as rs274 prints it (e.g. "STRAIGHT_FEED").
 const char* call_name(const CanonOp& op);
-bool is_motion(const CanonOp& op);  // traverse, feed or arc
+bool is_motion(const CanonOp& op);  // traverse, feed, arc or NURBS
 
 // Machine position (mm, degrees) of a programmed position under `ctx`:
 // X Y Z as program + G92, turned by the XY rotation, + G5x + tool offset.

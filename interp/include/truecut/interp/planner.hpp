@@ -48,7 +48,8 @@ struct PlannerOptions {
   // Under G64 without P: how far from the corner a blend may leave the lines
   // (mm of planning space); each line also gives at most half its length.
   double max_blend_length_mm = 10.0;
-  // BSPLINE/CSPLINE node insertion tolerance (the source's CAM tolerance).
+  // BSPLINE/CSPLINE node insertion tolerance (the source's CAM tolerance),
+  // and the chord tolerance of G5/G5.1/G5.2 curves (nurbs_polyline).
   double spline_tolerance_mm = 0.025;
   bool spline_node_insertion = true;
   // Feed of G0 moves; 0 = as fast as the axis limits allow.
