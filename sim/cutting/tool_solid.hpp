@@ -192,4 +192,36 @@ inline Span tool_span(const Eigen::Vector3d& q, const Eigen::Vector3d& n, const 
   return enters_slab_above(0, g.corner_mm) || enters_cylinder_above();
 }
 
+// True only when the box [lo, hi] holds no point of the tool (tip at the
+// origin, unit axis a), with a margin (1e-6 mm) far above the rounding of
+// tool_span's roots: a line inside the box then gets no cut from tool_span.
+// Conservative: the tool is taken as the cylinder of radius R from w = rc
+// (w = 0 unless a ball) to L, plus a ball's whole sphere; the box is
+// separated from the cylinder along the axis or by its distance from it.
+inline bool box_misses_tool(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+                            const Eigen::Vector3d& a, const ToolGeometry& g) {
+  constexpr double m = 1e-6;
+  const bool ball = g.core_mm <= 0 && g.corner_mm > 0;
+  if (ball) {  // the sphere of radius rc about rc·a
+    const Eigen::Vector3d s = g.corner_mm * a;
+    const Eigen::Vector3d out = (lo - s).cwiseMax(s - hi).cwiseMax(0.0);
+    if (out.squaredNorm() <= (g.corner_mm + m) * (g.corner_mm + m)) return false;
+  }
+  const Eigen::Vector3d c = 0.5 * (lo + hi), e = 0.5 * (hi - lo);
+  const double ca = c.dot(a);
+  const Eigen::Vector3d ea = e.cwiseProduct(a);
+  const double half_a = ea.cwiseAbs().sum();
+  const double w0 = ball ? g.corner_mm : 0.0;
+  if (ca + half_a < w0 - m || ca - half_a > g.flute_mm + m) return true;
+  // Distance from the axis: at least |c⊥| − ρ, ρ the largest distance of a
+  // corner's offset from the axis (|δ|² − (δ·a)², least |δ·a| over corners).
+  const double gap = (c - ca * a).norm() - g.radius_mm - m;
+  if (gap <= 0) return false;
+  const double along =
+      std::min({std::abs(ea.x() + ea.y() + ea.z()), std::abs(ea.x() + ea.y() - ea.z()),
+                std::abs(ea.x() - ea.y() + ea.z()), std::abs(ea.x() - ea.y() - ea.z())});
+  const double rho2 = e.squaredNorm() - along * along;
+  return gap * gap > rho2;
+}
+
 }  // namespace truecut::sim::cutting::detail
