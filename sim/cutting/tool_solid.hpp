@@ -197,7 +197,8 @@ inline Span tool_span(const Eigen::Vector3d& q, const Eigen::Vector3d& n, const 
 // tool_span's roots: a line inside the box then gets no cut from tool_span.
 // Conservative: the tool is taken as the cylinder of radius R from w = rc
 // (w = 0 unless a ball) to L, plus a ball's whole sphere; the box is
-// separated from the cylinder along the axis or by its distance from it.
+// separated from the cylinder along the axis, or along the direction from
+// the axis to the box's centre (a separating axis, square to the tool's).
 inline bool box_misses_tool(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
                             const Eigen::Vector3d& a, const ToolGeometry& g) {
   constexpr double m = 1e-6;
@@ -209,19 +210,15 @@ inline bool box_misses_tool(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi
   }
   const Eigen::Vector3d c = 0.5 * (lo + hi), e = 0.5 * (hi - lo);
   const double ca = c.dot(a);
-  const Eigen::Vector3d ea = e.cwiseProduct(a);
-  const double half_a = ea.cwiseAbs().sum();
+  const double half_a = e.dot(a.cwiseAbs());  // the box's half extent along a
   const double w0 = ball ? g.corner_mm : 0.0;
   if (ca + half_a < w0 - m || ca - half_a > g.flute_mm + m) return true;
-  // Distance from the axis: at least |c⊥| − ρ, ρ the largest distance of a
-  // corner's offset from the axis (|δ|² − (δ·a)², least |δ·a| over corners).
-  const double gap = (c - ca * a).norm() - g.radius_mm - m;
-  if (gap <= 0) return false;
-  const double along =
-      std::min({std::abs(ea.x() + ea.y() + ea.z()), std::abs(ea.x() + ea.y() - ea.z()),
-                std::abs(ea.x() - ea.y() + ea.z()), std::abs(ea.x() - ea.y() - ea.z())});
-  const double rho2 = e.squaredNorm() - along * along;
-  return gap * gap > rho2;
+  // Along u, the unit direction from the axis to the centre, square to a: the
+  // cylinder spans [−R, R], the box its centre's distance ± Σ e_i |u_i|.
+  const Eigen::Vector3d across = c - ca * a;
+  const double d = across.norm();
+  if (d <= g.radius_mm + m) return false;
+  return d - e.dot(across.cwiseAbs()) / d > g.radius_mm + m;
 }
 
 }  // namespace truecut::sim::cutting::detail

@@ -82,8 +82,7 @@ TEST(CuttingCellSkip, ABoxTouchingTheToolIsKeptAndOneJustAwayIsSkipped) {
                               z, ball));
   const Eigen::Vector3d flank(3, 0, 5);
   EXPECT_FALSE(box_misses_tool(flank, flank + tiny, z, ball));
-  // (A box is taken as the ball about its centre seen from the axis, so
-  // beside the flank only a flat box 1 µm away, or a cube further, is skipped.)
+  EXPECT_TRUE(box_misses_tool(flank + Eigen::Vector3d(1e-3, 0, 0), flank + tiny, z, ball));
   EXPECT_TRUE(box_misses_tool(flank + Eigen::Vector3d(1e-3, 0, 0),
                               flank + Eigen::Vector3d(0.1, 0, 0.1), z, ball));
   EXPECT_TRUE(box_misses_tool(flank + Eigen::Vector3d(0.2, 0, 0),
