@@ -444,12 +444,13 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
         for (int x = c0[0]; x <= c1[0]; ++x)
           fn((std::size_t(z) * m.grid_dims_[1] + y) * m.grid_dims_[0] + x,
              (x == c0[0] ? kFirstX : 0u) | (y == c0[1] ? kFirstY : 0u) |
-                 (z == c0[2] ? kFirstZ : 0u));
+                 (z == c0[2] ? kFirstZ : 0u),
+             x, y, z);
   };
   static_assert(kMaxDexels <= kIndexMask + 1, "dexel index and first-cell flags share a word");
   std::size_t total = 0;
   for (std::size_t i = 0; i < nd; ++i)
-    for_cells(i, [&](std::size_t c, std::uint32_t) {
+    for_cells(i, [&](std::size_t c, std::uint32_t, int, int, int) {
       ++m.cell_start_[c + 1];
       ++total;
     });
@@ -463,19 +464,19 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
   for (std::size_t i = 0; i < nd; ++i) {
     Eigen::Vector3d a, b;
     line_box(i, a, b);
-    for_cells(i, [&](std::size_t c, std::uint32_t flags) {
+    // The line's top corner in eighths of a cell above the grid's origin.
+    const Eigen::Vector3d top = (b - lo) * (8 / cell);
+    for_cells(i, [&](std::size_t c, std::uint32_t flags, int x, int y, int z) {
       m.cell_items_[fill[c]++] = static_cast<std::uint32_t>(i) | flags;
-      // The line's reach above the cell's low corner, in eighths of a cell
-      // rounded up (one more for the rounding of the corner itself).
-      const std::size_t cx = c % std::size_t(m.grid_dims_[0]);
-      const std::size_t cy = c / std::size_t(m.grid_dims_[0]) % std::size_t(m.grid_dims_[1]);
-      const std::size_t cz = c / (std::size_t(m.grid_dims_[0]) * std::size_t(m.grid_dims_[1]));
-      const double corner[3] = {double(cx), double(cy), double(cz)};
+      // The line's reach above the cell's low corner, in eighths of a cell:
+      // truncated, plus one for rounding up and one for the rounding of the
+      // corner itself.
+      const int corner[3] = {x, y, z};
       std::uint32_t& reach = m.cell_reach_[c];
       for (int k = 0; k < 3; ++k) {
-        const double eighths = std::ceil(((b[k] - lo[k]) / cell - corner[k]) * 8) + 1;
-        const std::uint32_t r = eighths < double(kReachUnbounded)
-                                    ? std::uint32_t(std::max(eighths, 0.0))
+        const double eighths = top[k] - 8.0 * corner[k];
+        const std::uint32_t r = eighths < double(kReachUnbounded - 3)
+                                    ? std::uint32_t(std::max(eighths, 0.0)) + 2
                                     : kReachUnbounded;
         const std::uint32_t old = (reach >> (8 * k)) & 0xFFu;
         if (r > old) reach = (reach & ~(0xFFu << (8 * k))) | (r << (8 * k));
@@ -491,6 +492,8 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
   std::vector<std::uint32_t> sorted;
   for (std::size_t c = 0; c < ncells; ++c) {
     const std::uint32_t first = m.cell_start_[c], last = m.cell_start_[c + 1];
+    m.cell_home_end_[c] = first;
+    if (first == last) continue;
     std::uint32_t start[9] = {};
     for (std::uint32_t k = first; k < last; ++k)
       ++start[flag_group(m.cell_items_[k]) + 1];
