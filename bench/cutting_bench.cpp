@@ -7,7 +7,8 @@
 //
 // freeform: ball R3 raster along x at F1500 (25 µm per cycle), tip from the
 // contact point on the free-form (tip = p + R·n − R·axis), 5 µm below it so
-// every cycle cuts. implant: flat R1 peripheral pass around the shaft at F500
+// every cycle cuts; freeform-30: the same with the axis leaning 30° about y.
+// implant: flat R1 peripheral pass around the shaft at F500
 // (8.3 µm per cycle), 0.3 mm radial allowance.
 #include <time.h>
 
@@ -17,6 +18,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -46,14 +48,18 @@ struct Path {
   std::vector<CutterPose> poses;
 };
 
-Path freeform_path(int cycles) {
+// `tilt_deg`: the tool axis leans that much about y (a 3+2 or 5-axis pass):
+// its 20 mm of flutes then reach far across the part's dexels.
+Path freeform_path(int cycles, double tilt_deg = 0) {
   Path p{{3, 3, 20}, {}};
+  const double tilt = tilt_deg * std::numbers::pi / 180;
+  const Eigen::Vector3d axis(std::sin(tilt), 0, std::cos(tilt));
   const double step = 1500.0 / 60 * 1e-3;  // mm per 1 ms cycle
   double x = -28, y = -10, dir = 1;
   for (int k = 0; k < cycles; ++k) {
     const Eigen::Vector3d n = freeform_normal(x, y);
     const Eigen::Vector3d contact(x, y, freeform_height_mm(x, y) - 0.005);
-    p.poses.push_back({contact + 3 * n - 3 * Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitZ()});
+    p.poses.push_back({contact + 3 * n - 3 * axis, axis});
     x += dir * step;
     if (x > 28 || x < -28) {  // next pass, 0.5 mm over
       dir = -dir;
@@ -100,7 +106,7 @@ void run(const char* name, PartId id, const Path& path, double spacing, double c
   auto t0 = Clock::now();
   DexelModel model = DexelModel::build(part.mesh, part.triangle_surface, part.metadata.stock, o);
   const double build_s = seconds_since(t0);
-  std::printf("%-9s %zu triangles, %zu dexels (spacing %.3g mm), built in %.2f s\n", name,
+  std::printf("%-11s %zu triangles, %zu dexels (spacing %.3g mm), built in %.2f s\n", name,
               part.mesh.triangles.size(), model.size(), spacing, build_s);
   const DexelModel fresh = model;
   for (const bool swept : {false, true}) {
@@ -131,7 +137,7 @@ void run(const char* name, PartId id, const Path& path, double spacing, double c
     }
     const double cycles = double(path.poses.size() - 1);
     std::printf(
-        "%-9s %s %.0f cycles in %.3f s CPU (%.3f s wall): %.2f us per cycle (%.1f %% of a 1 ms "
+        "%-11s %s %.0f cycles in %.3f s CPU (%.3f s wall): %.2f us per cycle (%.1f %% of a 1 ms "
         "servo period); %.2f instances and %.0f dexels lowered per cycle, %.9f mm3 removed, "
         "heights %016llx\n",
         name, swept ? "swept:    " : "per cycle:", cycles, s, wall, s / cycles * 1e6,
@@ -140,7 +146,7 @@ void run(const char* name, PartId id, const Path& path, double spacing, double c
     const auto t = model.thread_stats();
     if (t.jobs > 0)
       std::printf(
-          "%-9s           %d threads: %llu instances shared (%.1f chunks each, %.1f %% run by the "
+          "%-11s           %d threads: %llu instances shared (%.1f chunks each, %.1f %% run by the "
           "helper), %llu wake-ups, %.1f polls waiting per shared instance\n",
           name, model.threads(), static_cast<unsigned long long>(t.jobs),
           double(t.chunks) / double(t.jobs), 100.0 * double(t.worker_chunks) / double(t.chunks),
@@ -174,6 +180,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   run("freeform", PartId::kFreeform, freeform_path(cycles), spacing, cell, threads);
+  run("freeform-30", PartId::kFreeform, freeform_path(cycles, 30), spacing, cell, threads);
   run("implant", PartId::kImplant, implant_path(cycles), spacing, cell, threads);
   return 0;
 }

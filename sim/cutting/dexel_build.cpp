@@ -16,6 +16,12 @@ namespace truecut::sim::cutting {
 
 namespace {
 
+// A grid entry's group in its cell: 0 for all three first-cell flags (the
+// dexel's box starts in the cell), then XY, XZ, X, YZ, Y, Z, none.
+int flag_group(std::uint32_t entry) {
+  return static_cast<int>((~entry) >> 29);
+}
+
 constexpr std::size_t kMaxDexels = 50'000'000;
 constexpr std::uint32_t kNone = 0xFFFFFFFFu;
 
@@ -339,11 +345,11 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
   for (std::size_t i = 0; i < nd; ++i)
     for (int k = 0; k < insets[i].count; ++k)
       m.line_origin_[i] += insets[i].inset_mm * insets[i].dir[k];
-  m.height_.resize(nd);
+  m.initial_height_.resize(nd);
   m.floor_.assign(nd, -options.max_depth_mm);
   for (std::size_t i = 0; i < nd; ++i)
-    m.height_[i] = stock_height(m.line_origin_[i], m.normal_[i], stock, options.max_stock_mm);
-  m.initial_height_ = m.height_;
+    m.initial_height_[i] =
+        stock_height(m.line_origin_[i], m.normal_[i], stock, options.max_stock_mm);
   // Partners: the dexels at one position with different normals (the
   // sides of a sharp edge or corner), linked in a cycle.
   m.partner_.resize(nd);
@@ -367,7 +373,7 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
   m.sweep_radius_.assign(nd, 0.0f);
   m.line_.resize(nd);
   for (std::size_t i = 0; i < nd; ++i)
-    m.line_[i] = {m.line_origin_[i], m.normal_[i], m.floor_[i]};
+    m.line_[i] = {m.line_origin_[i], m.normal_[i], m.floor_[i], m.initial_height_[i]};
   m.stamp_.assign(nd, 0);
   m.old_height_.assign(nd, 0.0);
   m.threads_ = detail::CutThreads(options.threads > 0
@@ -382,7 +388,7 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::max()), hi = -lo;
   auto line_box = [&](std::size_t i, Eigen::Vector3d& a, Eigen::Vector3d& b) {
     const Eigen::Vector3d p0 = m.line_origin_[i] + m.floor_[i] * m.normal_[i];
-    const Eigen::Vector3d p1 = m.line_origin_[i] + m.height_[i] * m.normal_[i];
+    const Eigen::Vector3d p1 = m.line_origin_[i] + m.initial_height_[i] * m.normal_[i];
     a = p0.cwiseMin(p1);
     b = p0.cwiseMax(p1);
   };
@@ -399,8 +405,8 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
   double line_sum_mm = 0;
   std::size_t with_stock = 0;
   for (std::size_t i = 0; i < nd; ++i)
-    if (m.height_[i] > 0) {
-      line_sum_mm += m.height_[i] - m.floor_[i];
+    if (m.initial_height_[i] > 0) {
+      line_sum_mm += m.initial_height_[i] - m.floor_[i];
       ++with_stock;
     }
   const double mean_line_mm = with_stock > 0 ? line_sum_mm / double(with_stock) : 0;
@@ -438,12 +444,13 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
         for (int x = c0[0]; x <= c1[0]; ++x)
           fn((std::size_t(z) * m.grid_dims_[1] + y) * m.grid_dims_[0] + x,
              (x == c0[0] ? kFirstX : 0u) | (y == c0[1] ? kFirstY : 0u) |
-                 (z == c0[2] ? kFirstZ : 0u));
+                 (z == c0[2] ? kFirstZ : 0u),
+             x, y, z);
   };
   static_assert(kMaxDexels <= kIndexMask + 1, "dexel index and first-cell flags share a word");
   std::size_t total = 0;
   for (std::size_t i = 0; i < nd; ++i)
-    for_cells(i, [&](std::size_t c, std::uint32_t) {
+    for_cells(i, [&](std::size_t c, std::uint32_t, int, int, int) {
       ++m.cell_start_[c + 1];
       ++total;
     });
@@ -452,21 +459,51 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
   for (std::size_t c = 0; c < ncells; ++c)
     m.cell_start_[c + 1] += m.cell_start_[c];
   m.cell_items_.resize(total);
+  m.cell_reach_.assign(ncells, 0);
   std::vector<std::uint32_t> fill(m.cell_start_.begin(), m.cell_start_.end() - 1);
-  for (std::size_t i = 0; i < nd; ++i)
-    for_cells(i, [&](std::size_t c, std::uint32_t flags) {
+  for (std::size_t i = 0; i < nd; ++i) {
+    Eigen::Vector3d a, b;
+    line_box(i, a, b);
+    // The line's top corner in eighths of a cell above the grid's origin.
+    const Eigen::Vector3d top = (b - lo) * (8 / cell);
+    for_cells(i, [&](std::size_t c, std::uint32_t flags, int x, int y, int z) {
       m.cell_items_[fill[c]++] = static_cast<std::uint32_t>(i) | flags;
+      // The line's reach above the cell's low corner, in eighths of a cell:
+      // truncated, plus one for rounding up and one for the rounding of the
+      // corner itself.
+      const int corner[3] = {x, y, z};
+      std::uint32_t& reach = m.cell_reach_[c];
+      for (int k = 0; k < 3; ++k) {
+        const double eighths = top[k] - 8.0 * corner[k];
+        const std::uint32_t r = eighths < double(kReachUnbounded - 3)
+                                    ? std::uint32_t(std::max(eighths, 0.0)) + 2
+                                    : kReachUnbounded;
+        const std::uint32_t old = (reach >> (8 * k)) & 0xFFu;
+        if (r > old) reach = (reach & ~(0xFFu << (8 * k))) | (r << (8 * k));
+      }
     });
-  // In each cell the dexels whose box of cells starts there come first (in
-  // index order, as the rest): inside an instance's box only they are tested.
-  constexpr std::uint32_t kHome = kFirstX | kFirstY | kFirstZ;
+  }
+  // In each cell the dexels whose box of cells starts there come first: inside
+  // an instance's box only they are tested. The others follow grouped by
+  // their flags (XY, XZ, X, YZ, Y, Z, none), each group in index order: a
+  // cell on the edge of an instance's box scans them all and tests those with
+  // the flags it needs, and the groups make that test predictable.
   m.cell_home_end_.resize(ncells);
+  std::vector<std::uint32_t> sorted;
   for (std::size_t c = 0; c < ncells; ++c) {
-    const auto first = m.cell_items_.begin() + m.cell_start_[c];
-    const auto last = m.cell_items_.begin() + m.cell_start_[c + 1];
-    const auto mid = std::stable_partition(
-        first, last, [&](std::uint32_t entry) { return (entry & kHome) == kHome; });
-    m.cell_home_end_[c] = static_cast<std::uint32_t>(mid - m.cell_items_.begin());
+    const std::uint32_t first = m.cell_start_[c], last = m.cell_start_[c + 1];
+    m.cell_home_end_[c] = first;
+    if (first == last) continue;
+    std::uint32_t start[9] = {};
+    for (std::uint32_t k = first; k < last; ++k)
+      ++start[flag_group(m.cell_items_[k]) + 1];
+    for (int g = 0; g < 8; ++g)
+      start[g + 1] += start[g];
+    m.cell_home_end_[c] = first + start[1];
+    sorted.resize(last - first);
+    for (std::uint32_t k = first; k < last; ++k)
+      sorted[start[flag_group(m.cell_items_[k])]++] = m.cell_items_[k];
+    std::copy(sorted.begin(), sorted.end(), m.cell_items_.begin() + first);
   }
   return m;
 }

@@ -126,6 +126,7 @@ struct DexelModel::Instance {
   DexelModel* model;
   detail::ToolGeometry g;
   Eigen::Vector3d tip, axis, centre_motion;
+  Eigen::Vector3d lo_box, hi_box;  // the tool's bounding box
   int c0[3], c1[3];
   std::uint32_t ny;              // grid rows per z layer of the box
   std::uint32_t rows;            // grid rows (y, z) in the box
@@ -153,6 +154,8 @@ void DexelModel::apply_instance(const CutterShape& shape, const Eigen::Vector3d&
               centre_motion,
               {},
               {},
+              {},
+              {},
               0,
               0,
               1};
@@ -164,6 +167,8 @@ void DexelModel::apply_instance(const CutterShape& shape, const Eigen::Vector3d&
     lo_box[i] -= r;
     hi_box[i] += r;
   }
+  in.lo_box = lo_box;
+  in.hi_box = hi_box;
   for (int i = 0; i < 3; ++i) {
     const double a = std::floor((lo_box[i] - grid_origin_mm_[i]) / cell_mm_);
     const double b = std::floor((hi_box[i] - grid_origin_mm_[i]) / cell_mm_);
@@ -208,7 +213,7 @@ void DexelModel::apply_instance(const CutterShape& shape, const Eigen::Vector3d&
     const std::uint32_t* list = lowered_[r.thread].data() + r.begin;
     for (std::uint32_t k = 0; k < r.count; ++k) {
       const std::uint32_t d = list[k];
-      const double h = old_height_[d], new_h = height_[d];
+      const double h = old_height_[d], new_h = line_[d].height;
       const Eigen::Vector3d& p = line_origin_[d];
       const Eigen::Vector3d& n = normal_[d];
       const double removed = (h - new_h) * area_[d];
@@ -222,6 +227,56 @@ void DexelModel::apply_instance(const CutterShape& shape, const Eigen::Vector3d&
   }
 }
 
+void DexelModel::record_swept(const Instance& in, std::uint32_t d, const Eigen::Vector3d& p,
+                              const Eigen::Vector3d& n, double new_h, bool to_floor) noexcept {
+  // The surface this instance leaves at the dexel, for the output mesh's
+  // cusps: the ball's tube, the flank's or the flat bottom's tangent plane
+  // (g: out of the material, into the tool).
+  const detail::ToolGeometry& g = in.g;
+  const Eigen::Vector3d& tip = in.tip;
+  const Eigen::Vector3d& axis = in.axis;
+  const double w = (p + new_h * n - tip).dot(axis);
+  const Eigen::Vector3d x = p + new_h * n;
+  const Eigen::Vector3d radial = x - tip - w * axis;
+  const double r = radial.norm();
+  constexpr double kOn = 1e-7;  // mm: which face of the cutter the entry lies on
+  std::uint8_t kind = kSweptNone;
+  if (to_floor) {
+    // cut to the floor: no surface of the tool here
+  } else if (g.core_mm <= 0 && g.corner_mm > 0 && w < g.corner_mm) {
+    kind = kSweptBall;
+    sweep_point_[d] = (tip + g.corner_mm * axis - position_[d]).cast<float>();
+    sweep_vector_[d] = in.centre_motion.cast<float>();
+    sweep_radius_[d] = static_cast<float>(g.corner_mm);
+  } else if (w <= kOn && r <= g.core_mm + kOn) {
+    kind = kSweptPlane;  // flat bottom
+    sweep_point_[d] = (x - position_[d]).cast<float>();
+    sweep_vector_[d] = axis.cast<float>();
+  } else if (w >= g.corner_mm - kOn && w <= g.flute_mm - kOn && r > 0.5 * g.radius_mm &&
+             std::abs(r - g.radius_mm) <= 1e-6) {
+    kind = kSweptPlane;  // flank
+    sweep_point_[d] = (x - position_[d]).cast<float>();
+    sweep_vector_[d] = (-radial / r).cast<float>();
+  }
+  sweep_kind_[d] = kind;
+}
+
+bool DexelModel::cell_misses_tool(const Instance& in, std::size_t cell, int x, int y,
+                                  int z) const noexcept {
+  const std::uint32_t reach = cell_reach_[cell];
+  const int index[3] = {x, y, z};
+  Eigen::Vector3d lo, hi;
+  for (int k = 0; k < 3; ++k) {
+    const std::uint32_t r = (reach >> (8 * k)) & 0xFFu;
+    const double corner = grid_origin_mm_[k] + index[k] * cell_mm_;
+    lo[k] = std::max(corner, in.lo_box[k]);
+    hi[k] = r == kReachUnbounded ? in.hi_box[k]
+                                 : std::min(corner + double(r) * (cell_mm_ / 8), in.hi_box[k]);
+    if (hi[k] < lo[k] - 1e-6) return true;  // the lines end before the tool's box
+  }
+  return detail::box_misses_tool(lo - in.tip, hi - in.tip, in.axis, in.g);
+}
+
 void DexelModel::cut_chunk(const Instance& in, std::uint32_t chunk, int thread) noexcept {
   const detail::ToolGeometry& g = in.g;
   const Eigen::Vector3d& tip = in.tip;
@@ -229,16 +284,23 @@ void DexelModel::cut_chunk(const Instance& in, std::uint32_t chunk, int thread) 
   std::uint32_t* const lowered = lowered_[std::size_t(thread)].data();
   std::uint32_t cursor = cursor_[std::size_t(thread)].value;
   ChunkResult result{static_cast<std::uint32_t>(thread), cursor, 0, 0};
+  // The arrays as local pointers: the stores below (heights, swept surfaces)
+  // cannot then make the compiler reload them for every dexel.
+  const std::uint32_t* const items = cell_items_.data();
+  Line* const lines = line_.data();
+  double* const old_height = old_height_.data();
+  std::uint32_t* const stamp = stamp_.data();
+  const std::uint32_t epoch = epoch_;
   // Lowers the dexels of grid entries [first, last) whose flags include `need`
   // (the dexel's box of cells starts in this cell along those axes).
   auto cut_entries = [&](std::uint32_t first, std::uint32_t last, std::uint32_t need) {
     const std::uint32_t cell_begin = cursor;
     for (std::uint32_t it = first; it < last; ++it) {
-      const std::uint32_t entry = cell_items_[it];
+      const std::uint32_t entry = items[it];
       if ((entry & need) != need) continue;
       const std::uint32_t d = entry & kIndexMask;
-      const Line& line = line_[d];
-      const double h = height_[d], floor = line.floor;
+      Line& line = lines[d];
+      const double h = line.height, floor = line.floor;
       if (h <= floor) continue;
       const Eigen::Vector3d& p = line.origin;
       const Eigen::Vector3d& n = line.normal;
@@ -247,38 +309,12 @@ void DexelModel::cut_chunk(const Instance& in, std::uint32_t chunk, int thread) 
       const detail::Span span = detail::tool_span(q, n, axis, g, floor, h);
       if (span.empty() || !(span.t0 < h) || !(span.t1 > floor)) continue;
       const double new_h = std::max(span.t0, floor);
-      height_[d] = new_h;
-      old_height_[d] = h;
+      line.height = new_h;
+      old_height[d] = h;
       lowered[cursor++] = d;
-      // The surface this instance leaves at the dexel, for the output
-      // mesh's cusps: the ball's tube, the flank's or the flat bottom's
-      // tangent plane (g: out of the material, into the tool).
-      const double w = (p + new_h * n - tip).dot(axis);
-      const Eigen::Vector3d x = p + new_h * n;
-      const Eigen::Vector3d radial = x - tip - w * axis;
-      const double r = radial.norm();
-      constexpr double kOn = 1e-7;  // mm: which face of the cutter the entry lies on
-      std::uint8_t kind = kSweptNone;
-      if (span.t0 <= floor) {
-        // cut to the floor: no surface of the tool here
-      } else if (g.core_mm <= 0 && g.corner_mm > 0 && w < g.corner_mm) {
-        kind = kSweptBall;
-        sweep_point_[d] = (tip + g.corner_mm * axis - position_[d]).cast<float>();
-        sweep_vector_[d] = in.centre_motion.cast<float>();
-        sweep_radius_[d] = static_cast<float>(g.corner_mm);
-      } else if (w <= kOn && r <= g.core_mm + kOn) {
-        kind = kSweptPlane;  // flat bottom
-        sweep_point_[d] = (x - position_[d]).cast<float>();
-        sweep_vector_[d] = axis.cast<float>();
-      } else if (w >= g.corner_mm - kOn && w <= g.flute_mm - kOn && r > 0.5 * g.radius_mm &&
-                 std::abs(r - g.radius_mm) <= 1e-6) {
-        kind = kSweptPlane;  // flank
-        sweep_point_[d] = (x - position_[d]).cast<float>();
-        sweep_vector_[d] = (-radial / r).cast<float>();
-      }
-      sweep_kind_[d] = kind;
-      if (stamp_[d] != epoch_) {
-        stamp_[d] = epoch_;
+      record_swept(in, d, p, n, new_h, span.t0 <= floor);
+      if (stamp[d] != epoch) {
+        stamp[d] = epoch;
         ++result.touched;
       }
     }
@@ -310,9 +346,12 @@ void DexelModel::cut_chunk(const Instance& in, std::uint32_t chunk, int thread) 
     const std::uint32_t need = (y != in.c0[1] ? kFirstY : 0u) | (z != in.c0[2] ? kFirstZ : 0u);
     const std::size_t row = (std::size_t(z) * grid_dims_[1] + y) * grid_dims_[0];
     if (cell_start_[row + in.c0[0]] == cell_start_[row + in.c1[0] + 1]) continue;  // empty
-    cut_cell(row + in.c0[0], need);
-    for (int x = in.c0[0] + 1; x <= in.c1[0]; ++x)
-      cut_cell(row + x, need | kFirstX);
+    for (int x = in.c0[0]; x <= in.c1[0]; ++x) {
+      const std::size_t cell = row + x;
+      if (cell_start_[cell] == cell_start_[cell + 1]) continue;
+      if (cell_misses_tool(in, cell, x, y, z)) continue;
+      cut_cell(cell, x == in.c0[0] ? need : need | kFirstX);
+    }
   }
   cursor_[std::size_t(thread)].value = cursor;
   ChunkResult& out = chunks_[chunk];

@@ -94,20 +94,20 @@ offline::TriangleMesh DexelModel::machined_mesh() const {
   // than the dexel spacing) while it lies within max_depth_mm of their line.
   const std::size_t nd = position_.size();
   auto on_line = [&](std::size_t i) {
-    return height_[i] > floor_[i] && height_[i] < options_.max_stock_mm;
+    return line_[i].height > floor_[i] && line_[i].height < options_.max_stock_mm;
   };
   std::vector<Eigen::Vector3d> vertex(nd);
   std::vector<char> placed(nd, 0);
   std::vector<std::uint32_t> queue;
   for (std::size_t i = 0; i < nd; ++i) {
-    vertex[i] = position_[i] + height_[i] * normal_[i];
+    vertex[i] = position_[i] + line_[i].height * normal_[i];
     if (on_line(i)) {
       placed[i] = 1;
       continue;
     }
     for (std::size_t j = partner_[i]; j != i; j = partner_[j])
       if (on_line(j)) {
-        vertex[i] = position_[j] + height_[j] * normal_[j];
+        vertex[i] = position_[j] + line_[j].height * normal_[j];
         placed[i] = 1;
         queue.push_back(static_cast<std::uint32_t>(i));
         break;
@@ -136,7 +136,7 @@ offline::TriangleMesh DexelModel::machined_mesh() const {
         const std::uint32_t from = queue[q];
         for (std::uint32_t k = start[from]; k < start[from + 1]; ++k) {
           const std::uint32_t d = items[k];
-          if (placed[d] || (cut_through_only && height_[d] > floor_[d])) continue;
+          if (placed[d] || (cut_through_only && line_[d].height > floor_[d])) continue;
           const Eigen::Vector3d off = vertex[from] - position_[d];
           if ((off - off.dot(normal_[d]) * normal_[d]).norm() > options_.max_depth_mm) continue;
           vertex[d] = vertex[from];
@@ -222,7 +222,7 @@ offline::TriangleMesh DexelModel::machined_mesh() const {
     heights(0, ha0, hb0);
     heights(1, ha1, hb1);
     constexpr double kAgree = 5e-4;
-    if (!(std::abs(ha0 - height_[a]) < kAgree && std::abs(hb1 - height_[b]) < kAgree &&
+    if (!(std::abs(ha0 - line_[a].height) < kAgree && std::abs(hb1 - line_[b].height) < kAgree &&
           hb0 > ha0 + 1e-6 && ha1 > hb1 + 1e-6))
       return kNoSplit;
     double lo = 0, hi = 1;
@@ -244,7 +244,7 @@ offline::TriangleMesh DexelModel::machined_mesh() const {
     for (const std::uint32_t c : opposite.at(edge_key(a, b)))
       if (c != kNoSplit && sweep_kind_[c] != kSweptNone && on_line(c))
         ridge = std::min(ridge, entry(swept(c), x, n));
-    const double straight = (1 - s) * height_[a] + s * height_[b];
+    const double straight = (1 - s) * line_[a].height + s * line_[b].height;
     // Cusps lower than this are left to the straight edge (the creases
     // between the flanks of neighbouring instances of a deflected tool would
     // otherwise add vertices all over the walls).
@@ -305,8 +305,8 @@ void DexelModel::write_machined(const std::filesystem::path& dir,
 
 double DexelModel::removed_total_mm3() const {
   double sum = 0;
-  for (std::size_t i = 0; i < height_.size(); ++i)
-    sum += (initial_height_[i] - height_[i]) * area_[i];
+  for (std::size_t i = 0; i < line_.size(); ++i)
+    sum += (initial_height_[i] - line_[i].height) * area_[i];
   return sum;
 }
 

@@ -192,4 +192,33 @@ inline Span tool_span(const Eigen::Vector3d& q, const Eigen::Vector3d& n, const 
   return enters_slab_above(0, g.corner_mm) || enters_cylinder_above();
 }
 
+// True only when the box [lo, hi] holds no point of the tool (tip at the
+// origin, unit axis a), with a margin (1e-6 mm) far above the rounding of
+// tool_span's roots: a line inside the box then gets no cut from tool_span.
+// Conservative: the tool is taken as the cylinder of radius R from w = rc
+// (w = 0 unless a ball) to L, plus a ball's whole sphere; the box is
+// separated from the cylinder along the axis, or along the direction from
+// the axis to the box's centre (a separating axis, square to the tool's).
+inline bool box_misses_tool(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+                            const Eigen::Vector3d& a, const ToolGeometry& g) {
+  constexpr double m = 1e-6;
+  const bool ball = g.core_mm <= 0 && g.corner_mm > 0;
+  if (ball) {  // the sphere of radius rc about rc·a
+    const Eigen::Vector3d s = g.corner_mm * a;
+    const Eigen::Vector3d out = (lo - s).cwiseMax(s - hi).cwiseMax(0.0);
+    if (out.squaredNorm() <= (g.corner_mm + m) * (g.corner_mm + m)) return false;
+  }
+  const Eigen::Vector3d c = 0.5 * (lo + hi), e = 0.5 * (hi - lo);
+  const double ca = c.dot(a);
+  const double half_a = e.dot(a.cwiseAbs());  // the box's half extent along a
+  const double w0 = ball ? g.corner_mm : 0.0;
+  if (ca + half_a < w0 - m || ca - half_a > g.flute_mm + m) return true;
+  // Along u, the unit direction from the axis to the centre, square to a: the
+  // cylinder spans [−R, R], the box its centre's distance ± Σ e_i |u_i|.
+  const Eigen::Vector3d across = c - ca * a;
+  const double d = across.norm();
+  if (d <= g.radius_mm + m) return false;
+  return d - e.dot(across.cwiseAbs()) / d > g.radius_mm + m;
+}
+
 }  // namespace truecut::sim::cutting::detail

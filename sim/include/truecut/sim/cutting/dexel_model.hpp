@@ -108,10 +108,10 @@ class DexelModel {
   // machined.stl (binary) and machined.ply (binary) into `dir`, each atomic.
   void write_machined(const std::filesystem::path& dir, const std::string& comment = {}) const;
 
-  std::size_t size() const { return height_.size(); }
+  std::size_t size() const { return line_.size(); }
   const Eigen::Vector3d& position(std::size_t i) const { return position_[i]; }
   const Eigen::Vector3d& normal(std::size_t i) const { return normal_[i]; }
-  double height_mm(std::size_t i) const { return height_[i]; }
+  double height_mm(std::size_t i) const { return line_[i].height; }
   double initial_height_mm(std::size_t i) const { return initial_height_[i]; }
   double area_mm2(std::size_t i) const { return area_[i]; }
   int surface(std::size_t i) const { return surface_[i]; }
@@ -136,12 +136,18 @@ class DexelModel {
   struct Instance;
   // Tests and lowers the dexels of one chunk of grid rows (any thread).
   void cut_chunk(const Instance& in, std::uint32_t chunk, int thread) noexcept;
+  // Whether no line tested in grid cell (x, y, z) can meet the instance's
+  // tool (cell_reach_, detail::box_misses_tool): the cell is skipped.
+  bool cell_misses_tool(const Instance& in, std::size_t cell, int x, int y, int z) const noexcept;
+  // Keeps the surface the instance swept at dexel d, just lowered to new_h
+  // (to_floor: cut through, no surface), for machined_mesh()'s cusps.
+  void record_swept(const Instance& in, std::uint32_t d, const Eigen::Vector3d& p,
+                    const Eigen::Vector3d& n, double new_h, bool to_floor) noexcept;
 
   // Per dexel (structure of arrays).
   std::vector<Eigen::Vector3d> position_;     // on the nominal surface (output mesh)
   std::vector<Eigen::Vector3d> line_origin_;  // where the line is tested (inset on sharp edges)
   std::vector<Eigen::Vector3d> normal_;
-  std::vector<double> height_;
   std::vector<double> initial_height_;
   std::vector<double> floor_;  // −max_depth_mm
   std::vector<double> area_;
@@ -164,11 +170,13 @@ class DexelModel {
   std::vector<Eigen::Vector3f> sweep_vector_;
   std::vector<float> sweep_radius_;
   // What a tool instance reads of each dexel it tests, on one cache line:
-  // line_origin_, normal_ and floor_ (copies, made at build).
+  // line_origin_, normal_ and floor_ (copies, made at build) and the
+  // material height h (the only copy: cut() lowers it here).
   struct alignas(64) Line {
     Eigen::Vector3d origin;
     Eigen::Vector3d normal;
     double floor;
+    double height;
   };
   std::vector<Line> line_;
   std::vector<std::uint32_t> stamp_;  // last cut() that lowered the dexel
@@ -209,6 +217,13 @@ class DexelModel {
   // Per cell, the end of its leading entries that start their box there
   // (all three kFirst flags); the others follow, each part in index order.
   std::vector<std::uint32_t> cell_home_end_;
+  // Per cell, how far up x, y and z (bits 0-7, 8-15, 16-23, in eighths of a
+  // cell from its low corner, rounded up; kReachUnbounded beyond 254) the lines of
+  // its entries reach: every part of a line tested in the cell that an
+  // instance can touch lies in [corner, corner + reach], so a cell whose box
+  // misses the tool is skipped (detail::box_misses_tool).
+  std::vector<std::uint32_t> cell_reach_;
+  static constexpr std::uint32_t kReachUnbounded = 255;
   static constexpr std::uint32_t kFirstX = 1u << 31, kFirstY = 1u << 30, kFirstZ = 1u << 29,
                                  kIndexMask = kFirstZ - 1;
   DexelOptions options_;
