@@ -102,13 +102,7 @@ int cmd_canon(const std::vector<std::string>& argv) {
     return kExitOk;
   }
   if (a.positionals().size() != 1) throw UsageError("expected one PROGRAM.ngc file");
-  interp::LengthUnits tool_units = interp::LengthUnits::kMm;
-  if (auto u = a.value("tool-units")) {
-    if (*u == "inch")
-      tool_units = interp::LengthUnits::kInch;
-    else if (*u != "mm")
-      throw UsageError("--tool-units must be mm or inch, not '" + *u + "'");
-  }
+  const interp::LengthUnits tool_units = length_units_option(a, "tool-units");
   interp::FormatOptions format;
   format.decimals = static_cast<int>(a.integer("decimals", 4, 0, 12));
 

@@ -18,6 +18,9 @@ inline constexpr const char* kVarFileHelp =
     "                         the active system #5220, G92 (#5210..), G28/G30 homes\n"
     "  --var-units mm|inch    its length units (default mm; LinuxCNC: [TRAJ]LINEAR_UNITS)\n";
 
+// --OPTION mm|inch (default mm). Throws UsageError for anything else.
+interp::LengthUnits length_units_option(const ParsedArgs& a, const std::string& option);
+
 // The parameter file the options name, or nullopt without --var-file.
 // Throws UsageError for bad --var-units, interp::GcodeError for the file.
 std::optional<interp::ParameterFile> parameter_file_from_args(const ParsedArgs& a);

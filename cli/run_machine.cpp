@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 
+#include "parameter_file_args.hpp"
 #include "run_measure.hpp"
 #include "run_support.hpp"
 #include "truecut/rt/hal_file.hpp"
@@ -123,12 +124,8 @@ int run_machine(const std::vector<std::string>& argv) {
     if (!fs::is_regular_file(*v)) throw UsageError(*v + ": no such file");
     job.parameters = *v;
   }
-  if (auto u = a.value("var-units")) {
-    if (*u != "mm" && *u != "inch")
-      throw UsageError("--var-units must be mm or inch, not '" + *u + "'");
-    if (!job.parameters) throw UsageError("--var-units needs --var-file");
-    job.parameters_in_inches = *u == "inch";
-  }
+  job.parameters_in_inches = length_units_option(a, "var-units") == interp::LengthUnits::kInch;
+  if (a.value("var-units") && !job.parameters) throw UsageError("--var-units needs --var-file");
   job.out_dir = *out;
   job.period_us = a.number("period-us", 1000.0, 50.0, 100000.0);
   job.dexel_spacing_mm = a.number("dexel-spacing", 0.1, 0.01, 5.0);
