@@ -217,6 +217,15 @@ TEST(Rs274Oracle, ParameterFileSetupMatches) {
   EXPECT_TRUE(r.rs274_runs) << "rs274 rejects the program: " << r.rs274_error;
   EXPECT_TRUE(r.truecut_runs) << r.truecut_error;
   EXPECT_EQ(r.difference, std::nullopt);
+  // A parameter file LinuxCNC itself ships (its 9-axis sim configuration:
+  // 119 lines, with the U V W columns truecut has no axes for).
+  const fs::path shipped =
+      o->share / "doc/linuxcnc/examples/sample-configs/sim/qtvcp_screens/sim-9axis.var";
+  ASSERT_TRUE(fs::exists(shipped)) << shipped;
+  const Outcome s = run_both(*o, dir / "parameter_file_setup.ngc", shipped);
+  EXPECT_TRUE(s.rs274_runs) << "rs274 rejects the program: " << s.rs274_error;
+  EXPECT_TRUE(s.truecut_runs) << s.truecut_error;
+  EXPECT_EQ(s.difference, std::nullopt);
 }
 
 // G5, G5.1, G5.2/G5.3 (docs/gcode.md "Splines G5.x"), in mm and in
