@@ -47,7 +47,7 @@ ParameterFile ParameterFile::parse(std::string_view text, const std::string& nam
                            "...' is not a whole number followed by white space");
     const std::string number_text = s.substr(i, end - i);
     const long number = end - digits > 6 ? 999999 : std::strtol(number_text.c_str(), nullptr, 10);
-    if (sign || number < 1 || number >= Parameters::kCount)
+    if ((sign && s[i] == '-') || number < 1 || number >= Parameters::kCount)
       throw GcodeError({name, line, column},
                        "parameter number " + number_text + " out of range 1..5601");
     size_t v = end;

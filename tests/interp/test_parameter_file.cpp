@@ -49,6 +49,7 @@ TEST(ParameterFile, RefusesWhatLinuxCncRefusesAndWhatItWouldSilentlyDrop) {
   EXPECT_EQ(error_of("99999999999 1\n"),
             "m.var:1:1: parameter number 99999999999 out of range 1..5601");
   EXPECT_EQ(error_of("5601 1\n"), "no error");
+  EXPECT_EQ(error_of("+5221 1\n"), "no error");  // as sscanf("%d") reads it
   // rs274 skips these lines or reads "5221.5 3" as #5221 = 0.5.
   EXPECT_EQ(error_of("5221\n"), "m.var:1:1: parameter 5221 has no value");
   EXPECT_EQ(error_of("5221 abc\n"), "m.var:1:6: parameter 5221: 'abc' is not a finite number");
