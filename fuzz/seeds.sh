@@ -13,6 +13,7 @@ cd "$(dirname "$0")/.."
 case $target in
   gcode|expression) find examples tests/interp/corpus -name '*.ngc' -size -64k -exec cp -t "$d" {} + 2>/dev/null || true ;;
   tool_table) find examples tests -name '*.tbl' -exec cp -t "$d" {} + 2>/dev/null || true ;;
+  parameter_file) find examples tests -name '*.var' -exec cp -t "$d" {} + 2>/dev/null || true ;;
   mesh) find fuzz/seeds examples tests -name '*.stl' -size -256k -o -name '*.ply' -size -256k -o -name '*.xyz' -size -256k | head -50 |
           while read -r f; do case $f in *.stl) p=0;; *.ply) p=1;; *) p=2;; esac
             { printf "\\x$(printf %02x $p)"; cat "$f"; } > "$d/$(basename "$f")"; done ;;
