@@ -151,6 +151,13 @@ Outcome run_both(const Oracle& o, const fs::path& original,
   return out;
 }
 
+// Both interpreters run the program and print the same calls.
+void expect_agreement(const Outcome& r, const std::string& what) {
+  EXPECT_TRUE(r.rs274_runs) << what << ": rs274 rejects the program: " << r.rs274_error;
+  EXPECT_TRUE(r.truecut_runs) << what << ": " << r.truecut_error;
+  EXPECT_EQ(r.difference, std::nullopt) << what;
+}
+
 std::string key_of(const fs::path& p) {
   return p.parent_path().filename().string() + "/" + p.filename().string();
 }
@@ -182,9 +189,7 @@ TEST(Rs274Oracle, OwnCorpusMatches) {
   for (const auto& p : programs_under(source_dir() / "tests/interp/corpus")) {
     if (p.filename().string().rfind("sinumerik", 0) == 0) continue;  // not LinuxCNC G-code
     const Outcome r = run_both(*o, p);
-    EXPECT_TRUE(r.rs274_runs) << p << ": rs274 rejects the program: " << r.rs274_error;
-    EXPECT_TRUE(r.truecut_runs) << p << ": " << r.truecut_error;
-    EXPECT_EQ(r.difference, std::nullopt) << p;
+    expect_agreement(r, p.string());
     ++compared;
   }
   EXPECT_GE(compared, 6);
@@ -199,9 +204,7 @@ TEST(Rs274Oracle, RotatedCoordinateSystemsMatch) {
   for (const char* name : {"rotated_coordinates.ngc", "rotated_coordinates_inch.ngc"}) {
     const fs::path p = source_dir() / "tests/interp/corpus" / name;
     const Outcome r = run_both(*o, p);
-    EXPECT_TRUE(r.rs274_runs) << p << ": rs274 rejects the program: " << r.rs274_error;
-    EXPECT_TRUE(r.truecut_runs) << p << ": " << r.truecut_error;
-    EXPECT_EQ(r.difference, std::nullopt) << p;
+    expect_agreement(r, p.string());
   }
 }
 
@@ -214,18 +217,14 @@ TEST(Rs274Oracle, ParameterFileSetupMatches) {
   const fs::path dir = source_dir() / "tests/interp/corpus";
   const Outcome r =
       run_both(*o, dir / "parameter_file_setup.ngc", dir / "parameter_file_setup.var");
-  EXPECT_TRUE(r.rs274_runs) << "rs274 rejects the program: " << r.rs274_error;
-  EXPECT_TRUE(r.truecut_runs) << r.truecut_error;
-  EXPECT_EQ(r.difference, std::nullopt);
+  expect_agreement(r, "parameter_file_setup.ngc with parameter_file_setup.var");
   // A parameter file LinuxCNC itself ships (its 9-axis sim configuration:
   // 119 lines, with the U V W columns truecut has no axes for).
   const fs::path shipped =
       o->share / "doc/linuxcnc/examples/sample-configs/sim/qtvcp_screens/sim-9axis.var";
   ASSERT_TRUE(fs::exists(shipped)) << shipped;
   const Outcome s = run_both(*o, dir / "parameter_file_setup.ngc", shipped);
-  EXPECT_TRUE(s.rs274_runs) << "rs274 rejects the program: " << s.rs274_error;
-  EXPECT_TRUE(s.truecut_runs) << s.truecut_error;
-  EXPECT_EQ(s.difference, std::nullopt);
+  expect_agreement(s, "parameter_file_setup.ngc with sim-9axis.var");
 }
 
 // G5, G5.1, G5.2/G5.3 (docs/gcode.md "Splines G5.x"), in mm and in
@@ -236,9 +235,7 @@ TEST(Rs274Oracle, SplinesMatch) {
   for (const char* name : {"splines.ngc", "splines_inch.ngc"}) {
     const fs::path p = source_dir() / "tests/interp/corpus" / name;
     const Outcome r = run_both(*o, p);
-    EXPECT_TRUE(r.rs274_runs) << p << ": rs274 rejects the program: " << r.rs274_error;
-    EXPECT_TRUE(r.truecut_runs) << p << ": " << r.truecut_error;
-    EXPECT_EQ(r.difference, std::nullopt) << p;
+    expect_agreement(r, p.string());
     const auto t =
         run_process({cli_path().string(), "canon", "--tool-units", "inch", "--tool-table",
                      (o->work / "tools-inch.tbl").string(), p.filename().string()},
@@ -349,9 +346,7 @@ TEST(Rs274Oracle, FeedPerRevolutionAndSurfaceSpeedMatch) {
   for (const char* name : {"feed_per_rev_css.ngc"}) {
     const fs::path p = source_dir() / "tests/interp/corpus" / name;
     const Outcome r = run_both(*o, p);
-    EXPECT_TRUE(r.rs274_runs) << p << ": rs274 rejects the program: " << r.rs274_error;
-    EXPECT_TRUE(r.truecut_runs) << p << ": " << r.truecut_error;
-    EXPECT_EQ(r.difference, std::nullopt) << p;
+    expect_agreement(r, p.string());
   }
 }
 
