@@ -8,7 +8,6 @@
 #include "source_text.hpp"
 #include "system_parameters.hpp"
 #include "truecut/interp/error.hpp"
-#include "truecut/rt/input_file.hpp"
 
 namespace truecut::interp {
 
@@ -84,13 +83,7 @@ ParameterFile ParameterFile::parse(std::string_view text, const std::string& nam
 }
 
 ParameterFile ParameterFile::load(const std::filesystem::path& file, LengthUnits units) {
-  std::string text;
-  try {
-    text = rt::read_input_file(file, "parameter file");
-  } catch (const rt::InputFileError& e) {
-    throw GcodeError({file.string(), 0, 0}, e.reason());
-  }
-  return parse(text, file.string(), units);
+  return parse(read_located_file(file, "parameter file"), file.string(), units);
 }
 
 }  // namespace truecut::interp

@@ -47,12 +47,16 @@ SourceFile source_from_text(std::string_view text, const std::string& name) {
   return src;
 }
 
-SourceFile load_source(const std::filesystem::path& file) {
+std::string read_located_file(const std::filesystem::path& file, const char* what) {
   try {
-    return source_from_text(rt::read_input_file(file, "program file"), file.string());
+    return rt::read_input_file(file, what);
   } catch (const rt::InputFileError& e) {
     throw GcodeError({file.string(), 0, 0}, e.reason());
   }
+}
+
+SourceFile load_source(const std::filesystem::path& file) {
+  return source_from_text(read_located_file(file, "program file"), file.string());
 }
 
 }  // namespace truecut::interp

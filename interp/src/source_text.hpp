@@ -16,6 +16,10 @@ struct SourceFile {
 
 // Throws GcodeError when the file cannot be read or is not text.
 SourceFile load_source(const std::filesystem::path& file);
+// The text of an input file (a program, tool table, parameter file: `what`
+// names it in the message); GcodeError naming the file when it cannot be
+// read or is not text.
+std::string read_located_file(const std::filesystem::path& file, const char* what);
 SourceFile source_from_text(std::string_view text, const std::string& name);
 
 }  // namespace truecut::interp

@@ -9,7 +9,6 @@
 
 #include "source_text.hpp"
 #include "truecut/interp/error.hpp"
-#include "truecut/rt/input_file.hpp"
 
 namespace truecut::interp {
 
@@ -173,13 +172,7 @@ ToolTable ToolTable::parse(std::string_view text, const std::string& name, Lengt
 }
 
 ToolTable ToolTable::load(const std::filesystem::path& file, LengthUnits units) {
-  std::string text;
-  try {
-    text = rt::read_input_file(file, "tool table");
-  } catch (const rt::InputFileError& e) {
-    throw GcodeError({file.string(), 0, 0}, e.reason());
-  }
-  return parse(text, file.string(), units);
+  return parse(read_located_file(file, "tool table"), file.string(), units);
 }
 
 }  // namespace truecut::interp
