@@ -48,7 +48,8 @@ enum class OKeyword {
 };
 
 struct OWord {
-  std::string label;  // "100" or "<name>" (lower case)
+  std::string label;  // "100" or "<name>" (lower case); "" for a computed label not yet evaluated
+  bool computed = false;  // o[expr] or o#n: evaluated with the parameters when the line is met
   OKeyword keyword = OKeyword::kSub;
   int column = 0;
   std::vector<double> args;         // call arguments
@@ -89,7 +90,9 @@ struct Block {
 Block read_block(const LexedLine& line, const Parameters& params, bool has_b);
 
 // Just the O-word label and keyword of a line, without evaluating anything
-// (used when skipping over lines to find the end of an if or loop).
-std::optional<OWord> scan_oword(const LexedLine& line);
+// (used when skipping over lines to find the end of an if or loop). A
+// computed label comes back with computed set and an empty label, unless
+// params are given: then it is evaluated (errors throw, located).
+std::optional<OWord> scan_oword(const LexedLine& line, const Parameters* params = nullptr);
 
 }  // namespace truecut::interp

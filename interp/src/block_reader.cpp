@@ -27,12 +27,57 @@ std::string describe_letter(char l) {
   return std::string(1, static_cast<char>(std::toupper(l)));
 }
 
-// Reads an O-word label and keyword at the cursor (on 'o').
-OWord read_oword_head(Cursor& c) {
+// Moves the cursor past a computed label (an [expression] or a parameter
+// reference such as #5, #<n>, ##1 or #[1+2]) without evaluating it.
+void skip_computed_label(Cursor& c) {
+  while (c.peek() == '#') {
+    ++c.pos;
+    if (c.peek() == '#') continue;
+    if (c.peek() == '<') {
+      while (!c.at_end() && c.peek() != '>')
+        ++c.pos;
+      if (c.at_end()) c.fail("parameter name not closed with '>'");
+      ++c.pos;
+      return;
+    }
+    if (c.peek() != '[') {
+      while (std::isdigit(static_cast<unsigned char>(c.peek())) || c.peek() == '.')
+        ++c.pos;
+      return;
+    }
+  }
+  if (c.peek() != '[') c.fail("O-word needs a number or <name>");
+  int depth = 0;
+  do {
+    if (c.at_end()) c.fail("unbalanced brackets in the computed O-word label");
+    if (c.peek() == '[') ++depth;
+    if (c.peek() == ']') --depth;
+    ++c.pos;
+  } while (depth > 0);
+}
+
+// Reads an O-word label and keyword at the cursor (on 'o'). A computed label
+// (o[...], o#n: LinuxCNC's indirection) is evaluated with params, as rs274
+// reads it: a whole number, whatever the keyword. Without params (scanning
+// ahead) it is only marked computed, to be evaluated when the line is met.
+OWord read_oword_head(Cursor& c, const Parameters* params) {
   OWord o;
   o.column = c.column_at(c.pos);
   ++c.pos;
-  if (c.peek() == '<') {
+  if (c.peek() == '[' || c.peek() == '#') {
+    o.computed = true;
+    if (params) {
+      const size_t at = c.pos;
+      const double v = read_real_value(c, *params);
+      const double r = std::round(v);  // rs274 allows 1e-4 off a whole number
+      if (!(std::fabs(v - r) <= 1e-4 && std::fabs(r) <= 2147483647.0))
+        c.fail_at(at, "computed O-word label " + rt::format_shortest(v) +
+                          " is not a whole number (rs274: non integer value for integer)");
+      o.label = std::to_string(static_cast<int>(r));
+    } else {
+      skip_computed_label(c);
+    }
+  } else if (c.peek() == '<') {
     const size_t open = c.pos;
     while (!c.at_end() && c.peek() != '>')
       o.label.push_back(c.line->text[c.pos++]);
@@ -41,15 +86,13 @@ OWord read_oword_head(Cursor& c) {
   } else {
     while (std::isdigit(static_cast<unsigned char>(c.peek())))
       o.label.push_back(c.line->text[c.pos++]);
-    if (o.label.empty() && c.peek() == '[')
-      c.fail("computed O-word labels (o[...]) are not supported: write the number or <name>");
     if (o.label.empty()) c.fail("O-word needs a number or <name>");
     // o0100 and o100 are the same label.
     size_t nz = o.label.find_first_not_of('0');
     o.label = nz == std::string::npos ? "0" : o.label.substr(nz);
   }
   // A number alone (comments may follow): a Fanuc-style subprogram start.
-  if (o.label.front() != '<' && (c.at_end() || c.peek() == '(' || c.peek() == ';')) {
+  if (!o.computed && o.label.front() != '<' && (c.at_end() || c.peek() == '(' || c.peek() == ';')) {
     o.keyword = OKeyword::kFanucSub;
     return o;
   }
@@ -179,7 +222,7 @@ bool Block::has_m(int code) const {
   return false;
 }
 
-std::optional<OWord> scan_oword(const LexedLine& line) {
+std::optional<OWord> scan_oword(const LexedLine& line, const Parameters* params) {
   Cursor c{&line};
   if (c.peek() == '/') ++c.pos;
   if (c.peek() == 'n') {
@@ -188,8 +231,9 @@ std::optional<OWord> scan_oword(const LexedLine& line) {
       ++c.pos;
   }
   if (c.peek() != 'o') return std::nullopt;
+  if (params) return read_oword_head(c, params);
   try {
-    return read_oword_head(c);
+    return read_oword_head(c, nullptr);
   } catch (const GcodeError&) {
     return std::nullopt;
   }
@@ -220,7 +264,7 @@ Block read_block(const LexedLine& line, const Parameters& params, bool has_b) {
     if (!digits) c.fail_at(at, "N word needs a line number");
   }
   if (c.peek() == 'o') {
-    b.o = read_oword_head(c);
+    b.o = read_oword_head(c, &params);
     read_oword_rest(c, b, params);
     return b;
   }

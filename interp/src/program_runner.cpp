@@ -131,7 +131,7 @@ int ProgramRunner::add_file(SourceFile source) {
   file.owords.resize(file.lines.size());
   for (size_t i = 0; i < file.lines.size(); ++i) {
     file.owords[i] = scan_oword(file.lines[i]);
-    if (file.owords[i] && file.owords[i]->keyword == OKeyword::kSub)
+    if (file.owords[i] && file.owords[i]->keyword == OKeyword::kSub && !file.owords[i]->computed)
       subs_.emplace(file.owords[i]->label, std::make_pair(index, i));
     if (index == 0 && file.owords[i] && file.owords[i]->keyword == OKeyword::kFanucSub)
       fanuc_subs_.emplace(file.owords[i]->label, std::make_pair(index, i));
@@ -153,8 +153,8 @@ size_t ProgramRunner::find_forward(int file, size_t from, const std::string& lab
   const File& f = files_[file];
   for (size_t i = from; i < f.end; ++i) {
     const auto& o = f.owords[i];
-    if (!o || o->label != label) continue;
-    if (std::find(kinds.begin(), kinds.end(), o->keyword) != kinds.end()) return i;
+    if (!o || std::find(kinds.begin(), kinds.end(), o->keyword) == kinds.end()) continue;
+    if (label_at(file, i) == label) return i;
   }
   std::string expected;
   for (OKeyword k : kinds)
@@ -162,9 +162,18 @@ size_t ProgramRunner::find_forward(int file, size_t from, const std::string& lab
   fail(at, 1, "no matching " + label_text(label) + " " + expected + " found");
 }
 
+std::string ProgramRunner::label_at(int file, size_t index) const {
+  const auto& o = files_[file].owords[index];
+  if (!o->computed) return o->label;
+  // As rs274 seeking a label: the line's label with the parameters of now.
+  return scan_oword(files_[file].lines[index], &params_)->label;
+}
+
 std::optional<std::pair<int, size_t>> ProgramRunner::find_sub(const std::string& label,
                                                               const LexedLine& at) {
   if (auto it = subs_.find(label); it != subs_.end()) return it->second;
+  // A definition under a computed label is known only once the flow has met
+  // it: rs274 2.9 seeking a subroutine forward does not match one (measured).
   // o<name> call and o123 call: look for name.ngc (123.ngc) beside the
   // program, then on the path, as rs274 does.
   const bool named = !label.empty() && label.front() == '<';
@@ -347,7 +356,16 @@ void ProgramRunner::control(const OWord& o, const LexedLine& line) {
       frame.pc = pc + 1;
       return;
     case OKeyword::kSub: {
-      // A definition met in the flow of the program is skipped.
+      // A definition met in the flow of the program is skipped; one under a
+      // computed label is known from here on, as in rs274. rs274 refuses to
+      // meet a definition it already knows (called before it, or met again
+      // in a loop): measured with rs274 2.9.
+      if (!defined_subs_.insert(o.label).second)
+        fail(line, o.column,
+             label_text(o.label) +
+                 " sub found in illegal location: the subroutine is already defined (called "
+                 "before its definition, or the definition met again)");
+      if (o.computed) subs_.emplace(o.label, std::make_pair(fi, pc));
       frame.pc = find_forward(fi, pc + 1, o.label, {OKeyword::kEndsub}, line) + 1;
       return;
     }
@@ -356,6 +374,7 @@ void ProgramRunner::control(const OWord& o, const LexedLine& line) {
       if (!where) fail(line, o.column, "unknown subroutine " + label_text(o.label));
       if (frames_.size() > kMaxCallDepth)
         fail(line, o.column, "subroutine calls nested too deep (recursion?)");
+      defined_subs_.insert(o.label);
       frame.pc = pc + 1;
       params_.push_call(o.args);
       frames_.push_back(Frame{where->first, where->second + 1, o.label, {}});

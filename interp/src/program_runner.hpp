@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -46,6 +47,8 @@ class ProgramRunner {
   };
 
   int add_file(SourceFile source);
+  // The label of an O-word line, a computed one evaluated now.
+  std::string label_at(int file, size_t index) const;
   std::optional<std::pair<int, size_t>> find_sub(const std::string& label, const LexedLine& at);
   size_t find_forward(int file, size_t from, const std::string& label,
                       std::initializer_list<OKeyword> kinds, const LexedLine& at) const;
@@ -70,6 +73,8 @@ class ProgramRunner {
   std::deque<File> files_;
   std::vector<Frame> frames_;
   std::map<std::string, std::pair<int, size_t>> subs_;
+  // Subroutines rs274 would know by now: met in the flow or called.
+  std::set<std::string> defined_subs_;
   std::map<std::string, std::pair<int, size_t>> fanuc_subs_;  // "O100" lines, the first of each
   std::int64_t blocks_ = 0;
 };

@@ -76,10 +76,22 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{"M100\nM2\n", 1, 1, "user M code M100 is not supported"},
                       Case{"M199 P1\nM2\n", 1, 1, "user M code M199 is not supported"},
                       Case{"M428\nM2\n", 1, 1, "unknown M code M428"},
-                      Case{"#1 = 100\no[#1] call\nM2\no100 sub\no100 endsub\n", 2, 2,
-                           "computed O-word labels (o[...]) are not supported"},
                       Case{"G1 U1 F100\nM2\n", 1, 4, "unknown word U"},
                       Case{"G1 B1 F100\nM2\n", 1, 4, "B is rejected"}),
+    case_name);
+
+// Computed O-word labels (o[expr], o#n) are read as rs274 reads them: a
+// whole number, evaluated when the line is met or sought.
+INSTANTIATE_TEST_SUITE_P(
+    ComputedLabels, BadInput,
+    ::testing::Values(Case{"#1 = 100.5\no[#1] call\nM2\no100 sub\no100 endsub\n", 2, 2,
+                           "computed O-word label 100.5 is not a whole number"},
+                      Case{"#1 = 7\no[#1] if [1]\no7 endif\no[#1/0] call\nM2\n", 4, 5,
+                           "division by zero"},
+                      Case{"#1 = 7\no[#1] if [0]\n#1 = 8\no8 endif\nM2\n", 2, 1,
+                           "no matching o7 elseif or else or endif"},
+                      Case{"#<n> = 400\no#<n> call\nM2\no[#<n>] sub\no[#<n>] endsub\n", 2, 1,
+                           "unknown subroutine o400"}),
     case_name);
 
 // Found by fuzz_gcode and fuzz_expression (tools/fuzz.sh): values too large
