@@ -330,6 +330,7 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
   j += "  \"summary\": {\"moves_read\": " + std::to_string(s.moves_read) +
        ", \"moves_rewritten\": " + std::to_string(s.moves_rewritten) +
        ", \"moves_kept\": " + std::to_string(s.moves_kept) +
+       ", \"holes_rewritten\": " + std::to_string(s.holes_rewritten) +
        ", \"points_written\": " + std::to_string(s.points_written) +
        ", \"points_compensated\": " + std::to_string(s.points_compensated) +
        ", \"blend_points\": [" + std::to_string(s.blend_points[0]) + ", " +
@@ -365,6 +366,9 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
   std::printf("  moves read            %d\n", s.moves_read);
   std::printf("  moves rewritten       %d\n", s.moves_rewritten);
   std::printf("  moves kept            %d\n", s.moves_kept);
+  if (s.holes_rewritten > 0)
+    std::printf("  canned-cycle holes    %d (cycles kept, hole and bottom corrected)\n",
+                s.holes_rewritten);
   std::printf("  points written        %ld\n", s.points_written);
   std::printf("  points compensated    %ld\n", s.points_compensated);
   if (matrix_path)

@@ -950,6 +950,13 @@ void BlockExecutor::motion() {
     if (s_.comp.side != 0)
       fail(motion_column ? motion_column : 1,
            "cannot use canned cycles with cutter radius compensation on (G40 first)");
+    // The cycle's moves carry its code (CallContext::canned_cycle), also
+    // when it fails half way.
+    struct Running {
+      CycleState& cycle;
+      ~Running() { cycle.running = 0; }
+    } running{s_.cycle};
+    s_.cycle.running = code;
     canned_cycle(code, motion_column ? motion_column : 1);
     return;
   }

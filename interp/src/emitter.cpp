@@ -20,6 +20,7 @@ CanonCall Emitter::make(CanonOp op, double inverse_time_f) const {
   call.context.file = file_;
   call.context.line = line_;
   call.context.block_number = block_number_;
+  call.context.executed_block = executed_block_;
   call.context.operation = state_.operation;
   call.context.tool = state_.tool;
   call.context.units = state_.units;
@@ -28,6 +29,11 @@ CanonCall Emitter::make(CanonOp op, double inverse_time_f) const {
   call.context.spline = state_.spline;
   call.context.tcp = state_.tcp;
   call.context.cutter_comp = state_.comp.active() && is_motion(op);
+  if (state_.cycle.running != 0 && is_motion(op)) {
+    call.context.canned_cycle = state_.cycle.running;
+    call.context.cycle_plane = state_.plane;
+    call.context.cycle_incremental = state_.incremental;
+  }
   call.context.g5x_mm = state_.g5x_mm;
   call.context.g92_mm = state_.g92_mm;
   call.context.tool_offset_mm = state_.tool_offset_mm;

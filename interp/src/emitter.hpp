@@ -33,6 +33,7 @@ class Emitter {
     file_ = file;
     line_ = line;
     block_number_ = std::move(block_number);
+    ++executed_block_;
   }
   // Calls after the program has ended (rs274's closing ON_RESETs) belong to
   // no block: no N number.
@@ -62,6 +63,7 @@ class Emitter {
   int file_ = 0;
   int line_ = 0;
   std::string block_number_;
+  long executed_block_ = 0;
   std::vector<HeldCall> held_;
 };
 

@@ -20,6 +20,7 @@ struct CycleState {
   double level = 0;        // program units, along the axis normal to the plane
   double r = 0, bottom = 0, p = 0, q = 0;  // sticky R, Z (X, Y), P, Q words as written
   double ijk[3] = {0, 0, 0};               // G87's sticky I J K words as written
+  int running = 0;  // the cycle whose moves are being made (its code x10), else 0
 };
 
 // Cutter radius compensation (G40/G41/G42/G41.1/G42.1) between blocks, in

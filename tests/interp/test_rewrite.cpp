@@ -445,9 +445,7 @@ TEST(Rewrite, AFieldRotationUnderTraoriTurnsAAndCAboutTheTip) {
     EXPECT_NEAR(0.0, (turned_axis - wanted).norm(), 1e-8) << i;
   }
   // The retract inside the operation brings A and C back.
-  EXPECT_NE(turned.text.find("G0 X6 Y0 Z20.000000000000 A30.000000000000 C-10.000000000000"),
-            std::string::npos)
-      << turned.text;
+  EXPECT_NE(turned.text.find("G0 X6 Y0 Z20 A30 C-10"), std::string::npos) << turned.text;
 }
 
 // A wall x = 0 (material at x < 0) cut by the flank of a flat end mill R 1
@@ -645,27 +643,38 @@ TEST(Rewrite, BadInputIsRefusedWithAClearMessage) {
 // keep the cycle word, so a cycle line in the operation is refused by name
 // (also a modal cycle line without the G word); cycles outside the
 // operation are copied as written.
-TEST(Rewrite, CannedCycleInTheOperationIsRefusedByName) {
+// Canned cycles in the operation stay cycles, their hole and bottom
+// corrected (the cases of tests/interp/test_rewrite_cycles.cpp in detail);
+// outside it they are copied.
+TEST(Rewrite, CannedCyclesInTheOperationAreKeptWithTheirHolesCorrected) {
   RewriteOptions o = options("FACE", CutType::kFace);
   o.reach_mm = 100;
+  const auto m = plane_matrix(-10, 10, -4, 4, 0, 0.5, V(0, 0, 0.01));
   const std::string head = "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X0 Y0 Z1\n";
-  EXPECT_EQ(error_of<GcodeError>(head + "G98 G81 X1 Y1 Z-0.5 R0.5 F100\nX2\nG80\nM30\n", o),
-            "bad.ngc:6: canned cycle G81 makes several moves on one line: it cannot be "
-            "rewritten; program the holes as G0/G1 moves or keep them outside the operation");
+  const RewriteResult in_op =
+      rewrite_program(head + "G98 G81 X1 Y1 Z-0.5 R0.5 F100\nX2\nG80\nM30\n", "drill.ngc", m, o);
+  EXPECT_NE(in_op.text.find("\nG98 G81 R0.5 F100 X1.0000 Y1.0000 Z-0.4900\nX2.0000 Y1.0000 "
+                            "Z-0.4900\nG80\n"),
+            std::string::npos)
+      << in_op.text;
+  EXPECT_EQ(in_op.summary.holes_rewritten, 2);
+  // A cycle started before the operation: its line in the operation is
+  // written with its hole and bottom, the line before copied.
   const std::string modal =
       "G21 G90 G94\nT2 M6\nG43 H2\nG0 X0 Y0 Z1\nG83 X1 Y1 Z-0.5 R0.5 Q0.2 F100\n"
       "(OPERATION: FACE)\nX2\nG80\nM30\n";
-  EXPECT_EQ(error_of<GcodeError>(modal, o),
-            "bad.ngc:7: canned cycle G83 (from line 5) makes several moves on one line: it "
-            "cannot be rewritten; program the holes as G0/G1 moves or keep them outside the "
-            "operation");
+  const RewriteResult from_before = rewrite_program(modal, "drill.ngc", m, o);
+  EXPECT_NE(from_before.text.find("\nG83 X1 Y1 Z-0.5 R0.5 Q0.2 F100\n(OPERATION: FACE)\n"
+                                  "X2.0000 Y1.0000 Z-0.4900\nG80\n"),
+            std::string::npos)
+      << from_before.text;
   const std::string outside =
       "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X0 Y0 Z1\nG1 Z0 F100\nX2\n"
       "G0 Z1\n(OPERATION: DRILL)\nG81 X1 Y1 Z-0.5 R0.5 F100\nX2\nG80\nM30\n";
-  const auto m = plane_matrix(-10, 10, -4, 4, 0, 0.5, V(0, 0, 0.01));
   const RewriteResult r = rewrite_program(outside, "drill.ngc", m, o);
   EXPECT_NE(r.text.find("\nG81 X1 Y1 Z-0.5 R0.5 F100\nX2\nG80\n"), std::string::npos) << r.text;
   EXPECT_GT(r.summary.moves_rewritten, 0) << r.text;  // the FACE moves were compensated
+  EXPECT_EQ(r.summary.holes_rewritten, 0);
 }
 
 // Polar words (@ ^) end a move like X Y: a rewritten polar move is written

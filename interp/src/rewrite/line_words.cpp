@@ -30,7 +30,14 @@ std::string code_name(char letter, int code) {
 
 }  // namespace
 
-LineWords split_move_line(const std::string& source, const std::string& file, int line_no) {
+bool is_cycle_code(int code) {  // G73, G74, G76 excluded, G81-G89, x10
+  return code == 730 || code == 740 || (code >= 810 && code <= 890 && code % 10 == 0);
+}
+
+// cycle: the line of a canned cycle, whose hole and bottom (X Y Z) are cut
+// out and everything else of the cycle (its G code, R, Q, P, L, F, G98/G99)
+// kept.
+LineWords split_line(const std::string& source, const std::string& file, int line_no, bool cycle) {
   const LexedLine lx = lex_line(source, file, line_no);
   const std::string& t = lx.text;
   auto column = [&](size_t i) { return i < lx.column.size() ? lx.column[i] : lx.end_column; };
@@ -81,6 +88,26 @@ LineWords split_move_line(const std::string& source, const std::string& file, in
       !lx.sinumerik.empty() || t.find('(') != std::string::npos || t.find(';') != std::string::npos;
   for (size_t k = 0; k < words.size(); ++k) {
     const Span& w = words[k];
+    if (cycle) {
+      const bool keep_word = w.letter == 'r' || w.letter == 'q' || w.letter == 'p' ||
+                             w.letter == 'l' || w.letter == 'f' || w.letter == 'n' ||
+                             w.letter == 's' || w.letter == 't' || w.letter == 'h';
+      if (w.letter == 'x' || w.letter == 'y' || w.letter == 'z') {
+        remove[k] = true;
+        continue;
+      }
+      if (w.letter == '@' || w.letter == '^') fail(w.begin, "polar coordinate in a canned cycle");
+      if (w.letter == 'g' && w.code == 910) fail(w.begin, "G91 (incremental distance)");
+      if (w.letter == 'g' && !is_cycle_code(w.code) && !keep_g(w.code))
+        fail(w.begin, code_name('G', w.code) + " beside a canned cycle");
+      if (w.letter == 'm' && !keep_m(w.code))
+        fail(w.begin, code_name('M', w.code) + " beside a canned cycle");
+      if (w.letter != 'g' && w.letter != 'm' && !keep_word)
+        fail(w.begin, std::string("word ") + static_cast<char>(std::toupper(w.letter)) +
+                          " beside a canned cycle");
+      if (w.letter != 'n') keeps_something = true;
+      continue;
+    }
     switch (w.letter) {
       case 'g':
         if (w.code == 0 || w.code == 10 || w.code == 20 || w.code == 30) {
@@ -211,6 +238,25 @@ bool is_o_word_line(const std::string& source) {
     blanks();
   }
   return i < source.size() && (source[i] == 'o' || source[i] == 'O');
+}
+
+LineWords split_move_line(const std::string& source, const std::string& file, int line_no) {
+  return split_line(source, file, line_no, false);
+}
+
+LineWords split_cycle_line(const std::string& source, const std::string& file, int line_no) {
+  return split_line(source, file, line_no, true);
+}
+
+std::string with_words_before_comment(const std::string& residual, const std::string& words) {
+  // A word never holds '(' or ';': the first one starts the comments.
+  const size_t comment = residual.find_first_of("(;");
+  std::string head = residual.substr(0, comment);
+  while (!head.empty() && (head.back() == ' ' || head.back() == '\t'))
+    head.pop_back();
+  std::string out = head.empty() || head == "/" ? head + words : head + " " + words;
+  if (comment != std::string::npos) out += " " + residual.substr(comment);
+  return out;
 }
 
 int motion_code_of_line(const std::string& source) {

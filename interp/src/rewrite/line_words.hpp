@@ -27,6 +27,14 @@ struct LineWords {
 // M30 M60 and unknown words.
 LineWords split_move_line(const std::string& source, const std::string& file, int line);
 
+// The line of a canned cycle (G73 G74 G81-G89) without its X Y Z words;
+// the cycle's other words (its G code, R Q P L F, G98/G99) and comments
+// stay. Throws GcodeError as split_move_line, and for polar words.
+LineWords split_cycle_line(const std::string& source, const std::string& file, int line);
+
+// residual with `words` inserted after its last word, before any comment.
+std::string with_words_before_comment(const std::string& residual, const std::string& words);
+
 // The motion-group G code (x10: G0 G1 G2 G3 G73 G80-G89) written on a line,
 // -1 without one or when the line cannot be read. Never throws.
 int motion_code_of_line(const std::string& source);

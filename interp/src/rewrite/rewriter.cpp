@@ -62,16 +62,16 @@ using PrepareFn = std::function<double(const std::vector<double>& radii_mm)>;
 // The shortest decimal that reads back to the same double (written ends of
 // rapids reproduce the original position exactly).
 std::string exact(double v) {
-  char buf[40];
-  for (int digits = 1; digits <= 17; ++digits) {
-    std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+  // Fixed notation (G-code has no exponents), the fewest decimals that
+  // read back to v: "30", not "3e+01".
+  char buf[400];
+  std::snprintf(buf, sizeof buf, "%.12f", v);
+  for (int decimals = 0; decimals <= 17; ++decimals) {
+    std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
     if (std::strtod(buf, nullptr) == v) break;
+    if (decimals == 17) std::snprintf(buf, sizeof buf, "%.12f", v);
   }
   std::string s = buf;
-  if (s.find('e') != std::string::npos || s.find('E') != std::string::npos) {
-    std::snprintf(buf, sizeof buf, "%.12f", v);
-    s = buf;
-  }
   if (s == "-0") s = "0";
   return s;
 }
@@ -291,6 +291,94 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
   // after it, brings them back.
   bool turned = false;
 
+  // Canned cycles (docs/rewrite.md): a cycle line of the operation keeps its
+  // cycle; its hole and bottom (X Y Z) are written where the correction at
+  // the hole's bottom puts them. The moves of one execution of a cycle line
+  // are gathered, then planned together.
+  struct CycleMove {
+    ToolPath::Move move;
+    bool feed;
+  };
+  std::vector<CycleMove> cycle_moves;
+  CallContext cycle_ctx;
+  std::set<int> cycle_lines_planned;
+  // A cycle line was written with another hole or bottom: the cycle's later
+  // lines, which take X Y Z from it, are written with their own.
+  bool cycle_words_pending = false;
+  auto plan_cycle_line = [&] {
+    const CallContext& ctx = cycle_ctx;
+    const int line = ctx.line;
+    const std::string file = file_of(program, ctx, name);
+    const bool in_op = ctx.operation == o.operation;
+    const std::string g = "G" + std::to_string(ctx.canned_cycle / 10);
+    if (!cycle_lines_planned.insert(line).second)
+      throw GcodeError({file, line, 0}, "canned cycle " + g +
+                                            " line runs more than once (loop or subroutine): it "
+                                            "cannot be rewritten");
+    if (ctx.canned_cycle == 870)
+      throw GcodeError({file, line, 0},
+                       "canned cycle G87 (back boring): its entry offset and back-bore height "
+                       "cannot be corrected; keep it outside the operation");
+    if (ctx.cycle_incremental)
+      throw GcodeError({file, line, 0}, "canned cycle " + g +
+                                            " in G91 (incremental distance): its hole and depth "
+                                            "are relative and cannot be corrected; program it "
+                                            "in G90");
+    const int normal = ctx.cycle_plane == Plane::kXY ? 2 : ctx.cycle_plane == Plane::kXZ ? 1 : 0;
+    // The hole's bottom: the deepest end of a feed (R lies above the bottom).
+    const ToolPath::Move* bottom = nullptr;
+    for (const CycleMove& m : cycle_moves)
+      if (m.feed && (!bottom || path.to_program(m.move.end, ctx)[normal] <
+                                    path.to_program(bottom->end, ctx)[normal]))
+        bottom = &m.move;
+    if (!bottom) throw GcodeError({file, line, 0}, "canned cycle " + g + " without a feed move");
+    const Vec5 p = bottom->end;
+    Correction corr;
+    if (in_op) {
+      corr = correction(path.tool_point(p, ctx), ctx, radius_by_tool.at(ctx.tool));
+    }
+    // The hole is drilled along the tool as it stands: a rotation part of
+    // the correction is not applied (docs/rewrite.md).
+    const bool shifts = corr.shift_mm != Eigen::Vector3d::Zero();
+    if (!shifts && !displaced && !cycle_words_pending && o.keep_unchanged_moves) {
+      if (in_op) ++s.moves_kept;
+      return;
+    }
+    const Vec5 corrected = shifts ? path.shifted(p, ctx, corr.shift_mm) : p;
+    const Axes6 q = path.to_program(corrected, ctx);
+    const LineWords words = split_cycle_line(raw[line - 1].content, file, line);
+    const int decimals = o.decimals > 0 ? o.decimals : ctx.units == LengthUnits::kInch ? 5 : 4;
+    std::string axis_words;
+    RewrittenLine rl;
+    rl.context = ctx;
+    rl.cycle_normal_axis = normal;
+    rl.expected.push_back(q);
+    const char letters[] = {'X', 'Y', 'Z'};
+    for (int ax = 0; ax < 3; ++ax) {
+      const std::string v = shifts ? rt::format_fixed(q[ax], decimals) : exact(q[ax]);
+      axis_words += std::string(axis_words.empty() ? "" : " ") + letters[ax] + v;
+      rl.expected[0][ax] = std::strtod(v.c_str(), nullptr);
+    }
+    PlannedLine pl;
+    pl.moves.push_back(with_words_before_comment(words.residual, axis_words));
+    plan[line] = std::move(pl);
+    expected[line] = std::move(rl);
+    if (in_op && corr.compensated) {
+      ++s.points_compensated;
+      const double mag = corr.shift_mm.norm();
+      s.max_compensation_mm = std::max(s.max_compensation_mm, mag);
+      sum_mm += mag;
+    }
+    if (in_op) ++s.holes_rewritten;
+    cycle_words_pending = shifts;
+    displaced = shifts;
+  };
+  auto flush_cycle = [&] {
+    if (cycle_moves.empty()) return;
+    plan_cycle_line();
+    cycle_moves.clear();
+  };
+
   for (const CanonCall& c : program.calls) {
     const CallContext& ctx = c.context;
     path.observe(c);
@@ -301,6 +389,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     }
     if (const auto* f = std::get_if<SetFeedRate>(&c.op)) feed_upm = f->units_per_minute;
     if (!is_motion(c.op)) continue;
+    if (!cycle_moves.empty() && ctx.executed_block != cycle_ctx.executed_block) flush_cycle();
     path.rebase(ctx);
     const ToolPath::Move move = std::holds_alternative<ArcFeed>(c.op)
                                     ? path.arc_to(std::get<ArcFeed>(c.op), ctx)
@@ -361,6 +450,15 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       displaced = false;
       continue;
     }
+    if (ctx.canned_cycle != 0 && ctx.file == 0 && (in_op || cycle_words_pending)) {
+      if (cycle_moves.empty()) cycle_ctx = ctx;
+      cycle_moves.push_back({move, feed});
+      path.finish(move);
+      out_mode = orig_mode;
+      after_comp = false;
+      continue;
+    }
+    if (ctx.canned_cycle == 0) cycle_words_pending = false;
     const bool follows_comp = after_comp;  // starts from a compensated point
     after_comp = ctx.cutter_comp;
     if ((in_op || turned) && !feed && displaced) {
@@ -524,6 +622,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     turned = points.back()[3] != move.end[3] || points.back()[4] != move.end[4];
     path.finish(move);
   }
+  flush_cycle();
   s.mean_compensation_mm = s.points_compensated > 0 ? sum_mm / s.points_compensated : 0.0;
 
   // Lines that switch compensation on without a move of their own lose
@@ -543,6 +642,12 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
                              raw[0].content.find_first_not_of(" \t") != std::string::npos &&
                              raw[0].content[raw[0].content.find_first_not_of(" \t")] == '%';
   auto header = [&] {
+    if (s.holes_rewritten > 0) {
+      r.text += "(truecut rewrite: canned cycles kept: " + std::to_string(s.holes_rewritten) +
+                " cycle lines of operation " + o.operation +
+                " written with the hole and bottom X Y Z the correction at the bottom gives)\n";
+      origin.push_back({1, OutputLine::kResidual});
+    }
     if (!expands_comp) return;
     r.text +=
         "(truecut rewrite: cutter radius compensation G41/G42 expanded: the moves under it are "

@@ -21,6 +21,35 @@ struct Entry {
   double feed;  // SET_FEED_RATE in force
 };
 
+// A canned-cycle line: its feeds run over the written hole, and the deepest
+// ends at the written bottom.
+template <class Fail>
+void check_cycle_line(int line, const RewrittenLine& rw, const std::vector<const CanonCall*>* moves,
+                      const Fail& fail) {
+  const int normal = rw.cycle_normal_axis;
+  const Axes6& want = rw.expected.at(0);
+  auto near = [](double a, double b) {
+    return std::fabs(a - b) <= 1e-9 * std::max(1.0, std::fabs(b));
+  };
+  const Axes6* deepest = nullptr;
+  if (moves)
+    for (const CanonCall* c : *moves) {
+      const auto* f = std::get_if<StraightFeed>(&c->op);
+      if (!f) continue;
+      for (int ax = 0; ax < 3; ++ax)
+        if (ax != normal && !near(f->end[ax], want[ax]))
+          fail(line,
+               "the written canned cycle feeds off its hole (incremental distance mode G91 "
+               "active?)");
+      if (!deepest || f->end[normal] < (*deepest)[normal]) deepest = &f->end;
+      if (c->context.operation != rw.context.operation || c->context.tool != rw.context.tool)
+        fail(line, "the written canned cycle runs in another mode than the original");
+    }
+  if (!deepest) return fail(line, "the written canned cycle makes no feed move");
+  if (!near((*deepest)[normal], want[normal]))
+    fail(line, "the written canned cycle does not reach its written bottom");
+}
+
 }  // namespace
 
 void check_rewrite(const std::string& text, const CheckInput& in) {
@@ -109,6 +138,10 @@ void check_rewrite(const std::string& text, const CheckInput& in) {
   for (const auto& [line, rw] : in.rewritten) {
     const auto it = moves_out.find(line);
     const size_t got = it == moves_out.end() ? 0 : it->second.size();
+    if (rw.cycle_normal_axis >= 0) {
+      check_cycle_line(line, rw, got == 0 ? nullptr : &it->second, fail);
+      continue;
+    }
     if (got != rw.expected.size())
       fail(line, std::to_string(got) + " moves from the written G1 lines, expected " +
                      std::to_string(rw.expected.size()));

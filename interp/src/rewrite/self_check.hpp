@@ -24,6 +24,9 @@ struct RewrittenLine {
   CallContext context;          // of the original move
   bool traverse = false;        // a G0 written with all axes, else G1 lines
   std::vector<Axes6> expected;  // program position of each written G1
+  // A canned-cycle line (>= 0: the axis it drills along): expected[0] is the
+  // hole's bottom; its feeds run over the hole, the deepest ends there.
+  int cycle_normal_axis = -1;
 };
 
 struct CheckInput {

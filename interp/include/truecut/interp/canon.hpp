@@ -269,6 +269,9 @@ struct CallContext {
   // The digits of the block's N word as written ("00010"), "" without one;
   // rs274 prints them in its second column.
   std::string block_number;
+  // The block's place in the run: counts the blocks executed, so a line run
+  // again (in a loop or subroutine) gets a new number each time.
+  long executed_block = 0;
   std::string operation;  // CAM operation name, "" before the first marker
   int tool = 0;           // tool in the spindle
   LengthUnits units = LengthUnits::kMm;
@@ -279,6 +282,12 @@ struct CallContext {
   // Under cutter radius compensation (G41/G42 with a radius > 0): the
   // move's positions are those of the compensated tool, not as programmed.
   bool cutter_comp = false;
+  // A move of a canned cycle: its G code x10 (810 for G81), else 0; with the
+  // plane and distance mode the cycle ran in. The rewrite corrects a
+  // cycle's hole on the cycle's own line (docs/rewrite.md).
+  int canned_cycle = 0;
+  Plane cycle_plane = Plane::kXY;
+  bool cycle_incremental = false;
   // Offsets in mm (degrees for A B C) that turn positions into machine ones.
   Axes6 g5x_mm, g92_mm, tool_offset_mm;
   // XY rotation of the active coordinate system (G10 L2 R), degrees

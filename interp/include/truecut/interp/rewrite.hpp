@@ -90,10 +90,13 @@ struct RewriteOptions {
 };
 
 struct RewriteSummary {
-  int moves_read = 0;           // motion calls of the operation (G0 G1 G2 G3)
-  int moves_rewritten = 0;      // feed moves written as densified G1
-  int moves_kept = 0;           // motion lines of the operation copied unchanged
-  int rapids_rewritten = 0;     // G0 after a compensated point, written with all of X Y Z
+  int moves_read = 0;        // motion calls of the operation (G0 G1 G2 G3)
+  int moves_rewritten = 0;   // feed moves written as densified G1
+  int moves_kept = 0;        // motion lines of the operation copied unchanged
+  int rapids_rewritten = 0;  // G0 after a compensated point, written with all of X Y Z
+  // Canned-cycle lines of the operation written with a corrected hole and
+  // bottom (X Y Z), the cycle kept.
+  int holes_rewritten = 0;
   long points_written = 0;      // G1 points written
   long points_compensated = 0;  // points with a correction from >= 1 point / field weight > 0
   // Matrix mode: [1..3] blends (eqs. 2-5) by the number of points they used,

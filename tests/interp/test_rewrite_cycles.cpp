@@ -1,0 +1,190 @@
+// truecut::interp::rewrite_program on canned cycles (issue 22, point 5): a
+// cycle line of the rewritten operation keeps its cycle, with its hole and
+// bottom written where the correction at the bottom puts them; the cycle's
+// later lines outside the operation, which would take X Y Z from it, drill
+// where they did. The expected holes are the test's own arithmetic: the
+// programmed hole plus the vector planted around it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "truecut/interp/error.hpp"
+#include "truecut/interp/rewrite.hpp"
+
+namespace truecut::interp {
+namespace {
+
+using V = Eigen::Vector3d;
+
+const char* kProgram =
+    "G21 G17 G90 G94\n"
+    "T2 M6\n"
+    "G43 H2\n"
+    "S1000 M3\n"
+    "G0 X0 Y0 Z10\n"
+    "(OPERATION: HOLES)\n"
+    "G98 G81 X10 Y5 Z-3 R2 F100 (first hole)\n"
+    "X20\n"
+    "G83 X30 Y15 Z-6 R2 Q1.5\n"
+    "(OPERATION: OTHER)\n"
+    "Y25\n"
+    "G80\n"
+    "G0 Z20\n"
+    "M30\n";
+
+struct Hole {
+  V programmed;  // X Y and the bottom Z as programmed
+  V shift;       // planted around it
+};
+
+// Compensation points in a small cluster around each hole's bottom, all with
+// the hole's vector: whichever points the blend takes, it gives that vector.
+CompensationMatrixData clusters(const std::vector<Hole>& holes) {
+  CompensationMatrixData m;
+  for (const Hole& h : holes)
+    for (double dx = -0.4; dx <= 0.41; dx += 0.2)
+      for (double dy = -0.4; dy <= 0.41; dy += 0.2) {
+        m.positions_mm.push_back(h.programmed + V(dx, dy, 0));
+        m.vectors_mm.push_back(h.shift);
+        m.valid.push_back(1);
+        m.surface_ids.push_back(1);
+      }
+  return m;
+}
+
+RewriteOptions options() {
+  RewriteOptions o;
+  o.operation = "HOLES";
+  o.type = CutType::kBall;
+  o.interpreter.tools = ToolTable::parse("T2 P2 D0.001 Z40\n", "tools.tbl");
+  o.reach_mm = 1.0;
+  o.decimals = 6;
+  return o;
+}
+
+// The deepest feed of each line that makes feeds: the hole's bottom.
+std::map<int, Axes6> bottoms(const std::string& text) {
+  const CanonProgram p = Interpreter(options().interpreter).run_text(text, "p.ngc");
+  std::map<int, Axes6> out;
+  for (const CanonCall& c : p.calls)
+    if (const auto* f = std::get_if<StraightFeed>(&c.op)) {
+      auto it = out.find(c.context.line);
+      if (it == out.end() || f->end.z < it->second.z) out[c.context.line] = f->end;
+    }
+  return out;
+}
+
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> lines;
+  size_t start = 0;
+  while (start < text.size()) {
+    const size_t end = text.find('\n', start);
+    lines.push_back(text.substr(start, end - start));
+    start = end == std::string::npos ? text.size() : end + 1;
+  }
+  return lines;
+}
+
+TEST(RewriteCycles, HolesOfTheOperationMoveByTheirCorrectionAndKeepTheirCycle) {
+  const std::vector<Hole> holes = {{V(10, 5, -3), V(0.02, -0.01, 0.015)},
+                                   {V(20, 5, -3), V(-0.03, 0.02, -0.01)},
+                                   {V(30, 15, -6), V(0.01, 0.04, 0.025)}};
+  // Planted far from the holes of the other operation: (30, 25) gets nothing.
+  const RewriteResult r = rewrite_program(kProgram, "p.ngc", clusters(holes), options());
+  EXPECT_EQ(r.summary.holes_rewritten, 3);
+  EXPECT_NE(r.text.find("(truecut rewrite: canned cycles kept: 3 cycle lines"), std::string::npos)
+      << r.text;
+
+  const auto before = bottoms(kProgram);
+  const auto after = bottoms(r.text);
+  const auto out = lines_of(r.text);
+  // Output line numbers are one more (the header comment).
+  const int hole_lines[] = {7, 8, 9};
+  for (int k = 0; k < 3; ++k) {
+    const int line = hole_lines[k];
+    ASSERT_TRUE(after.count(line + 1)) << r.text;
+    const Axes6& got = after.at(line + 1);
+    const V want = holes[k].programmed + holes[k].shift;
+    EXPECT_NEAR(got.x, want.x(), 1e-9) << "hole " << k << "\n" << r.text;
+    EXPECT_NEAR(got.y, want.y(), 1e-9) << "hole " << k;
+    EXPECT_NEAR(got.z, want.z(), 1e-9) << "hole " << k;
+    // The line is still a cycle line with its R (and Q, F, comment).
+    const std::string& text = out.at(line);
+    EXPECT_TRUE(text.find("G81") != std::string::npos || text.find("G83") != std::string::npos ||
+                k == 1)
+        << text;
+    EXPECT_EQ(text.find("G1"), std::string::npos) << text;
+  }
+  EXPECT_NE(out.at(7).find("R2 F100 X10.020000 Y4.990000 Z-2.985000 (first hole)"),
+            std::string::npos)
+      << out.at(7);
+  EXPECT_NE(out.at(9).find("Q1.5"), std::string::npos) << out.at(9);
+  // Y25, outside the operation, continues G83 but took X and Z from the
+  // corrected line: written with its own, it drills where it did.
+  EXPECT_EQ(out.at(11), "X30 Y25 Z-6");  // shortest exact decimals
+  ASSERT_TRUE(after.count(12)) << r.text;
+  const Axes6& other = after.at(12);
+  const Axes6& was = before.at(11);
+  EXPECT_EQ(other.x, was.x);
+  EXPECT_EQ(other.y, was.y);
+  EXPECT_EQ(other.z, was.z);
+  EXPECT_EQ(was.x, 30.0);
+  EXPECT_EQ(was.y, 25.0);
+  EXPECT_EQ(was.z, -6.0);
+}
+
+TEST(RewriteCycles, AnUncorrectedCycleIsCopied) {
+  const std::vector<Hole> far = {{V(100, 100, -3), V(0.02, 0, 0)}};
+  const RewriteResult r = rewrite_program(kProgram, "p.ngc", clusters(far), options());
+  EXPECT_EQ(r.text, kProgram);
+  EXPECT_EQ(r.summary.holes_rewritten, 0);
+}
+
+TEST(RewriteCycles, AHoleInG18IsCorrectedAlongY) {
+  const char* prog =
+      "G21 G18 G90 G94\nT2 M6\nG43 H2\nS1000 M3\nG0 X0 Y10 Z0\n(OPERATION: HOLES)\n"
+      "G98 G81 X4 Z6 Y-2 R3 F100\nG80\nG0 Y20\nM30\n";
+  const std::vector<Hole> holes = {{V(4, -2, 6), V(0.01, -0.02, 0.03)}};
+  const RewriteResult r = rewrite_program(prog, "p.ngc", clusters(holes), options());
+  EXPECT_EQ(r.summary.holes_rewritten, 1);
+  const CanonProgram p = Interpreter(options().interpreter).run_text(r.text, "p.ngc");
+  int feeds = 0;
+  for (const CanonCall& c : p.calls)
+    if (const auto* f = std::get_if<StraightFeed>(&c.op)) {
+      if (f->end.y > 0) continue;  // the G98 return is a rapid; feeds go down to Y
+      ++feeds;
+      EXPECT_NEAR(f->end.x, 4.01, 1e-9) << r.text;
+      EXPECT_NEAR(f->end.y, -2.02, 1e-9) << r.text;
+      EXPECT_NEAR(f->end.z, 6.03, 1e-9) << r.text;
+    }
+  EXPECT_EQ(feeds, 1) << r.text;
+}
+
+void expect_refused(const std::string& prog, int line, const std::string& message) {
+  const std::vector<Hole> holes = {{V(10, 5, -3), V(0.02, 0, 0)}, {V(20, 5, -3), V(0.02, 0, 0)}};
+  try {
+    rewrite_program(prog, "p.ngc", clusters(holes), options());
+    FAIL() << "accepted:\n" << prog;
+  } catch (const GcodeError& e) {
+    EXPECT_EQ(e.where().line, line) << e.what();
+    EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+  }
+}
+
+TEST(RewriteCycles, CyclesThatCannotBeCorrectedAreRefusedByName) {
+  const std::string head =
+      "G21 G17 G90 G94\nT2 M6\nG43 H2\nS1000 M3\nG0 X0 Y0 Z10\n(OPERATION: HOLES)\n";
+  expect_refused(head + "G91 G98 G81 X10 Y5 Z-5 R-8 F100\nG90 G80\nM30\n", 7, "G91");
+  expect_refused(head + "G98 G87 X10 Y5 Z-3 R2 I1 J0 K-1 F100\nG80\nM30\n", 7, "G87 (back boring)");
+  expect_refused(head +
+                     "G98 G81 X10 Y5 Z-3 R2 F100\n#1 = 0\no1 while [#1 LT 2]\nX20\n"
+                     "#1 = [#1 + 1]\no1 endwhile\nG80\nM30\n",
+                 10, "runs more than once");
+  expect_refused(head + "G98 G81 X10 Y5 Z[-3] R2 F100\nG80\nM30\n", 7, "expression");
+}
+
+}  // namespace
+}  // namespace truecut::interp
