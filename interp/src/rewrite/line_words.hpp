@@ -39,6 +39,9 @@ std::string with_words_before_comment(const std::string& residual, const std::st
 // -1 without one or when the line cannot be read. Never throws.
 int motion_code_of_line(const std::string& source);
 
+// Whether a line has the G code `code` (x10: 52 for G5.2). Never throws.
+bool line_has_g_code(const std::string& source, int code);
+
 // Whether a line has G41, G42, G41.1 or G42.1. Never throws.
 bool has_cutter_comp_code(const std::string& source);
 

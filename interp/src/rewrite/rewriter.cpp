@@ -18,6 +18,7 @@
 #include "swept.hpp"
 #include "tool_path.hpp"
 #include "truecut/interp/error.hpp"
+#include "truecut/interp/nurbs.hpp"
 #include "truecut/interp/operations.hpp"
 #include "truecut/interp/path_geometry.hpp"
 #include "truecut/interp/rewrite.hpp"
@@ -149,11 +150,55 @@ struct PlannedLine {               // what replaces one program line
 Axes6 end_of(const CanonOp& op) {
   if (const auto* a = std::get_if<ArcFeed>(&op)) return a->end;
   if (const auto* f = std::get_if<StraightFeed>(&op)) return f->end;
+  if (const auto* n = std::get_if<NurbsFeed>(&op)) return n->end;
   return std::get<StraightTraverse>(op).end;
 }
 
 std::string file_of(const CanonProgram& program, const CallContext& ctx, const std::string& name) {
   return ctx.file < static_cast<int>(program.files.size()) ? program.files[ctx.file] : name;
+}
+
+// G5 and G5.1 of the operation (docs/rewrite.md): each NURBS_FEED becomes
+// the G1 chords of its curve within the chord tolerance, which the rewrite
+// then corrects like any feed; returns their lines. A NURBS block (G5.2 ...
+// G5.3) spans several lines and is refused in the operation; splines
+// outside it are copied.
+std::set<int> expand_splines(CanonProgram& program, const std::vector<RawLine>& raw,
+                             const std::string& name, const RewriteOptions& o) {
+  std::set<int> lines;
+  std::vector<CanonCall> calls;
+  calls.reserve(program.calls.size());
+  for (CanonCall& c : program.calls) {
+    const auto* n = std::get_if<NurbsFeed>(&c.op);
+    if (!n || c.context.operation != o.operation) {
+      calls.push_back(std::move(c));
+      continue;
+    }
+    const SourceLocation at{file_of(program, c.context, name), c.context.line, 0};
+    if (c.context.file != 0)
+      throw GcodeError(at, "spline of operation '" + o.operation +
+                               "' in a subroutine file: only the main program is rewritten");
+    const std::string& source = raw.at(static_cast<std::size_t>(c.context.line) - 1).content;
+    if (line_has_g_code(source, 52) || line_has_g_code(source, 53))
+      throw GcodeError(at,
+                       "NURBS block (G5.2 ... G5.3) in the operation: it spans several lines and "
+                       "cannot be written as chords in its place; have the CAM output G5, G5.1, "
+                       "lines or arcs");
+    const double units_mm = c.context.units == LengthUnits::kInch ? 25.4 : 1.0;
+    const std::vector<NurbsPoint2> chord_ends = nurbs_polyline(*n, o.chord_tolerance_mm / units_mm);
+    for (const NurbsPoint2& q : chord_ends) {
+      StraightFeed f;
+      f.end = n->end;
+      f.end[0] = q[0];
+      f.end[1] = q[1];
+      calls.push_back({c.context, f});
+    }
+    // The last chord ends exactly at the spline's end.
+    std::get<StraightFeed>(calls.back().op).end = n->end;
+    lines.insert(c.context.line);
+  }
+  program.calls = std::move(calls);
+  return lines;
 }
 
 // The cutter radius of every tool that makes a feed move of the operation:
@@ -199,7 +244,7 @@ std::map<int, double> tool_radii(const CanonProgram& program, const std::string&
 RewriteResult run(std::string_view text, const std::string& name, const RewriteOptions& o,
                   const PrepareFn& prepare, const CorrectionFn& correction) {
   const Interpreter interpreter(o.interpreter);
-  const CanonProgram program = interpreter.run_text(text, name);
+  CanonProgram program = interpreter.run_text(text, name);
   const auto names = operation_names(program);
   if (std::find(names.begin(), names.end(), o.operation) == names.end()) {
     std::string list;
@@ -219,13 +264,8 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
                        "G10 L1/L10/L11 (tool table edit) in the program: the rewrite takes the "
                        "tool radii from the tool table given and cannot follow an edit; put the "
                        "values into the tool table file instead");
-  // G5/G5.1/G5.2: the rewrite corrects points on straight moves and arcs;
-  // it refuses a spline anywhere in the program by name (docs/rewrite.md).
-  for (const CanonCall& c : program.calls)
-    if (std::holds_alternative<NurbsFeed>(c.op))
-      throw GcodeError({file_of(program, c.context, name), c.context.line, 0},
-                       "G5/G5.1/G5.2 spline (NURBS_FEED) in the program: the rewrite cannot "
-                       "correct a spline's control points; have the CAM output lines or arcs");
+  const std::vector<RawLine> raw = split_raw_lines(text);
+  const std::set<int> spline_lines = expand_splines(program, raw, name, o);
   const std::map<int, double> radius_by_tool = tool_radii(program, name, o);
   std::vector<double> radii;
   for (const auto& [tool, radius] : radius_by_tool)
@@ -233,7 +273,6 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
   std::sort(radii.begin(), radii.end());
   radii.erase(std::unique(radii.begin(), radii.end()), radii.end());
   const double reach_mm = prepare(radii);
-  const std::vector<RawLine> raw = split_raw_lines(text);
   // Cutter radius compensation (docs/gcode.md): the output runs in G40, with
   // every compensated move written where the compensated tool goes, and the
   // first move after the G40 exit with all of X Y Z (it starts from the
@@ -499,6 +538,12 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       continue;
     }
     if (!in_op || !feed) {
+      // A spline's call holds its control points, not its start: one that
+      // would start from a corrected point is not what the original cut.
+      if (std::holds_alternative<NurbsFeed>(c.op) && displaced)
+        throw GcodeError({file, ctx.line, 0},
+                         "G5/G5.1/G5.2 spline right after a corrected move: it would start from "
+                         "the corrected point; put a move to its start (or a rapid) before it");
       path.finish(move);
       if (in_op) ++s.moves_kept;
       out_mode = orig_mode;
@@ -512,7 +557,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     if (ctx.spline != SplineMode::kNone)
       throw GcodeError({file, ctx.line, 0},
                        "BSPLINE/CSPLINE point: spline moves cannot be rewritten as G1 moves");
-    if (motions_per_line[ctx.line] != 1 && !ctx.cutter_comp) {
+    if (motions_per_line[ctx.line] != 1 && !ctx.cutter_comp && !spline_lines.count(ctx.line)) {
       refuse_canned_cycle(file, ctx.line);
       throw GcodeError({file, ctx.line, 0},
                        "line makes several moves (loop, subroutine or G28/G30): it cannot be "
@@ -545,7 +590,8 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       }
     }
     const std::string& source = raw[ctx.line - 1].content;
-    if (o.keep_unchanged_moves && all_zero && !displaced && !ctx.cutter_comp && !follows_comp) {
+    if (o.keep_unchanged_moves && all_zero && !displaced && !ctx.cutter_comp && !follows_comp &&
+        !spline_lines.count(ctx.line)) {
       bool explicit_motion = false;
       try {
         explicit_motion = split_move_line(source, file, ctx.line).explicit_motion;
@@ -642,6 +688,12 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
                              raw[0].content.find_first_not_of(" \t") != std::string::npos &&
                              raw[0].content[raw[0].content.find_first_not_of(" \t")] == '%';
   auto header = [&] {
+    if (!spline_lines.empty()) {
+      r.text += "(truecut rewrite: " + std::to_string(spline_lines.size()) +
+                " G5/G5.1 splines of operation " + o.operation + " written as G1 chords within " +
+                rt::format_shortest(o.chord_tolerance_mm) + " mm of the curve, corrected)\n";
+      origin.push_back({1, OutputLine::kResidual});
+    }
     if (s.holes_rewritten > 0) {
       r.text += "(truecut rewrite: canned cycles kept: " + std::to_string(s.holes_rewritten) +
                 " cycle lines of operation " + o.operation +
