@@ -68,19 +68,14 @@ class Steps {
     // (the kernel keeps the running binary reachable here).
     args.insert(args.begin(), "/proc/self/exe");
     const fs::path log = dir_ / "demo.log";
-    const fs::path cwd = fs::current_path();
-    fs::current_path(dir_);
-    int rc = -1;
-    try {
-      rc = run_logged(args, "demo.log");
-    } catch (...) {
-      fs::current_path(cwd);
-      throw;
-    }
-    fs::current_path(cwd);
+    const auto start = std::chrono::steady_clock::now();
+    const int rc = run_logged(args, log, dir_);
     if (rc != 0)
       throw std::runtime_error(part_ + ": step '" + what + "' failed (exit " + std::to_string(rc) +
                                "); its output is in " + log.string());
+    const double wall_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::fprintf(stderr, "demo %-12s %s: done in %.1f s\n", part_.c_str(), what.c_str(), wall_s);
   }
   const fs::path& dir() const { return dir_; }
 

@@ -32,7 +32,8 @@ std::string shell_words(const std::vector<std::string>& argv) {
   return out;
 }
 
-int run_logged(const std::vector<std::string>& argv, const std::filesystem::path& log) {
+int run_logged(const std::vector<std::string>& argv, const std::filesystem::path& log,
+               const std::filesystem::path& cwd) {
   const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
   if (fd < 0) throw std::runtime_error(log.string() + ": " + std::strerror(errno));
   const std::string header = "$ " + shell_words(argv) + "\n";
@@ -41,6 +42,7 @@ int run_logged(const std::vector<std::string>& argv, const std::filesystem::path
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_adddup2(&actions, fd, STDOUT_FILENO);
   posix_spawn_file_actions_adddup2(&actions, fd, STDERR_FILENO);
+  if (!cwd.empty()) posix_spawn_file_actions_addchdir_np(&actions, cwd.c_str());
   std::vector<char*> args;
   for (const auto& a : argv)
     args.push_back(const_cast<char*>(a.c_str()));

@@ -8,10 +8,13 @@
 
 namespace truecut::cli {
 
-// Runs argv[0] with argv, stdout and stderr appended to `log`; returns the
+// Runs argv[0] with argv in the folder `cwd` (the caller's own working
+// folder is not touched, so threads may run steps at once), stdout and
+// stderr appended to `log` (relative to the caller's folder); returns the
 // exit code (-1 when killed by a signal). Throws std::runtime_error when the
 // program cannot be started.
-int run_logged(const std::vector<std::string>& argv, const std::filesystem::path& log);
+int run_logged(const std::vector<std::string>& argv, const std::filesystem::path& log,
+               const std::filesystem::path& cwd = {});
 
 // argv as a shell command line (arguments quoted where needed), for logs
 // and the demo's commands.sh.
