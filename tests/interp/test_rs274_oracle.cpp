@@ -421,6 +421,20 @@ TEST(Rs274Oracle, CutterCompErrorsAtTheSameLine) {
   expect_refused_at_the_same_line(*o, "comp_errors", "G21 F100 T1 M6\nG0 X-5 Y-5\n", kCases);
 }
 
+// Centre-format arcs whose radii differ by more than LinuxCNC's allowance
+// (docs/gcode.md "Differences"): refused by both at the same line.
+TEST(Rs274Oracle, ArcRadiusToleranceErrorsAtTheSameLine) {
+  REQUIRE_ORACLE(o);
+  static const char* kCases[] = {
+      "G2 X24.03 Y0 I12 J0 (0.03 mm, 0.25 percent)",
+      "G2 X6002.9 Y0 I3000 J0 (2.9 mm, under 0.1 percent of 3000 mm)",
+      "G20\nG2 X1.003 Y0 I0.5 J0 (0.003 in, 0.6 percent)",
+      "G20\nG3 X-0.0031 Y0 I0.5 J0 (0.0031 in, 0.6 percent)",
+      "G20\nG2 X600.29 Y0 I300 J0 (0.29 in, under 0.1 percent of 300 in)",
+  };
+  expect_refused_at_the_same_line(*o, "arc_tolerance", "G21 F100\nG0 X0 Y0 Z0\n", kCases);
+}
+
 // Tapping and back boring (docs/gcode.md "Canned cycles"): the programs
 // rs274 refuses, refused by truecut at the same line.
 TEST(Rs274Oracle, TappingAndBackBoringErrorsAtTheSameLine) {
