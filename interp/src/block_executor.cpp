@@ -300,6 +300,7 @@ void BlockExecutor::tool_change() {
     s_.tool = s_.selected_tool;
     s_.spindle_slot = slot.value_or(0);
     out_.emit(ChangeTool{s_.tool, slot.value_or(0)});
+    loaded_tool_parameters();
   } else if (change == 610) {
     if (!b_->has('q'))
       fail(codes_.m_column[group(MGroup::kToolChange)], "M61 needs Q (tool number)");
