@@ -85,7 +85,8 @@ void BlockExecutor::restore_setup() {
     s_.g5x_mm[i] = s_.to_machine(i, params_.get(base + i));
   s_.rotation_deg = params_.get(base + kCoordSystemRotation);
   s_.coord_index = index;
-  if (params_.get(kG92Enabled) == 1.0)
+  // LinuxCNC restores the G92 offsets for any non-zero #5210, not only 1.
+  if (params_.get(kG92Enabled) != 0.0)
     for (int i = 0; i < 6; ++i)
       s_.g92_mm[i] = s_.to_machine(i, params_.get(kG92Offsets + i));
 }

@@ -218,6 +218,10 @@ TEST(Rs274Oracle, ParameterFileSetupMatches) {
   const Outcome r =
       run_both(*o, dir / "parameter_file_setup.ngc", dir / "parameter_file_setup.var");
   expect_agreement(r, "parameter_file_setup.ngc with parameter_file_setup.var");
+  // G92 offsets in force at the start for any non-zero #5210 (here 3).
+  const Outcome g =
+      run_both(*o, dir / "parameter_file_setup.ngc", dir / "g92_enabled_any_nonzero.var");
+  expect_agreement(g, "parameter_file_setup.ngc with g92_enabled_any_nonzero.var");
   // A parameter file LinuxCNC itself ships (its 9-axis sim configuration:
   // 119 lines, with the U V W columns truecut has no axes for).
   const fs::path shipped =
