@@ -426,7 +426,8 @@ TEST(Rs274Oracle, CutterCompErrorsAtTheSameLine) {
 }
 
 // Centre-format arcs whose radii differ by more than LinuxCNC's allowance
-// (docs/gcode.md "Differences"): refused by both at the same line.
+// (docs/gcode.md "LinuxCNC's regression programs"): refused by both at the
+// same line.
 TEST(Rs274Oracle, ArcRadiusToleranceErrorsAtTheSameLine) {
   REQUIRE_ORACLE(o);
   static const char* kCases[] = {
