@@ -20,8 +20,8 @@
 # and not run. Totals at the end.
 #
 # options:
-#   --truecut PATH   the truecut executable (default build/cli/truecut)
-#   --compare PATH   rs274_compare (default build/tests/rs274_compare)
+#   --truecut PATH   the truecut executable (default build/truecut)
+#   --compare PATH   rs274_compare (default build/rs274_compare)
 #   --rs274 PATH     LinuxCNC's rs274 (default: rs274 on PATH)
 #   --keep DIR       keep both listings of every run in DIR
 #
@@ -29,8 +29,8 @@
 # at run time. Exit 0 once every program has been classified.
 set -u
 root=$(cd "$(dirname "$0")/.." && pwd)
-truecut=$root/build/cli/truecut
-compare=$root/build/tests/rs274_compare
+truecut=$root/build/truecut
+compare=$root/build/rs274_compare
 rs274=$(command -v rs274 || true)
 keep=
 while [ $# -gt 1 ]; do
