@@ -99,7 +99,7 @@ runs_of() {
   if [ -f "$t/test.sh" ]; then
     while IFS= read -r line; do
       args=$(sed -E 's/.*(^|[^-a-zA-Z_./])rs274 +//; s/[|;>&].*//; s/2$//' <<< "$line")
-      prog= ini= tbl= var=
+      prog='' ini='' tbl='' var=''
       set -- $args
       while [ $# -gt 0 ]; do
         case $1 in
@@ -121,7 +121,7 @@ runs_of() {
     done < <(sed -e ':a' -e '/\\$/N; s/\\\n//; ta' "$t/test.sh" | grep -E '(^|[^-a-zA-Z_./])rs274 ' | grep -v '^\s*#')
   fi
   [ $found = 1 ] && return
-  ini= tbl=
+  ini='' tbl=''
   [ -f "$t/test.ini" ] && ini=test.ini
   [ -f "$t/test.tbl" ] && tbl=test.tbl
   for prog in "$t"/*.ngc; do
@@ -183,7 +183,7 @@ run_one() {
     fi
   elif [ $rs_rc != 0 ] && [ $tc_rc != 0 ]; then
     # rs274 names the block it stops on; truecut its file and line.
-    local rs_block tc_block= file line
+    local rs_block tc_block='' file line
     rs_block=$(grep -v '^executing$' "$work/rs274.err" | tail -n 1)
     if [[ $tc_msg =~ ^(.+):([0-9]+):[0-9]+:\  ]]; then
       file=${BASH_REMATCH[1]} line=${BASH_REMATCH[2]}
