@@ -770,5 +770,39 @@ TEST(Rs274Oracle, LinuxCncSamplePrograms) {
                                               << "of scope but was not rejected";
 }
 
+// tools/linuxcnc-regression.sh on a folder laid out like LinuxCNC's
+// tests/interp, with programs of this test's own: one line per program,
+// classified, and the totals.
+TEST(Rs274Oracle, RegressionRunnerClassifiesPrograms) {
+  REQUIRE_ORACLE(o);
+  const fs::path dir = o->work / "regression";
+  fs::remove_all(dir);
+  auto write = [&](const std::string& file, const std::string& text) {
+    fs::create_directories((dir / file).parent_path());
+    std::ofstream(dir / file) << text;
+  };
+  write("plain/test.ngc", "G21 F100\nG1 X1 Y2\nM2\n");  // no test.sh: rs274 -g test.ngc
+  write("nofeed/test.sh", "#!/bin/bash\nrs274 -g prog.ngc | awk '{$1=\"\"; print}'\n");
+  write("nofeed/prog.ngc", "G21\nG1 X1\nM2\n");
+  // An inch table without an INI, as rs274 reads it: T1 is 0.5 in long.
+  write("table/test.sh", "#!/bin/bash\nrs274 -g -t tools.tbl p.ngc\n");
+  write("table/tools.tbl", "T1 P1 Z0.5 ;\n");
+  write("table/p.ngc", "G21 T1 M6 G43\nG0 Z1\n(debug,#5403)\nM2\n");
+  write("ui/test.ngc", "G0 X1\nM2\n");
+  write("ui/test-ui.py", "");
+  const auto r = run_process({"/bin/bash", (source_dir() / "tools/linuxcnc-regression.sh").string(),
+                              "--truecut", cli_path().string(), "--compare",
+                              (truecut::test::binary_dir() / "rs274_compare").string(), "--rs274",
+                              o->rs274.string(), dir.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("plain/test.ngc: agree\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("nofeed/prog.ngc: both refuse, same line"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("table/p.ngc: agree\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("ui: needs a running LinuxCNC"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\nagree: 2\nboth refuse, same line: 1\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("tests not run (need more than a standalone rs274): 1"), std::string::npos)
+      << r.out;
+}
+
 }  // namespace
 }  // namespace truecut::interp::testing
