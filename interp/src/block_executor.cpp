@@ -1006,8 +1006,9 @@ void BlockExecutor::straight(bool rapid, const Axes6& target, int column) {
     double f = 0;
     if (s_.feed_mode == FeedMode::kInverseTime) {
       // LinuxCNC turns inverse time into a rate: the move's length times F,
-      // the XYZ length when XYZ move, else the rotary one.
-      const Axes6 start = s_.program_position();
+      // the XYZ length when XYZ move, else the rotary one; under cutter
+      // compensation the programmed length (from the programmed point).
+      const Axes6 start = s_.program_position(move_base());
       double linear = 0, rotary = 0;
       for (int i = 0; i < 3; ++i)
         linear += (end[i] - start[i]) * (end[i] - start[i]);
