@@ -17,6 +17,13 @@ double tolerance(const ArcRequest& r) {
   return r.inch ? 0.0005 : 0.005;
 }
 
+// LinuxCNC's allowance for the two radii of a centre-format arc: 2 x 0.001
+// inch x sqrt(2) (2 x 0.01 mm x sqrt(2) in G21); beyond 100 times that, or
+// beyond it with more than 0.1 % relative difference, the arc is refused.
+double center_tolerance(const ArcRequest& r) {
+  return 2.0 * (r.inch ? 0.001 : 0.01) * std::numbers::sqrt2;
+}
+
 ArcResult radius_form(const ArcRequest& r) {
   if (r.end[0] == r.start[0] && r.end[1] == r.start[1])
     throw ArcDataError{
@@ -57,7 +64,8 @@ ArcResult center_form(const ArcRequest& r) {
     throw ArcDataError{"zero-radius arc: the centre is on the start or end point", 'i'};
   const double abs_err = std::fabs(r1 - r2);
   const double rel_err = abs_err / std::max(r1, r2);
-  if (abs_err > tol * 100.0 || (rel_err > 0.001 && abs_err > tol)) {
+  const double allowed = center_tolerance(r);
+  if (abs_err > allowed * 100.0 || (rel_err > 0.001 && abs_err > allowed)) {
     char msg[200];
     std::snprintf(msg, sizeof msg,
                   "arc radius mismatch: radius to start %.4f, radius to end %.4f (difference "

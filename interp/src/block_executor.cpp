@@ -85,7 +85,8 @@ void BlockExecutor::restore_setup() {
     s_.g5x_mm[i] = s_.to_machine(i, params_.get(base + i));
   s_.rotation_deg = params_.get(base + kCoordSystemRotation);
   s_.coord_index = index;
-  if (params_.get(kG92Enabled) == 1.0)
+  // LinuxCNC restores the G92 offsets for any non-zero #5210, not only 1.
+  if (params_.get(kG92Enabled) != 0.0)
     for (int i = 0; i < 6; ++i)
       s_.g92_mm[i] = s_.to_machine(i, params_.get(kG92Offsets + i));
 }
@@ -300,6 +301,7 @@ void BlockExecutor::tool_change() {
     s_.tool = s_.selected_tool;
     s_.spindle_slot = slot.value_or(0);
     out_.emit(ChangeTool{s_.tool, slot.value_or(0)});
+    loaded_tool_parameters();
   } else if (change == 610) {
     if (!b_->has('q'))
       fail(codes_.m_column[group(MGroup::kToolChange)], "M61 needs Q (tool number)");
@@ -1011,8 +1013,9 @@ void BlockExecutor::straight(bool rapid, const Axes6& target, int column) {
     double f = 0;
     if (s_.feed_mode == FeedMode::kInverseTime) {
       // LinuxCNC turns inverse time into a rate: the move's length times F,
-      // the XYZ length when XYZ move, else the rotary one.
-      const Axes6 start = s_.program_position();
+      // the XYZ length when XYZ move, else the rotary one; under cutter
+      // compensation the programmed length (from the programmed point).
+      const Axes6 start = s_.program_position(move_base());
       double linear = 0, rotary = 0;
       for (int i = 0; i < 3; ++i)
         linear += (end[i] - start[i]) * (end[i] - start[i]);

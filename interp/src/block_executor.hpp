@@ -67,7 +67,8 @@ class BlockExecutor {
   void dynamic_tool_length(int code);  // G43.1, G43.2
   void non_modal();
   void coord_system_data();
-  void tool_table_edit(int l);  // G10 L1 L10 L11 (tool_table_edit.cpp)
+  void tool_table_edit(int l);    // G10 L1 L10 L11 (tool_table_edit.cpp)
+  void loaded_tool_parameters();  // #5401..#5413 (tool_table_edit.cpp)
   void g92_offsets(int code);
   void set_origin_at_tool(int base);
   void go_home(int code);

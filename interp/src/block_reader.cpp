@@ -96,6 +96,11 @@ OWord read_oword_head(Cursor& c, const Parameters* params) {
     o.keyword = OKeyword::kFanucSub;
     return o;
   }
+  // A name alone: a program's title (O<name>), a label in the flow as in rs274.
+  if (o.label.front() == '<' && (c.at_end() || c.peek() == '(' || c.peek() == ';')) {
+    o.keyword = OKeyword::kFanucSub;
+    return o;
+  }
   for (const auto& k : kOKeywords) {
     if (c.starts_with(k.text)) {
       o.keyword = k.keyword;

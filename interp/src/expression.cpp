@@ -227,16 +227,23 @@ const Function* peek_function(const Cursor& c) {
 double call_function_unchecked(Cursor& c, const Parameters& params, const Function& f, size_t at) {
   c.pos += std::char_traits<char>::length(f.name);
   if (f.kind == Function::kExists) {
-    // exists[#<name>]: 1 when the named parameter is defined.
+    // exists[#<name>]: 1 when the named parameter is defined. As in
+    // LinuxCNC, exists[#n] (n a number or a parameter, ##1) is 1 when the
+    // number n is a parameter number (1..5601): numbered parameters always
+    // exist.
     const size_t open = c.pos;
     ++c.pos;
-    if (c.peek() != '#' || c.peek(1) != '<')
-      c.fail("EXISTS needs a named parameter: exists[#<name>]");
+    if (c.peek() != '#') c.fail("EXISTS needs a parameter: exists[#<name>] or exists[#number]");
     ++c.pos;
-    std::string name = read_name(c);
+    double exists = 0.0;
+    if (c.peek() == '<') {
+      exists = params.named(read_name(c)).has_value() ? 1.0 : 0.0;
+    } else {
+      exists = Parameters::valid_index(read_integer_value(c, params)) ? 1.0 : 0.0;
+    }
     if (c.peek() != ']') c.fail_at(open, "missing ']' (unbalanced brackets)");
     ++c.pos;
-    return params.named(name).has_value() ? 1.0 : 0.0;
+    return exists;
   }
   double v = read_expression(c, params);
   switch (f.kind) {

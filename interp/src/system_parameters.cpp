@@ -7,8 +7,8 @@ namespace truecut::interp {
 void sync_state_parameters(const InterpState& state, Parameters& params) {
   params.set(kCoordSystemIndex, state.coord_index);
   params.set(5400, state.tool);
-  // #5401..#5409 stay as the program set them: LinuxCNC's standalone
-  // interpreter does not write the tool offsets there either.
+  // #5401..#5413 (the loaded tool's row) are written on M6 and G10 L1
+  // (BlockExecutor::loaded_tool_parameters).
   const Axes6 pos = state.program_position();
   for (int i = 0; i < 6; ++i)
     params.set(5420 + i, pos[i]);
@@ -34,6 +34,11 @@ std::optional<double> predefined_parameter(const InterpState& s, const Parameter
   static const char* kAxes[] = {"x", "y", "z", "a", "b", "c"};
   for (int i = 0; i < 6; ++i)
     if (n == kAxes[i]) return pos[i];
+  // #<_abs_x> ...: the position in machine coordinates (where a G53 move
+  // to it would go), in program units.
+  if (n.size() == 5 && n.substr(0, 4) == "abs_")
+    for (int i = 0; i < 6; ++i)
+      if (n[4] == kAxes[i][0]) return s.to_program(i, s.position_mm[i]);
   auto flag = [](bool b) { return b ? 1.0 : 0.0; };
   if (n == "metric") return flag(s.units == LengthUnits::kMm);
   if (n == "imperial") return flag(s.units == LengthUnits::kInch);

@@ -17,7 +17,8 @@ constexpr int kG30Home = 5181;
 constexpr int kG92Enabled = 5210;
 constexpr int kG92Offsets = 5211;
 constexpr int kCoordSystemIndex = 5220;
-constexpr int kDebugSwitch = 5599;  // (DEBUG,...) messages shown when non-zero
+constexpr int kLoadedToolOffsets = 5401;  // #5401..#5413: the loaded tool's row
+constexpr int kDebugSwitch = 5599;        // (DEBUG,...) messages shown when non-zero
 // First parameter of coordinate system n (1 = G54 .. 9 = G59.3).
 constexpr int coord_system_base(int n) {
   return 5201 + 20 * n;

@@ -86,6 +86,7 @@ ToolTable ToolTable::parse(std::string_view text, const std::string& name, Lengt
   // Lengths are checked in the table's units and stored in mm.
   const double to_mm = units == LengthUnits::kInch ? 25.4 : 1.0;
   ToolTable table;
+  table.units_ = units;
   const SourceFile src = source_from_text(text, name);
   for (size_t li = 0; li < src.lines.size(); ++li) {
     const int line = static_cast<int>(li) + 1;

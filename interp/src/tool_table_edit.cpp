@@ -82,7 +82,26 @@ void BlockExecutor::tool_table_edit(int l) {
   if (entry.pocket == s_.spindle_slot) {  // the spindle's copy too, as rs274
     entry.pocket = 0;
     out_.emit(entry);
+    loaded_tool_parameters();
   }
+}
+
+// rs274 shows the loaded tool's row in #5401..#5413 (X Y Z A B C U V W
+// offsets, diameter, front and back angle, orientation) in the machine's
+// units, the tool table's: written by M6 and by a G10 L1/L10/L11 that edits
+// the loaded tool (not by M61, nor by M6 of T0, as LinuxCNC 2.9).
+void BlockExecutor::loaded_tool_parameters() {
+  const ToolEntry* e = tools_.find(s_.tool);
+  if (!e) return;
+  const double per_mm = tools_.units() == LengthUnits::kInch ? 1.0 / kMmPerInch : 1.0;
+  for (int i = 0; i < 6; ++i)
+    params_.set(kLoadedToolOffsets + i, i < 3 ? e->offset_mm[i] * per_mm : e->offset_mm[i]);
+  for (int i = 6; i < 9; ++i)  // U V W: no such axes
+    params_.set(kLoadedToolOffsets + i, 0.0);
+  params_.set(kLoadedToolOffsets + 9, e->diameter_mm * per_mm);
+  params_.set(kLoadedToolOffsets + 10, e->front_angle_deg);
+  params_.set(kLoadedToolOffsets + 11, e->back_angle_deg);
+  params_.set(kLoadedToolOffsets + 12, e->orientation);
 }
 
 }  // namespace truecut::interp

@@ -218,6 +218,10 @@ TEST(Rs274Oracle, ParameterFileSetupMatches) {
   const Outcome r =
       run_both(*o, dir / "parameter_file_setup.ngc", dir / "parameter_file_setup.var");
   expect_agreement(r, "parameter_file_setup.ngc with parameter_file_setup.var");
+  // G92 offsets in force at the start for any non-zero #5210 (here 3).
+  const Outcome g =
+      run_both(*o, dir / "parameter_file_setup.ngc", dir / "g92_enabled_any_nonzero.var");
+  expect_agreement(g, "parameter_file_setup.ngc with g92_enabled_any_nonzero.var");
   // A parameter file LinuxCNC itself ships (its 9-axis sim configuration:
   // 119 lines, with the U V W columns truecut has no axes for).
   const fs::path shipped =
@@ -419,6 +423,21 @@ TEST(Rs274Oracle, CutterCompErrorsAtTheSameLine) {
       "G41 D8 G1 X0 Y0\nG1 X20 Y0\nG3 X30 Y10 R10\nG1 X29 Y10 (arc then back line)",
   };
   expect_refused_at_the_same_line(*o, "comp_errors", "G21 F100 T1 M6\nG0 X-5 Y-5\n", kCases);
+}
+
+// Centre-format arcs whose radii differ by more than LinuxCNC's allowance
+// (docs/gcode.md "LinuxCNC's regression programs"): refused by both at the
+// same line.
+TEST(Rs274Oracle, ArcRadiusToleranceErrorsAtTheSameLine) {
+  REQUIRE_ORACLE(o);
+  static const char* kCases[] = {
+      "G2 X24.03 Y0 I12 J0 (0.03 mm, 0.25 percent)",
+      "G2 X6002.9 Y0 I3000 J0 (2.9 mm, under 0.1 percent of 3000 mm)",
+      "G20\nG2 X1.003 Y0 I0.5 J0 (0.003 in, 0.6 percent)",
+      "G20\nG3 X-0.0031 Y0 I0.5 J0 (0.0031 in, 0.6 percent)",
+      "G20\nG2 X600.29 Y0 I300 J0 (0.29 in, under 0.1 percent of 300 in)",
+  };
+  expect_refused_at_the_same_line(*o, "arc_tolerance", "G21 F100\nG0 X0 Y0 Z0\n", kCases);
 }
 
 // Tapping and back boring (docs/gcode.md "Canned cycles"): the programs
@@ -753,6 +772,40 @@ TEST(Rs274Oracle, LinuxCncSamplePrograms) {
   for (const auto& [key, reason] : out_of_scope())
     EXPECT_TRUE(seen_out_of_scope.count(key)) << key << " (" << reason << ") is listed as out "
                                               << "of scope but was not rejected";
+}
+
+// tools/linuxcnc-regression.sh on a folder laid out like LinuxCNC's
+// tests/interp, with programs of this test's own: one line per program,
+// classified, and the totals.
+TEST(Rs274Oracle, RegressionRunnerClassifiesPrograms) {
+  REQUIRE_ORACLE(o);
+  const fs::path dir = o->work / "regression";
+  fs::remove_all(dir);
+  auto write = [&](const std::string& file, const std::string& text) {
+    fs::create_directories((dir / file).parent_path());
+    std::ofstream(dir / file) << text;
+  };
+  write("plain/test.ngc", "G21 F100\nG1 X1 Y2\nM2\n");  // no test.sh: rs274 -g test.ngc
+  write("nofeed/test.sh", "#!/bin/bash\nrs274 -g prog.ngc | awk '{$1=\"\"; print}'\n");
+  write("nofeed/prog.ngc", "G21\nG1 X1\nM2\n");
+  // An inch table without an INI, as rs274 reads it: T1 is 0.5 in long.
+  write("table/test.sh", "#!/bin/bash\nrs274 -g -t tools.tbl p.ngc\n");
+  write("table/tools.tbl", "T1 P1 Z0.5 ;\n");
+  write("table/p.ngc", "G21 T1 M6 G43\nG0 Z1\n(debug,#5403)\nM2\n");
+  write("ui/test.ngc", "G0 X1\nM2\n");
+  write("ui/test-ui.py", "");
+  const auto r = run_process({"/bin/bash", (source_dir() / "tools/linuxcnc-regression.sh").string(),
+                              "--truecut", cli_path().string(), "--compare",
+                              (truecut::test::binary_dir() / "rs274_compare").string(), "--rs274",
+                              o->rs274.string(), dir.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("plain/test.ngc: agree\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("nofeed/prog.ngc: both refuse, same line"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("table/p.ngc: agree\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("ui: needs a running LinuxCNC"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\nagree: 2\nboth refuse, same line: 1\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("tests not run (need more than a standalone rs274): 1"), std::string::npos)
+      << r.out;
 }
 
 }  // namespace

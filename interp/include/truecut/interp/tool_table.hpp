@@ -39,9 +39,12 @@ class ToolTable {
   ToolEntry* find(int number);  // G10 L1/L10/L11 edit the entry
   // 1-based row of the tool in the table, as LinuxCNC numbers its slots.
   std::optional<int> slot_of(int number) const;
+  // The units the table was read in: the machine's length units.
+  LengthUnits units() const { return units_; }
 
  private:
   std::vector<ToolEntry> entries_;
+  LengthUnits units_ = LengthUnits::kMm;
 };
 
 }  // namespace truecut::interp
