@@ -366,7 +366,14 @@ void ProgramRunner::control(const OWord& o, const LexedLine& line) {
                  " sub found in illegal location: the subroutine is already defined (called "
                  "before its definition, or the definition met again)");
       if (o.computed) subs_.emplace(o.label, std::make_pair(fi, pc));
-      frame.pc = find_forward(fi, pc + 1, o.label, {OKeyword::kEndsub}, line) + 1;
+      const size_t end = find_forward(fi, pc + 1, o.label, {OKeyword::kEndsub}, line);
+      // rs274 refuses a definition inside another when it skips over it.
+      for (size_t i = pc + 1; i < end; ++i)
+        if (const auto& inner = files_[fi].owords[i]; inner && inner->keyword == OKeyword::kSub)
+          fail(files_[fi].lines[i], inner->column,
+               "nested subroutine definition: " + label_text(label_at(fi, i)) + " sub inside " +
+                   label_text(o.label) + " sub");
+      frame.pc = end + 1;
       return;
     }
     case OKeyword::kCall: {

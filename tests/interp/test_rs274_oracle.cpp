@@ -520,6 +520,7 @@ TEST(Rs274Oracle, OffsetToolAndSubprogramErrorsAtTheSameLine) {
       "#1 = 0\no10 while [#1 LT 2]\no400 sub (met again in a loop)\nG0 X1\no400 endsub\n"
       "o400 call\n#1 = [#1 + 1]\no10 endwhile\nM2",
       "#5 = 100.5\no[#5] call (a computed label not whole)\nM2",
+      "o1 sub\nG1 X0\no2 sub (nested definition)\nG1 Y0\no2 endsub\no1 endsub\no1 call\nM2",
   };
   expect_refused_at_the_same_line(*o, "offset_errors", "G21 F100 T1 M6\nG0 X-5 Y-5\n", kCases);
 }
