@@ -18,6 +18,8 @@
 #include <filesystem>
 #include <string>
 
+#include <unistd.h>
+
 #include "planted_cases.hpp"
 
 using namespace truecut::test::planted;
@@ -44,7 +46,11 @@ int main(int argc, char** argv) {
     else
       only = argv[i];
   }
-  const auto dir = std::filesystem::temp_directory_path() / "truecut_planted_sweep";
+  // One directory per process: a case's file name does not change with -n,
+  // and sweeps run side by side (other worktrees' among them) must not
+  // read each other's half-written recordings.
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("truecut_planted_sweep_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   int failed_total = 0;
   std::printf("| effect | magnitude | seeds passed | worst error | first failure |\n");
@@ -83,5 +89,6 @@ int main(int argc, char** argv) {
       std::fflush(stdout);
     }
   }
+  std::filesystem::remove_all(dir);
   return failed_total == 0 ? 0 : 1;
 }

@@ -84,6 +84,14 @@ TEST(DiagnosisPlanted, PitchStandingInForAServoSplitIsDropped) {
   expect_right(sweep_case(Effect::kReversalSpike, 1, 8));
 }
 
+// Friction 30 N under servo lag on the contour, the sweep's seed 12: once
+// reported with Z's split at Kv 122.9 / ff1 0.693 (for 40 / 0.9) beside a
+// pitch scale of Z (-52 µm/m) that was not planted. Every loop within
+// ±15 % and nothing reported that was not planted.
+TEST(DiagnosisPlanted, FrictionSeed12KeepsZsSplitWithoutAPitch) {
+  expect_right(sweep_case(Effect::kReversalSpike, 0, 12));
+}
+
 // A reversal spike (Coulomb friction) under servo lag, on the 3-axis
 // contour: the loop found by the diagnosis must not bend to mimic the
 // spikes (Kv 79 / ff1 0.8 with 169 N for 100 N planted; at 300 N a pure lag

@@ -154,7 +154,11 @@ std::vector<std::string> drop_stand_ins_for_splits(const FitContext& ctx,
       const double cost =
           n_eff * std::log(std::max(trial.rss, 1e-300) / std::max(fit.rss, 1e-300)) -
           double(s.keys.size()) * std::log(n_eff);
-      if (cost >= ctx.bic_threshold) continue;
+      if (cost >= ctx.bic_threshold) {
+        say(ctx, "kept " + s.group + ": with the splits refined without it the model costs " +
+                     fmt4g(cost) + " in BIC");
+        continue;
+      }
       say(ctx, "dropped " + s.group + ": it stood in for a servo loop's split (re-simulated ΔBIC " +
                    fmt4g(-cost) + " with the splits refined without it)");
       dropped.push_back(s.group);
