@@ -135,6 +135,10 @@ int cmd_demo(const std::vector<std::string>& argv) {
 
   const unsigned cpus = std::max(1u, std::thread::hardware_concurrency());
   const auto jobs = static_cast<std::size_t>(a.integer("jobs", std::min(cpus, 3u), 1, 64));
+  // Each machine run cuts with its share of the CPUs (the results do not
+  // depend on the number of cutting threads).
+  if (jobs > 1 && parts.size() > 1)
+    o.cut_threads = static_cast<int>(std::max<std::size_t>(1, cpus / std::min(jobs, parts.size())));
 
   fs::create_directories(o.out_dir);
   // The parts are independent (each has its own folder and seeds): with

@@ -134,6 +134,8 @@ DemoPartResult run_demo_part(const std::string& part, const DemoOptions& o) {
                                   rt::format_printf("%g", dexel)};
     args.insert(args.end(), part_files.begin(), part_files.end());
     if (!field.empty()) args.insert(args.end(), {"--field", field});
+    if (o.cut_threads > 0)
+      args.insert(args.end(), {"--cut-threads", std::to_string(o.cut_threads)});
     s.run("machine (" + title + ")", args);
     s.run("measure (" + title + ") with the CMM",
           {"cmm", key + "/machined.stl", "--nominal", "part/nominal.stl", "--part",

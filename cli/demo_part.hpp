@@ -41,6 +41,9 @@ struct DemoOptions {
   // cutting model), which no compensation of the machine can remove.
   bool ideal_reference = true;
   std::uint64_t seed = 1;
+  // Threads that cut in each `truecut run` (0: its default, one per CPU);
+  // with several parts at once, the CPUs shared among them.
+  int cut_threads = 0;
 };
 
 struct DemoStage {
