@@ -9,6 +9,7 @@
 #include <numbers>
 #include <set>
 
+#include "rewrite_test_util.hpp"
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/operations.hpp"
 #include "truecut/interp/rewrite.hpp"
@@ -30,18 +31,7 @@ RewriteOptions options(const std::string& op, CutType type) {
 }
 
 // Compensation points on a grid in the plane z = z0 over [x0,x1] x [y0,y1].
-CompensationMatrixData plane_matrix(double x0, double x1, double y0, double y1, double z0,
-                                    double spacing, const V& vector) {
-  CompensationMatrixData m;
-  for (double x = x0; x <= x1 + 1e-9; x += spacing)
-    for (double y = y0; y <= y1 + 1e-9; y += spacing) {
-      m.positions_mm.emplace_back(x, y, z0);
-      m.vectors_mm.push_back(vector);
-      m.valid.push_back(1);
-      m.surface_ids.push_back(1);
-    }
-  return m;
-}
+using testing::plane_matrix;
 
 // Straight feeds of operation `op` in the program's coordinates.
 std::vector<Axes6> feeds_of(const std::string& text, const std::string& op) {

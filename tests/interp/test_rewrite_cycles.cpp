@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "rewrite_test_util.hpp"
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/rewrite.hpp"
 
@@ -44,14 +45,11 @@ struct Hole {
 // the hole's vector: whichever points the blend takes, it gives that vector.
 CompensationMatrixData clusters(const std::vector<Hole>& holes) {
   CompensationMatrixData m;
-  for (const Hole& h : holes)
-    for (double dx = -0.4; dx <= 0.41; dx += 0.2)
-      for (double dy = -0.4; dy <= 0.41; dy += 0.2) {
-        m.positions_mm.push_back(h.programmed + V(dx, dy, 0));
-        m.vectors_mm.push_back(h.shift);
-        m.valid.push_back(1);
-        m.surface_ids.push_back(1);
-      }
+  for (const Hole& h : holes) {
+    const V& c = h.programmed;
+    m = testing::plane_matrix(c.x() - 0.4, c.x() + 0.4, c.y() - 0.4, c.y() + 0.4, c.z(), 0.2,
+                              h.shift, std::move(m));
+  }
   return m;
 }
 

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "rewrite_test_util.hpp"
 #include "truecut/interp/rewrite.hpp"
 
 namespace truecut::interp {
@@ -60,14 +61,7 @@ double distance_to_circle(const V& p, const V& c, const V& u, const V& v, double
 
 TEST(RewriteRotated, CorrectionsAreTurnedIntoTheRotatedProgramFrame) {
   const V shift_mm(0.03, -0.02, 0.01);  // workpiece frame
-  CompensationMatrixData m;
-  for (double x = -40; x <= 40; x += 1.0)
-    for (double y = -40; y <= 40; y += 1.0) {
-      m.positions_mm.emplace_back(x, y, 0.0);
-      m.vectors_mm.push_back(shift_mm);
-      m.valid.push_back(1);
-      m.surface_ids.push_back(1);
-    }
+  const CompensationMatrixData m = testing::plane_matrix(-40, 40, -40, 40, 0, 1.0, shift_mm);
   RewriteOptions o;
   o.operation = "FACE";
   o.type = CutType::kFace;

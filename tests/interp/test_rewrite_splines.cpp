@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "rewrite_test_util.hpp"
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/rewrite.hpp"
 
@@ -25,15 +26,7 @@ using P2 = std::array<double, 2>;
 const V kShift(0.02, -0.01, 0.005);
 
 CompensationMatrixData constant_matrix() {
-  CompensationMatrixData m;
-  for (double x = -10; x <= 10; x += 0.5)
-    for (double y = -10; y <= 10; y += 0.5) {
-      m.positions_mm.emplace_back(x, y, 0.0);
-      m.vectors_mm.push_back(kShift);
-      m.valid.push_back(1);
-      m.surface_ids.push_back(1);
-    }
-  return m;
+  return testing::plane_matrix(-10, 10, -10, 10, 0, 0.5, kShift);
 }
 
 RewriteOptions options() {
