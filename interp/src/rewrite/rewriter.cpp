@@ -64,14 +64,14 @@ using PrepareFn = std::function<double(const std::vector<double>& radii_mm)>;
 // rapids reproduce the original position exactly).
 std::string exact(double v) {
   // Fixed notation (G-code has no exponents), the fewest decimals that
-  // read back to v: "30", not "3e+01".
+  // read back to v: "30", not "3e+01"; 12 decimals when none does.
   char buf[400];
-  std::snprintf(buf, sizeof buf, "%.12f", v);
-  for (int decimals = 0; decimals <= 17; ++decimals) {
+  int decimals = 0;
+  for (; decimals <= 17; ++decimals) {
     std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
     if (std::strtod(buf, nullptr) == v) break;
-    if (decimals == 17) std::snprintf(buf, sizeof buf, "%.12f", v);
   }
+  if (decimals > 17) std::snprintf(buf, sizeof buf, "%.12f", v);
   std::string s = buf;
   if (s == "-0") s = "0";
   return s;
