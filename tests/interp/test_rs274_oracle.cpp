@@ -517,8 +517,8 @@ TEST(Rs274Oracle, OffsetToolAndSubprogramErrorsAtTheSameLine) {
       "G10 L2 P1 R30\nG10 L20 P1 X0 R45 (R with L20)",
       "G10 L2 P1 R30\nG41 D1 G1 X10 Y0\nG10 L2 P0 R10 (the active system turned, comp on)",
       "o400 call [5]\nG0 Z1\no400 sub (met after the call)\nG0 X[#1]\no400 endsub\nM2",
-      "#1 = 0\no10 while [#1 LT 2]\no400 sub (met again in a loop)\nG0 X1\no400 endsub\n"
-      "o400 call\n#1 = [#1 + 1]\no10 endwhile\nM2",
+      ("#1 = 0\no10 while [#1 LT 2]\no400 sub (met again in a loop)\nG0 X1\no400 endsub\n"
+       "o400 call\n#1 = [#1 + 1]\no10 endwhile\nM2"),
       "#5 = 100.5\no[#5] call (a computed label not whole)\nM2",
       "o1 sub\nG1 X0\no2 sub (nested definition)\nG1 Y0\no2 endsub\no1 endsub\no1 call\nM2",
   };
