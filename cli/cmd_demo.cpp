@@ -2,9 +2,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <exception>
 #include <fstream>
-#include <mutex>
+#include <memory>
 #include <sstream>
 #include <thread>
 
@@ -33,7 +32,7 @@ const char* kHelp =
     "every part with the virtual CMM, then scan part 2 and machine a 2nd iteration.\n"
     "A last part machined on the error-free machine shows the deviation the program\n"
     "itself leaves (scallops), the floor of what compensation can reach.\n"
-    "Every step is a truecut command; DIR/<part>/commands.sh lists them, demo.log\n"
+    "Every step is a truecut command; DIR/<part>/commands.sh lists them, logs/\n"
     "holds their output. Writes DIR/report.html and DIR/results.json.\n"
     "\n"
     "options:\n"
@@ -63,8 +62,9 @@ const char* kHelp =
     "  --edge-exclusion MM no error vector this close to a sharp edge (default 0.2)\n"
     "  --dexel-spacing MM cutting model sampling (default 0.1 implant, 0.3 others)\n"
     "  --seed N           noise seed (default 1)\n"
-    "  --jobs N           parts machined at once with --part all (default: the\n"
-    "                     number of CPUs, at most 3); the results do not depend on it\n"
+    "  --jobs N           steps run at once (default: the number of CPUs): other\n"
+    "                     parts' and the same part's independent stages; the\n"
+    "                     results do not depend on it\n"
     "  --help             this text\n";
 
 std::string read_text(const fs::path& path) {
@@ -133,52 +133,27 @@ int cmd_demo(const std::vector<std::string>& argv) {
   else
     throw UsageError("--part must be implant, benchmark004, freeform or all, not '" + which + "'");
 
+  // The steps of all parts form one graph; independent ones run at once,
+  // each machine run cutting with its share of the CPUs (the results do
+  // not depend on the number of cutting threads, nor on what runs at once).
   const unsigned cpus = std::max(1u, std::thread::hardware_concurrency());
-  const auto jobs = static_cast<std::size_t>(a.integer("jobs", std::min(cpus, 3u), 1, 64));
-  // Each machine run cuts with its share of the CPUs (the results do not
-  // depend on the number of cutting threads).
-  if (jobs > 1 && parts.size() > 1)
-    o.cut_threads = static_cast<int>(std::max<std::size_t>(1, cpus / std::min(jobs, parts.size())));
+  const auto jobs = static_cast<std::size_t>(a.integer("jobs", cpus, 1, 64));
+  if (jobs > 1) o.cut_threads = static_cast<int>(std::max<std::size_t>(1, cpus / jobs));
 
   fs::create_directories(o.out_dir);
-  // The parts are independent (each has its own folder and seeds): with
-  // several jobs they run at once, the longest first; the results keep the
-  // order of `parts`.
-  std::vector<DemoPartResult> results(parts.size());
-  std::vector<std::exception_ptr> failures(parts.size());
-  std::vector<std::size_t> queue(parts.size());
-  for (std::size_t i = 0; i < parts.size(); ++i)
-    queue[i] = i;
-  const auto cost = [&](std::size_t i) {
-    return parts[i] == "benchmark004" ? 0 : parts[i] == "freeform" ? 1 : 2;
-  };
-  std::stable_sort(queue.begin(), queue.end(),
-                   [&](std::size_t x, std::size_t y) { return cost(x) < cost(y); });
-  std::mutex next_mutex;
-  std::size_t next = 0;
-  auto worker = [&] {
-    while (true) {
-      std::size_t i = 0;
-      {
-        std::lock_guard<std::mutex> lock(next_mutex);
-        if (next == queue.size()) return;
-        i = queue[next++];
-      }
-      try {
-        results[i] = run_demo_part(parts[i], o);
-      } catch (...) {
-        failures[i] = std::current_exception();
-      }
-    }
-  };
-  std::vector<std::thread> threads;
-  for (std::size_t t = 1; t < std::min(jobs, parts.size()); ++t)
-    threads.emplace_back(worker);
-  worker();
-  for (auto& t : threads)
-    t.join();
-  for (const auto& f : failures)
-    if (f) std::rethrow_exception(f);
+  std::vector<std::unique_ptr<DemoPart>> plans;
+  StepGraph graph;
+  for (const auto& part : parts) {
+    plans.push_back(std::make_unique<DemoPart>(part, o));
+    plans.back()->plan_generation(graph);
+  }
+  graph.run(jobs);
+  for (auto& plan : plans)
+    plan->plan_stages(graph);
+  graph.run(jobs);
+  std::vector<DemoPartResult> results;
+  for (const auto& plan : plans)
+    results.push_back(plan->result());
 
   std::vector<analysis::report::ReportPart> report_parts;
   nlohmann::ordered_json json;

@@ -1,12 +1,14 @@
 // The closed-loop demo of one benchmark part (truecut demo): every step is a
-// truecut command run as a child process, logged with its command line in
+// truecut command run as a child process, written with its command line to
 // DIR/<part>/commands.sh, so a user can repeat any step by hand.
 #pragma once
 
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "step_graph.hpp"
 #include "truecut/sim/measure/cmm.hpp"
 
 namespace truecut::cli {
@@ -65,11 +67,30 @@ struct DemoPartResult {
   std::vector<DemoSurface> surfaces;
   std::vector<DemoStage> stages;
   std::filesystem::path first_field_dir;  // field.tcf, audit.json, compensation_matrix.csv
-  double wall_s = 0;
+  double wall_s = 0;                      // from the demo's start to this part's last step
 };
 
-// Runs the steps; throws std::runtime_error naming the failed step and its
-// log when a command fails.
-DemoPartResult run_demo_part(const std::string& part, const DemoOptions& options);
+// One part's steps, added to a StepGraph that runs them with other parts'
+// (the order of commands.sh, the seeds and the stages are those of the
+// plan, whatever runs at once). Each step's output goes to
+// DIR/<part>/logs/NN.log, NN its number in commands.sh.
+class DemoPart {
+ public:
+  DemoPart(std::string part, const DemoOptions& options);
+  DemoPart(const DemoPart&) = delete;
+  DemoPart& operator=(const DemoPart&) = delete;
+  ~DemoPart();
+
+  // The step that generates the part (`truecut part`).
+  void plan_generation(StepGraph& graph);
+  // The other steps; reads the part.json the generation wrote.
+  void plan_stages(StepGraph& graph);
+  // Once the graph has run: the stages with their CMM measurements.
+  DemoPartResult result() const;
+
+ private:
+  struct Plan;
+  std::unique_ptr<Plan> plan_;
+};
 
 }  // namespace truecut::cli
