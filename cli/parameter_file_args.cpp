@@ -11,10 +11,15 @@ interp::LengthUnits length_units_option(const ParsedArgs& a, const std::string& 
 
 std::optional<interp::ParameterFile> parameter_file_from_args(const ParsedArgs& a) {
   const interp::LengthUnits units = length_units_option(a, "var-units");
-  if (a.value("var-units") && !a.value("var-file"))
-    throw UsageError("--var-units needs --var-file");
   const auto file = a.value("var-file");
-  if (!file) return std::nullopt;
+  // Without a file, the machine's units alone: where the offset
+  // parameters (#5211.., #5221..) keep their lengths.
+  if (!file) {
+    if (!a.value("var-units")) return std::nullopt;
+    interp::ParameterFile empty;
+    empty.units = units;
+    return empty;
+  }
   return interp::ParameterFile::load(*file, units);
 }
 

@@ -82,13 +82,13 @@ void BlockExecutor::restore_setup() {
   if (index < 1 || index > 9) index = 1;
   const int base = coord_system_base(index);
   for (int i = 0; i < 6; ++i)
-    s_.g5x_mm[i] = s_.to_machine(i, params_.get(base + i));
+    s_.g5x_mm[i] = s_.from_param(i, params_.get(base + i));
   s_.rotation_deg = params_.get(base + kCoordSystemRotation);
   s_.coord_index = index;
   // LinuxCNC restores the G92 offsets for any non-zero #5210, not only 1.
   if (params_.get(kG92Enabled) != 0.0)
     for (int i = 0; i < 6; ++i)
-      s_.g92_mm[i] = s_.to_machine(i, params_.get(kG92Offsets + i));
+      s_.g92_mm[i] = s_.from_param(i, params_.get(kG92Offsets + i));
 }
 
 void BlockExecutor::start_program() {
@@ -461,10 +461,7 @@ void BlockExecutor::set_units(LengthUnits units) {
     fail(codes_.g_column[group(GGroup::kUnits)],
          "changing units (G20/G21) with cutter radius compensation on is not supported (G40 "
          "first)");
-  if (units != s_.units) {
-    convert_offset_parameters(params_, units == LengthUnits::kInch ? 1.0 / kMmPerInch : kMmPerInch);
-    s_.units = units;
-  }
+  s_.units = units;
   out_.emit(UseLengthUnits{units});
 }
 
@@ -477,7 +474,7 @@ void BlockExecutor::emit_offsets() {
 void BlockExecutor::select_coord_system(int index) {
   const int base = coord_system_base(index);
   for (int i = 0; i < 6; ++i)
-    s_.g5x_mm[i] = s_.to_machine(i, params_.get(base + i));
+    s_.g5x_mm[i] = s_.from_param(i, params_.get(base + i));
   s_.rotation_deg = params_.get(base + kCoordSystemRotation);
   s_.coord_index = index;
   params_.set(kCoordSystemIndex, index);
@@ -595,7 +592,8 @@ void BlockExecutor::coord_system_data() {
   const int base = coord_system_base(index);
   if (l == 2) {
     for (int i = 0; i < 6; ++i)
-      if (b_->has(kAxisLetters[i])) params_.set(base + i, b_->value(kAxisLetters[i]));
+      if (b_->has(kAxisLetters[i]))
+        params_.set(base + i, s_.to_param(i, s_.to_machine(i, b_->value(kAxisLetters[i]))));
     if (b_->has('r')) params_.set(base + kCoordSystemRotation, b_->value('r'));
   } else {
     set_origin_at_tool(base);
@@ -605,7 +603,7 @@ void BlockExecutor::coord_system_data() {
     const Axes6 old_g5x = s_.g5x_mm, program = s_.program_position();
     const double old_rotation = s_.rotation_deg;
     for (int i = 0; i < 6; ++i)
-      s_.g5x_mm[i] = s_.to_machine(i, params_.get(base + i));
+      s_.g5x_mm[i] = s_.from_param(i, params_.get(base + i));
     s_.rotation_deg = params_.get(base + kCoordSystemRotation);
     if (s_.rotation_deg != old_rotation && (s_.g92_mm.x != 0 || s_.g92_mm.y != 0)) {
       // rs274 turns the program position into the new frame without the
@@ -643,17 +641,18 @@ void BlockExecutor::set_origin_at_tool(int base) {
     const Axes6 g5x = s_.to_program(s_.g5x_mm);
     for (int i = 0; i < 6; ++i)
       if (b_->has(kAxisLetters[i]))
-        params_.set(base + i, prog[i] + g5x[i] - b_->value(kAxisLetters[i]));
+        params_.set(base + i, s_.to_param(i, s_.to_machine(i, prog[i] + g5x[i] -
+                                                                  b_->value(kAxisLetters[i]))));
     return;
   }
   const Axes6& m = s_.position_mm;
   for (int i = 2; i < 6; ++i)
     if (b_->has(kAxisLetters[i]))
-      params_.set(base + i, s_.to_program(i, m[i] - s_.g92_mm[i] - s_.tool_offset_mm[i]) -
-                                b_->value(kAxisLetters[i]));
+      params_.set(base + i, s_.to_param(i, m[i] - s_.g92_mm[i] - s_.tool_offset_mm[i] -
+                                               s_.to_machine(i, b_->value(kAxisLetters[i]))));
   if (!b_->has('x') && !b_->has('y')) return;
-  double x = m.x - s_.tool_offset_mm.x - s_.to_machine(0, params_.get(base));
-  double y = m.y - s_.tool_offset_mm.y - s_.to_machine(1, params_.get(base + 1));
+  double x = m.x - s_.tool_offset_mm.x - s_.from_param(0, params_.get(base));
+  double y = m.y - s_.tool_offset_mm.y - s_.from_param(1, params_.get(base + 1));
   rotate_xy_deg(x, y, -rotation);
   x -= s_.g92_mm.x;
   y -= s_.g92_mm.y;
@@ -662,8 +661,8 @@ void BlockExecutor::set_origin_at_tool(int base) {
   x += s_.g92_mm.x;
   y += s_.g92_mm.y;
   rotate_xy_deg(x, y, rotation);
-  params_.set(base, s_.to_program(0, m.x - s_.tool_offset_mm.x - x));
-  params_.set(base + 1, s_.to_program(1, m.y - s_.tool_offset_mm.y - y));
+  params_.set(base, s_.to_param(0, m.x - s_.tool_offset_mm.x - x));
+  params_.set(base + 1, s_.to_param(1, m.y - s_.tool_offset_mm.y - y));
 }
 
 void BlockExecutor::g92_offsets(int code) {
@@ -680,7 +679,7 @@ void BlockExecutor::g92_offsets(int code) {
     if (!any) fail(codes_.g_column[0], "G52 needs at least one axis word");
     axes_used_ = true;
     for (int i = 0; i < 6; ++i)
-      params_.set(kG92Offsets + i, s_.to_program(i, s_.g92_mm[i]));
+      params_.set(kG92Offsets + i, s_.to_param(i, s_.g92_mm[i]));
     params_.set(kG92Enabled, 1);
   } else if (code == 920) {
     bool any = false;
@@ -695,7 +694,7 @@ void BlockExecutor::g92_offsets(int code) {
     if (!any) fail(codes_.g_column[0], "G92 needs at least one axis word");
     axes_used_ = true;
     for (int i = 0; i < 6; ++i)
-      params_.set(kG92Offsets + i, s_.to_program(i, s_.g92_mm[i]));
+      params_.set(kG92Offsets + i, s_.to_param(i, s_.g92_mm[i]));
     params_.set(kG92Enabled, 1);
   } else if (code == 921 || code == 922) {
     s_.g92_mm = Axes6{};
@@ -705,7 +704,7 @@ void BlockExecutor::g92_offsets(int code) {
     params_.set(kG92Enabled, 0);
   } else {  // G92.3
     for (int i = 0; i < 6; ++i)
-      s_.g92_mm[i] = s_.to_machine(i, params_.get(kG92Offsets + i));
+      s_.g92_mm[i] = s_.from_param(i, params_.get(kG92Offsets + i));
     params_.set(kG92Enabled, 1);
   }
   out_.emit(SetG92Offset{s_.to_program(s_.g92_mm)});
@@ -715,7 +714,7 @@ void BlockExecutor::go_home(int code) {
   const int base = (code == 280 || code == 281) ? kG28Home : kG30Home;
   if (code == 281 || code == 301) {  // store the current machine position
     for (int i = 0; i < 6; ++i)
-      params_.set(base + i, s_.to_program(i, s_.position_mm[i]));
+      params_.set(base + i, s_.to_param(i, s_.position_mm[i]));
     return;
   }
   if (codes_.g[kMotion] >= 0)
@@ -731,13 +730,13 @@ void BlockExecutor::go_home(int code) {
   s_.position_mm = via;
   Axes6 home = via;
   for (int i = 0; i < 6; ++i)
-    if (!any || b_->has(kAxisLetters[i])) home[i] = s_.to_machine(i, params_.get(base + i));
+    if (!any || b_->has(kAxisLetters[i])) home[i] = s_.from_param(i, params_.get(base + i));
   if (s_.rotation_deg != 0) {
     // rs274 takes the home's program coordinates for the programmed axes
     // (in the rotated frame) and keeps the others'.
     Axes6 all;
     for (int i = 0; i < 6; ++i)
-      all[i] = s_.to_machine(i, params_.get(base + i));
+      all[i] = s_.from_param(i, params_.get(base + i));
     const Axes6 home_program = s_.program_position(all);
     Axes6 p = s_.program_position(via);
     for (int i = 0; i < 6; ++i)
@@ -1117,7 +1116,7 @@ void BlockExecutor::end_program(bool pallet_shuttle) {
   check_nurbs_closed(1, "the program end");
   const int base = coord_system_base(1);
   for (int i = 0; i < 6; ++i)
-    s_.g5x_mm[i] = s_.to_machine(i, params_.get(base + i));
+    s_.g5x_mm[i] = s_.from_param(i, params_.get(base + i));
   s_.rotation_deg = params_.get(base + kCoordSystemRotation);
   s_.coord_index = 1;
   out_.emit(SetG5xOffset{1, s_.to_program(s_.g5x_mm)});

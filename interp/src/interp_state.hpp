@@ -84,6 +84,16 @@ struct InterpState {
   std::string operation;
 
   double scale() const { return units == LengthUnits::kInch ? kMmPerInch : 1.0; }
+  // The offset parameters (#5161.., #5211.., #5221..) hold lengths in the
+  // machine's units, whatever G20/G21 is in force, as in rs274 (the
+  // parameter file's units: its INI's LINEAR_UNITS).
+  LengthUnits machine_units = LengthUnits::kMm;
+  double from_param(int axis, double value) const {
+    return axis < 3 && machine_units == LengthUnits::kInch ? value * kMmPerInch : value;
+  }
+  double to_param(int axis, double mm) const {
+    return axis < 3 && machine_units == LengthUnits::kInch ? mm / kMmPerInch : mm;
+  }
   // Program-unit value of machine-unit length `mm` on axis i (0..5).
   double to_program(int axis, double mm) const { return axis < 3 ? mm / scale() : mm; }
   double to_machine(int axis, double value) const { return axis < 3 ? value * scale() : value; }

@@ -86,9 +86,8 @@ ProgramRunner::ProgramRunner(const InterpreterOptions& options, CanonProgram& ou
   if (options.probe) executor_.set_probe(&options_.probe);
   for (const auto& [number, value] : options.parameters.values)
     params_.set(number, value);
-  // Stored in program units, mm at the start (convert_offset_parameters).
-  if (options.parameters.units == LengthUnits::kInch)
-    convert_offset_parameters(params_, kMmPerInch);
+  // The offset parameters stay in the file's (the machine's) units.
+  state_.machine_units = options.parameters.units;
   params_.set(kDebugSwitch, 1.0);  // rs274 shows (DEBUG,...) whatever the file holds
   executor_.restore_setup();
   params_.predefined = [this](std::string_view name) {

@@ -14,18 +14,6 @@ void sync_state_parameters(const InterpState& state, Parameters& params) {
     params.set(5420 + i, pos[i]);
 }
 
-void convert_offset_parameters(Parameters& params, double factor) {
-  auto scale_xyz = [&](int base) {
-    for (int i = 0; i < 3; ++i)
-      params.set(base + i, params.get(base + i) * factor);
-  };
-  scale_xyz(kG28Home);
-  scale_xyz(kG30Home);
-  scale_xyz(kG92Offsets);
-  for (int n = 1; n <= 9; ++n)
-    scale_xyz(coord_system_base(n));
-}
-
 std::optional<double> predefined_parameter(const InterpState& s, const Parameters& params,
                                            std::string_view name) {
   if (name.empty() || name[0] != '_') return std::nullopt;

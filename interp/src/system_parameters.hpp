@@ -29,8 +29,6 @@ constexpr int kCoordSystemRotation = 9;
 
 // Writes the read-only state parameters (#5220, #5400.., #5420..).
 void sync_state_parameters(const InterpState& state, Parameters& params);
-// Converts the stored linear offsets when the program switches units.
-void convert_offset_parameters(Parameters& params, double factor);
 // #<_x>, #<_metric>, ...; nullopt for names that are not predefined.
 std::optional<double> predefined_parameter(const InterpState& state, const Parameters& params,
                                            std::string_view name);

@@ -40,8 +40,9 @@ void BlockExecutor::tool_table_edit(int l) {
   const Axes6 prog = s_.program_position();
   Axes6 fixture;
   for (int i = 0; i < 6; ++i)
-    fixture[i] = params_.get(coord_system_base(kG593) + i);
+    fixture[i] = s_.to_program(i, s_.from_param(i, params_.get(coord_system_base(kG593) + i)));
   const bool rotated = s_.rotation_deg != 0;
+  const Axes6 old_offset_mm = e->offset_mm;
   for (int i = 0; i < 6; ++i) {
     const char letter = kAxisLetters[i];
     if (!b_->has(letter)) continue;
@@ -56,14 +57,19 @@ void BlockExecutor::tool_table_edit(int l) {
     e->offset_mm[i] = s_.to_machine(i, offset);
   }
   if (l == 10 && rotated && (b_->has('x') || b_->has('y'))) {
-    // Under an XY rotation X and Y go together, as in rs274: the offset
-    // that puts the tool at the words (the current position for a missing
-    // one) in the rotated frame.
-    double x = s_.to_machine(0, b_->has('x') ? b_->value('x') : prog.x) + s_.g92_mm.x;
-    double y = s_.to_machine(1, b_->has('y') ? b_->value('y') : prog.y) + s_.g92_mm.y;
-    rotate_xy_deg(x, y, s_.rotation_deg);
-    e->offset_mm.x = s_.position_mm.x - s_.g5x_mm.x - x;
-    e->offset_mm.y = s_.position_mm.y - s_.g5x_mm.y - y;
+    // Under an XY rotation rs274 works in the rotated frame: the entry's X
+    // and Y turned into it, the given words' components replaced by the
+    // offset that puts the tool at them, the result turned back. A missing
+    // word keeps the entry's component in that frame, not the position's.
+    double px = s_.position_mm.x - s_.g5x_mm.x, py = s_.position_mm.y - s_.g5x_mm.y;
+    rotate_xy_deg(px, py, -s_.rotation_deg);
+    double tx = old_offset_mm.x, ty = old_offset_mm.y;
+    rotate_xy_deg(tx, ty, -s_.rotation_deg);
+    if (b_->has('x')) tx = px - s_.to_machine(0, b_->value('x')) - s_.g92_mm.x;
+    if (b_->has('y')) ty = py - s_.to_machine(1, b_->value('y')) - s_.g92_mm.y;
+    rotate_xy_deg(tx, ty, s_.rotation_deg);
+    e->offset_mm.x = tx;
+    e->offset_mm.y = ty;
   }
   if (b_->has('r')) e->diameter_mm = s_.to_machine(0, 2 * b_->value('r'));
   if (b_->has('i')) e->front_angle_deg = b_->value('i');

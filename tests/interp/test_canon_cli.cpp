@@ -64,9 +64,17 @@ TEST(CanonCli, ParameterFileSetsTheStartingSetup) {
   EXPECT_EQ(b.exit_code, 2);
   EXPECT_EQ(b.out, "");
   EXPECT_EQ(b.err.rfind(bad.string() + ":2:1: parameter 5220 after 5221 (line 1)", 0), 0u) << b.err;
-  auto units = run_process({cli_path().string(), "canon", "--var-units", "inch", prog.string()});
-  EXPECT_EQ(units.exit_code, 2);
-  EXPECT_NE(units.err.find("--var-units needs --var-file"), std::string::npos) << units.err;
+  // --var-units alone: the machine's units, where the offset parameters
+  // keep their lengths (25.4 mm set in G21 reads 1 on an inch machine).
+  const auto g10 = write(dir, "g10.ngc", "G21 G10 L2 P1 X25.4\n(DEBUG,#5221)\nM2\n");
+  for (const auto& [machine_units, shown] : std::vector<std::pair<std::string, std::string>>{
+           {"inch", "1.000000"}, {"mm", "25.400000"}}) {
+    auto units =
+        run_process({cli_path().string(), "canon", "--var-units", machine_units, g10.string()});
+    ASSERT_EQ(units.exit_code, 0) << units.err;
+    EXPECT_NE(units.out.find("MESSAGE(\"" + shown + "\")"), std::string::npos)
+        << machine_units << ": " << units.out;
+  }
   auto missing = run_process(
       {cli_path().string(), "canon", "--var-file", (dir / "none.var").string(), prog.string()});
   EXPECT_EQ(missing.exit_code, 2);

@@ -116,20 +116,17 @@ Outcome run_both(const Oracle& o, const fs::path& original,
   Outcome out;
   std::vector<std::string> rs274 = {o.rs274.string(), "-g", "-t",
                                     (o.work / "tools-inch.tbl").string()};
-  std::vector<std::string> truecut = {cli_path().string(),
-                                      "canon",
-                                      "--decimals",
-                                      "8",
-                                      "--b-axis",
-                                      "--tool-units",
-                                      "inch",
-                                      "--tool-table",
-                                      (o.work / "tools-inch.tbl").string()};
+  std::vector<std::string> truecut = {cli_path().string(), "canon", "--decimals", "8", "--b-axis",
+                                      "--tool-units", "inch", "--tool-table",
+                                      (o.work / "tools-inch.tbl").string(),
+                                      // rs274 without an INI: a machine in inches,
+                                      // where its offset parameters are kept.
+                                      "--var-units", "inch"};
   if (var_file) {
     const fs::path copy = o.work / "parameters.var";
     fs::copy_file(*var_file, copy, fs::copy_options::overwrite_existing);
     rs274.insert(rs274.end(), {"-v", copy.string()});
-    truecut.insert(truecut.end(), {"--var-file", var_file->string(), "--var-units", "inch"});
+    truecut.insert(truecut.end(), {"--var-file", var_file->string()});
   }
   rs274.push_back(program.filename().string());
   truecut.push_back(program.filename().string());
