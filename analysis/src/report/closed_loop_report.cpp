@@ -7,6 +7,7 @@
 #include <limits>
 #include <map>
 
+#include <tbb/parallel_for.h>
 #include <Eigen/Geometry>
 
 #include "truecut/analysis/report/deviation_image.hpp"
@@ -211,7 +212,11 @@ std::string closed_loop_html(const std::vector<ReportPart>& parts, const ReportO
       if (m.valid) limit_um = std::max(limit_um, std::abs(m.deviation_mm) * 1000.0);
     limit_um = 5.0 * std::ceil(limit_um / 5.0);  // axis labels people can read
     h += "<h3>Deviation maps (judged surfaces; grey: not judged)</h3><div>";
-    for (const auto& st : part.stages) {
+    // The stages' maps are independent (each reads its own machined mesh):
+    // made at once, written in the stages' order.
+    std::vector<std::string> figures(part.stages.size());
+    tbb::parallel_for(std::size_t{0}, part.stages.size(), [&](std::size_t k) {
+      const auto& st = part.stages[k];
       const offline::TriangleMesh machined = offline::read_mesh(st.machined_stl);
       sim::measure::CmmOptions exact;
       exact.sigma_mm = 0.0;
@@ -220,9 +225,11 @@ std::string closed_loop_html(const std::vector<ReportPart>& parts, const ReportO
                                  std::numeric_limits<double>::quiet_NaN());
       for (std::size_t i = 0; i < probes.size(); ++i)
         if (probes[i].valid) values[vp.vertex[i]] = probes[i].deviation_mm * 1000.0;
-      h += "<figure>" + png_img(render_mesh(nominal, values, limit_um), st.title) + "<figcaption>" +
-           html_escape(st.title) + "</figcaption></figure>";
-    }
+      figures[k] = "<figure>" + png_img(render_mesh(nominal, values, limit_um), st.title) +
+                   "<figcaption>" + html_escape(st.title) + "</figcaption></figure>";
+    });
+    for (const std::string& figure : figures)
+      h += figure;
     h += "</div>" + colour_bar_svg(limit_um, o.tolerance_um, "deviation µm");
 
     // Histograms.
