@@ -106,6 +106,8 @@ void ResimCache::bind(const Trace& trace, double max_period_s) {
   trace_ = &trace;
   rows_ = trace.rows();
   max_period_s_ = max_period_s;
+  const std::size_t run_bytes = sizeof(Run) + 2 * sizeof(double) * std::max<std::size_t>(rows_, 1);
+  capacity_ = std::min(max_runs_, std::max(kMinRuns, kBytesPerJoint / run_bytes));
   for (auto& r : runs_)
     r.clear();
 }

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -59,11 +60,17 @@ struct Simulated {
 // depends only on its own parameters (sim::MachineModel::step_joint), so a
 // model that differs from an earlier one in another joint's effects (a
 // column of a Jacobian, a candidate) re-simulates only the joints that
-// changed; the rest is read back, bit for bit. The few most recent runs per
-// joint are kept. Safe to share between threads.
+// changed; the rest is read back, bit for bit. The most recent runs per
+// joint are kept, as many as fit in kBytesPerJoint (at least kMinRuns, at
+// most runs_per_joint): a fit returns to a model it left several columns or
+// candidates ago, and a run of a short recording is small (1055 rows:
+// 17 kB) while it costs tens of milliseconds to simulate again. Safe to
+// share between threads.
 class ResimCache {
  public:
-  explicit ResimCache(std::size_t runs_per_joint = 6) : capacity_(runs_per_joint) {}
+  static constexpr std::size_t kBytesPerJoint = std::size_t{16} << 20;
+  static constexpr std::size_t kMinRuns = 6;
+  explicit ResimCache(std::size_t runs_per_joint = SIZE_MAX) : max_runs_(runs_per_joint) {}
   ResimCache(const ResimCache&) = delete;
   ResimCache& operator=(const ResimCache&) = delete;
 
@@ -81,7 +88,8 @@ class ResimCache {
   const Trace* trace_ = nullptr;
   std::size_t rows_ = 0;
   double max_period_s_ = 0.0;
-  std::size_t capacity_;
+  std::size_t max_runs_;
+  std::size_t capacity_ = 0;  // for the bound trace
   std::array<std::vector<std::shared_ptr<const Run>>, sim::kJointCount> runs_;  // most recent last
   void bind(const Trace& trace, double max_period_s);
 };
