@@ -161,6 +161,27 @@ TEST(RewriteCycles, AHoleInG18IsCorrectedAlongY) {
   EXPECT_EQ(feeds, 1) << r.text;
 }
 
+// The next operation's retract after the last, corrected hole (found by
+// fuzzing the rewrite): it names only Z, so it is written with X Y Z and
+// goes where the original went, not above the corrected hole.
+TEST(RewriteCycles, TheNextOperationsRetractReturnsToTheOriginalHole) {
+  const std::string prog =
+      "G21 G17 G90 G94\nT2 M6\nG43 H2\nS1000 M3\nG0 X0 Y0 Z10\n(OPERATION: HOLES)\n"
+      "G99 G81 X10 Y5 Z-3 R2 F100\nG80\n(OPERATION: REST)\nG0 Z20\nM30\n";
+  const std::vector<Hole> holes = {{V(10, 5, -3), V(0.02, -0.01, 0.015)}};
+  const RewriteResult r = rewrite_program(prog, "p.ngc", clusters(holes), options());
+  EXPECT_EQ(r.summary.holes_rewritten, 1);
+  EXPECT_EQ(r.summary.rapids_rewritten, 1);
+  const CanonProgram p = Interpreter(options().interpreter).run_text(r.text, "p.ngc");
+  const auto* last = std::get_if<StraightTraverse>(&p.calls.back().op);
+  for (auto it = p.calls.rbegin(); !last && it != p.calls.rend(); ++it)
+    last = std::get_if<StraightTraverse>(&it->op);
+  ASSERT_NE(last, nullptr) << r.text;
+  EXPECT_EQ(last->end.x, 10) << r.text;
+  EXPECT_EQ(last->end.y, 5) << r.text;
+  EXPECT_EQ(last->end.z, 20) << r.text;
+}
+
 void expect_refused(const std::string& prog, int line, const std::string& message) {
   const std::vector<Hole> holes = {{V(10, 5, -3), V(0.02, 0, 0)}, {V(20, 5, -3), V(0.02, 0, 0)}};
   try {

@@ -500,10 +500,11 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     if (ctx.canned_cycle == 0) cycle_words_pending = false;
     const bool follows_comp = after_comp;  // starts from a compensated point
     after_comp = ctx.cutter_comp;
-    if ((in_op || turned) && !feed && displaced) {
-      // A rapid after a compensated point: written with all of X Y Z (and A
-      // and C when they were turned), so the axes it does not name come
-      // back to the original position.
+    if (!feed && displaced) {
+      // A rapid after a compensated point, in the operation or the first
+      // after it (the next operation's retract): written with all of X Y Z
+      // (and A and C when they were turned), so the axes it does not name
+      // come back to the original position.
       if (ctx.file == 0 && motions_per_line[ctx.line] != 1) refuse_canned_cycle(file, ctx.line);
       if (ctx.file != 0 || motions_per_line[ctx.line] != 1)
         throw GcodeError({file, ctx.line, 0},
