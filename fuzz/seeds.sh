@@ -11,6 +11,7 @@ mkdir -p "$2"
 d=$(realpath "$2") truecut=$(realpath -m "${3:-build/truecut}")
 cd "$(dirname "$0")/.."
 case $target in
+  rewrite) cp fuzz/seeds/rewrite/*.ngc "$d" ;;
   gcode|expression) find examples tests/interp/corpus -name '*.ngc' -size -64k -exec cp -t "$d" {} + 2>/dev/null || true ;;
   tool_table) find examples tests -name '*.tbl' -exec cp -t "$d" {} + 2>/dev/null || true ;;
   parameter_file) find examples tests -name '*.var' -exec cp -t "$d" {} + 2>/dev/null || true ;;

@@ -17,7 +17,7 @@ if [ "${1:-}" = "--cpu" ]; then
 fi
 seconds=${1:-60}
 shift || true
-all=(gcode expression tool_table parameter_file mesh field_file ini hal machine_json part_json recording)
+all=(gcode rewrite expression tool_table parameter_file mesh field_file ini hal machine_json part_json recording)
 targets=("${@:-${all[@]}}")
 [ ${#targets[@]} -eq 0 ] && targets=("${all[@]}")
 command -v clang++ >/dev/null || { echo "fuzz.sh: clang++ is not installed (apt install clang libclang-rt-14-dev)" >&2; exit 2; }
