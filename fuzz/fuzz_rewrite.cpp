@@ -43,7 +43,8 @@ std::string operation_of(std::string_view text) {
   std::size_t e = b;
   while (e < text.size() && text[e] != ')' && text[e] != '\n')
     ++e;
-  return std::string(text.substr(b, e - b));
+  // The API's precondition (the CLI refuses an empty --operation itself).
+  return e > b ? std::string(text.substr(b, e - b)) : "OP";
 }
 
 }  // namespace
