@@ -965,5 +965,23 @@ TEST(Rewrite, GivenToolRadiusThatDiffersFromTheTableIsRefused) {
   EXPECT_EQ(error_of<std::invalid_argument>(kThreeOps, o), "tool radius must be >= 0 mm");
 }
 
+// A move far beyond any machine's travel (found by fuzzing: X of 1e31 mm) would be
+// densified into more G1 points than an int holds; it is refused with its
+// line instead.
+TEST(Rewrite, AMoveTooLongToDensifyIsRefusedWithItsLine) {
+  const std::string prog =
+      "G21 G17 G90 G94\nT1 M6\nG43 H1\nG0 X0 Y0 Z1\n(OPERATION: FAR)\nG1 Z0 F300\n"
+      "G1 X10000000000000000000000000000000\nG0 Z10\nM30\n";
+  const auto m = plane_matrix(-4, 4, -4, 4, 0, 0.5, V(0.01, 0, 0));
+  try {
+    rewrite_program(prog, "p.ngc", m, options("FAR", CutType::kPeripheral));
+    FAIL() << "accepted";
+  } catch (const GcodeError& e) {
+    EXPECT_EQ(e.where().line, 7) << e.what();
+    EXPECT_NE(std::string(e.what()).find("longer than any part's move"), std::string::npos)
+        << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace truecut::interp

@@ -90,7 +90,8 @@ Point3 tangent_at(const Helix& h, double f) noexcept {
 int arc_pieces_for_chord(double radius_mm, double sweep_rad, double chord_tolerance_mm) noexcept {
   if (!(radius_mm > chord_tolerance_mm)) return 1;
   const double max_piece_rad = 2.0 * std::acos(1.0 - chord_tolerance_mm / radius_mm);
-  return std::max(1, static_cast<int>(std::ceil(std::fabs(sweep_rad) / max_piece_rad - 1e-9)));
+  const double n = std::ceil(std::fabs(sweep_rad) / max_piece_rad - 1e-9);
+  return static_cast<int>(std::clamp(n, 1.0, 1e7));  // as pieces_for_step
 }
 
 int pieces_for_step(double length_mm, double max_step_mm) noexcept {

@@ -115,8 +115,10 @@ void check_options(const RewriteOptions& o) {
 // Pieces so that neither the point the compensation is looked up for (tip,
 // or ball centre) nor the cutting edge turning about it (R per radian of
 // the tool axis) moves more than one step per piece.
-int pieces_for_step(const ToolPath& path, const ToolPath::Move& m, const CallContext& ctx,
-                    const RewriteOptions& o, double radius_mm) {
+// Returned as a real number: a move beyond any machine's travel asks for
+// more pieces than an int holds (the caller refuses such a move).
+double pieces_for_step(const ToolPath& path, const ToolPath::Move& m, const CallContext& ctx,
+                       const RewriteOptions& o, double radius_mm) {
   constexpr int kSamples = 64;
   double length_mm = 0, turn_rad = 0;
   ToolPoint prev = path.tool_point(m.start, ctx);
@@ -130,8 +132,12 @@ int pieces_for_step(const ToolPath& path, const ToolPath::Move& m, const CallCon
     prev = t;
   }
   const double longest = std::max(length_mm, radius_mm * turn_rad);
-  return std::max(1, static_cast<int>(std::ceil(longest / o.step_mm - 1e-9)));
+  return std::max(1.0, std::ceil(longest / o.step_mm - 1e-9));
 }
+
+// More G1 points than this for one move (500 m at the default 0.5 mm step)
+// is refused: no part's move is that long.
+constexpr double kMaxPiecesPerMove = 1e6;
 
 // Pieces of an arc so that no chord's sagitta r (1 - cos(sweep / 2n))
 // exceeds the tolerance (r: the larger of the start and end radii).
@@ -567,8 +573,14 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
 
     // Densify and compensate.
     const double radius_mm = radius_by_tool.at(ctx.tool);
-    const int n =
-        std::max(pieces_for_step(path, move, ctx, o, radius_mm), pieces_for_chord(move, o));
+    const double pieces = std::max(pieces_for_step(path, move, ctx, o, radius_mm),
+                                   static_cast<double>(pieces_for_chord(move, o)));
+    if (!(pieces <= kMaxPiecesPerMove))
+      throw GcodeError({file, ctx.line, 0},
+                       rt::format_printf("move would be written as %.3g G1 points of at most %g mm "
+                                         "(more than %.0f): it is longer than any part's move",
+                                         pieces, o.step_mm, kMaxPiecesPerMove));
+    const int n = static_cast<int>(pieces);
     std::vector<Vec5> points(n);
     std::vector<Correction> corrections(n);
     bool all_zero = true, rotated = false;
