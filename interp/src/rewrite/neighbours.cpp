@@ -107,6 +107,11 @@ Nearest NeighbourSearch::nearest(const ToolPoint& tool) const {
   const Eigen::Vector3d& a = tool.axis;
   out.query_mm = type_ == CutType::kBall ? Eigen::Vector3d(t + radius_mm_ * a) : t;
   const Eigen::Vector3d& q = out.query_mm;
+  // More than a cell outside the points' box, no cell searched below holds
+  // a point; and far enough out (or NaN) a cell index is not an integer.
+  if (!((q.array() >= lower_mm_.array() - cell_mm_).all() &&
+        (q.array() <= upper_mm_.array() + cell_mm_).all()))
+    return out;
   std::array<double, 3> rank{};
   const Eigen::Vector3d c = ((q - origin_mm_) / cell_mm_).array().floor();
   for (int di = -1; di <= 1; ++di)
