@@ -12,6 +12,9 @@ constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 // Degrees to radians after reducing to [-180, 180] (exact), so that many
 // turns of C lose no precision.
 double to_rad(double deg) noexcept {
+  // remainder() of glibc is slow, and within [-180, 180] it is the identity
+  // (a tie at 180 rounds to the even quotient 0).
+  if (std::fabs(deg) <= 180.0) return deg * kRadPerDeg;
   return std::remainder(deg, 360.0) * kRadPerDeg;
 }
 
