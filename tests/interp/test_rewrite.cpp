@@ -983,5 +983,23 @@ TEST(Rewrite, AMoveTooLongToDensifyIsRefusedWithItsLine) {
   }
 }
 
+// A G5 far longer than any part's move is refused with its line before its
+// chords are densified (fuzzing found one taking 12 s to be refused).
+TEST(Rewrite, ASplineTooLongToDensifyIsRefusedWithItsLine) {
+  const std::string prog =
+      "G21 G17 G90 G94\nT1 M6\nG43 H1\nG0 X0 Y0 Z1\n(OPERATION: FAR)\nG1 Z0 F300\n"
+      "G5 I0 J2000000 P0 Q-2000000 X10 Y0\nG0 Z10\nM30\n";
+  const auto m = plane_matrix(-4, 4, -4, 4, 0, 0.5, V(0.01, 0, 0));
+  try {
+    rewrite_program(prog, "p.ngc", m, options("FAR", CutType::kPeripheral));
+    FAIL() << "accepted";
+  } catch (const GcodeError& e) {
+    EXPECT_EQ(e.where().line, 7) << e.what();
+    EXPECT_NE(std::string(e.what()).find("spline would be written as at least"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace truecut::interp

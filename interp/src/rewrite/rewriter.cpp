@@ -135,8 +135,9 @@ double pieces_for_step(const ToolPath& path, const ToolPath::Move& m, const Call
   return std::max(1.0, std::ceil(longest / o.step_mm - 1e-9));
 }
 
-// More G1 points than this for one move (500 m at the default 0.5 mm step)
-// is refused: no part's move is that long.
+// More G1 points than this for one program line (its move, or all the
+// chords of a G5 line together; 500 m at the default 0.5 mm step) is
+// refused: no part's move is that long.
 constexpr double kMaxPiecesPerMove = 1e6;
 
 // Pieces of an arc so that no chord's sagitta r (1 - cos(sweep / 2n))
@@ -192,6 +193,19 @@ std::set<int> expand_splines(CanonProgram& program, const std::vector<RawLine>& 
                        "lines or arcs");
     const double units_mm = c.context.units == LengthUnits::kInch ? 25.4 : 1.0;
     const std::vector<NurbsPoint2> chord_ends = nurbs_polyline(*n, o.chord_tolerance_mm / units_mm);
+    // Its G1 points number at least its length over the step: refused here,
+    // before a million of them are corrected only to be refused later.
+    double length_mm = 0;
+    NurbsPoint2 from{n->points.front().x, n->points.front().y};
+    for (const NurbsPoint2& q : chord_ends) {
+      length_mm += std::hypot(q[0] - from[0], q[1] - from[1]) * units_mm;
+      from = q;
+    }
+    if (!(length_mm / o.step_mm <= kMaxPiecesPerMove))
+      throw GcodeError(at, rt::format_printf("spline would be written as at least %.3g G1 points of "
+                                             "at most %g mm (more than %.0f): it is longer than "
+                                             "any part's move",
+                                             length_mm / o.step_mm, o.step_mm, kMaxPiecesPerMove));
     for (const NurbsPoint2& q : chord_ends) {
       StraightFeed f;
       f.end = n->end;
@@ -323,6 +337,9 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
   s.lines_in = static_cast<int>(raw.size());
   double sum_mm = 0;
   std::map<int, PlannedLine> plan;  // by 1-based line
+  // G1 points written for the current line: a G5 line's chords add up.
+  int points_line = 0;
+  double points_on_line = 0;
   std::map<int, RewrittenLine> expected;
   ToolPath path(o.kinematics);
   double feed_upm = 0;
@@ -575,11 +592,17 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     const double radius_mm = radius_by_tool.at(ctx.tool);
     const double pieces = std::max(pieces_for_step(path, move, ctx, o, radius_mm),
                                    static_cast<double>(pieces_for_chord(move, o)));
-    if (!(pieces <= kMaxPiecesPerMove))
+    if (ctx.line != points_line) {
+      points_line = ctx.line;
+      points_on_line = 0;
+    }
+    points_on_line += pieces;
+    if (!(points_on_line <= kMaxPiecesPerMove))
       throw GcodeError({file, ctx.line, 0},
-                       rt::format_printf("move would be written as %.3g G1 points of at most %g mm "
-                                         "(more than %.0f): it is longer than any part's move",
-                                         pieces, o.step_mm, kMaxPiecesPerMove));
+                       rt::format_printf("move would be written as %s%.3g G1 points of at most %g "
+                                         "mm (more than %.0f): it is longer than any part's move",
+                                         points_on_line > pieces ? "at least " : "",
+                                         points_on_line, o.step_mm, kMaxPiecesPerMove));
     const int n = static_cast<int>(pieces);
     std::vector<Vec5> points(n);
     std::vector<Correction> corrections(n);
