@@ -38,9 +38,8 @@ const char* kHelp =
     "  --nominal FILE.stl     nominal part: where the cutting model's dexels sit\n"
     "  --part FILE.json       part.json: stock and tools\n"
     "  --tools FILE.tbl       LinuxCNC tool table\n"
-    "  --var-file FILE.var    the controller's parameter file (LinuxCNC .var): work\n"
-    "                         offsets, G92 and homes the program starts from\n"
-    "  --var-units mm|inch    its length units (default mm)\n"
+    ;
+const char* kHelpOptions =
     "options:\n"
     "  --out DIR              output folder (created)\n"
     "  --field FILE.tcf       correction field for truecut_comp (real-time compensation)\n"
@@ -101,7 +100,7 @@ int run_machine(const std::vector<std::string>& argv) {
                              {"help", false}});
   ParsedArgs a(argv, specs);
   if (a.flag("help")) {
-    std::fputs(kHelp, stdout);
+    std::fputs((std::string(kHelp) + kVarFileHelp + kHelpOptions).c_str(), stdout);
     return kExitOk;
   }
   if (a.positionals().size() != 2) throw UsageError("expected MACHINE.json PROGRAM.ngc");
@@ -125,7 +124,6 @@ int run_machine(const std::vector<std::string>& argv) {
     job.parameters = *v;
   }
   job.parameters_in_inches = length_units_option(a, "var-units") == interp::LengthUnits::kInch;
-  if (a.value("var-units") && !job.parameters) throw UsageError("--var-units needs --var-file");
   job.out_dir = *out;
   job.period_us = a.number("period-us", 1000.0, 50.0, 100000.0);
   job.dexel_spacing_mm = a.number("dexel-spacing", 0.1, 0.01, 5.0);

@@ -153,9 +153,12 @@ extern "C" TC_COMPONENT_EXPORT int truecut_component_init(const tc_hal_api_t* ap
     const std::string units = args.take_or("parameter-units", "mm");
     if (units != "mm" && units != "inch")
       throw InitError("parameter-units='" + units + "' must be mm or inch");
+    const LengthUnits machine_units = units == "inch" ? LengthUnits::kInch : LengthUnits::kMm;
+    // Without a file the units still say where the offset parameters keep
+    // their lengths (the machine's units, as LinuxCNC's [TRAJ]LINEAR_UNITS).
+    iopt.parameters.units = machine_units;
     if (auto file = args.take("parameter-file"); file && !file->empty())
-      iopt.parameters =
-          ParameterFile::load(*file, units == "inch" ? LengthUnits::kInch : LengthUnits::kMm);
+      iopt.parameters = ParameterFile::load(*file, machine_units);
     const PlannerOptions popt = planner_options(args);
     auto names = instance_names(args, "interp_planner", 1);
     args.expect_consumed("interp_planner");

@@ -218,7 +218,27 @@ TEST(CliRun, ParameterFileOffsetsTheMachinedProgram) {
   EXPECT_EQ(2, far.exit_code);
   EXPECT_NE(far.err.find("program.ngc"), std::string::npos) << far.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "far"));
-  auto units = with({"--out", (dir / "u").string(), "--var-units", "inch"});
-  EXPECT_EQ(2, units.exit_code);
-  EXPECT_NE(units.err.find("--var-units needs --var-file"), std::string::npos) << units.err;
+  // --var-units without a file: the machine's units, in which G10 keeps the
+  // offset parameters (LinuxCNC's [TRAJ]LINEAR_UNITS). G10 L2 X25.4 under
+  // G21 stores 25.4 on a mm machine and 1 on an inch one; the program then
+  // goes to X#5221 (mm, G21) in G54: 25.4 + 25.4 against 1 + 25.4.
+  std::ofstream(part / "offsets.ngc") << "G21 G90 G17\nG10 L2 P1 X25.4\nG54\nG0 Z50\n"
+                                         "G0 X[#5221] Y0\nM30\n";
+  const std::vector<std::string> offsets = {"run", (part / "machine.json").string(),
+                                            (part / "offsets.ngc").string(), "--dexel-spacing",
+                                            "1"};
+  auto in_units = [&](const std::string& name, std::vector<std::string> extra) {
+    std::vector<std::string> a = offsets;
+    a.insert(a.end(), {"--out", (dir / name).string()});
+    a.insert(a.end(), extra.begin(), extra.end());
+    auto r = run_truecut(a);
+    EXPECT_EQ(0, r.exit_code) << r.err;
+    return last_row(dir / name / "trace.csv");
+  };
+  const auto mm = in_units("mm", {});
+  const auto inch = in_units("inch", {"--var-units", "inch"});
+  ASSERT_GE(mm.size(), 2u);
+  ASSERT_EQ(mm.size(), inch.size());
+  EXPECT_NEAR(mm[1] - inch[1], 25.4 - 1.0, 1e-6);  // x_cmd
+  EXPECT_NE(read_file(dir / "inch" / "run.ini").find("PARAMETER_UNITS = inch"), std::string::npos);
 }

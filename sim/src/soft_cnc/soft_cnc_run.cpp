@@ -56,10 +56,10 @@ void check_program(const SoftCncJob& job, const MachineDescription& machine) {
   try {
     interp::InterpreterOptions io;
     io.tools = interp::ToolTable::load(job.tools);
-    if (job.parameters)
-      io.parameters = interp::ParameterFile::load(*job.parameters, job.parameters_in_inches
-                                                                       ? interp::LengthUnits::kInch
-                                                                       : interp::LengthUnits::kMm);
+    const interp::LengthUnits units =
+        job.parameters_in_inches ? interp::LengthUnits::kInch : interp::LengthUnits::kMm;
+    io.parameters.units = units;  // as the planner component: units with or without a file
+    if (job.parameters) io.parameters = interp::ParameterFile::load(*job.parameters, units);
     const interp::Plan plan = interp::plan_program(interp::Interpreter(io).run_file(job.program),
                                                    soft_cnc_planner_options(job, machine));
     const ProgramTravel travel = program_travel(plan, machine.machine, job.program.string());
