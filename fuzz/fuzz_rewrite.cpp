@@ -57,6 +57,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   // The cut type from the input's length: all three paths get inputs.
   o.type = size % 3 == 0 ? CutType::kPeripheral : size % 3 == 1 ? CutType::kFace : CutType::kBall;
   o.interpreter.max_blocks = 20'000;  // an endless loop is an error, found quickly
+  // Moves hundreds of metres long are legal and take their time to densify
+  // (about 3 us a point): bounded like the blocks, so that slow means a defect.
+  o.max_points = 20'000;
   o.interpreter.tools =
       ToolTable::parse("T1 P1 D6 Z50\nT2 P2 D10 Z40\nT3 P3 D0.5 Z30\n", "fuzz.tbl");
   try {

@@ -1001,5 +1001,26 @@ TEST(Rewrite, ASplineTooLongToDensifyIsRefusedWithItsLine) {
   }
 }
 
+// The limit of G1 points over the whole operation stops the rewrite at the
+// line that goes past it: 10 + 10 + 10 mm at 0.5 mm are 20 points each.
+TEST(Rewrite, TheLimitOfWrittenPointsNamesTheLineThatPassesIt) {
+  const std::string prog =
+      "G21 G17 G90 G94\nT1 M6\nG43 H1\nG0 X0 Y0 Z1\n(OPERATION: OP)\nG1 Z0 F300\n"
+      "G1 X10\nG1 Y10\nG1 X0\nG0 Z10\nM30\n";
+  const auto m = plane_matrix(-4, 14, -4, 14, 0, 0.5, V(0.01, 0, 0));
+  RewriteOptions o = options("OP", CutType::kPeripheral);
+  o.max_points = 45;
+  try {
+    rewrite_program(prog, "p.ngc", m, o);
+    FAIL() << "accepted";
+  } catch (const GcodeError& e) {
+    EXPECT_EQ(e.where().line, 9) << e.what();
+    EXPECT_NE(std::string(e.what()).find("more than the limit of 45"), std::string::npos)
+        << e.what();
+  }
+  o.max_points = 1e6;
+  EXPECT_NO_THROW(rewrite_program(prog, "p.ngc", m, o));
+}
+
 }  // namespace
 }  // namespace truecut::interp

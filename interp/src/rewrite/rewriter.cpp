@@ -100,6 +100,7 @@ void check_options(const RewriteOptions& o) {
     throw std::invalid_argument("step must be > 0 mm (got " + std::to_string(o.step_mm) + ")");
   if (o.tool_radius_mm && (!(*o.tool_radius_mm >= 0) || !std::isfinite(*o.tool_radius_mm)))
     throw std::invalid_argument("tool radius must be >= 0 mm");
+  if (!(o.max_points > 0)) throw std::invalid_argument("the limit of G1 points must be > 0");
   if (!(o.chord_tolerance_mm > 0) || !std::isfinite(o.chord_tolerance_mm))
     throw std::invalid_argument("chord tolerance must be > 0 mm");
   if (!(o.reach_mm >= 0) || !std::isfinite(o.reach_mm))
@@ -339,7 +340,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
   std::map<int, PlannedLine> plan;  // by 1-based line
   // G1 points written for the current line: a G5 line's chords add up.
   int points_line = 0;
-  double points_on_line = 0;
+  double points_on_line = 0, points_written = 0;
   std::map<int, RewrittenLine> expected;
   ToolPath path(o.kinematics);
   double feed_upm = 0;
@@ -603,6 +604,12 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
                                          "mm (more than %.0f): it is longer than any part's move",
                                          points_on_line > pieces ? "at least " : "",
                                          points_on_line, o.step_mm, kMaxPiecesPerMove));
+    points_written += pieces;
+    if (!(points_written <= o.max_points))
+      throw GcodeError({file, ctx.line, 0},
+                       rt::format_printf("the operation's feed moves up to here need "
+                                         "%.3g G1 points, more than the limit of %.0f",
+                                         points_written, o.max_points));
     const int n = static_cast<int>(pieces);
     std::vector<Vec5> points(n);
     std::vector<Correction> corrections(n);

@@ -59,6 +59,10 @@ struct RewriteOptions {
   // tool of the operation (RewriteError naming the tool and both values).
   std::optional<double> tool_radius_mm;
   double step_mm = 0.5;  // densification distance, > 0
+  // G1 points the operation's feed moves may become in all, > 0 (a
+  // GcodeError at the line that goes past it). The default, 2e7, is
+  // 10 km of feed at 0.5 mm, about 800 MB of G-code.
+  double max_points = 2e7;
   // Arcs: the most a written chord may leave the programmed arc (its sagitta),
   // > 0. Pieces of `step_mm` alone leave R (1 - cos(step / 2R)) inside the
   // arc: 19 um on a 1 mm tool-centre radius, the size of the compensation.
