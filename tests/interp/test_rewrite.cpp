@@ -13,6 +13,7 @@
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/operations.hpp"
 #include "truecut/interp/rewrite.hpp"
+#include "truecut/interp/rs274_format.hpp"
 
 namespace truecut::interp {
 namespace {
@@ -1020,6 +1021,61 @@ TEST(Rewrite, TheLimitOfWrittenPointsNamesTheLineThatPassesIt) {
   }
   o.max_points = 1e6;
   EXPECT_NO_THROW(rewrite_program(prog, "p.ngc", m, o));
+}
+
+// The motion calls of operation `op`, as rs274 prints them.
+std::vector<std::string> motions_of(const std::string& text, const std::string& op) {
+  InterpreterOptions io;
+  io.tools = ToolTable::parse(kTools, "tools.tbl");
+  std::vector<std::string> out;
+  for (const CanonCall& c : Interpreter(io).run_text(text, "o.ngc").calls)
+    if (c.context.operation == op && is_motion(c.op)) out.push_back(format_rs274(c.op));
+  return out;
+}
+
+// Another operation's feed right after a corrected point (issue 22, point
+// 5): a G1 back to where the original was is written before its line, and
+// the other operation makes the very moves it made; an arc keeps its centre.
+TEST(Rewrite, TheNextOperationsFeedStartsFromTheOriginalPoint) {
+  const std::string head = "G21 G17 G90 G94\nT1 M6\nG43 H1\nG0 X0 Y0 Z1\n(OPERATION: OP)\n"
+                           "G1 Z0 F300\nG1 X10\n(OPERATION: B)\n";
+  const auto m = plane_matrix(-4, 24, -10, 14, 0, 0.5, V(0.01, -0.02, 0.005));
+  for (const std::string b : {"G1 X20\nG1 Y10\n", "G2 X20 Y0 I5 J0\nG1 Y10\n",
+                              "G3 X20 Y0 R5 F200\nG1 Y5\n"}) {
+    const std::string prog = head + b + "G0 Z10\nM30\n";
+    const RewriteResult r = rewrite_program(prog, "p.ngc", m, options("OP", CutType::kPeripheral));
+    const std::string first_b = b.substr(0, b.find('\n') + 1);
+    EXPECT_NE(r.text.find("\nG1 X10 Y0 Z0\n" + first_b), std::string::npos) << r.text;
+    EXPECT_NE(r.text.find("(truecut rewrite: 1 G1 move back from a corrected point"),
+              std::string::npos)
+        << r.text;
+    std::vector<std::string> want = motions_of(prog, "B");
+    want.insert(want.begin(), "STRAIGHT_FEED(10.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)");
+    EXPECT_EQ(motions_of(r.text, "B"), want) << r.text;
+    // The operation itself still ends on its corrected point.
+    const auto op = feeds_of(r.text, "OP");
+    ASSERT_FALSE(op.empty());
+    EXPECT_NEAR(op.back().x, 10.01, 1e-9);
+    EXPECT_NEAR(op.back().y, -0.02, 1e-9);
+  }
+  // A modal G2 continued without its word would turn into G1 after the G1
+  // back: refused by name.
+  const std::string modal = "G21 G17 G90 G94\nT1 M6\nG43 H1\nG0 X0 Y0 Z1\nG2 X0 Y0 Z0.5 I0 J-1 "
+                            "F300\n(OPERATION: OP)\nG1 Z0\nG1 X10\n(OPERATION: B)\n"
+                            "G2 X20 Y0 I5 J0\nG0 Z10\nM30\n";
+  EXPECT_NO_THROW(rewrite_program(modal, "p.ngc", m, options("OP", CutType::kPeripheral)));
+  const std::string no_word = "G21 G17 G90 G94\nT1 M6\nG43 H1\nG0 X0 Y0 Z1\n(OPERATION: OP)\n"
+                              "G1 Z0 F300\nG2 X10 Y0 I5 J0\n(OPERATION: B)\nX20 Y0 I5 J0\n"
+                              "G0 Z10\nM30\n";
+  try {
+    rewrite_program(no_word, "p.ngc", m, options("OP", CutType::kPeripheral));
+    FAIL() << "accepted";
+  } catch (const GcodeError& e) {
+    EXPECT_EQ(e.where().line, 9) << e.what();
+    EXPECT_NE(std::string(e.what()).find("continues a modal G2 without its G word"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

@@ -1,8 +1,9 @@
 // truecut::interp::rewrite_program on LinuxCNC's splines (issue 22, point
 // 5): a G5 or G5.1 of the rewritten operation is written as G1 chords of its
 // curve, each point corrected; splines outside the operation are copied; a
-// NURBS block in it, or a spline that would start from a corrected point,
-// is refused by name. The curves here are the test's own Bezier formulas
+// NURBS block in it, or one that would start from a corrected point, is
+// refused by name; a G5/G5.1 of another operation right after a corrected
+// point gets a G1 back to the original point before it. The curves here are the test's own Bezier formulas
 // from the words of the program (G5: P1 = start + (I, J), P2 = end + (P, Q);
 // G5.1: P1 = start + (I, J)), not the interpreter's NURBS code.
 #include <gtest/gtest.h>
@@ -155,13 +156,31 @@ TEST(RewriteSplines, SplinesOutsideTheOperationAreCopiedOrRefusedByName) {
       "G0 Z1\n(OPERATION: OTHER)\nG0 X0 Y0\nG1 Z0\nG5.1 X4 Y0 I2 J2\nG0 Z5\nM30\n";
   const RewriteResult r = rewrite_program(outside, "s.ngc", constant_matrix(), options());
   EXPECT_NE(r.text.find("\nG5.1 X4 Y0 I2 J2\n"), std::string::npos) << r.text;
-  // Right after a corrected move it would start from the corrected point.
+  // Right after a corrected move it would start from the corrected point: a
+  // G1 back to the original one is written before it, the spline kept.
   const std::string displaced =
       "G21 G90 G94\nT2 M6\nG43 H2\n(OPERATION: FACE)\nG0 X0 Y0 Z1\nG1 Z0 F100\nG1 X2\n"
       "(OPERATION: OTHER)\nG5.1 X4 Y0 I2 J2\nG0 Z5\nM30\n";
-  const std::string e = error_of(displaced);
-  EXPECT_NE(e.find("bad.ngc:9:"), std::string::npos) << e;
-  EXPECT_NE(e.find("would start from the corrected point"), std::string::npos) << e;
+  const RewriteResult d = rewrite_program(displaced, "s.ngc", constant_matrix(), options());
+  EXPECT_NE(d.text.find("\nG1 X2 Y0 Z0\nG5.1 X4 Y0 I2 J2\n"), std::string::npos) << d.text;
+  const CanonProgram again = Interpreter(options().interpreter).run_text(d.text, "s.ngc");
+  const NurbsFeed* spline = nullptr;
+  for (const CanonCall& c : again.calls)
+    if (const auto* n = std::get_if<NurbsFeed>(&c.op)) spline = n;
+  ASSERT_NE(spline, nullptr) << d.text;
+  ASSERT_EQ(spline->points.size(), 3u);
+  // Its control points as the words give them: start (2, 0), start + (I, J), end.
+  const std::array<P2, 3> want{P2{2, 0}, P2{4, 2}, P2{4, 0}};
+  for (size_t k = 0; k < 3; ++k) {
+    EXPECT_NEAR(spline->points[k].x, want[k][0], 1e-12) << k;
+    EXPECT_NEAR(spline->points[k].y, want[k][1], 1e-12) << k;
+  }
+  // A NURBS block there cannot have a move written into it.
+  const std::string block =
+      "G21 G90 G94\nT2 M6\nG43 H2\n(OPERATION: FACE)\nG0 X0 Y0 Z1\nG1 Z0 F100\nG1 X2\n"
+      "(OPERATION: OTHER)\nG5.2 X2 Y1 P1 L3\nX3 Y2 P1\nX4 Y0 P1\nG5.3\nG0 Z5\nM30\n";
+  const std::string e = error_of(block);
+  EXPECT_NE(e.find("G5.2 NURBS block right after a corrected move"), std::string::npos) << e;
   // A NURBS block in the operation spans several lines.
   const std::string nurbs =
       "G21 G90 G94\nT2 M6\nG43 H2\n(OPERATION: FACE)\nG0 X0 Y0 Z1\nG1 Z0 F100\n"

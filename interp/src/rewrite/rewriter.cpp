@@ -153,6 +153,7 @@ int pieces_for_chord(const ToolPath::Move& m, const RewriteOptions& o) {
 struct PlannedLine {               // what replaces one program line
   std::string residual;            // the line without its move, "" for none
   std::vector<std::string> moves;  // G1 lines, without terminators
+  bool last_verbatim = false;      // the last of `moves` is the source line itself
 };
 
 Axes6 end_of(const CanonOp& op) {
@@ -342,6 +343,9 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
   int points_line = 0;
   double points_on_line = 0, points_written = 0;
   std::map<int, RewrittenLine> expected;
+  // Lines of another operation kept as they are, after a G1 back from a
+  // corrected point to the original one: where that G1 ends.
+  std::map<int, Axes6> returns;
   ToolPath path(o.kinematics);
   double feed_upm = 0;
   // The feed in force before the current line: the output has the same
@@ -562,13 +566,66 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       turned = false;
       continue;
     }
-    if (!in_op || !feed) {
-      // A spline's call holds its control points, not its start: one that
-      // would start from a corrected point is not what the original cut.
-      if (std::holds_alternative<NurbsFeed>(c.op) && displaced)
+    if (!in_op && feed && displaced) {
+      // Another operation's feed right after a corrected point: a G1 back
+      // to the original point is written before its line, which is kept as
+      // it is, so the other operation cuts exactly what it did (an arc's
+      // centre and a spline's control points assume the original start).
+      const std::string& source = raw[ctx.line - 1].content;
+      if (const auto* n = std::get_if<NurbsFeed>(&c.op);
+          n && !line_has_g_code(source, 50) && !line_has_g_code(source, 51))
         throw GcodeError({file, ctx.line, 0},
-                         "G5/G5.1/G5.2 spline right after a corrected move: it would start from "
+                         "G5.2 NURBS block right after a corrected move: it would start from "
                          "the corrected point; put a move to its start (or a rapid) before it");
+      if (ctx.file != 0 || motions_per_line[ctx.line] != 1)
+        throw GcodeError({file, ctx.line, 0},
+                         "feed after a compensated move makes several moves (loop, subroutine "
+                         "or G28/G30): the way back to the original point cannot be written "
+                         "before it; put a move to its start (or a rapid) before it");
+      if (ctx.feed_mode == FeedMode::kInverseTime)
+        throw GcodeError({file, ctx.line, 0},
+                         "feed after a compensated move in G93 (inverse time): the way back to "
+                         "the original point would need a time of its own; put a move to its "
+                         "start (or a rapid) before it");
+      bool explicit_motion = false;
+      bool block_delete = source.find_first_not_of(" \t") != std::string::npos &&
+                          source[source.find_first_not_of(" \t")] == '/';
+      try {
+        const LineWords words = split_move_line(source, file, ctx.line);
+        explicit_motion = words.explicit_motion;
+        block_delete = words.block_delete;
+      } catch (const GcodeError&) {
+        // Words the rewrite cannot move: the line is kept as it is anyway.
+      }
+      if (orig_mode != 1 && !explicit_motion)
+        throw GcodeError({file, ctx.line, 0},
+                         "feed after a compensated move continues a modal G" +
+                             std::to_string(orig_mode) +
+                             " without its G word: the G1 back to the original point written "
+                             "before it would change its mode; write G" +
+                             std::to_string(orig_mode) + " on the line");
+      const Axes6 back = path.to_program(move.start, ctx);
+      std::string line = block_delete ? "/G1" : "G1";
+      Axes6 expect = back;
+      const char letters[] = {'X', 'Y', 'Z', 'A', 'B', 'C'};
+      for (int ax : {0, 1, 2, 3, 5}) {
+        if ((ax == 3 || ax == 5) && !turned) continue;
+        const std::string v = exact(back[ax]);
+        line += std::string(" ") + letters[ax] + v;
+        expect[ax] = std::strtod(v.c_str(), nullptr);
+      }
+      PlannedLine pl;
+      pl.moves = {line, source};
+      pl.last_verbatim = true;
+      plan[ctx.line] = std::move(pl);
+      returns[ctx.line] = expect;
+      path.finish(move);
+      out_mode = orig_mode;
+      displaced = false;
+      turned = false;
+      continue;
+    }
+    if (!in_op || !feed) {
       path.finish(move);
       if (in_op) ++s.moves_kept;
       out_mode = orig_mode;
@@ -743,6 +800,13 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
                 " written with the hole and bottom X Y Z the correction at the bottom gives)\n";
       origin.push_back({1, OutputLine::kResidual});
     }
+    if (!returns.empty()) {
+      r.text += "(truecut rewrite: " + std::to_string(returns.size()) + " G1 move" +
+                (returns.size() == 1 ? "" : "s") +
+                " back from a corrected point to the original one written before the next "
+                "operation's first feed, which is kept as it is)\n";
+      origin.push_back({1, OutputLine::kResidual});
+    }
     if (!expands_comp) return;
     r.text +=
         "(truecut rewrite: cutter radius compensation G41/G42 expanded: the moves under it are "
@@ -770,11 +834,12 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     for (size_t k = 0; k < moves.size(); ++k) {
       r.text += moves[k];
       r.text += k + 1 < moves.size() ? inner : term;
-      origin.push_back({line, OutputLine::kMove});
+      const bool verbatim = it->second.last_verbatim && k + 1 == moves.size();
+      origin.push_back({line, verbatim ? OutputLine::kVerbatim : OutputLine::kMove});
     }
   }
   s.lines_out = static_cast<int>(origin.size());
-  check_rewrite(r.text, CheckInput{program, expected, origin, o.interpreter, name});
+  check_rewrite(r.text, CheckInput{program, expected, origin, o.interpreter, name, &returns});
   r.summary = s;
   return r;
 }

@@ -135,6 +135,21 @@ void check_rewrite(const std::string& text, const CheckInput& in) {
                 " calls outside the rewritten lines, the original " +
                 std::to_string(kept_in.size()));
 
+  if (in.returns)
+    for (const auto& [line, want] : *in.returns) {
+      const auto it = moves_out.find(line);
+      const auto* f = it == moves_out.end() || it->second.size() != 1
+                          ? nullptr
+                          : std::get_if<StraightFeed>(&it->second[0]->op);
+      if (!f) {
+        fail(line, "the G1 back to the original point before this line is not one feed move");
+        continue;
+      }
+      for (int ax = 0; ax < 6; ++ax)
+        if (std::fabs(f->end[ax] - want[ax]) > 1e-9 * std::max(1.0, std::fabs(want[ax])))
+          fail(line, "the G1 back to the original point before this line comes out at " +
+                         format_rs274(it->second[0]->op, fmt));
+    }
   for (const auto& [line, rw] : in.rewritten) {
     const auto it = moves_out.find(line);
     const size_t got = it == moves_out.end() ? 0 : it->second.size();

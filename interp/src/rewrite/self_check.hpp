@@ -35,6 +35,9 @@ struct CheckInput {
   const std::vector<OutputLine>& origin;  // per output line
   const InterpreterOptions& options;
   const std::string& name;
+  // Lines kept as they are after a G1 back to the original point (written
+  // before them): where that G1 must end.
+  const std::map<int, Axes6>* returns = nullptr;
 };
 
 // Throws GcodeError at the original line where the programs part.
