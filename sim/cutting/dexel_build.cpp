@@ -1,12 +1,15 @@
 // DexelModel::build: samples the nominal surfaces, sets the initial heights
 // from the stock and bins the dexel lines into the uniform grid.
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <span>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <Eigen/Geometry>
 
@@ -51,42 +54,42 @@ struct WeldHash {
   }
 };
 
-// WeldKey -> uint32 with open addressing (linear probing, power-of-two
-// size, at most half full): one probe touches one cache line, where a node
-// map costs a bucket and a node per lookup and a lookup per sub-vertex of
-// every triangle is most of building a model.
+// WeldKey -> dexel index with open addressing (linear probing, power-of-two
+// size, at most half full). A slot holds only the index of the newest
+// dexel at its key (4 bytes: the table of a million dexels stays in a few
+// MB of cache); the key is that dexel's own, read back through `key_of`.
+// One lookup per sub-vertex of every triangle is most of building a model.
+template <class KeyOf>
 class WeldTable {
  public:
-  explicit WeldTable(std::size_t expected) {
-    resize(std::bit_ceil(std::max<std::size_t>(16, 2 * expected)));
+  WeldTable(std::size_t expected, KeyOf key_of) : key_of_(key_of) {
+    slots_.assign(std::bit_ceil(std::max<std::size_t>(16, 2 * expected)), kNone);
   }
-  // The value at `key`, inserted as `fresh` when absent.
-  std::uint32_t& at(const WeldKey& key, std::uint32_t fresh) {
-    if (2 * (size_ + 1) > slots_.size()) resize(2 * slots_.size());
+  // The slot of `key`: the one holding it, or the empty one where it goes.
+  std::size_t find(const WeldKey& key) const {
     std::size_t i = WeldHash{}(key) & (slots_.size() - 1);
-    while (slots_[i].used && !(slots_[i].key == key))
+    while (slots_[i] != kNone && !(key_of_(slots_[i]) == key))
       i = (i + 1) & (slots_.size() - 1);
-    if (!slots_[i].used) {
-      slots_[i] = {key, fresh, true};
-      ++size_;
-    }
-    return slots_[i].value;
+    return i;
+  }
+  std::uint32_t value(std::size_t slot) const { return slots_[slot]; }
+  // Stores `dexel` (whose key is the slot's) at a slot find() returned; the
+  // slot may move when the table grows, so look it up again afterwards.
+  void set(std::size_t slot, std::uint32_t dexel) {
+    if (slots_[slot] == kNone) ++size_;
+    slots_[slot] = dexel;
+    if (2 * size_ > slots_.size()) grow();
   }
 
  private:
-  struct Slot {
-    WeldKey key;
-    std::uint32_t value;
-    bool used = false;
-  };
-  void resize(std::size_t n) {
-    std::vector<Slot> old(n);
+  void grow() {
+    std::vector<std::uint32_t> old(2 * slots_.size(), kNone);
     old.swap(slots_);
-    size_ = 0;
-    for (const Slot& s : old)
-      if (s.used) at(s.key, s.value);
+    for (std::uint32_t v : old)
+      if (v != kNone) slots_[find(key_of_(v))] = v;
   }
-  std::vector<Slot> slots_;
+  KeyOf key_of_;
+  std::vector<std::uint32_t> slots_;
   std::size_t size_ = 0;
 };
 
@@ -97,19 +100,96 @@ WeldKey weld_key(int surface, const Eigen::Vector3d& p) {
   return k;
 }
 
+constexpr double kStockEps = 1e-9;  // a point this close to a box is in it
+
+// The stock boxes that may hold a point, by a uniform grid over their union
+// (a part's stock can be hundreds of boxes: benchmark004 has 384). A cell
+// lists, in the stock's order, every box whose slightly grown extent meets
+// it, so the first box of a point's cell that holds the point is the first
+// of all the boxes that does.
+class StockGrid {
+ public:
+  explicit StockGrid(std::span<const StockBox> stock) : stock_(stock) {
+    if (stock.empty()) return;
+    lo_ = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+    Eigen::Vector3d hi = -lo_;
+    for (const StockBox& b : stock) {
+      lo_ = lo_.cwiseMin((b.min_mm.array() - kStockEps).matrix());
+      hi = hi.cwiseMax((b.max_mm.array() + kStockEps).matrix());
+    }
+    if (!lo_.allFinite() || !hi.allFinite()) return;  // every query scans them all
+    const int per_axis = std::clamp(static_cast<int>(std::cbrt(8.0 * double(stock.size()))), 1, 64);
+    for (int i = 0; i < 3; ++i) {
+      dims_[i] = per_axis;
+      cell_mm_[i] = std::max((hi[i] - lo_[i]) / per_axis, 1e-9);
+    }
+    hi_ = hi;
+    std::vector<std::vector<std::uint32_t>> lists(std::size_t(dims_[0]) * dims_[1] * dims_[2]);
+    for (std::size_t k = 0; k < stock.size(); ++k) {
+      const auto a = cell_of((stock[k].min_mm.array() - kStockEps).matrix());
+      const auto b = cell_of((stock[k].max_mm.array() + kStockEps).matrix());
+      for (int z = a[2]; z <= b[2]; ++z)
+        for (int y = a[1]; y <= b[1]; ++y)
+          for (int x = a[0]; x <= b[0]; ++x)
+            lists[index(x, y, z)].push_back(static_cast<std::uint32_t>(k));
+    }
+    start_.assign(lists.size() + 1, 0);
+    for (std::size_t c = 0; c < lists.size(); ++c) {
+      start_[c + 1] = start_[c] + static_cast<std::uint32_t>(lists[c].size());
+      boxes_.insert(boxes_.end(), lists[c].begin(), lists[c].end());
+    }
+    indexed_ = true;
+  }
+
+  // Calls f(box) for the boxes that may hold x, in the stock's order, until f
+  // returns true.
+  template <class F>
+  void visit(const Eigen::Vector3d& x, F&& f) const {
+    if (!indexed_ || !x.allFinite()) {
+      for (const StockBox& b : stock_)
+        if (f(b)) return;
+      return;
+    }
+    if ((x.array() < lo_.array()).any() || (x.array() > hi_.array()).any()) return;
+    const auto c = cell_of(x);
+    const std::size_t cell = index(c[0], c[1], c[2]);
+    for (std::uint32_t i = start_[cell]; i < start_[cell + 1]; ++i)
+      if (f(stock_[boxes_[i]])) return;
+  }
+
+ private:
+  std::array<int, 3> cell_of(const Eigen::Vector3d& p) const {
+    std::array<int, 3> c{};
+    for (int i = 0; i < 3; ++i)
+      c[i] = std::clamp(static_cast<int>(std::floor((p[i] - lo_[i]) / cell_mm_[i])), 0,
+                        dims_[i] - 1);
+    return c;
+  }
+  std::size_t index(int x, int y, int z) const {
+    return (std::size_t(z) * dims_[1] + y) * dims_[0] + x;
+  }
+
+  std::span<const StockBox> stock_;
+  bool indexed_ = false;
+  Eigen::Vector3d lo_ = Eigen::Vector3d::Zero(), hi_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d cell_mm_ = Eigen::Vector3d::Ones();
+  std::array<int, 3> dims_{1, 1, 1};
+  std::vector<std::uint32_t> start_, boxes_;
+};
+
 // Distance from p along n to where the union of boxes ends (0 when p is not
 // inside any box), capped at `cap`.
-double stock_height(const Eigen::Vector3d& p, const Eigen::Vector3d& n,
-                    std::span<const StockBox> stock, double cap) {
-  constexpr double kEps = 1e-9;
+double stock_height(const Eigen::Vector3d& p, const Eigen::Vector3d& n, const StockGrid& grid,
+                    std::size_t box_count, double cap) {
+  constexpr double kEps = kStockEps;
   double t = 0;
-  for (std::size_t pass = 0; pass <= stock.size() && t < cap; ++pass) {
+  for (std::size_t pass = 0; pass <= box_count && t < cap; ++pass) {
     bool advanced = false;
     const Eigen::Vector3d x = p + t * n;
-    for (const StockBox& b : stock) {
+    grid.visit(x, [&](const StockBox& b) {
       if ((x.array() < b.min_mm.array() - kEps).any() ||
           (x.array() > b.max_mm.array() + kEps).any())
-        continue;
+        return false;
       double exit = std::numeric_limits<double>::infinity();
       for (int i = 0; i < 3; ++i) {
         if (n[i] > 1e-15) exit = std::min(exit, (b.max_mm[i] - x[i]) / n[i]);
@@ -118,9 +198,10 @@ double stock_height(const Eigen::Vector3d& p, const Eigen::Vector3d& n,
       if (exit > 1e-12) {
         t += exit;
         advanced = true;
-        break;
+        return true;
       }
-    }
+      return false;
+    });
     if (!advanced) break;
   }
   return std::clamp(t, 0.0, cap);
@@ -212,14 +293,30 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
 
   // The dexels at one weld key, newest first: the head in `welded`, the rest
   // through `next_welded` (one map entry per position, no list per entry).
-  WeldTable welded(2 * nt);
+  // Sized for the dexels to come, so it is not rehashed while it fills: a
+  // triangle cut into n² sub-triangles has (n-1)(n-2)/2 points of its own,
+  // 3(n-1) on edges shared with a neighbour and 3 corners shared by about six.
+  double expected_dexels = 0;
+  for (std::size_t f = 0; f < nt; ++f) {
+    if (!modelled(triangle_surface[f]) || face_area[f] <= 0) continue;
+    const auto& t = nominal.triangles[f];
+    const double longest = std::max(
+        {(V[t[1]] - V[t[0]]).norm(), (V[t[2]] - V[t[1]]).norm(), (V[t[0]] - V[t[2]]).norm()});
+    const double n = std::max(1.0, std::ceil(longest / options.spacing_mm - 1e-9));
+    expected_dexels += (n - 1) * (n - 2) / 2 + 1.5 * (n - 1) + 0.5;
+  }
+  // (Capped: an estimate is not worth gigabytes; past it the table grows.)
+  auto dexel_key = [&m](std::uint32_t i) { return weld_key(m.surface_[i], m.position_[i]); };
+  WeldTable welded(static_cast<std::size_t>(std::min(expected_dexels, 16e6)) + 16, dexel_key);
   std::vector<std::uint32_t> next_welded;
   // Inset directions gathered from every triangle that shares a dexel (a
   // block corner is on the sharp edges of two triangles); applied at the end.
   std::vector<EdgeInsets> insets;
   auto dexel = [&](int surface, const Eigen::Vector3d& p, const Eigen::Vector3d& n,
                    const EdgeInsets& in) {
-    std::uint32_t& head = welded.at(weld_key(surface, p), kNone);
+    const WeldKey key = weld_key(surface, p);
+    const std::size_t slot = welded.find(key);
+    const std::uint32_t head = welded.value(slot);
     std::uint32_t index = kNone;
     for (std::uint32_t i = head; i != kNone && index == kNone; i = next_welded[i])
       if (m.normal_[i].dot(n) > kWeldCos) index = i;  // the newest that matches
@@ -232,7 +329,7 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
       m.area_.push_back(0);
       m.surface_.push_back(surface);
       next_welded.push_back(head);
-      head = index;
+      welded.set(slot, index);
       insets.emplace_back();
     }
     if (in.count > 0) {
@@ -347,20 +444,24 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
       m.line_origin_[i] += insets[i].inset_mm * insets[i].dir[k];
   m.initial_height_.resize(nd);
   m.floor_.assign(nd, -options.max_depth_mm);
+  const StockGrid stock_grid(stock);
   for (std::size_t i = 0; i < nd; ++i)
-    m.initial_height_[i] =
-        stock_height(m.line_origin_[i], m.normal_[i], stock, options.max_stock_mm);
+    m.initial_height_[i] = stock_height(m.line_origin_[i], m.normal_[i], stock_grid, stock.size(),
+                                        options.max_stock_mm);
   // Partners: the dexels at one position with different normals (the
   // sides of a sharp edge or corner), linked in a cycle.
   m.partner_.resize(nd);
   {
-    WeldTable first(nd);
+    WeldTable first(nd, [&m](std::uint32_t i) { return weld_key(0, m.position_[i]); });
     std::vector<std::uint32_t> last(nd);
     for (std::size_t i = 0; i < nd; ++i) {
       m.partner_[i] = last[i] = static_cast<std::uint32_t>(i);
-      const std::uint32_t head =
-          first.at(weld_key(0, m.position_[i]), static_cast<std::uint32_t>(i));
-      if (head == i) continue;
+      const std::size_t slot = first.find(weld_key(0, m.position_[i]));
+      const std::uint32_t head = first.value(slot);
+      if (head == kNone) {
+        first.set(slot, static_cast<std::uint32_t>(i));
+        continue;
+      }
       // Append i to the cycle that starts at head.
       m.partner_[last[head]] = static_cast<std::uint32_t>(i);
       m.partner_[i] = head;

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <map>
 #include <numbers>
 
 #include "cutting_test_meshes.hpp"
@@ -347,4 +349,50 @@ TEST(Cutting, MachinedMeshMovesVerticesAlongTheirNormals) {
   for (std::size_t i = 0; i < m.size(); ++i)
     ASSERT_EQ(m.position(i) + m.height_mm(i) * m.normal(i), out.vertices_mm[i]);
   EXPECT_EQ(2u * 80 * 40, out.triangles.size());  // cells of 0.5 mm, spacing 0.5: no subdivision
+}
+
+// The stock of a part can be hundreds of boxes (benchmark004: 384), found
+// through a grid over them. Columns of stacked boxes over the plate, some
+// with a gap: each dexel's height is where its column's material first
+// ends above it, as the test walks the column's intervals itself.
+TEST(Cutting, InitialHeightThroughHundredsOfStockBoxes) {
+  Plate plate;
+  std::vector<StockBox> stock;
+  std::map<std::pair<int, int>, std::vector<std::pair<double, double>>> columns;
+  std::uint64_t state = 12345;
+  auto uniform = [&state] {  // splitmix64
+    std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return double((z ^ (z >> 31)) >> 11) / double(1ull << 53);
+  };
+  for (int cx = 0; cx < 20; ++cx)
+    for (int cy = 0; cy < 10; ++cy) {
+      double z = -5;
+      const int pieces = 1 + static_cast<int>(uniform() * 3);
+      for (int k = 0; k < pieces; ++k) {
+        const double top = z + 0.5 + 2.5 * uniform();
+        stock.push_back({{2.0 * cx, 2.0 * cy, z}, {2.0 * cx + 2, 2.0 * cy + 2, top}});
+        columns[{cx, cy}].push_back({z, top});
+        z = top + (uniform() < 0.2 ? 0.3 : 0.0);  // a gap now and then
+      }
+    }
+  ASSERT_GT(stock.size(), 300u);
+  DexelOptions o;
+  o.spacing_mm = 0.3;
+  o.max_stock_mm = 50;
+  const DexelModel m = DexelModel::build(plate.mesh, plate.ids, stock, o);
+  std::size_t checked = 0;
+  for (std::size_t i = 0; i < m.size(); ++i) {
+    const Eigen::Vector3d p = m.position(i);
+    const double fx = p.x() / 2 - std::floor(p.x() / 2), fy = p.y() / 2 - std::floor(p.y() / 2);
+    if (fx < 1e-6 || fx > 1 - 1e-6 || fy < 1e-6 || fy > 1 - 1e-6) continue;  // on a column's side
+    const auto& column = columns.at({static_cast<int>(p.x() / 2), static_cast<int>(p.y() / 2)});
+    double reach = 0;  // from z = 0 up through contiguous intervals
+    for (const auto& [lo, hi] : column)
+      if (lo <= reach + 1e-9 && hi > reach) reach = hi;
+    ASSERT_NEAR(m.initial_height_mm(i), std::max(reach, 0.0), 1e-9) << p.transpose();
+    ++checked;
+  }
+  EXPECT_GT(checked, 5000u);
 }
