@@ -811,9 +811,31 @@ TEST(Rewrite, CutterCompensationIsExpandedIntoCompensatedMoves) {
       "G21 G90 G94\nT2 M6\nG0 X-10 Y-10 Z1\nG41 D2 G1 X0 Y0 F300\n(OPERATION: PROFILE)\n"
       "o1 repeat [2]\nG1 X10\no1 endrepeat\nG40 G0 X-10\nM30\n";
   EXPECT_EQ(error_of<GcodeError>(loop, o),
-            "bad.ngc:6:1: O-word in a program with cutter radius compensation: the rewrite writes "
-            "compensated moves out one by one and cannot do that for subroutines, loops or "
-            "conditions");
+            "bad.ngc:7: move under cutter radius compensation on a line that runs more than once "
+            "(loop, or a subroutine called twice): the rewrite writes compensated moves out one "
+            "by one, where the tool goes each time");
+  // Around moves that run once (a condition, a subroutine called once) the
+  // O-words stay, and the compensated moves are written where the tool goes
+  // as without them.
+  const std::string plain =
+      "G21 G90 G94\nT2 M6\nG0 X-10 Y-10 Z0\n(OPERATION: PROFILE)\nG41 D2 G1 X0 Y0 F300\n"
+      "X20\nY20\nX0\nY0\nG40 G1 X-10 Y-10\nM30\n";
+  const std::string with_o_words =
+      "o<side> sub\nY20\no<side> endsub\nG21 G90 G94\nT2 M6\nG0 X-10 Y-10 Z0\n"
+      "(OPERATION: PROFILE)\n#1 = 20\nG41 D2 G1 X0 Y0 F300\no2 if [#1 GT 10]\nX20\n"
+      "o2 else\nX30\no2 endif\no<side> call\nX0\nY0\nG40 G1 X-10 Y-10\nM30\n";
+  const RewriteResult a = rewrite_program(plain, "a.ngc", zero, o);
+  const RewriteResult b = rewrite_program(with_o_words, "b.ngc", zero, o);
+  EXPECT_NE(b.text.find("\no2 if [#1 GT 10]\n"), std::string::npos) << b.text;
+  EXPECT_NE(b.text.find("\no<side> call\n"), std::string::npos) << b.text;
+  auto feeds = [&](const std::string& text) {
+    std::vector<std::string> out;
+    for (const auto& c : Interpreter(io).run_text(text, "f.ngc").calls)
+      if (std::holds_alternative<StraightFeed>(c.op) || std::holds_alternative<ArcFeed>(c.op))
+        out.push_back(format_rs274(c.op));
+    return out;
+  };
+  EXPECT_EQ(feeds(b.text), feeds(a.text)) << a.text << "\n" << b.text;
 }
 
 // M70/M72 inside the operation are copied as written: the rewritten lines

@@ -234,23 +234,6 @@ bool has_cutter_comp_code(const std::string& source) {
   return false;
 }
 
-bool is_o_word_line(const std::string& source) {
-  size_t i = 0;
-  auto blanks = [&] {
-    while (i < source.size() && (source[i] == ' ' || source[i] == '\t'))
-      ++i;
-  };
-  blanks();
-  if (i < source.size() && source[i] == '/') ++i, blanks();
-  if (i < source.size() && (source[i] == 'n' || source[i] == 'N')) {
-    ++i;
-    while (i < source.size() && std::isdigit(static_cast<unsigned char>(source[i])))
-      ++i;
-    blanks();
-  }
-  return i < source.size() && (source[i] == 'o' || source[i] == 'O');
-}
-
 LineWords split_move_line(const std::string& source, const std::string& file, int line_no) {
   return split_line(source, file, line_no, false);
 }

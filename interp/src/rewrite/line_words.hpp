@@ -45,7 +45,4 @@ bool line_has_g_code(const std::string& source, int code);
 // Whether a line has G41, G42, G41.1 or G42.1. Never throws.
 bool has_cutter_comp_code(const std::string& source);
 
-// Whether a line is an O-word line (sub, call, if, while ...). Never throws.
-bool is_o_word_line(const std::string& source);
-
 }  // namespace truecut::interp::rewrite

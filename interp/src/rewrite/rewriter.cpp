@@ -298,16 +298,12 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
   // Cutter radius compensation (docs/gcode.md): the output runs in G40, with
   // every compensated move written where the compensated tool goes, and the
   // first move after the G40 exit with all of X Y Z (it starts from the
-  // compensated point). Moves that run more than once cannot be written so.
+  // compensated point). Moves that run more than once cannot be written so;
+  // O-words around moves that run once (conditions, a subroutine called
+  // once) stay as written.
   const bool expands_comp = std::any_of(program.calls.begin(), program.calls.end(),
                                         [](const CanonCall& c) { return c.context.cutter_comp; });
-  if (expands_comp)
-    for (size_t i = 0; i < raw.size(); ++i)
-      if (is_o_word_line(raw[i].content))
-        throw GcodeError({name, static_cast<int>(i) + 1, 1},
-                         "O-word in a program with cutter radius compensation: the rewrite "
-                         "writes compensated moves out one by one and cannot do that for "
-                         "subroutines, loops or conditions");
+  std::map<int, long> comp_line_block;  // the one execution of each compensated line
   bool after_comp = false;  // the last move was compensated
   // A canned cycle (G73, G74, G81-G89) expands into several moves on one line:
   // the rewrite cannot keep the cycle word and refuses it by name. The
@@ -467,6 +463,13 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     const bool feed = !std::holds_alternative<StraightTraverse>(c.op);
     if (in_op) ++s.moves_read;
     const std::string file = file_of(program, ctx, name);
+    if (ctx.cutter_comp && ctx.file == 0 &&
+        !comp_line_block.try_emplace(ctx.line, ctx.executed_block).second &&
+        comp_line_block[ctx.line] != ctx.executed_block)
+      throw GcodeError({file, ctx.line, 0},
+                       "move under cutter radius compensation on a line that runs more than "
+                       "once (loop, or a subroutine called twice): the rewrite writes "
+                       "compensated moves out one by one, where the tool goes each time");
     if (expands_comp && (ctx.cutter_comp || after_comp) && !(in_op && feed)) {
       // A compensated move, or the first after the G40 exit, outside what
       // the operation corrects: written exactly where the tool goes.
