@@ -1,7 +1,9 @@
 #include "truecut/interp/nurbs.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <span>
 #include <stdexcept>
 
 namespace truecut::interp {
@@ -67,8 +69,18 @@ NurbsPoint2 nurbs_point(const NurbsFeed& nurbs, double u) {
   const int s = std::min(k - 1 + static_cast<int>(std::floor(u)), n);
   // Cox-de Boor: the k basis functions of order k that are non-zero there,
   // for points s-k+1 ... s.
-  std::vector<double> basis(static_cast<size_t>(k), 0.0), left(static_cast<size_t>(k)),
-      right(static_cast<size_t>(k));
+  // On the stack for the orders programs use (G5 4, G5.1 3, G5.2 L): the
+  // polyline of one curve evaluates it hundreds of thousands of times.
+  constexpr int kStackOrder = 16;
+  std::array<double, 3 * kStackOrder> small{};
+  std::vector<double> large;
+  double* scratch = small.data();
+  if (k > kStackOrder) {
+    large.assign(3 * static_cast<size_t>(k), 0.0);
+    scratch = large.data();
+  }
+  const std::span<double> basis(scratch, static_cast<size_t>(k)),
+      left(scratch + k, static_cast<size_t>(k)), right(scratch + 2 * k, static_cast<size_t>(k));
   basis[0] = 1;
   for (int j = 1; j < k; ++j) {
     left[static_cast<size_t>(j)] = u - knot(s + 1 - j, n, k);

@@ -194,20 +194,34 @@ std::set<int> expand_splines(CanonProgram& program, const std::vector<RawLine>& 
                        "cannot be written as chords in its place; have the CAM output G5, G5.1, "
                        "lines or arcs");
     const double units_mm = c.context.units == LengthUnits::kInch ? 25.4 : 1.0;
-    const std::vector<NurbsPoint2> chord_ends = nurbs_polyline(*n, o.chord_tolerance_mm / units_mm);
-    // Its G1 points number at least its length over the step: refused here,
-    // before a million of them are corrected only to be refused later.
-    double length_mm = 0;
-    NurbsPoint2 from{n->points.front().x, n->points.front().y};
-    for (const NurbsPoint2& q : chord_ends) {
-      length_mm += std::hypot(q[0] - from[0], q[1] - from[1]) * units_mm;
-      from = q;
-    }
-    if (!(length_mm / o.step_mm <= kMaxPiecesPerMove))
-      throw GcodeError(at, rt::format_printf("spline would be written as at least %.3g G1 points of "
-                                             "at most %g mm (more than %.0f): it is longer than "
-                                             "any part's move",
-                                             length_mm / o.step_mm, o.step_mm, kMaxPiecesPerMove));
+    // Its G1 points number at least its length over the step: refused before
+    // a million of them are corrected only to be refused later. The length
+    // of a polygon through points of the curve is at most the curve's.
+    auto refuse_longer = [&](const std::vector<NurbsPoint2>& curve_points) {
+      double length_mm = 0;
+      for (std::size_t i = 1; i < curve_points.size(); ++i)
+        length_mm += std::hypot(curve_points[i][0] - curve_points[i - 1][0],
+                                curve_points[i][1] - curve_points[i - 1][1]) *
+                     units_mm;
+      if (!(length_mm / o.step_mm <= kMaxPiecesPerMove))
+        throw GcodeError(at, rt::format_printf("spline would be written as at least %.3g G1 points "
+                                               "of at most %g mm (more than %.0f): it is longer "
+                                               "than any part's move",
+                                               length_mm / o.step_mm, o.step_mm,
+                                               kMaxPiecesPerMove));
+    };
+    // First from a few points (a curve thousands of km long would otherwise
+    // be cut into millions of chords first), then from the chords.
+    constexpr int kSamplesPerSpan = 8;
+    const int samples = kSamplesPerSpan * static_cast<int>(std::lround(nurbs_parameter_end(*n)));
+    std::vector<NurbsPoint2> coarse;
+    for (int i = 0; i <= samples; ++i)
+      coarse.push_back(nurbs_point(*n, static_cast<double>(i) / kSamplesPerSpan));
+    refuse_longer(coarse);
+    std::vector<NurbsPoint2> chord_ends = nurbs_polyline(*n, o.chord_tolerance_mm / units_mm);
+    chord_ends.insert(chord_ends.begin(), {n->points.front().x, n->points.front().y});
+    refuse_longer(chord_ends);
+    chord_ends.erase(chord_ends.begin());
     for (const NurbsPoint2& q : chord_ends) {
       StraightFeed f;
       f.end = n->end;
