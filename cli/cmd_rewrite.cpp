@@ -331,6 +331,7 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
        ", \"moves_rewritten\": " + std::to_string(s.moves_rewritten) +
        ", \"moves_kept\": " + std::to_string(s.moves_kept) +
        ", \"holes_rewritten\": " + std::to_string(s.holes_rewritten) +
+       ", \"returns_written\": " + std::to_string(s.returns_written) +
        ", \"points_written\": " + std::to_string(s.points_written) +
        ", \"points_compensated\": " + std::to_string(s.points_compensated) +
        ", \"blend_points\": [" + std::to_string(s.blend_points[0]) + ", " +
@@ -369,6 +370,10 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
   if (s.holes_rewritten > 0)
     std::printf("  canned-cycle holes    %d (cycles kept, hole and bottom corrected)\n",
                 s.holes_rewritten);
+  if (s.returns_written > 0)
+    std::printf("  returns to the path   %d (G1 back to the original point before the next "
+                "operation's feed)\n",
+                s.returns_written);
   std::printf("  points written        %ld\n", s.points_written);
   std::printf("  points compensated    %ld\n", s.points_compensated);
   if (matrix_path)

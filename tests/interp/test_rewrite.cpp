@@ -1071,6 +1071,7 @@ TEST(Rewrite, TheNextOperationsFeedStartsFromTheOriginalPoint) {
     EXPECT_NE(r.text.find("(truecut rewrite: 1 G1 move back from a corrected point"),
               std::string::npos)
         << r.text;
+    EXPECT_EQ(r.summary.returns_written, 1);
     std::vector<std::string> want = motions_of(prog, "B");
     want.insert(want.begin(), "STRAIGHT_FEED(10.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)");
     EXPECT_EQ(motions_of(r.text, "B"), want) << r.text;

@@ -636,6 +636,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       pl.last_verbatim = true;
       plan[ctx.line] = std::move(pl);
       returns[ctx.line] = expect;
+      ++s.returns_written;
       path.finish(move);
       out_mode = orig_mode;
       displaced = false;

@@ -98,6 +98,9 @@ struct RewriteSummary {
   int moves_rewritten = 0;   // feed moves written as densified G1
   int moves_kept = 0;        // motion lines of the operation copied unchanged
   int rapids_rewritten = 0;  // G0 after a compensated point, written with all of X Y Z
+  // Another operation's first feed after a compensated point: a G1 back to
+  // the original point written before its line, which is kept.
+  int returns_written = 0;
   // Canned-cycle lines of the operation written with a corrected hole and
   // bottom (X Y Z), the cycle kept.
   int holes_rewritten = 0;
