@@ -371,9 +371,10 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
     std::printf("  canned-cycle holes    %d (cycles kept, hole and bottom corrected)\n",
                 s.holes_rewritten);
   if (s.returns_written > 0)
-    std::printf("  returns to the path   %d (G1 back to the original point before the next "
-                "operation's feed)\n",
-                s.returns_written);
+    std::printf(
+        "  returns to the path   %d (G1 back to the original point before the next "
+        "operation's feed)\n",
+        s.returns_written);
   std::printf("  points written        %ld\n", s.points_written);
   std::printf("  points compensated    %ld\n", s.points_compensated);
   if (matrix_path)

@@ -37,8 +37,7 @@ const char* kHelp =
     "(nominal.stl, part.json, tools.tbl), unless given:\n"
     "  --nominal FILE.stl     nominal part: where the cutting model's dexels sit\n"
     "  --part FILE.json       part.json: stock and tools\n"
-    "  --tools FILE.tbl       LinuxCNC tool table\n"
-    ;
+    "  --tools FILE.tbl       LinuxCNC tool table\n";
 const char* kHelpOptions =
     "options:\n"
     "  --out DIR              output folder (created)\n"

@@ -5,8 +5,8 @@
 #include <bit>
 #include <cmath>
 #include <limits>
-#include <stdexcept>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
@@ -161,8 +161,8 @@ class StockGrid {
   std::array<int, 3> cell_of(const Eigen::Vector3d& p) const {
     std::array<int, 3> c{};
     for (int i = 0; i < 3; ++i)
-      c[i] = std::clamp(static_cast<int>(std::floor((p[i] - lo_[i]) / cell_mm_[i])), 0,
-                        dims_[i] - 1);
+      c[i] =
+          std::clamp(static_cast<int>(std::floor((p[i] - lo_[i]) / cell_mm_[i])), 0, dims_[i] - 1);
     return c;
   }
   std::size_t index(int x, int y, int z) const {

@@ -988,6 +988,18 @@ TEST(Rewrite, GivenToolRadiusThatDiffersFromTheTableIsRefused) {
   EXPECT_EQ(error_of<std::invalid_argument>(kThreeOps, o), "tool radius must be >= 0 mm");
 }
 
+// The rewrite refuses `prog` at `line` with a message containing `words`.
+void expect_refused_at(const std::string& prog, const CompensationMatrixData& m,
+                       const RewriteOptions& o, int line, const std::string& words) {
+  try {
+    rewrite_program(prog, "p.ngc", m, o);
+    FAIL() << "accepted";
+  } catch (const GcodeError& e) {
+    EXPECT_EQ(e.where().line, line) << e.what();
+    EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+  }
+}
+
 // A move far beyond any machine's travel (found by fuzzing: X of 1e31 mm) would be
 // densified into more G1 points than an int holds; it is refused with its
 // line instead.
@@ -995,15 +1007,8 @@ TEST(Rewrite, AMoveTooLongToDensifyIsRefusedWithItsLine) {
   const std::string prog =
       "G21 G17 G90 G94\nT1 M6\nG43 H1\nG0 X0 Y0 Z1\n(OPERATION: FAR)\nG1 Z0 F300\n"
       "G1 X10000000000000000000000000000000\nG0 Z10\nM30\n";
-  const auto m = plane_matrix(-4, 4, -4, 4, 0, 0.5, V(0.01, 0, 0));
-  try {
-    rewrite_program(prog, "p.ngc", m, options("FAR", CutType::kPeripheral));
-    FAIL() << "accepted";
-  } catch (const GcodeError& e) {
-    EXPECT_EQ(e.where().line, 7) << e.what();
-    EXPECT_NE(std::string(e.what()).find("longer than any part's move"), std::string::npos)
-        << e.what();
-  }
+  expect_refused_at(prog, plane_matrix(-4, 4, -4, 4, 0, 0.5, V(0.01, 0, 0)),
+                    options("FAR", CutType::kPeripheral), 7, "longer than any part's move");
 }
 
 // A G5 far longer than any part's move is refused with its line before its
@@ -1012,16 +1017,8 @@ TEST(Rewrite, ASplineTooLongToDensifyIsRefusedWithItsLine) {
   const std::string prog =
       "G21 G17 G90 G94\nT1 M6\nG43 H1\nG0 X0 Y0 Z1\n(OPERATION: FAR)\nG1 Z0 F300\n"
       "G5 I0 J2000000 P0 Q-2000000 X10 Y0\nG0 Z10\nM30\n";
-  const auto m = plane_matrix(-4, 4, -4, 4, 0, 0.5, V(0.01, 0, 0));
-  try {
-    rewrite_program(prog, "p.ngc", m, options("FAR", CutType::kPeripheral));
-    FAIL() << "accepted";
-  } catch (const GcodeError& e) {
-    EXPECT_EQ(e.where().line, 7) << e.what();
-    EXPECT_NE(std::string(e.what()).find("spline would be written as at least"),
-              std::string::npos)
-        << e.what();
-  }
+  expect_refused_at(prog, plane_matrix(-4, 4, -4, 4, 0, 0.5, V(0.01, 0, 0)),
+                    options("FAR", CutType::kPeripheral), 7, "spline would be written as at least");
 }
 
 // The limit of G1 points over the whole operation stops the rewrite at the
@@ -1033,14 +1030,7 @@ TEST(Rewrite, TheLimitOfWrittenPointsNamesTheLineThatPassesIt) {
   const auto m = plane_matrix(-4, 14, -4, 14, 0, 0.5, V(0.01, 0, 0));
   RewriteOptions o = options("OP", CutType::kPeripheral);
   o.max_points = 45;
-  try {
-    rewrite_program(prog, "p.ngc", m, o);
-    FAIL() << "accepted";
-  } catch (const GcodeError& e) {
-    EXPECT_EQ(e.where().line, 9) << e.what();
-    EXPECT_NE(std::string(e.what()).find("more than the limit of 45"), std::string::npos)
-        << e.what();
-  }
+  expect_refused_at(prog, m, o, 9, "more than the limit of 45");
   o.max_points = 1e6;
   EXPECT_NO_THROW(rewrite_program(prog, "p.ngc", m, o));
 }
@@ -1059,11 +1049,12 @@ std::vector<std::string> motions_of(const std::string& text, const std::string& 
 // 5): a G1 back to where the original was is written before its line, and
 // the other operation makes the very moves it made; an arc keeps its centre.
 TEST(Rewrite, TheNextOperationsFeedStartsFromTheOriginalPoint) {
-  const std::string head = "G21 G17 G90 G94\nT1 M6\nG43 H1\nG0 X0 Y0 Z1\n(OPERATION: OP)\n"
-                           "G1 Z0 F300\nG1 X10\n(OPERATION: B)\n";
+  const std::string head =
+      "G21 G17 G90 G94\nT1 M6\nG43 H1\nG0 X0 Y0 Z1\n(OPERATION: OP)\n"
+      "G1 Z0 F300\nG1 X10\n(OPERATION: B)\n";
   const auto m = plane_matrix(-4, 24, -10, 14, 0, 0.5, V(0.01, -0.02, 0.005));
-  for (const std::string b : {"G1 X20\nG1 Y10\n", "G2 X20 Y0 I5 J0\nG1 Y10\n",
-                              "G3 X20 Y0 R5 F200\nG1 Y5\n"}) {
+  for (const std::string b :
+       {"G1 X20\nG1 Y10\n", "G2 X20 Y0 I5 J0\nG1 Y10\n", "G3 X20 Y0 R5 F200\nG1 Y5\n"}) {
     const std::string prog = head + b + "G0 Z10\nM30\n";
     const RewriteResult r = rewrite_program(prog, "p.ngc", m, options("OP", CutType::kPeripheral));
     const std::string first_b = b.substr(0, b.find('\n') + 1);
@@ -1083,22 +1074,17 @@ TEST(Rewrite, TheNextOperationsFeedStartsFromTheOriginalPoint) {
   }
   // A modal G2 continued without its word would turn into G1 after the G1
   // back: refused by name.
-  const std::string modal = "G21 G17 G90 G94\nT1 M6\nG43 H1\nG0 X0 Y0 Z1\nG2 X0 Y0 Z0.5 I0 J-1 "
-                            "F300\n(OPERATION: OP)\nG1 Z0\nG1 X10\n(OPERATION: B)\n"
-                            "G2 X20 Y0 I5 J0\nG0 Z10\nM30\n";
+  const std::string modal =
+      "G21 G17 G90 G94\nT1 M6\nG43 H1\nG0 X0 Y0 Z1\nG2 X0 Y0 Z0.5 I0 J-1 "
+      "F300\n(OPERATION: OP)\nG1 Z0\nG1 X10\n(OPERATION: B)\n"
+      "G2 X20 Y0 I5 J0\nG0 Z10\nM30\n";
   EXPECT_NO_THROW(rewrite_program(modal, "p.ngc", m, options("OP", CutType::kPeripheral)));
-  const std::string no_word = "G21 G17 G90 G94\nT1 M6\nG43 H1\nG0 X0 Y0 Z1\n(OPERATION: OP)\n"
-                              "G1 Z0 F300\nG2 X10 Y0 I5 J0\n(OPERATION: B)\nX20 Y0 I5 J0\n"
-                              "G0 Z10\nM30\n";
-  try {
-    rewrite_program(no_word, "p.ngc", m, options("OP", CutType::kPeripheral));
-    FAIL() << "accepted";
-  } catch (const GcodeError& e) {
-    EXPECT_EQ(e.where().line, 9) << e.what();
-    EXPECT_NE(std::string(e.what()).find("continues a modal G2 without its G word"),
-              std::string::npos)
-        << e.what();
-  }
+  const std::string no_word =
+      "G21 G17 G90 G94\nT1 M6\nG43 H1\nG0 X0 Y0 Z1\n(OPERATION: OP)\n"
+      "G1 Z0 F300\nG2 X10 Y0 I5 J0\n(OPERATION: B)\nX20 Y0 I5 J0\n"
+      "G0 Z10\nM30\n";
+  expect_refused_at(no_word, m, options("OP", CutType::kPeripheral), 9,
+                    "continues a modal G2 without its G word");
 }
 
 }  // namespace

@@ -3,9 +3,9 @@
 // curve, each point corrected; splines outside the operation are copied; a
 // NURBS block in it, or one that would start from a corrected point, is
 // refused by name; a G5/G5.1 of another operation right after a corrected
-// point gets a G1 back to the original point before it. The curves here are the test's own Bezier formulas
-// from the words of the program (G5: P1 = start + (I, J), P2 = end + (P, Q);
-// G5.1: P1 = start + (I, J)), not the interpreter's NURBS code.
+// point gets a G1 back to the original point before it. The curves here are the test's own Bezier
+// formulas from the words of the program (G5: P1 = start + (I, J), P2 = end + (P, Q); G5.1: P1 =
+// start + (I, J)), not the interpreter's NURBS code.
 #include <gtest/gtest.h>
 
 #include <array>

@@ -204,11 +204,11 @@ std::set<int> expand_splines(CanonProgram& program, const std::vector<RawLine>& 
                                 curve_points[i][1] - curve_points[i - 1][1]) *
                      units_mm;
       if (!(length_mm / o.step_mm <= kMaxPiecesPerMove))
-        throw GcodeError(at, rt::format_printf("spline would be written as at least %.3g G1 points "
-                                               "of at most %g mm (more than %.0f): it is longer "
-                                               "than any part's move",
-                                               length_mm / o.step_mm, o.step_mm,
-                                               kMaxPiecesPerMove));
+        throw GcodeError(at,
+                         rt::format_printf("spline would be written as at least %.3g G1 points "
+                                           "of at most %g mm (more than %.0f): it is longer "
+                                           "than any part's move",
+                                           length_mm / o.step_mm, o.step_mm, kMaxPiecesPerMove));
     };
     // First from a few points (a curve thousands of km long would otherwise
     // be cut into millions of chords first), then from the chords.
@@ -318,7 +318,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
   const bool expands_comp = std::any_of(program.calls.begin(), program.calls.end(),
                                         [](const CanonCall& c) { return c.context.cutter_comp; });
   std::map<int, long> comp_line_block;  // the one execution of each compensated line
-  bool after_comp = false;  // the last move was compensated
+  bool after_comp = false;              // the last move was compensated
   // A canned cycle (G73, G74, G81-G89) expands into several moves on one line:
   // the rewrite cannot keep the cycle word and refuses it by name. The
   // motion mode of a line is followed through the source text in order.
@@ -677,8 +677,8 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       throw GcodeError({file, ctx.line, 0},
                        rt::format_printf("move would be written as %s%.3g G1 points of at most %g "
                                          "mm (more than %.0f): it is longer than any part's move",
-                                         points_on_line > pieces ? "at least " : "",
-                                         points_on_line, o.step_mm, kMaxPiecesPerMove));
+                                         points_on_line > pieces ? "at least " : "", points_on_line,
+                                         o.step_mm, kMaxPiecesPerMove));
     points_written += pieces;
     if (!(points_written <= o.max_points))
       throw GcodeError({file, ctx.line, 0},
