@@ -77,6 +77,20 @@ std::string exact(double v) {
   return s;
 }
 
+// " X.. Y.. Z.." (and A, C when asked) in exact() decimals; `read` gets
+// the values the interpreter will read back from them.
+std::string exact_words(const Axes6& p, bool with_a, bool with_c, Axes6& read) {
+  std::string words;
+  const char letters[] = {'X', 'Y', 'Z', 'A', 'B', 'C'};
+  for (int ax : {0, 1, 2, 3, 5}) {
+    if ((ax == 3 && !with_a) || (ax == 5 && !with_c)) continue;
+    const std::string v = exact(p[ax]);
+    words += std::string(" ") + letters[ax] + v;
+    read[ax] = std::strtod(v.c_str(), nullptr);
+  }
+  return words;
+}
+
 // A feed with up to 4 decimals and no trailing zeros ("F500", "F1234.5").
 std::string feed_text(double v) {
   std::string s = rt::format_fixed(v, 4);
@@ -197,12 +211,12 @@ std::set<int> expand_splines(CanonProgram& program, const std::vector<RawLine>& 
     // Its G1 points number at least its length over the step: refused before
     // a million of them are corrected only to be refused later. The length
     // of a polygon through points of the curve is at most the curve's.
-    auto refuse_longer = [&](const std::vector<NurbsPoint2>& curve_points) {
+    auto refuse_longer = [&](NurbsPoint2 from, const std::vector<NurbsPoint2>& curve_points) {
       double length_mm = 0;
-      for (std::size_t i = 1; i < curve_points.size(); ++i)
-        length_mm += std::hypot(curve_points[i][0] - curve_points[i - 1][0],
-                                curve_points[i][1] - curve_points[i - 1][1]) *
-                     units_mm;
+      for (const NurbsPoint2& q : curve_points) {
+        length_mm += std::hypot(q[0] - from[0], q[1] - from[1]) * units_mm;
+        from = q;
+      }
       if (!(length_mm / o.step_mm <= kMaxPiecesPerMove))
         throw GcodeError(at,
                          rt::format_printf("spline would be written as at least %.3g G1 points "
@@ -214,14 +228,13 @@ std::set<int> expand_splines(CanonProgram& program, const std::vector<RawLine>& 
     // be cut into millions of chords first), then from the chords.
     constexpr int kSamplesPerSpan = 8;
     const int samples = kSamplesPerSpan * static_cast<int>(std::lround(nurbs_parameter_end(*n)));
+    const NurbsPoint2 start{n->points.front().x, n->points.front().y};
     std::vector<NurbsPoint2> coarse;
-    for (int i = 0; i <= samples; ++i)
+    for (int i = 1; i <= samples; ++i)
       coarse.push_back(nurbs_point(*n, static_cast<double>(i) / kSamplesPerSpan));
-    refuse_longer(coarse);
-    std::vector<NurbsPoint2> chord_ends = nurbs_polyline(*n, o.chord_tolerance_mm / units_mm);
-    chord_ends.insert(chord_ends.begin(), {n->points.front().x, n->points.front().y});
-    refuse_longer(chord_ends);
-    chord_ends.erase(chord_ends.begin());
+    refuse_longer(start, coarse);
+    const std::vector<NurbsPoint2> chord_ends = nurbs_polyline(*n, o.chord_tolerance_mm / units_mm);
+    refuse_longer(start, chord_ends);
     for (const NurbsPoint2& q : chord_ends) {
       StraightFeed f;
       f.end = n->end;
@@ -477,13 +490,14 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     const bool feed = !std::holds_alternative<StraightTraverse>(c.op);
     if (in_op) ++s.moves_read;
     const std::string file = file_of(program, ctx, name);
-    if (ctx.cutter_comp && ctx.file == 0 &&
-        !comp_line_block.try_emplace(ctx.line, ctx.executed_block).second &&
-        comp_line_block[ctx.line] != ctx.executed_block)
-      throw GcodeError({file, ctx.line, 0},
-                       "move under cutter radius compensation on a line that runs more than "
-                       "once (loop, or a subroutine called twice): the rewrite writes "
-                       "compensated moves out one by one, where the tool goes each time");
+    if (ctx.cutter_comp && ctx.file == 0) {
+      const auto [first, fresh] = comp_line_block.try_emplace(ctx.line, ctx.executed_block);
+      if (!fresh && first->second != ctx.executed_block)
+        throw GcodeError({file, ctx.line, 0},
+                         "move under cutter radius compensation on a line that runs more than "
+                         "once (loop, or a subroutine called twice): the rewrite writes "
+                         "compensated moves out one by one, where the tool goes each time");
+    }
     if (expands_comp && (ctx.cutter_comp || after_comp) && !(in_op && feed)) {
       // A compensated move, or the first after the G40 exit, outside what
       // the operation corrects: written exactly where the tool goes.
@@ -513,13 +527,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
         std::string line = words.block_delete ? "/" : "";
         line += feed ? "G1" : "G0";
         Axes6 expect = end_prog;
-        const char letters[] = {'X', 'Y', 'Z', 'A', 'B', 'C'};
-        for (int ax : {0, 1, 2, 3, 5}) {
-          if ((ax == 3 && !write_a) || (ax == 5 && !write_c)) continue;
-          const std::string v = exact(q[ax]);
-          line += std::string(" ") + letters[ax] + v;
-          expect[ax] = std::strtod(v.c_str(), nullptr);
-        }
+        line += exact_words(q, write_a, write_c, expect);
         if (feed && ctx.feed_mode == FeedMode::kInverseTime)
           line += " F" + feed_text(ctx.inverse_time_f * n);
         else if (feed && k == 1 && feed_before_line != feed_upm)
@@ -564,14 +572,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       rl.traverse = true;
       Axes6 expect = end;
       std::string line = words.block_delete ? "/G0" : "G0";
-      const char letters[] = {'X', 'Y', 'Z', 'A', 'B', 'C'};
-      for (int ax : {0, 1, 2, 3, 5}) {
-        if (ax == 3 && !words.has_a && !turned) continue;
-        if (ax == 5 && !words.has_c && !turned) continue;
-        const std::string v = exact(end[ax]);
-        line += std::string(" ") + letters[ax] + v;
-        expect[ax] = std::strtod(v.c_str(), nullptr);
-      }
+      line += exact_words(end, words.has_a || turned, words.has_c || turned, expect);
       pl.moves.push_back(line);
       rl.expected.push_back(expect);
       plan[ctx.line] = std::move(pl);
@@ -622,15 +623,9 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
                              "before it would change its mode; write G" +
                              std::to_string(orig_mode) + " on the line");
       const Axes6 back = path.to_program(move.start, ctx);
-      std::string line = block_delete ? "/G1" : "G1";
       Axes6 expect = back;
-      const char letters[] = {'X', 'Y', 'Z', 'A', 'B', 'C'};
-      for (int ax : {0, 1, 2, 3, 5}) {
-        if ((ax == 3 || ax == 5) && !turned) continue;
-        const std::string v = exact(back[ax]);
-        line += std::string(" ") + letters[ax] + v;
-        expect[ax] = std::strtod(v.c_str(), nullptr);
-      }
+      const std::string line =
+          (block_delete ? "/G1" : "G1") + exact_words(back, turned, turned, expect);
       PlannedLine pl;
       pl.moves = {line, source};
       pl.last_verbatim = true;
