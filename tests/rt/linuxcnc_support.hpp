@@ -11,6 +11,7 @@
 
 #include "oracle.hpp"
 #include "run_process.hpp"
+#include "test_paths.hpp"
 
 namespace truecut::test {
 
@@ -26,6 +27,14 @@ inline std::string linuxcnc_missing() {
   if (::geteuid() != 0)
     return "root, to run halrun in a private mount namespace with the modules built here "
            "(tests/support/linuxcnc/halrun_private.sh)";
+  // The private mount namespace has a /tmp of its own, which hides a build
+  // folder there (halrun_private.sh refuses it).
+  std::error_code ec;
+  const std::string build = std::filesystem::weakly_canonical(binary_dir(), ec).string() + "/";
+  if (build.rfind("/tmp/", 0) == 0)
+    return "a build folder outside /tmp (this one is " + build +
+           "; LinuxCNC runs in a private mount namespace whose own /tmp hides it): clone and "
+           "build elsewhere";
   return {};
 }
 
