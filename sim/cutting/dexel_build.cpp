@@ -100,6 +100,18 @@ WeldKey weld_key(int surface, const Eigen::Vector3d& p) {
   return k;
 }
 
+// The longest edge of triangle t, and the pieces each edge is cut into so
+// that none is longer than the dexel spacing.
+template <class Vertices, class Triangle>
+double longest_edge_mm(const Vertices& V, const Triangle& t) {
+  return std::max(
+      {(V[t[1]] - V[t[0]]).norm(), (V[t[2]] - V[t[1]]).norm(), (V[t[0]] - V[t[2]]).norm()});
+}
+template <class Vertices, class Triangle>
+int pieces_per_edge(const Vertices& V, const Triangle& t, double spacing_mm) {
+  return std::max(1, static_cast<int>(std::ceil(longest_edge_mm(V, t) / spacing_mm - 1e-9)));
+}
+
 constexpr double kStockEps = 1e-9;  // a point this close to a box is in it
 
 // The stock boxes that may hold a point, by a uniform grid over their union
@@ -141,6 +153,7 @@ class StockGrid {
     indexed_ = true;
   }
 
+  std::size_t size() const { return stock_.size(); }
   // Calls f(box) for the boxes that may hold x, in the stock's order, until f
   // returns true.
   template <class F>
@@ -180,10 +193,10 @@ class StockGrid {
 // Distance from p along n to where the union of boxes ends (0 when p is not
 // inside any box), capped at `cap`.
 double stock_height(const Eigen::Vector3d& p, const Eigen::Vector3d& n, const StockGrid& grid,
-                    std::size_t box_count, double cap) {
+                    double cap) {
   constexpr double kEps = kStockEps;
   double t = 0;
-  for (std::size_t pass = 0; pass <= box_count && t < cap; ++pass) {
+  for (std::size_t pass = 0; pass <= grid.size() && t < cap; ++pass) {
     bool advanced = false;
     const Eigen::Vector3d x = p + t * n;
     grid.visit(x, [&](const StockBox& b) {
@@ -299,10 +312,7 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
   double expected_dexels = 0;
   for (std::size_t f = 0; f < nt; ++f) {
     if (!modelled(triangle_surface[f]) || face_area[f] <= 0) continue;
-    const auto& t = nominal.triangles[f];
-    const double longest = std::max(
-        {(V[t[1]] - V[t[0]]).norm(), (V[t[2]] - V[t[1]]).norm(), (V[t[0]] - V[t[2]]).norm()});
-    const double n = std::max(1.0, std::ceil(longest / options.spacing_mm - 1e-9));
+    const double n = pieces_per_edge(V, nominal.triangles[f], options.spacing_mm);
     expected_dexels += (n - 1) * (n - 2) / 2 + 1.5 * (n - 1) + 0.5;
   }
   // (Capped: an estimate is not worth gigabytes; past it the table grows.)
@@ -357,9 +367,8 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
       continue;
     }
     if (face_area[f] <= 0) continue;  // degenerate: no surface to sample
-    const double longest = std::max(
-        {(V[t[1]] - V[t[0]]).norm(), (V[t[2]] - V[t[1]]).norm(), (V[t[0]] - V[t[2]]).norm()});
-    const int n = std::max(1, static_cast<int>(std::ceil(longest / options.spacing_mm - 1e-9)));
+    const double longest = longest_edge_mm(V, t);
+    const int n = pieces_per_edge(V, t, options.spacing_mm);
     const Eigen::Vector3d cn[3] = {corner_normal(f, t[0]), corner_normal(f, t[1]),
                                    corner_normal(f, t[2])};
     // Dexels on a sharp edge test their line a quarter sub-triangle inside
@@ -446,8 +455,8 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
   m.floor_.assign(nd, -options.max_depth_mm);
   const StockGrid stock_grid(stock);
   for (std::size_t i = 0; i < nd; ++i)
-    m.initial_height_[i] = stock_height(m.line_origin_[i], m.normal_[i], stock_grid, stock.size(),
-                                        options.max_stock_mm);
+    m.initial_height_[i] =
+        stock_height(m.line_origin_[i], m.normal_[i], stock_grid, options.max_stock_mm);
   // Partners: the dexels at one position with different normals (the
   // sides of a sharp edge or corner), linked in a cycle.
   m.partner_.resize(nd);
