@@ -21,10 +21,13 @@ CanonCall Emitter::make(CanonOp op, double inverse_time_f) const {
   call.context.line = line_;
   call.context.block_number = block_number_;
   call.context.executed_block = executed_block_;
+  call.context.outer_line = outer_line_;
+  call.context.outer_loop_line = outer_loop_line_;
   call.context.operation = state_.operation;
   call.context.tool = state_.tool;
   call.context.units = state_.units;
   call.context.feed_mode = state_.feed_mode;
+  call.context.incremental = state_.incremental;
   call.context.inverse_time_f = inverse_time_f;
   call.context.spline = state_.spline;
   call.context.tcp = state_.tcp;

@@ -34,6 +34,13 @@ class Emitter {
     line_ = line;
     block_number_ = std::move(block_number);
     ++executed_block_;
+    outer_line_ = line;
+    outer_loop_line_ = 0;
+  }
+  // Inside a subroutine or a loop of the main program (CallContext).
+  void set_outer(int outer_line, int outer_loop_line) {
+    outer_line_ = outer_line;
+    outer_loop_line_ = outer_loop_line;
   }
   // Calls after the program has ended (rs274's closing ON_RESETs) belong to
   // no block: no N number.
@@ -64,6 +71,8 @@ class Emitter {
   int line_ = 0;
   std::string block_number_;
   long executed_block_ = 0;
+  int outer_line_ = 0;
+  int outer_loop_line_ = 0;
   std::vector<HeldCall> held_;
 };
 

@@ -22,6 +22,14 @@ std::optional<double> Parameters::named(std::string_view name) const {
   return std::nullopt;
 }
 
+ParameterValues Parameters::values() const {
+  ParameterValues v;
+  v.numbered = numbered_;
+  v.named.insert(globals_.begin(), globals_.end());
+  v.named.insert(frames_.back().locals.begin(), frames_.back().locals.end());
+  return v;
+}
+
 void Parameters::set_named(const std::string& name, double value) {
   if (!name.empty() && name[0] == '_')
     globals_[name] = value;

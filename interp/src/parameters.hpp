@@ -11,6 +11,8 @@
 #include <string_view>
 #include <vector>
 
+#include "truecut/interp/interpreter.hpp"
+
 namespace truecut::interp {
 
 class Parameters {
@@ -36,6 +38,8 @@ class Parameters {
   void push_shared_call();
   void pop_call();
   int call_level() const { return static_cast<int>(frames_.size()) - 1; }
+  // The numbered parameters and the named ones of the current call level.
+  ParameterValues values() const;
 
   std::function<std::optional<double>(std::string_view)> predefined;
 

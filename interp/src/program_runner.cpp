@@ -237,6 +237,9 @@ bool ProgramRunner::step() {
       blocks_ % options_.progress_every_blocks == 0)
     options_.progress(blocks_);
   const LexedLine& line = file.lines[frame.pc];
+  if (frames_.size() == 1 && options_.on_watch_line && options_.watch_lines.count(line.line) &&
+      watched_.insert(line.line).second)
+    options_.on_watch_line(line.line, params_.values());
   if (line.text.empty() && line.sinumerik.empty()) {
     ++frame.pc;
     return true;
@@ -249,6 +252,12 @@ bool ProgramRunner::step() {
     fail(line, line.column[0], "'%' is only allowed alone on the first and last program lines");
   sync_state_parameters(state_, params_);
   emitter_.set_location(frame.file, line.line, block_number_of(line));
+  if (frames_.size() > 1 || !frame.loops.empty()) {
+    const Frame& top = frames_.front();
+    const File& main = files_.front();
+    emitter_.set_outer(frames_.size() > 1 ? main.lines[top.pc - 1].line : line.line,
+                       top.loops.empty() ? 0 : main.lines[top.loops.front().start].line);
+  }
   const Block block = read_block(line, params_, options_.has_b);
   assign(block, line);
   if (block.o) {

@@ -77,6 +77,7 @@ class ProgramRunner {
   std::set<std::string> defined_subs_;
   std::map<std::string, std::pair<int, size_t>> fanuc_subs_;  // "O100" lines, the first of each
   std::int64_t blocks_ = 0;
+  std::set<int> watched_;  // InterpreterOptions::watch_lines met so far
 };
 
 }  // namespace truecut::interp

@@ -272,10 +272,17 @@ struct CallContext {
   // The block's place in the run: counts the blocks executed, so a line run
   // again (in a loop or subroutine) gets a new number each time.
   long executed_block = 0;
+  // Where the main program stands when the call is made: the line being run
+  // there (the calling line while a subroutine runs), and the first line of
+  // the outermost loop running there (0: none). The rewrite expands such a
+  // line or loop when moves inside it cannot be corrected in place.
+  int outer_line = 0;
+  int outer_loop_line = 0;
   std::string operation;  // CAM operation name, "" before the first marker
   int tool = 0;           // tool in the spindle
   LengthUnits units = LengthUnits::kMm;
   FeedMode feed_mode = FeedMode::kUnitsPerMinute;
+  bool incremental = false;   // G91 in force
   double inverse_time_f = 0;  // the programmed F of an inverse-time move
   SplineMode spline = SplineMode::kNone;
   bool tcp = false;  // TRAORI active

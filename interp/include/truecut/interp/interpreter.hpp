@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <map>
+#include <set>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -16,6 +18,14 @@
 #include "truecut/interp/tool_table.hpp"
 
 namespace truecut::interp {
+
+// The parameters of the main program at a moment of its run: #1..#5601 by
+// number ([0] unused), and its named ones (its locals and the #<_globals>;
+// lower case, without '#<' '>'), predefined names apart.
+struct ParameterValues {
+  std::vector<double> numbered;
+  std::map<std::string, double> named;
+};
 
 struct InterpreterOptions {
   ToolTable tools;
@@ -44,6 +54,12 @@ struct InterpreterOptions {
   // LinuxCNC's rs274: never trips, no error). When set, a G38.2 or G38.4
   // whose probe does not trip is an error at its line, as on LinuxCNC.
   ProbeFunction probe;
+  // Called the first time the main program, not inside a subroutine,
+  // reaches one of these lines (1-based, before running it), with the
+  // parameters then. The rewrite sets after a loop it writes out move by
+  // move the parameters the loop set.
+  std::set<int> watch_lines;
+  std::function<void(int line, const ParameterValues& values)> on_watch_line;
 };
 
 class Interpreter {
