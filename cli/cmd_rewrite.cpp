@@ -35,7 +35,10 @@ const char* kRewriteHelp =
     "point is shifted by the compensation there (the 3 nearest compensation points\n"
     "of the matrix blended by eqs. 2-5 of the optical-compensation source, or the\n"
     "correction field's layer of the operation's tool) and written as G1 moves with\n"
-    "the original feed (G93 F recomputed). Every other line is copied byte for byte.\n"
+    "the original feed (G93 F recomputed). Every other line is copied byte for byte;\n"
+    "a loop, subroutine call or NURBS block whose feeds cannot be corrected on\n"
+    "their own line (they run more than once, or sit in a subroutine file) is\n"
+    "written out move by move in its place, with a note saying so.\n"
     "The cutter radius is that of the tool in the spindle (T.. M6): D / 2 in the\n"
     "tool table, as for every other command.\n"
     "OUT and OUT.audit.json (inputs, options, SHA-256 digests, the summary) are\n"
@@ -332,6 +335,8 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
        ", \"moves_kept\": " + std::to_string(s.moves_kept) +
        ", \"holes_rewritten\": " + std::to_string(s.holes_rewritten) +
        ", \"returns_written\": " + std::to_string(s.returns_written) +
+       ", \"expansions\": " + std::to_string(s.expansions) +
+       ", \"expanded_moves\": " + std::to_string(s.expanded_moves) +
        ", \"points_written\": " + std::to_string(s.points_written) +
        ", \"points_compensated\": " + std::to_string(s.points_compensated) +
        ", \"blend_points\": [" + std::to_string(s.blend_points[0]) + ", " +
@@ -375,6 +380,11 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
         "  returns to the path   %d (G1 back to the original point before the next "
         "operation's feed)\n",
         s.returns_written);
+  if (s.expansions > 0)
+    std::printf(
+        "  written out           %d loops, calls or NURBS blocks as %ld moves (see the notes "
+        "in the program)\n",
+        s.expansions, s.expanded_moves);
   std::printf("  points written        %ld\n", s.points_written);
   std::printf("  points compensated    %ld\n", s.points_compensated);
   if (matrix_path)

@@ -614,20 +614,20 @@ TEST(Rewrite, BadInputIsRefusedWithAClearMessage) {
   const std::string head = "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X0 Y0 Z1\n";
   EXPECT_EQ(error_of<GcodeError>(head + "G1 Z0 F100 M0\nM30\n", o),
             "bad.ngc:6:12: M0 beside a move: this move cannot be rewritten");
-  EXPECT_EQ(error_of<GcodeError>(head + "G1 X[1+1] F100\nM30\n", o),
-            "bad.ngc:6:4: word X with a parameter or expression: this move cannot be rewritten");
-  EXPECT_EQ(error_of<GcodeError>(head + "G91 G1 X1 F100\nM30\n", o),
-            "bad.ngc:6:1: G91 (incremental distance): this move cannot be rewritten");
+  // Parameters, expressions and G91 on a feed of the operation: the line is
+  // written out as its moves (test_rewrite_expansion.cpp), not refused.
+  EXPECT_EQ(error_of<GcodeError>(head + "G1 X[1+1] F100\nM30\n", o), "no error");
+  EXPECT_EQ(error_of<GcodeError>(head + "G91 G1 X1 F100\nM30\n", o), "no error");
   EXPECT_EQ(error_of<GcodeError>(head + "F100\nBSPLINE X1\nX2 Y1\nG1 X3\nM30\n", o),
             "bad.ngc:7: BSPLINE/CSPLINE point: spline moves cannot be rewritten as G1 moves");
+  // A loop is written out move by move (test_rewrite_expansion.cpp), not refused.
   EXPECT_EQ(
       error_of<GcodeError>(head + "F100\no1 repeat [2]\nG1 X1\nG1 X0\no1 endrepeat\nM30\n", o),
-      "bad.ngc:8: line makes several moves (loop, subroutine or G28/G30): it cannot be "
-      "rewritten");
-  // G91 set before the operation: caught when the new program is checked.
-  const std::string g91 = error_of<GcodeError>(
-      "G21 G91 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 Z40\nG1 X1 F100\nM30\n", o);
-  EXPECT_NE(g91.find("G91"), std::string::npos) << g91;
+      "no error");
+  // G91 set before the operation: its feed is written out too.
+  EXPECT_EQ(error_of<GcodeError>(
+                "G21 G91 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 Z40\nG1 X1 F100\nM30\n", o),
+            "no error");
 }
 
 // A canned cycle expands into several moves on its line: the rewrite cannot
@@ -710,12 +710,14 @@ TEST(Rewrite, PolarMovesAreWrittenAsXYAtTheirEnd) {
   EXPECT_EQ(r.text.substr(0, face), program.substr(0, program.find("(OPERATION: FACE)")));
   EXPECT_EQ(r.text.substr(last), program.substr(program.find("(OPERATION: LAST)")));
   EXPECT_GT(r.summary.moves_rewritten, 0);
-  // A polar word from a parameter cannot be rewritten: refused with its line.
+  // A polar word from an expression: the line is written out as its move.
   const std::string expr =
       "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X0 Y0 Z0\nG1 @5 ^[45] F100\nM30\n";
-  EXPECT_EQ(error_of<GcodeError>(expr, o),
-            "bad.ngc:6:7: polar coordinate ^ with a parameter or expression: this move cannot "
-            "be rewritten");
+  const RewriteResult e = rewrite_program(expr, "e.ngc", m, o);
+  EXPECT_NE(e.text.find("(truecut rewrite: line 6, the line, written out as the "),
+            std::string::npos)
+      << e.text;
+  EXPECT_EQ(e.text.find("^[45]"), std::string::npos) << e.text;
 }
 
 // A program under cutter radius compensation (G41/G42) is written out in
@@ -811,9 +813,10 @@ TEST(Rewrite, CutterCompensationIsExpandedIntoCompensatedMoves) {
       "G21 G90 G94\nT2 M6\nG0 X-10 Y-10 Z1\nG41 D2 G1 X0 Y0 F300\n(OPERATION: PROFILE)\n"
       "o1 repeat [2]\nG1 X10\no1 endrepeat\nG40 G0 X-10\nM30\n";
   EXPECT_EQ(error_of<GcodeError>(loop, o),
-            "bad.ngc:7: move under cutter radius compensation on a line that runs more than once "
-            "(loop, or a subroutine called twice): the rewrite writes compensated moves out one "
-            "by one, where the tool goes each time");
+            "bad.ngc:7: cutter radius compensation on this line, inside the loop o1 repeat ... "
+            "endrepeat (lines 6-8), which the rewrite writes out move by move (feed moves of "
+            "operation 'PROFILE' run more than once): an expansion writes moves, feeds, dwells, "
+            "planes and comments only");
   // Around moves that run once (a condition, a subroutine called once) the
   // O-words stay, and the compensated moves are written where the tool goes
   // as without them.
@@ -884,7 +887,7 @@ TEST(Rewrite, ModalStateLinesAreCopied) {
                 .find("M62 beside a move"),
             std::string::npos);
   // A Fanuc-style subprogram run once is rewritten in place; run twice (L2)
-  // its lines are refused like those of a loop.
+  // its call is written out move by move, like a loop.
   const std::string m98 =
       "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X-4 Y0 Z1\nG1 Z0 F100\nM98 P100\n"
       "G0 Z1\nM30\nO100\nG1 X0 F40\nG1 X4\nM99\n";
@@ -894,8 +897,13 @@ TEST(Rewrite, ModalStateLinesAreCopied) {
   EXPECT_GT(r98.summary.moves_rewritten, 0);
   std::string twice = m98;
   twice.replace(twice.find("M98 P100"), 8, "M98 P100 L2");
-  EXPECT_NE(error_of<GcodeError>(twice, o).find("bad.ngc:11"), std::string::npos)
-      << error_of<GcodeError>(twice, o);
+  const RewriteResult r98x2 = rewrite_program(twice, "m98.ngc", m, o);
+  EXPECT_EQ(r98x2.summary.expansions, 1);
+  EXPECT_EQ(r98x2.text.find("\nM98 P100 L2\n"), std::string::npos) << r98x2.text;
+  EXPECT_NE(
+      r98x2.text.find("(truecut rewrite: line 7, the subprogram call M98 P100 L2, written out"),
+      std::string::npos)
+      << r98x2.text;
 }
 
 // The cutter radius is D / 2 of the tool in the spindle: giving the same

@@ -201,7 +201,7 @@ TEST(RewriteCycles, CyclesThatCannotBeCorrectedAreRefusedByName) {
   expect_refused(head +
                      "G98 G81 X10 Y5 Z-3 R2 F100\n#1 = 0\no1 while [#1 LT 2]\nX20\n"
                      "#1 = [#1 + 1]\no1 endwhile\nG80\nM30\n",
-                 10, "runs more than once");
+                 10, "canned cycle G81 inside the loop o1 while ... endwhile (lines 9-12)");
   expect_refused(head + "G98 G81 X10 Y5 Z[-3] R2 F100\nG80\nM30\n", 7, "expression");
 }
 

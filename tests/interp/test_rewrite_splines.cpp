@@ -1,7 +1,7 @@
 // truecut::interp::rewrite_program on LinuxCNC's splines (issue 22, point
-// 5): a G5 or G5.1 of the rewritten operation is written as G1 chords of its
-// curve, each point corrected; splines outside the operation are copied; a
-// NURBS block in it, or one that would start from a corrected point, is
+// 5): a G5, G5.1 or NURBS block of the rewritten operation is written as G1
+// chords of its curve, each point corrected; splines outside the operation
+// are copied; a NURBS block that would start from a corrected point is
 // refused by name; a G5/G5.1 of another operation right after a corrected
 // point gets a G1 back to the original point before it. The curves here are the test's own Bezier
 // formulas from the words of the program (G5: P1 = start + (I, J), P2 = end + (P, Q); G5.1: P1 =
@@ -78,13 +78,14 @@ std::vector<P2> cut_points(const std::string& text) {
 }
 
 void expect_on_curve(const std::string& program, const std::function<P2(double)>& curve,
-                     const P2& end) {
+                     const P2& end,
+                     const std::string& note =
+                         "(truecut rewrite: 1 G5/G5.1 splines of operation "
+                         "FACE written as G1 chords within 0.001 mm of the "
+                         "curve, corrected)") {
   const RewriteOptions o = options();
   const RewriteResult r = rewrite_program(program, "s.ngc", constant_matrix(), o);
-  EXPECT_NE(r.text.find("(truecut rewrite: 1 G5/G5.1 splines of operation FACE written as G1 "
-                        "chords within 0.001 mm of the curve, corrected)"),
-            std::string::npos)
-      << r.text;
+  EXPECT_NE(r.text.find(note), std::string::npos) << r.text;
   const std::vector<P2> pts = cut_points(r.text);
   ASSERT_GE(pts.size(), 8u) << r.text;
   for (const P2& p : pts)
@@ -181,13 +182,28 @@ TEST(RewriteSplines, SplinesOutsideTheOperationAreCopiedOrRefusedByName) {
       "(OPERATION: OTHER)\nG5.2 X2 Y1 P1 L3\nX3 Y2 P1\nX4 Y0 P1\nG5.3\nG0 Z5\nM30\n";
   const std::string e = error_of(block);
   EXPECT_NE(e.find("G5.2 NURBS block right after a corrected move"), std::string::npos) << e;
-  // A NURBS block in the operation spans several lines.
-  const std::string nurbs =
-      "G21 G90 G94\nT2 M6\nG43 H2\n(OPERATION: FACE)\nG0 X0 Y0 Z1\nG1 Z0 F100\n"
-      "G5.2 X0 Y1 P1 L3\nX2 Y2 P1\nX4 Y0 P1\nG5.3\nG0 Z5\nM30\n";
-  const std::string n = error_of(nurbs);
-  EXPECT_NE(n.find("bad.ngc:10:"), std::string::npos) << n;
-  EXPECT_NE(n.find("NURBS block (G5.2 ... G5.3)"), std::string::npos) << n;
+}
+
+// A NURBS block of the operation spans several lines: they are replaced by
+// the corrected chords of its curve. The tool's position and two control
+// points of weight 1, order 3 (LinuxCNC's knots 0 0 0 1 1 1), make a
+// quadratic Bezier curve.
+TEST(RewriteSplines, ANurbsBlockIsWrittenOutAsCorrectedChordsInPlaceOfItsLines) {
+  const std::string program =
+      "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X0 Y0 Z1\nG1 Z0 F100\n"
+      "G5.2 X2 Y2 P1 L3\nX4 Y0 P1\nG5.3\nG0 Z1\nM30\n";
+  const P2 p0{0, 0}, p1{2, 2}, p2{4, 0};
+  expect_on_curve(
+      program,
+      [&](double t) {
+        const double a = (1 - t) * (1 - t), b = 2 * t * (1 - t), c = t * t;
+        return P2{a * p0[0] + b * p1[0] + c * p2[0], a * p0[1] + b * p1[1] + c * p2[1]};
+      },
+      p2, "(truecut rewrite: lines 7-9, the NURBS block G5.2 ... G5.3, written out as the ");
+  const RewriteResult r = rewrite_program(program, "s.ngc", constant_matrix(), options());
+  EXPECT_EQ(r.text.find("\nG5.2"), std::string::npos) << r.text;
+  // The rapid after it leaves the corrected end with all of X Y Z.
+  EXPECT_NE(r.text.find("\nG0 X4 Y0 Z1\nM30\n"), std::string::npos) << r.text;
 }
 
 }  // namespace

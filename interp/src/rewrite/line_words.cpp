@@ -228,6 +228,26 @@ bool line_has_g_code(const std::string& source, int code) {
   return false;
 }
 
+bool line_has_parameter_or_expression(const std::string& source) {
+  LexedLine lx;
+  try {
+    lx = lex_line(source, "", 0);
+  } catch (const GcodeError&) {
+    return false;
+  }
+  const std::string& t = lx.text;
+  for (size_t pos = 0; pos < t.size(); ++pos) {
+    if (t[pos] == '(') {
+      pos = t.find(')', pos);
+      if (pos == std::string::npos) break;
+      continue;
+    }
+    if (t[pos] == ';') break;
+    if (t[pos] == '#' || t[pos] == '[') return true;
+  }
+  return false;
+}
+
 bool has_cutter_comp_code(const std::string& source) {
   for (int code : g_codes_of_line(source))
     if (code == 410 || code == 411 || code == 420 || code == 421) return true;

@@ -42,6 +42,10 @@ int motion_code_of_line(const std::string& source);
 // Whether a line has the G code `code` (x10: 52 for G5.2). Never throws.
 bool line_has_g_code(const std::string& source, int code);
 
+// Whether a line's words use parameters or expressions ('#' or '[' outside
+// comments; parameter settings included). Never throws.
+bool line_has_parameter_or_expression(const std::string& source);
+
 // Whether a line has G41, G42, G41.1 or G42.1. Never throws.
 bool has_cutter_comp_code(const std::string& source);
 

@@ -9,6 +9,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "expansion.hpp"
 #include "line_words.hpp"
 #include "modal_groups.hpp"
 #include "neighbours.hpp"
@@ -181,13 +182,14 @@ std::string file_of(const CanonProgram& program, const CallContext& ctx, const s
   return ctx.file < static_cast<int>(program.files.size()) ? program.files[ctx.file] : name;
 }
 
-// G5 and G5.1 of the operation (docs/rewrite.md): each NURBS_FEED becomes
-// the G1 chords of its curve within the chord tolerance, which the rewrite
-// then corrects like any feed; returns their lines. A NURBS block (G5.2 ...
-// G5.3) spans several lines and is refused in the operation; splines
-// outside it are copied.
+// G5, G5.1 and NURBS blocks of the operation (docs/rewrite.md): each
+// NURBS_FEED becomes the G1 chords of its curve within the chord
+// tolerance, which the rewrite then corrects like any feed; returns the
+// lines of the G5 and G5.1 (corrected in place) and gives the NURBS blocks
+// (written out in place of their lines). Splines outside it are copied.
 std::set<int> expand_splines(CanonProgram& program, const std::vector<RawLine>& raw,
-                             const std::string& name, const RewriteOptions& o) {
+                             const std::string& name, const RewriteOptions& o,
+                             std::vector<NurbsBlock>& nurbs_blocks) {
   std::set<int> lines;
   std::vector<CanonCall> calls;
   calls.reserve(program.calls.size());
@@ -198,15 +200,22 @@ std::set<int> expand_splines(CanonProgram& program, const std::vector<RawLine>& 
       continue;
     }
     const SourceLocation at{file_of(program, c.context, name), c.context.line, 0};
-    if (c.context.file != 0)
-      throw GcodeError(at, "spline of operation '" + o.operation +
-                               "' in a subroutine file: only the main program is rewritten");
-    const std::string& source = raw.at(static_cast<std::size_t>(c.context.line) - 1).content;
-    if (line_has_g_code(source, 52) || line_has_g_code(source, 53))
-      throw GcodeError(at,
-                       "NURBS block (G5.2 ... G5.3) in the operation: it spans several lines and "
-                       "cannot be written as chords in its place; have the CAM output G5, G5.1, "
-                       "lines or arcs");
+    // A spline of a subroutine file is written out with the calling line
+    // (expansion.hpp); a NURBS block (G5.2 ... G5.3) spans several lines and
+    // is written out in their place.
+    bool block = false;
+    if (c.context.file == 0) {
+      const std::string& source = raw.at(static_cast<std::size_t>(c.context.line) - 1).content;
+      if (line_has_g_code(source, 52) || line_has_g_code(source, 53)) {
+        int first = c.context.line;
+        while (first > 1 && !line_has_g_code(raw[static_cast<std::size_t>(first) - 1].content, 52))
+          --first;
+        if (!line_has_g_code(raw[static_cast<std::size_t>(first) - 1].content, 52))
+          throw GcodeError(at, "NURBS block of the operation without its G5.2 line");
+        nurbs_blocks.push_back({first, c.context.line, c.context.outer_line});
+        block = true;
+      }
+    }
     const double units_mm = c.context.units == LengthUnits::kInch ? 25.4 : 1.0;
     // Its G1 points number at least its length over the step: refused before
     // a million of them are corrected only to be refused later. The length
@@ -244,7 +253,7 @@ std::set<int> expand_splines(CanonProgram& program, const std::vector<RawLine>& 
     }
     // The last chord ends exactly at the spline's end.
     std::get<StraightFeed>(calls.back().op).end = n->end;
-    lines.insert(c.context.line);
+    if (c.context.file == 0 && !block) lines.insert(c.context.line);
   }
   program.calls = std::move(calls);
   return lines;
@@ -290,6 +299,42 @@ std::map<int, double> tool_radii(const CanonProgram& program, const std::string&
   return radii;
 }
 
+// The parameter settings that stand for what each expansion set: the
+// program is run again and its parameters compared before the expansion's
+// first line and after its last (numbered ones up to #5000, the system's
+// above are set by calls an expansion refuses; named ones new or changed).
+std::map<int, std::vector<std::string>> parameters_set_by(const Expansions& expansions,
+                                                          std::string_view text,
+                                                          const std::string& name,
+                                                          const InterpreterOptions& io) {
+  std::map<int, std::vector<std::string>> out;
+  if (expansions.empty()) return out;
+  InterpreterOptions watch = io;
+  std::map<int, ParameterValues> at;
+  for (const auto& [first, e] : expansions) {
+    watch.watch_lines.insert(first);
+    watch.watch_lines.insert(e.last_line + 1);
+  }
+  watch.on_watch_line = [&](int line, const ParameterValues& v) { at[line] = v; };
+  watch.on_call = [](const CanonCall&, const std::vector<std::string>&) {};
+  Interpreter(watch).run_text(text, name);
+  constexpr int kLastUserParameter = 5000;
+  for (const auto& [first, e] : expansions) {
+    const auto before = at.find(first), after = at.find(e.last_line + 1);
+    if (before == at.end() || after == at.end()) continue;
+    std::vector<std::string>& lines = out[first];
+    for (int k = 1; k <= kLastUserParameter; ++k)
+      if (after->second.numbered[k] != before->second.numbered[k])
+        lines.push_back("#" + std::to_string(k) + " = " + exact(after->second.numbered[k]));
+    for (const auto& [key, value] : after->second.named) {
+      const auto was = before->second.named.find(key);
+      if (was == before->second.named.end() || was->second != value)
+        lines.push_back("#<" + key + "> = " + exact(value));
+    }
+  }
+  return out;
+}
+
 RewriteResult run(std::string_view text, const std::string& name, const RewriteOptions& o,
                   const PrepareFn& prepare, const CorrectionFn& correction) {
   const Interpreter interpreter(o.interpreter);
@@ -314,7 +359,8 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
                        "tool radii from the tool table given and cannot follow an edit; put the "
                        "values into the tool table file instead");
   const std::vector<RawLine> raw = split_raw_lines(text);
-  const std::set<int> spline_lines = expand_splines(program, raw, name, o);
+  std::vector<NurbsBlock> nurbs_blocks;
+  const std::set<int> spline_lines = expand_splines(program, raw, name, o, nurbs_blocks);
   const std::map<int, double> radius_by_tool = tool_radii(program, name, o);
   std::vector<double> radii;
   for (const auto& [tool, radius] : radius_by_tool)
@@ -351,10 +397,23 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
             "the holes as G0/G1 moves or keep them outside the operation");
   };
 
-  // Motion calls per line of the main file: a rewritten line must make one.
+  // Loops and calls written out move by move (expansion.hpp).
+  const Expansions expansions = find_expansions(program, raw, name, o.operation, nurbs_blocks);
+  const std::map<int, std::vector<std::string>> parameters_set =
+      parameters_set_by(expansions, text, name, o.interpreter);
+  // Motion calls per line of the main file outside them: a rewritten line
+  // must make one.
   std::map<int, int> motions_per_line;
   for (const CanonCall& c : program.calls)
-    if (is_motion(c.op) && c.context.file == 0) ++motions_per_line[c.context.line];
+    if (is_motion(c.op) && c.context.file == 0 && !expansion_at(expansions, c.context.outer_line))
+      ++motions_per_line[c.context.line];
+  // A, C on every expanded move when the program moves them at all.
+  const bool program_uses_ac =
+      std::any_of(program.calls.begin(), program.calls.end(), [](const CanonCall& c) {
+        if (!is_motion(c.op)) return false;
+        const Axes6 e = end_of(c.op);
+        return e.a != 0 || e.c != 0;
+      });
 
   RewriteSummary s;
   s.reach_mm = reach_mm;
@@ -469,15 +528,241 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     cycle_moves.clear();
   };
 
+  // A feed of the operation cut into G1 points of at most a step, each
+  // corrected (densify and compensate).
+  struct Densified {
+    int n = 0;
+    std::vector<Vec5> points;
+    std::vector<Correction> corrections;
+    bool all_zero = true, rotated = false;
+  };
+  auto densify = [&](const ToolPath::Move& move, const CallContext& ctx, const std::string& file) {
+    const double radius_mm = radius_by_tool.at(ctx.tool);
+    const double pieces = std::max(pieces_for_step(path, move, ctx, o, radius_mm),
+                                   static_cast<double>(pieces_for_chord(move, o)));
+    if (ctx.line != points_line) {
+      points_line = ctx.line;
+      points_on_line = 0;
+    }
+    points_on_line += pieces;
+    if (!(points_on_line <= kMaxPiecesPerMove))
+      throw GcodeError({file, ctx.line, 0},
+                       rt::format_printf("move would be written as %s%.3g G1 points of at most %g "
+                                         "mm (more than %.0f): it is longer than any part's move",
+                                         points_on_line > pieces ? "at least " : "", points_on_line,
+                                         o.step_mm, kMaxPiecesPerMove));
+    points_written += pieces;
+    if (!(points_written <= o.max_points))
+      throw GcodeError({file, ctx.line, 0},
+                       rt::format_printf("the operation's feed moves up to here need "
+                                         "%.3g G1 points, more than the limit of %.0f",
+                                         points_written, o.max_points));
+    const int n = static_cast<int>(pieces);
+    std::vector<Vec5> points(n);
+    std::vector<Correction> corrections(n);
+    bool all_zero = true, rotated = false;
+    for (int k = 1; k <= n; ++k) {
+      const Vec5 p = ToolPath::at(move, static_cast<double>(k) / n);
+      const Correction corr = correction(path.tool_point(p, ctx), ctx, radius_mm);
+      corrections[k - 1] = corr;
+      if (corr.shift_mm != Eigen::Vector3d::Zero() || corr.rotation_rad != Eigen::Vector3d::Zero())
+        all_zero = false;
+      if (corr.rotation_rad != Eigen::Vector3d::Zero()) {
+        double shortfall_rad = 0.0;
+        points[k - 1] = path.corrected(p, ctx, corr.shift_mm, corr.rotation_rad, shortfall_rad);
+        rotated = rotated || points[k - 1][3] != p[3] || points[k - 1][4] != p[4];
+        ++s.points_rotated;
+        s.max_rotation_rad = std::max(s.max_rotation_rad, corr.rotation_rad.norm());
+        s.max_rotation_shortfall_rad = std::max(s.max_rotation_shortfall_rad, shortfall_rad);
+      } else {
+        points[k - 1] =
+            corr.shift_mm == Eigen::Vector3d::Zero() ? p : path.shifted(p, ctx, corr.shift_mm);
+      }
+    }
+    return Densified{n, std::move(points), std::move(corrections), all_zero, rotated};
+  };
+  auto count_corrections = [&](const std::vector<Correction>& corrections) {
+    for (const Correction& corr : corrections) {
+      for (int k = 0; k < 4; ++k)
+        s.blend_points[k] += corr.blends[k];
+      if (!corr.compensated) continue;
+      ++s.points_compensated;
+      const double mag = corr.shift_mm.norm();
+      s.max_compensation_mm = std::max(s.max_compensation_mm, mag);
+      sum_mm += mag;
+    }
+  };
+
+  // The expansion being written: its moves go onto its first line, in order.
+  struct OpenExpansion {
+    const Expansion* e = nullptr;
+    double out_feed = 0;  // the feed in force in the new program
+    bool first_move = true;
+    long moves = 0;
+    // G91 in force at the last call inside (a change of mode makes a call,
+    // the interpreter's note).
+    bool incremental = false;
+  };
+  bool incremental_before = false;  // G91 in force at the last call before
+  OpenExpansion ex;
+  std::set<int> closed_expansions;
+  std::map<int, long> expanded_moves;  // by first line
+  // Leaves the expansion: the feed and distance mode the original has at
+  // its end.
+  auto close_expansion = [&] {
+    PlannedLine& pl = plan[ex.e->first_line];
+    if (const auto it = parameters_set.find(ex.e->first_line); it != parameters_set.end())
+      pl.moves.insert(pl.moves.end(), it->second.begin(), it->second.end());
+    if (ex.out_feed != feed_upm) pl.moves.push_back("F" + feed_text(feed_upm));
+    if (ex.incremental) pl.moves.push_back("G91");
+    incremental_before = ex.incremental;
+    expanded_moves[ex.e->first_line] = ex.moves;
+    closed_expansions.insert(ex.e->first_line);
+    ++s.expansions;
+    s.expanded_moves += ex.moves;
+    ex = OpenExpansion{};
+  };
+  auto expansion_error = [&](const CanonCall& c, const std::string& what) -> GcodeError {
+    const Expansion& e = *ex.e;
+    return GcodeError({file_of(program, c.context, name), c.context.line, 0},
+                      what + ", inside " + e.what + " (lines " + std::to_string(e.first_line) +
+                          "-" + std::to_string(e.last_line) +
+                          "), which the rewrite writes out move by move (" + e.why +
+                          "): an expansion writes moves, feeds, dwells, planes and comments only");
+  };
+  // One call inside an expansion.
+  auto expand_call = [&](const CanonCall& c) {
+    const CallContext& ctx = c.context;
+    ex.incremental = ctx.incremental;
+    const int first = ex.e->first_line;
+    PlannedLine& pl = plan[first];
+    RewrittenLine& rl = expected[first];
+    if (rl.last_line == 0) {
+      rl.context = ctx;
+      rl.context.line = first;
+      rl.last_line = ex.e->last_line;
+    }
+    if (!is_motion(c.op)) {
+      if (std::holds_alternative<SetFeedRate>(c.op)) return;
+      std::string text;
+      if (const auto* m = std::get_if<Comment>(&c.op)) {
+        // The interpreter's own notes of a mode change come from the mode
+        // words the expansion writes (G90, G91), not from a copy.
+        if (is_interpreter_note(*m)) return;
+        text = "(" + m->text + ")";
+      } else if (const auto* m = std::get_if<Message>(&c.op)) {
+        text = "(MSG," + m->text + ")";
+      } else if (const auto* d = std::get_if<Dwell>(&c.op)) {
+        text = "G4 P" + exact(d->seconds);
+      } else if (const auto* p = std::get_if<SelectPlane>(&c.op)) {
+        text = p->plane == Plane::kXY ? "G17" : p->plane == Plane::kXZ ? "G18" : "G19";
+      } else {
+        throw expansion_error(c, std::string("this line makes ") + call_name(c.op));
+      }
+      pl.moves.push_back(text);
+      rl.others.push_back(format_rs274(c.op, check_format()));
+      return;
+    }
+    if (ctx.canned_cycle != 0) throw expansion_error(c, "canned cycle on this line");
+    if (ctx.cutter_comp) throw expansion_error(c, "cutter radius compensation on this line");
+    if (std::holds_alternative<NurbsFeed>(c.op)) throw expansion_error(c, "NURBS block here");
+    if (ctx.spline != SplineMode::kNone) throw expansion_error(c, "BSPLINE/CSPLINE point here");
+    const bool feed = !std::holds_alternative<StraightTraverse>(c.op);
+    if (feed && ctx.feed_mode == FeedMode::kInverseTime)
+      throw expansion_error(c, "feed in G93 (inverse time) on this line");
+    path.rebase(ctx);
+    const ToolPath::Move move = std::holds_alternative<ArcFeed>(c.op)
+                                    ? path.arc_to(std::get<ArcFeed>(c.op), ctx)
+                                    : path.line_to(end_of(c.op), ctx);
+    orig_mode = motion_mode(c.op);
+    const bool in_op = ctx.operation == o.operation;
+    if (in_op) ++s.moves_read;
+    const auto context_index = static_cast<std::uint32_t>(rl.contexts.size());
+    rl.contexts.push_back(ctx);
+    const int decimals = o.decimals > 0 ? o.decimals : ctx.units == LengthUnits::kInch ? 5 : 4;
+    // A line of the expansion: X Y Z (A C) exactly, or rounded when corrected.
+    auto write = [&](const Axes6& q, bool traverse, bool corrected, bool with_ac) {
+      std::string line = ex.first_move && incremental_before ? "G90 " : "";
+      ex.first_move = false;
+      line += traverse ? "G0" : "G1";
+      Axes6 read = q;
+      if (corrected) {
+        const char letters[] = {'X', 'Y', 'Z', 'A', 'B', 'C'};
+        for (int ax : {0, 1, 2, 3, 5}) {
+          if ((ax == 3 || ax == 5) && !with_ac) continue;
+          const std::string v = rt::format_fixed(q[ax], decimals);
+          line += std::string(" ") + letters[ax] + v;
+          read[ax] = std::strtod(v.c_str(), nullptr);
+        }
+      } else {
+        line += exact_words(q, with_ac, with_ac, read);
+      }
+      if (!traverse && ex.out_feed != feed_upm) {
+        line += " F" + feed_text(feed_upm);
+        ex.out_feed = feed_upm;
+      }
+      pl.moves.push_back(line);
+      rl.expected.push_back(read);
+      rl.traverse_at.push_back(traverse ? 1 : 0);
+      rl.feed_at.push_back(feed_upm);
+      rl.context_at.push_back(context_index);
+      ++ex.moves;
+    };
+    if (in_op && feed) {
+      Densified d = densify(move, ctx, file_of(program, ctx, name));
+      count_corrections(d.corrections);
+      const bool with_ac = program_uses_ac || d.rotated || turned;
+      for (const Vec5& p : d.points)
+        write(path.to_program(p, ctx), false, true, with_ac);
+      s.points_written += d.n;
+      ++s.moves_rewritten;
+      displaced = d.points.back() != move.end;
+      turned = d.points.back()[3] != move.end[3] || d.points.back()[4] != move.end[4];
+    } else {
+      const bool with_ac = program_uses_ac || turned;
+      // Another operation's feed starts from the original point.
+      if (feed && displaced) write(path.to_program(move.start, ctx), false, false, with_ac);
+      const int n = feed ? pieces_for_chord(move, o) : 1;
+      for (int k = 1; k <= n; ++k)
+        write(k == n ? end_of(c.op)
+                     : path.to_program(ToolPath::at(move, static_cast<double>(k) / n), ctx),
+              !feed, false, with_ac);
+      if (in_op) ++s.moves_kept;
+      displaced = false;
+      turned = false;
+    }
+    path.finish(move);
+    out_mode = feed ? 1 : 0;
+    after_comp = false;
+    cycle_words_pending = false;
+  };
+
   for (const CanonCall& c : program.calls) {
     const CallContext& ctx = c.context;
+    const Expansion* expansion = expansion_at(expansions, ctx.outer_line);
+    if (ex.e && expansion != ex.e) close_expansion();
     path.observe(c);
     if (c.context.file != line_file || c.context.line != line_no) {
       line_file = c.context.file;
       line_no = c.context.line;
       feed_before_line = feed_upm;
     }
+    if (expansion && !ex.e) {
+      if (closed_expansions.count(expansion->first_line))
+        throw GcodeError({name, expansion->first_line, 0},
+                         expansion->what + " is written out move by move (" + expansion->why +
+                             "), but its calls come out in two parts (held back by cutter "
+                             "compensation before it?)");
+      flush_cycle();
+      ex.e = expansion;
+      ex.out_feed = feed_upm;
+    }
     if (const auto* f = std::get_if<SetFeedRate>(&c.op)) feed_upm = f->units_per_minute;
+    if (expansion) {
+      expand_call(c);
+      continue;
+    }
+    incremental_before = ctx.incremental;
     if (!is_motion(c.op)) continue;
     if (!cycle_moves.empty() && ctx.executed_block != cycle_ctx.executed_block) flush_cycle();
     path.rebase(ctx);
@@ -660,48 +945,11 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     }
 
     // Densify and compensate.
-    const double radius_mm = radius_by_tool.at(ctx.tool);
-    const double pieces = std::max(pieces_for_step(path, move, ctx, o, radius_mm),
-                                   static_cast<double>(pieces_for_chord(move, o)));
-    if (ctx.line != points_line) {
-      points_line = ctx.line;
-      points_on_line = 0;
-    }
-    points_on_line += pieces;
-    if (!(points_on_line <= kMaxPiecesPerMove))
-      throw GcodeError({file, ctx.line, 0},
-                       rt::format_printf("move would be written as %s%.3g G1 points of at most %g "
-                                         "mm (more than %.0f): it is longer than any part's move",
-                                         points_on_line > pieces ? "at least " : "", points_on_line,
-                                         o.step_mm, kMaxPiecesPerMove));
-    points_written += pieces;
-    if (!(points_written <= o.max_points))
-      throw GcodeError({file, ctx.line, 0},
-                       rt::format_printf("the operation's feed moves up to here need "
-                                         "%.3g G1 points, more than the limit of %.0f",
-                                         points_written, o.max_points));
-    const int n = static_cast<int>(pieces);
-    std::vector<Vec5> points(n);
-    std::vector<Correction> corrections(n);
-    bool all_zero = true, rotated = false;
-    for (int k = 1; k <= n; ++k) {
-      const Vec5 p = ToolPath::at(move, static_cast<double>(k) / n);
-      const Correction corr = correction(path.tool_point(p, ctx), ctx, radius_mm);
-      corrections[k - 1] = corr;
-      if (corr.shift_mm != Eigen::Vector3d::Zero() || corr.rotation_rad != Eigen::Vector3d::Zero())
-        all_zero = false;
-      if (corr.rotation_rad != Eigen::Vector3d::Zero()) {
-        double shortfall_rad = 0.0;
-        points[k - 1] = path.corrected(p, ctx, corr.shift_mm, corr.rotation_rad, shortfall_rad);
-        rotated = rotated || points[k - 1][3] != p[3] || points[k - 1][4] != p[4];
-        ++s.points_rotated;
-        s.max_rotation_rad = std::max(s.max_rotation_rad, corr.rotation_rad.norm());
-        s.max_rotation_shortfall_rad = std::max(s.max_rotation_shortfall_rad, shortfall_rad);
-      } else {
-        points[k - 1] =
-            corr.shift_mm == Eigen::Vector3d::Zero() ? p : path.shifted(p, ctx, corr.shift_mm);
-      }
-    }
+    Densified d = densify(move, ctx, file);
+    const int n = d.n;
+    const std::vector<Vec5>& points = d.points;
+    const std::vector<Correction>& corrections = d.corrections;
+    const bool all_zero = d.all_zero, rotated = d.rotated;
     const std::string& source = raw[ctx.line - 1].content;
     if (o.keep_unchanged_moves && all_zero && !displaced && !ctx.cutter_comp && !follows_comp &&
         !spline_lines.count(ctx.line)) {
@@ -718,15 +966,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       }
     }
 
-    for (const Correction& corr : corrections) {
-      for (int k = 0; k < 4; ++k)
-        s.blend_points[k] += corr.blends[k];
-      if (!corr.compensated) continue;
-      ++s.points_compensated;
-      const double mag = corr.shift_mm.norm();
-      s.max_compensation_mm = std::max(s.max_compensation_mm, mag);
-      sum_mm += mag;
-    }
+    count_corrections(corrections);
     const LineWords words = split_move_line(source, file, ctx.line);
     PlannedLine pl;
     pl.residual = words.residual;
@@ -782,6 +1022,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     path.finish(move);
   }
   flush_cycle();
+  if (ex.e) close_expansion();
   s.mean_compensation_mm = s.points_compensated > 0 ? sum_mm / s.points_compensated : 0.0;
 
   // Lines that switch compensation on without a move of their own lose
@@ -793,6 +1034,30 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       plan[line].residual = split_move_line(raw[i].content, name, line).residual;
       expected[line].context.line = line;
     }
+
+  // An expanded loop or call: a note on its first line, its other lines gone.
+  for (const auto& [first, e] : expansions) {
+    if (!expanded_moves.count(first)) continue;
+    const std::string lines =
+        e.last_line > first ? "lines " + std::to_string(first) + "-" + std::to_string(e.last_line)
+                            : "line " + std::to_string(first);
+    const auto set = parameters_set.find(first);
+    const size_t n_set = set == parameters_set.end() ? 0 : set->second.size();
+    const std::string set_text = n_set == 0 ? std::string()
+                                            : " and the " + std::to_string(n_set) + " parameter" +
+                                                  (n_set == 1 ? "" : "s") + " they set";
+    const long n_moves = expanded_moves[first];
+    const std::string moves_text =
+        n_moves == 1 ? "the move it makes" : "the " + std::to_string(n_moves) + " moves they make";
+    std::string note = "(truecut rewrite: " + lines + ", " + e.what + ", written out as " +
+                       moves_text + set_text + ": " + e.why + ")";
+    // A comment cannot hold parentheses.
+    std::replace(note.begin() + 1, note.end() - 1, '(', '[');
+    std::replace(note.begin() + 1, note.end() - 1, ')', ']');
+    plan[first].residual = note;
+    for (int line = first + 1; line <= e.last_line; ++line)
+      plan[line] = PlannedLine{};
+  }
 
   // Assemble: every other line byte for byte.
   RewriteResult r;
@@ -818,6 +1083,13 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
                 (returns.size() == 1 ? "" : "s") +
                 " back from a corrected point to the original one written before the next "
                 "operation's first feed, which is kept as it is)\n";
+      origin.push_back({1, OutputLine::kResidual});
+    }
+    if (s.expansions > 0) {
+      r.text +=
+          "(truecut rewrite: " + std::to_string(s.expansions) +
+          (s.expansions == 1 ? " loop, call or NURBS block" : " loops, calls or NURBS blocks") +
+          " written out move by move, corrected: see the note at each)\n";
       origin.push_back({1, OutputLine::kResidual});
     }
     if (!expands_comp) return;

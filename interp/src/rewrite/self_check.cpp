@@ -78,14 +78,26 @@ void check_rewrite(const std::string& text, const CheckInput& in) {
     return mapped_to_original ? line : line + " of the new program";
   };
 
+  // Expanded loops and calls: first line -> last.
+  std::map<int, int> expanded;
+  for (const auto& [line, rw] : in.rewritten)
+    if (rw.last_line > 0) expanded.emplace(line, rw.last_line);
+  auto in_expansion = [&](const CallContext& c) {
+    auto it = expanded.upper_bound(c.outer_line);
+    return it != expanded.begin() && c.outer_line <= std::prev(it)->second;
+  };
+
   std::vector<Entry> kept_in, kept_out;
   double feed = 0;
   for (const CanonCall& c : in.original.calls) {
     if (const auto* f = std::get_if<SetFeedRate>(&c.op)) feed = f->units_per_minute;
     if (c.context.file == 0 && in.rewritten.count(c.context.line)) continue;
+    if (!expanded.empty() && in_expansion(c.context)) continue;
     kept_in.push_back({&c, feed});
   }
   std::map<int, std::vector<const CanonCall*>> moves_out;  // by original line
+  std::map<int, std::vector<double>> feeds_out;            // feed in force at each
+  std::map<int, std::vector<std::string>> others_out;      // expansions' other calls
   std::vector<CanonCall> mapped;
   std::vector<std::string> where_out;  // per mapped call
   mapped.reserve(out.calls.size());
@@ -109,14 +121,18 @@ void check_rewrite(const std::string& text, const CheckInput& in) {
       feeds.push_back(feed);
     } else if (o.kind == OutputLine::kMove && is_motion(c.op)) {
       moves_out[o.source_line].push_back(&c);
+      feeds_out[o.source_line].push_back(feed);
+    } else if (o.kind == OutputLine::kMove && !std::holds_alternative<SetFeedRate>(c.op) &&
+               !(std::holds_alternative<Comment>(c.op) &&
+                 is_interpreter_note(std::get<Comment>(c.op)))) {
+      others_out[o.source_line].push_back(format_rs274(c.op, check_format()));
     }
   }
   for (size_t i = 0; i < mapped.size(); ++i)
     kept_out.push_back({&mapped[i], feeds[i]});
   std::vector<std::string> kept_where = std::move(where_out);
 
-  FormatOptions fmt;
-  fmt.decimals = 9;
+  const FormatOptions fmt = check_format();
   const size_t n = std::min(kept_in.size(), kept_out.size());
   for (size_t i = 0; i < n; ++i) {
     const CanonCall& a = *kept_in[i].call;
@@ -155,6 +171,36 @@ void check_rewrite(const std::string& text, const CheckInput& in) {
     const size_t got = it == moves_out.end() ? 0 : it->second.size();
     if (rw.cycle_normal_axis >= 0) {
       check_cycle_line(line, rw, got == 0 ? nullptr : &it->second, fail);
+      continue;
+    }
+    if (rw.last_line > 0) {
+      if (others_out[line] != rw.others)
+        fail(line, "the expanded lines do not make the original's dwells, planes and comments");
+      if (got != rw.expected.size())
+        fail(line, std::to_string(got) + " moves from the expanded lines, expected " +
+                       std::to_string(rw.expected.size()));
+      const std::vector<double>& feeds = feeds_out[line];
+      for (size_t k = 0; k < got; ++k) {
+        const CanonCall& c = *it->second[k];
+        const bool traverse = rw.traverse_at[k] != 0;
+        const auto* f = std::get_if<StraightFeed>(&c.op);
+        const auto* t = std::get_if<StraightTraverse>(&c.op);
+        if (traverse ? !t : !f) fail(line, "an expanded line made another kind of move");
+        const Axes6& end = traverse ? t->end : f->end;
+        for (int ax = 0; ax < 6; ++ax)
+          if (std::fabs(end[ax] - rw.expected[k][ax]) > 1e-9 * std::max(1.0, std::fabs(end[ax])))
+            fail(line, "an expanded move comes out at " + format_rs274(c.op, fmt));
+        const CallContext& want = rw.contexts[rw.context_at[k]];
+        if (c.context.tcp != want.tcp || c.context.feed_mode != want.feed_mode ||
+            c.context.operation != want.operation || c.context.tool != want.tool ||
+            c.context.units != want.units || c.context.g5x_mm != want.g5x_mm ||
+            c.context.g92_mm != want.g92_mm || c.context.tool_offset_mm != want.tool_offset_mm)
+          fail(line, "an expanded move runs in another mode than the original (" +
+                         format_rs274(c.op, fmt) + ")");
+        if (!traverse && feeds[k] != rw.feed_at[k])
+          fail(line, "an expanded move runs at another feed than the original (" +
+                         format_rs274(c.op, fmt) + ")");
+      }
       continue;
     }
     if (got != rw.expected.size())

@@ -5,12 +5,14 @@
 // it was meant to be.
 #pragma once
 
+#include <cstdint>
 #include <map>
 #include <string>
 #include <vector>
 
 #include "truecut/interp/canon.hpp"
 #include "truecut/interp/interpreter.hpp"
+#include "truecut/interp/rs274_format.hpp"
 
 namespace truecut::interp::rewrite {
 
@@ -27,6 +29,16 @@ struct RewrittenLine {
   // A canned-cycle line (>= 0: the axis it drills along): expected[0] is the
   // hole's bottom; its feeds run over the hole, the deepest ends there.
   int cycle_normal_axis = -1;
+  // An expanded loop or call (expansion.hpp) on lines first..last_line:
+  // per written move, whether it is a G0, the feed in force and the context
+  // of the original move (an index into contexts); the original's other
+  // calls (rs274 text, feeds apart) in order, which the new lines must make.
+  int last_line = 0;  // > 0: expanded
+  std::vector<char> traverse_at;
+  std::vector<double> feed_at;
+  std::vector<std::uint32_t> context_at;
+  std::vector<CallContext> contexts;
+  std::vector<std::string> others;
 };
 
 struct CheckInput {
@@ -39,6 +51,19 @@ struct CheckInput {
   // before them): where that G1 must end.
   const std::map<int, Axes6>* returns = nullptr;
 };
+
+// How the check prints calls to compare them.
+inline FormatOptions check_format() {
+  FormatOptions f;
+  f.decimals = 9;
+  return f;
+}
+
+// A comment the interpreter makes of a mode change ("interpreter: distance
+// mode changed to incremental"), not one of the program.
+inline bool is_interpreter_note(const Comment& c) {
+  return c.text.rfind("interpreter: ", 0) == 0;
+}
 
 // Throws GcodeError at the original line where the programs part.
 void check_rewrite(const std::string& text, const CheckInput& in);

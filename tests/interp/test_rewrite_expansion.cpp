@@ -1,0 +1,296 @@
+// Issue 22, point 5: feed moves of the operation that run more than once (a
+// loop, a subroutine called twice) or sit in a subroutine file are written
+// out move by move in place of the outermost loop or calling line. The
+// oracle is the interpreter run on the original program: every feed of the
+// operation must come out shifted by the (constant) correction, every other
+// move exactly where it was, in the same order.
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "rewrite_test_util.hpp"
+#include "test_paths.hpp"
+#include "truecut/interp/error.hpp"
+#include "truecut/interp/interpreter.hpp"
+#include "truecut/interp/rewrite.hpp"
+
+namespace truecut::interp {
+namespace {
+
+namespace fs = std::filesystem;
+using V = Eigen::Vector3d;
+
+std::string rt_number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3f", v);
+  return buf;
+}
+
+const char* kTools = "T1 P1 D2 Z35\nT2 P2 D4 Z40\n";
+
+RewriteOptions options(const fs::path& sub_dir = {}) {
+  RewriteOptions o;
+  o.operation = "POCKET";
+  o.type = CutType::kFace;
+  o.reach_mm = 1000;  // every point corrected
+  o.decimals = 6;
+  o.interpreter.tools = ToolTable::parse(kTools, "tools.tbl");
+  if (!sub_dir.empty()) o.interpreter.subroutine_path = {sub_dir};
+  return o;
+}
+
+struct Motion {
+  Axes6 end;
+  bool feed_of_op;   // a feed of the operation (corrected), else kept exactly
+  double feed;       // F in force
+  bool arc = false;  // an arc in the XY plane about `center`
+  Axes6 center{};
+};
+
+std::vector<Motion> motions(const std::string& text, const std::string& name,
+                            const RewriteOptions& o) {
+  const CanonProgram p = Interpreter(o.interpreter).run_text(text, name);
+  std::vector<Motion> out;
+  double feed = 0;
+  for (const CanonCall& c : p.calls) {
+    if (const auto* f = std::get_if<SetFeedRate>(&c.op)) feed = f->units_per_minute;
+    if (const auto* t = std::get_if<StraightTraverse>(&c.op)) out.push_back({t->end, false, feed});
+    if (const auto* f = std::get_if<StraightFeed>(&c.op))
+      out.push_back({f->end, c.context.operation == o.operation, feed});
+    if (const auto* a = std::get_if<ArcFeed>(&c.op))
+      out.push_back({a->end, c.context.operation == o.operation, feed, true, a->center});
+  }
+  return out;
+}
+
+V xyz(const Axes6& a) {
+  return V(a.x, a.y, a.z);
+}
+
+// The new program's moves against the original's: each original move's end
+// (shifted by `offset` when it is a feed of the operation) is met in order,
+// and the new program's feeds of the operation between two such ends lie on
+// the shifted original segment.
+void expect_same_path_shifted(const std::string& original, const std::string& rewritten,
+                              const RewriteOptions& o, const V& offset,
+                              const std::string& name = "p.ngc") {
+  const std::vector<Motion> want = motions(original, name, o);
+  const std::vector<Motion> got = motions(rewritten, name, o);
+  size_t g = 0;
+  V prev_want = V::Zero();
+  for (size_t i = 0; i < want.size(); ++i) {
+    const V target = xyz(want[i].end) + (want[i].feed_of_op ? offset : V::Zero());
+    const V from = prev_want;
+    bool found = false;
+    for (; g < got.size(); ++g) {
+      const V p = xyz(got[g].end);
+      if ((p - target).norm() <= 2e-6 && got[g].feed_of_op == want[i].feed_of_op) {
+        EXPECT_EQ(got[g].feed, want[i].feed) << "move " << i << " of the original";
+        found = true;
+        ++g;
+        break;
+      }
+      // A point in between: on the segment from the last end to this one.
+      ASSERT_TRUE(want[i].feed_of_op && got[g].feed_of_op)
+          << "at move " << i << " of the original, " << g << " of the new program: "
+          << "the new program makes an extra move to " << p.transpose() << " before move " << i
+          << " of the original (" << target.transpose() << ")\n"
+          << rewritten;
+      const V a = from, b = target - offset, q = p - offset;
+      if (want[i].arc) {  // on the circle through the arc's start
+        const double r = std::hypot(a.x() - want[i].center.x, a.y() - want[i].center.y);
+        EXPECT_NEAR(std::hypot(q.x() - want[i].center.x, q.y() - want[i].center.y), r, 2e-6)
+            << "point " << p.transpose() << " off the arc (move " << i << ")";
+        continue;
+      }
+      const V d = b - a;
+      const double t =
+          d.squaredNorm() > 0 ? std::clamp((q - a).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
+      EXPECT_LE((a + t * d - q).norm(), 2e-6)
+          << "point " << p.transpose() << " off the path from " << a.transpose() << " to "
+          << b.transpose() << " (move " << i << ")";
+    }
+    ASSERT_TRUE(found) << "move " << i << " of the original (to " << target.transpose()
+                       << ") is not in the new program\n"
+                       << rewritten;
+    prev_want = xyz(want[i].end);
+  }
+  EXPECT_EQ(g, got.size()) << "the new program makes more moves than the original\n" << rewritten;
+}
+
+CompensationMatrixData constant(const V& offset) {
+  return testing::plane_matrix(-50, 50, -50, 50, -5, 1, offset);
+}
+
+const std::string kHead = "G21 G17 G90 G94\nT2 M6\nG43 H2\nG0 X0 Y0 Z5\n(OPERATION: POCKET)\n";
+
+TEST(RewriteExpansion, AWhileLoopOfPassesIsWrittenOutCorrected) {
+  // Three passes at depths set by a counter, in expressions the in-place
+  // rewrite could not keep.
+  const std::string program = kHead +
+                              "#1 = 1\n"
+                              "o100 while [#1 LE 3]\n"
+                              "G1 Z[-#1] F100\n"
+                              "G1 X10 F300\n"
+                              "G1 Y10\n"
+                              "G0 Z5\n"
+                              "G0 X0 Y0\n"
+                              "#1 = [#1 + 1]\n"
+                              "o100 endwhile\n"
+                              "G0 Z20\n"
+                              "M30\n";
+  const V offset(0.01, -0.02, 0.03);
+  const RewriteResult r = rewrite_program(program, "p.ngc", constant(offset), options());
+  EXPECT_EQ(r.summary.expansions, 1);
+  EXPECT_EQ(r.summary.moves_rewritten, 9);
+  EXPECT_EQ(r.text.find("\no100"), std::string::npos) << r.text;
+  EXPECT_NE(r.text.find("(truecut rewrite: lines 7-14, the loop o100 while ... endwhile"),
+            std::string::npos)
+      << r.text;
+  // The lines around the loop byte for byte.
+  EXPECT_EQ(r.text.rfind(kHead + "#1 = 1\n", std::string::npos), r.text.find("G21"));
+  EXPECT_NE(r.text.find("\nG0 Z20\nM30\n"), std::string::npos) << r.text;
+  expect_same_path_shifted(program, r.text, options(), offset);
+}
+
+TEST(RewriteExpansion, ARepeatInIncrementalDistanceEndsInG91AsTheOriginal) {
+  // Steps over in G91 inside the loop, and a G91 move after it.
+  const std::string program = kHead +
+                              "G1 Z-1 F100\n"
+                              "o7 repeat [4]\n"
+                              "G91 G1 X5 F250\n"
+                              "G0 Y2\n"
+                              "o7 endrepeat\n"
+                              "G0 Z6\n"
+                              "G90 G0 Z20\n"
+                              "M30\n";
+  const V offset(-0.004, 0.0, 0.012);
+  const RewriteResult r = rewrite_program(program, "p.ngc", constant(offset), options());
+  EXPECT_EQ(r.summary.expansions, 1);
+  // The loop's moves are written in G90, then G91 again for the G0 Z6 kept
+  // after it (a relative move up from the loop's last point).
+  EXPECT_NE(r.text.find("\nG91\nG0 Z6\n"), std::string::npos) << r.text;
+  expect_same_path_shifted(program, r.text, options(), offset);
+}
+
+TEST(RewriteExpansion, ASubroutineFileCalledTwiceIsWrittenOutAtEachCall) {
+  const fs::path dir = truecut::test::scratch_dir();
+  std::ofstream(dir / "ring.ngc") << "o<ring> sub\n"
+                                     "G0 X#1 Y0\n"
+                                     "G1 Z#2 F120\n"
+                                     "G3 X-#1 Y0 I-#1 J0 F400\n"
+                                     "G3 X#1 Y0 I#1 J0\n"
+                                     "G0 Z5\n"
+                                     "o<ring> endsub\n"
+                                     "M2\n";
+  const std::string program =
+      kHead + "o<ring> call [8] [-1]\nG4 P0.5\no<ring> call [12] [-2]\n" + "G0 Z20\nM30\n";
+  const V offset(0.02, 0.01, -0.015);
+  const RewriteOptions o = options(dir);
+  const RewriteResult r = rewrite_program(program, "p.ngc", constant(offset), o);
+  EXPECT_EQ(r.summary.expansions, 2);
+  EXPECT_EQ(r.summary.moves_rewritten, 6);
+  EXPECT_EQ(r.text.find("\no<ring> call"), std::string::npos) << r.text;
+  EXPECT_NE(r.text.find("\nG4 P0.5\n"), std::string::npos) << r.text;
+  EXPECT_NE(r.text.find("feed moves of operation 'POCKET' in a subroutine file"), std::string::npos)
+      << r.text;
+  expect_same_path_shifted(program, r.text, o, offset);
+}
+
+TEST(RewriteExpansion, ASubroutineOfTheProgramCalledTwiceIsCorrectedAtBothCalls) {
+  // Both calls are written out: the definition's lines run twice.
+  const std::string program =
+      "o<pass> sub\nG1 Z#1 F100\nG1 X10 F300\nG0 Z5\nG0 X0\no<pass> endsub\n" + kHead +
+      "o<pass> call [-1]\no<pass> call [-2]\nG0 Z20\nM30\n";
+  const V offset(0.0, 0.02, 0.01);
+  const RewriteResult r = rewrite_program(program, "p.ngc", constant(offset), options());
+  EXPECT_EQ(r.summary.expansions, 2);
+  // The definition stays, no longer called.
+  EXPECT_NE(r.text.find("o<pass> sub\nG1 Z#1 F100\n"), std::string::npos) << r.text;
+  EXPECT_EQ(r.text.find("\no<pass> call"), std::string::npos) << r.text;
+  expect_same_path_shifted(program, r.text, options(), offset);
+}
+
+// Programs drawn from a seed: loops of each kind, nested, in G90 or G91,
+// with calls of a subroutine of the program, back to back, each checked
+// against the original's own moves with its own correction.
+TEST(RewriteExpansion, DrawnLoopProgramsComeOutShiftedByTheirCorrection) {
+  std::mt19937 rng(20261129);
+  auto uniform = [&](double lo, double hi) {
+    return std::uniform_real_distribution<double>(lo, hi)(rng);
+  };
+  auto pick = [&](int n) { return std::uniform_int_distribution<int>(0, n - 1)(rng); };
+  for (int seed = 0; seed < 24; ++seed) {
+    std::string p =
+        "o<step> sub\nG1 X[#<_cx> + #1] F[#2]\n#<_cx> = [#<_cx> + #1]\no<step> endsub\n" + kHead +
+        "#<_cx> = 0\n";
+    const int loops = 1 + pick(3);
+    for (int l = 0; l < loops; ++l) {
+      const int n = 1 + pick(4);
+      const std::string label = std::to_string(100 + l);
+      const std::string dx = rt_number(uniform(0.5, 6));
+      const std::string feed = std::to_string(100 + 50 * pick(6));
+      std::string body;
+      switch (pick(3)) {
+        case 0:
+          body = "G1 Z" + rt_number(uniform(-3, 0)) + " F80\no<step> call [" + dx + "] [" + feed +
+                 "]\nG0 Z2\n";
+          break;
+        case 1:
+          body = "G91 G1 X" + dx + " Y" + rt_number(uniform(-2, 2)) + " F" + feed + "\nG90\n";
+          break;
+        default:
+          body = "G1 Y" + rt_number(uniform(-8, 8)) + " F" + feed + "\nG2 X[#<_cx> + " + dx +
+                 "] Y0 R" + rt_number(uniform(9, 14)) + "\n#<_cx> = [#<_cx> + " + dx + "]\n";
+          break;
+      }
+      if (pick(2) == 0) {
+        p += "o" + label + " repeat [" + std::to_string(n) + "]\n" + body + "o" + label +
+             " endrepeat\n";
+      } else {
+        p += "#9 = 0\no" + label + " while [#9 LT " + std::to_string(n) + "]\n" + body +
+             "#9 = [#9 + 1]\no" + label + " endwhile\n";
+      }
+      p += "G90 G0 Z5\nG0 X#<_cx> Y0\n";
+    }
+    p += "G0 Z20\nM30\n";
+    const V offset(uniform(-0.05, 0.05), uniform(-0.05, 0.05), uniform(-0.05, 0.05));
+    SCOPED_TRACE("seed " + std::to_string(seed) + "\n" + p);
+    try {
+      const RewriteResult r = rewrite_program(p, "p.ngc", constant(offset), options());
+      expect_same_path_shifted(p, r.text, options(), offset);
+    } catch (const GcodeError& e) {
+      ADD_FAILURE() << e.what();
+    }
+  }
+}
+
+TEST(RewriteExpansion, WhatAnExpansionCannotWriteIsRefusedNamingTheLoop) {
+  const std::string spindle = kHead +
+                              "o1 repeat [2]\n"
+                              "G1 Z-1 F100\n"
+                              "M3 S1000\n"
+                              "G0 Z5\n"
+                              "o1 endrepeat\n"
+                              "M30\n";
+  try {
+    rewrite_program(spindle, "bad.ngc", constant(V(0.01, 0, 0)), options());
+    ADD_FAILURE() << "no error";
+  } catch (const GcodeError& e) {
+    EXPECT_EQ(e.where().line, 8) << e.what();
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("inside the loop o1 repeat ... endrepeat (lines 6-10)"), std::string::npos)
+        << msg;
+    EXPECT_NE(msg.find("run more than once"), std::string::npos) << msg;
+  }
+}
+
+}  // namespace
+}  // namespace truecut::interp
