@@ -337,6 +337,7 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
        ", \"returns_written\": " + std::to_string(s.returns_written) +
        ", \"expansions\": " + std::to_string(s.expansions) +
        ", \"expanded_moves\": " + std::to_string(s.expanded_moves) +
+       ", \"expanded_holes\": " + std::to_string(s.expanded_holes) +
        ", \"points_written\": " + std::to_string(s.points_written) +
        ", \"points_compensated\": " + std::to_string(s.points_compensated) +
        ", \"blend_points\": [" + std::to_string(s.blend_points[0]) + ", " +
@@ -382,9 +383,9 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
         s.returns_written);
   if (s.expansions > 0)
     std::printf(
-        "  written out           %d loops, calls or NURBS blocks as %ld moves (see the notes "
-        "in the program)\n",
-        s.expansions, s.expanded_moves);
+        "  written out           %d loops, calls, NURBS blocks or lines as %ld moves, %d "
+        "canned-cycle holes among them (see the notes in the program)\n",
+        s.expansions, s.expanded_moves, s.expanded_holes);
   std::printf("  points written        %ld\n", s.points_written);
   std::printf("  points compensated    %ld\n", s.points_compensated);
   if (matrix_path)

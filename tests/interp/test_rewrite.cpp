@@ -808,15 +808,18 @@ TEST(Rewrite, CutterCompensationIsExpandedIntoCompensatedMoves) {
   EXPECT_NEAR(got.y, want.y, 1e-9) << z.text;
   EXPECT_EQ(z.text.find("\nX20\n"), std::string::npos) << z.text;
 
-  // Compensated moves that run more than once cannot be written out.
+  // Compensated moves that run more than once are written out with their
+  // loop (test_rewrite_expansion.cpp): as the unrolled program's.
   const std::string loop =
+      "G21 G90 G94\nT2 M6\n#<_row> = 0\nG0 X-10 Y-10 Z1\nG41 D2 G1 X0 Y0 F300\n"
+      "(OPERATION: PROFILE)\no1 repeat [2]\nG1 X10 Y[#<_row>]\n#<_row> = 5\no1 endrepeat\nG40 G0 "
+      "X-10\nM30\n";
+  const std::string unrolled =
       "G21 G90 G94\nT2 M6\nG0 X-10 Y-10 Z1\nG41 D2 G1 X0 Y0 F300\n(OPERATION: PROFILE)\n"
-      "o1 repeat [2]\nG1 X10\no1 endrepeat\nG40 G0 X-10\nM30\n";
-  EXPECT_EQ(error_of<GcodeError>(loop, o),
-            "bad.ngc:7: cutter radius compensation on this line, inside the loop o1 repeat ... "
-            "endrepeat (lines 6-8), which the rewrite writes out move by move (feed moves of "
-            "operation 'PROFILE' run more than once): an expansion writes moves, feeds, dwells, "
-            "planes and comments only");
+      "G1 X10 Y0\nG1 X10 Y5\nG40 G0 X-10\nM30\n";
+  const RewriteResult looped = rewrite_program(loop, "l.ngc", zero, o);
+  const RewriteResult flat = rewrite_program(unrolled, "u.ngc", zero, o);
+  EXPECT_EQ(looped.summary.expansions, 1);
   // Around moves that run once (a condition, a subroutine called once) the
   // O-words stay, and the compensated moves are written where the tool goes
   // as without them.
@@ -839,6 +842,7 @@ TEST(Rewrite, CutterCompensationIsExpandedIntoCompensatedMoves) {
     return out;
   };
   EXPECT_EQ(feeds(b.text), feeds(a.text)) << a.text << "\n" << b.text;
+  EXPECT_EQ(feeds(looped.text), feeds(flat.text)) << looped.text << "\n" << flat.text;
 }
 
 // M70/M72 inside the operation are copied as written: the rewritten lines

@@ -193,16 +193,28 @@ void expect_refused(const std::string& prog, int line, const std::string& messag
   }
 }
 
-TEST(RewriteCycles, CyclesThatCannotBeCorrectedAreRefusedByName) {
+// A cycle in G91 or with an expression cannot be kept, corrected, on its
+// line: it is written out as its moves (test_rewrite_expansion.cpp), the
+// hole corrected; G87 is refused by name, also inside a loop.
+TEST(RewriteCycles, CyclesThatCannotBeKeptAreWrittenOutOrRefusedByName) {
   const std::string head =
       "G21 G17 G90 G94\nT2 M6\nG43 H2\nS1000 M3\nG0 X0 Y0 Z10\n(OPERATION: HOLES)\n";
-  expect_refused(head + "G91 G98 G81 X10 Y5 Z-5 R-8 F100\nG90 G80\nM30\n", 7, "G91");
+  const std::vector<Hole> holes = {{V(10, 5, -3), V(0.02, 0, 0)}, {V(20, 5, -3), V(0.02, 0, 0)}};
+  for (const std::string& line :
+       {"G91 G98 G81 X10 Y5 Z-5 R-8 F100\nG90 G80\n", "G98 G81 X10 Y5 Z[-3] R2 F100\nG80\n"}) {
+    const RewriteResult r =
+        rewrite_program(head + line + "M30\n", "p.ngc", clusters(holes), options());
+    EXPECT_EQ(r.summary.expansions, 1) << r.text;
+    EXPECT_EQ(r.summary.expanded_holes, 1) << r.text;
+    EXPECT_EQ(r.summary.holes_rewritten, 0) << r.text;
+    // The bottom of the hole (10, 5, -3) moved by the vector planted there.
+    EXPECT_NE(r.text.find("G1 X10.020000 Y5.000000 Z-3.000000"), std::string::npos) << r.text;
+  }
   expect_refused(head + "G98 G87 X10 Y5 Z-3 R2 I1 J0 K-1 F100\nG80\nM30\n", 7, "G87 (back boring)");
   expect_refused(head +
-                     "G98 G81 X10 Y5 Z-3 R2 F100\n#1 = 0\no1 while [#1 LT 2]\nX20\n"
-                     "#1 = [#1 + 1]\no1 endwhile\nG80\nM30\n",
-                 10, "canned cycle G81 inside the loop o1 while ... endwhile (lines 9-12)");
-  expect_refused(head + "G98 G81 X10 Y5 Z[-3] R2 F100\nG80\nM30\n", 7, "expression");
+                     "G98 G81 X10 Y5 Z-3 R2 F100\n#1 = 0\no1 while [#1 LT 2]\nG87 X20 Y5 Z-3 R2 "
+                     "I1 J0 K-1\n#1 = [#1 + 1]\no1 endwhile\nG80\nM30\n",
+                 10, "canned cycle G87 (back boring) on this line: its entry offset");
 }
 
 }  // namespace

@@ -272,6 +272,82 @@ TEST(RewriteExpansion, DrawnLoopProgramsComeOutShiftedByTheirCorrection) {
   }
 }
 
+TEST(RewriteExpansion, ProfilesUnderCutterCompensationInALoopAreWrittenWhereTheToolWent) {
+  // Each pass enters G41, goes round a square and leaves with G40; the
+  // oracle's moves are those of the compensated tool (the interpreter's).
+  const std::string program = kHead +
+                              "o5 repeat [3]\n"
+                              "G1 Z[-1 * #<_pass>] F100\n"
+                              "G41 D2 G1 X5 Y5 F300\n"
+                              "X25\nY25\nX5\nY5\n"
+                              "G40 G1 X0 Y0\n"
+                              "#<_pass> = [#<_pass> + 1]\n"
+                              "o5 endrepeat\n"
+                              "G0 Z20\nM30\n";
+  const std::string with_start = "#<_pass> = 1\n" + program;
+  const V offset(0.01, 0.02, -0.01);
+  const RewriteResult r = rewrite_program(with_start, "p.ngc", constant(offset), options());
+  EXPECT_EQ(r.summary.expansions, 1);
+  EXPECT_EQ(r.text.find("G41 D"), std::string::npos) << r.text;
+  expect_same_path_shifted(with_start, r.text, options(), offset);
+}
+
+TEST(RewriteExpansion, CannedCyclesInALoopAreWrittenOutWithEachHoleCorrected) {
+  // A row of G81, G82 (dwell) and G83 (pecks) holes per pass of a loop. As
+  // on a cycle line that runs once, each hole moves by the correction: every
+  // move of the cycle over the shifted hole, its bottom shifted in depth, the
+  // R plane, the pecks above the bottom and the retract height unchanged.
+  const std::string program =
+      "G21 G17 G90 G94\nT2 M6\nG43 H2\nG0 X0 Y0 Z10\n(OPERATION: POCKET)\n#1 = 0\n"
+      "o1 while [#1 LT 3]\n"
+      "G98 G81 X[#1 * 10] Y5 Z-3 R2 F100\n"
+      "G82 X[#1 * 10] Y15 Z-3 R2 P0.5\n"
+      "G83 X[#1 * 10] Y25 Z-5 R2 Q2\n"
+      "G80\n"
+      "#1 = [#1 + 1]\n"
+      "o1 endwhile\n"
+      "G0 Z20\nM30\n";
+  const V offset(0.02, -0.01, 0.015);
+  const RewriteOptions o = options();
+  const RewriteResult r = rewrite_program(program, "p.ngc", constant(offset), o);
+  EXPECT_EQ(r.summary.expansions, 1);
+  EXPECT_EQ(r.summary.expanded_holes, 9);
+  EXPECT_NE(r.text.find("\nG4 P0.5\n"), std::string::npos) << r.text;
+  const CanonProgram a = Interpreter(o.interpreter).run_text(program, "p.ngc");
+  const CanonProgram b = Interpreter(o.interpreter).run_text(r.text, "p.ngc");
+  std::vector<std::pair<Axes6, bool>> want, got;  // end, a feed
+  std::vector<double> bottoms;                    // the depth of each cycle move's hole
+  for (const CanonCall& c : a.calls) {
+    if (!is_motion(c.op)) continue;
+    const bool feed = !std::holds_alternative<StraightTraverse>(c.op);
+    want.push_back(
+        {feed ? std::get<StraightFeed>(c.op).end : std::get<StraightTraverse>(c.op).end, feed});
+    bottoms.push_back(c.context.canned_cycle == 830 ? -5 : c.context.canned_cycle ? -3 : 1e9);
+  }
+  for (const CanonCall& c : b.calls) {
+    if (!is_motion(c.op)) continue;
+    const bool feed = !std::holds_alternative<StraightTraverse>(c.op);
+    got.push_back(
+        {feed ? std::get<StraightFeed>(c.op).end : std::get<StraightTraverse>(c.op).end, feed});
+  }
+  ASSERT_EQ(got.size(), want.size()) << r.text;
+  for (size_t i = 0; i < want.size(); ++i) {
+    SCOPED_TRACE("move " + std::to_string(i));
+    EXPECT_EQ(got[i].second, want[i].second);
+    const Axes6& w = want[i].first;
+    const Axes6& g = got[i].first;
+    if (bottoms[i] > 1e8) {  // not a cycle's: where it went
+      EXPECT_NEAR(g.x, w.x, 1e-9);
+      EXPECT_NEAR(g.y, w.y, 1e-9);
+      EXPECT_NEAR(g.z, w.z, 1e-9);
+      continue;
+    }
+    EXPECT_NEAR(g.x, w.x + offset.x(), 1e-6);
+    EXPECT_NEAR(g.y, w.y + offset.y(), 1e-6);
+    EXPECT_NEAR(g.z, w.z + (w.z == bottoms[i] ? offset.z() : 0.0), 1e-6);
+  }
+}
+
 TEST(RewriteExpansion, WhatAnExpansionCannotWriteIsRefusedNamingTheLoop) {
   const std::string spindle = kHead +
                               "o1 repeat [2]\n"

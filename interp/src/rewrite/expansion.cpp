@@ -132,20 +132,6 @@ Expansions find_expansions(const CanonProgram& program, const std::vector<RawLin
     }
     out.emplace(e.first_line, std::move(e));
   }
-  // A canned cycle keeps its cycle word on a line that runs once; inside an
-  // expansion it would have to be written out too.
-  for (const CanonCall& c : program.calls)
-    if (c.context.canned_cycle != 0)
-      if (const Expansion* e = expansion_at(out, c.context.outer_line))
-        throw GcodeError({c.context.file < static_cast<int>(program.files.size())
-                              ? program.files[static_cast<std::size_t>(c.context.file)]
-                              : name,
-                          c.context.line, 0},
-                         "canned cycle G" + std::to_string(c.context.canned_cycle / 10) +
-                             " inside " + e->what + " (lines " + std::to_string(e->first_line) +
-                             "-" + std::to_string(e->last_line) +
-                             "), which the rewrite writes out move by move (" + e->why +
-                             "): a cycle is kept, corrected, only on a line that runs once");
   return out;
 }
 

@@ -624,14 +624,16 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
   };
   auto expansion_error = [&](const CanonCall& c, const std::string& what) -> GcodeError {
     const Expansion& e = *ex.e;
-    return GcodeError({file_of(program, c.context, name), c.context.line, 0},
-                      what + ", inside " + e.what + " (lines " + std::to_string(e.first_line) +
-                          "-" + std::to_string(e.last_line) +
-                          "), which the rewrite writes out move by move (" + e.why +
-                          "): an expansion writes moves, feeds, dwells, planes and comments only");
+    return GcodeError(
+        {file_of(program, c.context, name), c.context.line, 0},
+        what + ", inside " + e.what + " (lines " + std::to_string(e.first_line) + "-" +
+            std::to_string(e.last_line) + "), which the rewrite writes out move by move (" + e.why +
+            "): an expansion writes moves, feeds, dwells, planes, path modes and comments "
+            "only");
   };
   // One call inside an expansion.
-  auto expand_call = [&](const CanonCall& c) {
+  // `cycle_end`: a canned cycle's move, written to that end (program units).
+  auto expand_call = [&](const CanonCall& c, const Axes6* cycle_end = nullptr) {
     const CallContext& ctx = c.context;
     ex.incremental = ctx.incremental;
     const int first = ex.e->first_line;
@@ -656,6 +658,17 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
         text = "G4 P" + exact(d->seconds);
       } else if (const auto* p = std::get_if<SelectPlane>(&c.op)) {
         text = p->plane == Plane::kXY ? "G17" : p->plane == Plane::kXZ ? "G18" : "G19";
+      } else if (const auto* m = std::get_if<SetMotionControlMode>(&c.op)) {
+        text = m->mode == PathMode::kExactStop   ? "G61.1"
+               : m->mode == PathMode::kExactPath ? "G61"
+                                                 : "G64 P" + exact(m->tolerance);
+      } else if (const auto* q = std::get_if<SetNaivecamTolerance>(&c.op)) {
+        // G64 makes both calls: its Q goes onto the G64 line just written.
+        if (pl.moves.empty() || pl.moves.back().rfind("G64 P", 0) != 0)
+          throw expansion_error(c, "this line makes SET_NAIVECAM_TOLERANCE without G64");
+        pl.moves.back() += " Q" + exact(q->tolerance);
+        rl.others.push_back(format_rs274(c.op, check_format()));
+        return;
       } else {
         throw expansion_error(c, std::string("this line makes ") + call_name(c.op));
       }
@@ -663,8 +676,6 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       rl.others.push_back(format_rs274(c.op, check_format()));
       return;
     }
-    if (ctx.canned_cycle != 0) throw expansion_error(c, "canned cycle on this line");
-    if (ctx.cutter_comp) throw expansion_error(c, "cutter radius compensation on this line");
     if (std::holds_alternative<NurbsFeed>(c.op)) throw expansion_error(c, "NURBS block here");
     if (ctx.spline != SplineMode::kNone) throw expansion_error(c, "BSPLINE/CSPLINE point here");
     const bool feed = !std::holds_alternative<StraightTraverse>(c.op);
@@ -708,7 +719,13 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       rl.context_at.push_back(context_index);
       ++ex.moves;
     };
-    if (in_op && feed) {
+    if (cycle_end) {
+      const bool moved = *cycle_end != end_of(c.op);
+      write(*cycle_end, !feed, moved, program_uses_ac || turned);
+      if (in_op) ++s.moves_kept;
+      displaced = moved;
+      turned = false;
+    } else if (in_op && feed) {
       Densified d = densify(move, ctx, file_of(program, ctx, name));
       count_corrections(d.corrections);
       const bool with_ac = program_uses_ac || d.rotated || turned;
@@ -733,13 +750,89 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     }
     path.finish(move);
     out_mode = feed ? 1 : 0;
-    after_comp = false;
+    // Compensated moves are written where the compensated tool went; the
+    // first move after the G40 exit, after the expansion, with all of X Y Z.
+    after_comp = ctx.cutter_comp;
     cycle_words_pending = false;
+  };
+
+  // The calls of one canned-cycle block inside an expansion: its holes are
+  // corrected as on a cycle line that runs once, by the correction at each
+  // hole's bottom (the cycle is written out as its moves).
+  std::vector<const CanonCall*> expanded_cycle;
+  auto flush_expanded_cycle = [&] {
+    if (expanded_cycle.empty()) return;
+    std::vector<Axes6> ends(expanded_cycle.size());
+    std::vector<bool> is_move(expanded_cycle.size(), false);
+    const CanonCall& head = *expanded_cycle.front();
+    const CallContext& cctx = head.context;
+    if (cctx.canned_cycle == 870)
+      throw expansion_error(head,
+                            "canned cycle G87 (back boring) on this line: its entry offset "
+                            "and back-bore height cannot be corrected");
+    const int normal = cctx.cycle_plane == Plane::kXY ? 2 : cctx.cycle_plane == Plane::kXZ ? 1 : 0;
+    path.rebase(cctx);
+    size_t k = 0;
+    while (k < expanded_cycle.size()) {
+      // A hole: the moves that end over the same point of the plane.
+      size_t end = k;
+      const Axes6* hole = nullptr;
+      const Axes6* bottom = nullptr;
+      for (; end < expanded_cycle.size(); ++end) {
+        const CanonCall& c = *expanded_cycle[end];
+        if (!is_motion(c.op)) continue;
+        const Axes6 e = end_of(c.op);
+        bool same = true;
+        for (int ax = 0; ax < 3; ++ax)
+          if (ax != normal && hole && e[ax] != (*hole)[ax]) same = false;
+        if (!same) break;
+        is_move[end] = true;
+        ends[end] = e;
+        if (!hole) hole = &ends[end];
+        if (!std::holds_alternative<StraightTraverse>(c.op) &&
+            (!bottom || e[normal] < (*bottom)[normal]))
+          bottom = &ends[end];
+      }
+      if (bottom && cctx.operation == o.operation) {
+        const Axes6 b = *bottom;
+        const Vec5 p = path.line_to(b, cctx).end;
+        const Correction corr =
+            correction(path.tool_point(p, cctx), cctx, radius_by_tool.at(cctx.tool));
+        if (corr.shift_mm != Eigen::Vector3d::Zero()) {
+          const Axes6 q = path.to_program(path.shifted(p, cctx, corr.shift_mm), cctx);
+          for (size_t i = k; i < end; ++i) {
+            if (!is_move[i]) continue;
+            for (int ax = 0; ax < 3; ++ax)
+              if (ax != normal)
+                ends[i][ax] += q[ax] - b[ax];
+              else if (ends[i][ax] == b[ax])
+                ends[i][ax] = q[ax];
+          }
+        }
+        if (corr.compensated) {
+          ++s.points_compensated;
+          const double mag = corr.shift_mm.norm();
+          s.max_compensation_mm = std::max(s.max_compensation_mm, mag);
+          sum_mm += mag;
+        }
+        ++s.expanded_holes;
+      }
+      k = std::max(end, k + 1);
+    }
+    for (size_t i = 0; i < expanded_cycle.size(); ++i)
+      expand_call(*expanded_cycle[i], is_move[i] ? &ends[i] : nullptr);
+    expanded_cycle.clear();
   };
 
   for (const CanonCall& c : program.calls) {
     const CallContext& ctx = c.context;
     const Expansion* expansion = expansion_at(expansions, ctx.outer_line);
+    const bool cycle_move = is_motion(c.op) && ctx.canned_cycle != 0;
+    if (!expanded_cycle.empty() &&
+        (expansion != ex.e ||
+         ctx.executed_block != expanded_cycle.front()->context.executed_block ||
+         (is_motion(c.op) && !cycle_move)))
+      flush_expanded_cycle();
     if (ex.e && expansion != ex.e) close_expansion();
     path.observe(c);
     if (c.context.file != line_file || c.context.line != line_no) {
@@ -759,7 +852,10 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     }
     if (const auto* f = std::get_if<SetFeedRate>(&c.op)) feed_upm = f->units_per_minute;
     if (expansion) {
-      expand_call(c);
+      if (cycle_move || !expanded_cycle.empty())
+        expanded_cycle.push_back(&c);
+      else
+        expand_call(c);
       continue;
     }
     incremental_before = ctx.incremental;
@@ -1022,6 +1118,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     path.finish(move);
   }
   flush_cycle();
+  flush_expanded_cycle();
   if (ex.e) close_expansion();
   s.mean_compensation_mm = s.points_compensated > 0 ? sum_mm / s.points_compensated : 0.0;
 

@@ -104,11 +104,12 @@ struct RewriteSummary {
   // Canned-cycle lines of the operation written with a corrected hole and
   // bottom (X Y Z), the cycle kept.
   int holes_rewritten = 0;
-  // Loops and subroutine calls replaced by the moves they make (a feed of
-  // the operation ran more than once, or in a subroutine file), and the
-  // moves written for them.
+  // Loops, subroutine calls, NURBS blocks and lines replaced by the moves
+  // they make (a feed of the operation ran more than once, in a subroutine
+  // file, with parameters or expressions, in G91), and the moves written.
   int expansions = 0;
   long expanded_moves = 0;
+  int expanded_holes = 0;       // canned-cycle holes of the operation among them
   long points_written = 0;      // G1 points written
   long points_compensated = 0;  // points with a correction from >= 1 point / field weight > 0
   // Matrix mode: [1..3] blends (eqs. 2-5) by the number of points they used,
