@@ -94,6 +94,9 @@ Expansions find_expansions(const CanonProgram& program, const std::vector<RawLin
       why = "feed moves of operation '" + operation + "' run more than once";
     else if (ctx.line >= 1 && ctx.line <= static_cast<int>(raw.size()) && is_computed(ctx.line))
       why = "a feed move of operation '" + operation + "' with parameters or expressions";
+    else if (ctx.canned_cycle != 0 && ctx.line >= 1 && ctx.line <= static_cast<int>(raw.size()) &&
+             line_has_polar_word(raw[static_cast<size_t>(ctx.line) - 1].content))
+      why = "a canned cycle of operation '" + operation + "' in polar coordinates";
     else if (ctx.incremental)
       why = "a feed move of operation '" + operation + "' in G91, incremental distance";
     else

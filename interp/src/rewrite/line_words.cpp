@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 
 #include "line_lexer.hpp"
 
@@ -116,6 +117,10 @@ LineWords split_line(const std::string& source, const std::string& file, int lin
             w.code == 51) {
           remove[k] = true;
           out.explicit_motion = true;
+        } else if (w.code == 530) {
+          // A move in machine coordinates: its end is written in the program's
+          // coordinates, where the interpreter put it (the same move).
+          remove[k] = true;
         } else if (w.code == 410 || w.code == 411 || w.code == 420 || w.code == 421) {
           remove[k] = true;  // the rewrite writes compensated moves (docs/gcode.md)
           out.cutter_comp = true;
@@ -228,7 +233,10 @@ bool line_has_g_code(const std::string& source, int code) {
   return false;
 }
 
-bool line_has_parameter_or_expression(const std::string& source) {
+namespace {
+
+// Whether the line's text outside comments holds one of `chars`.
+bool line_has_any_of(const std::string& source, const char* chars) {
   LexedLine lx;
   try {
     lx = lex_line(source, "", 0);
@@ -243,9 +251,19 @@ bool line_has_parameter_or_expression(const std::string& source) {
       continue;
     }
     if (t[pos] == ';') break;
-    if (t[pos] == '#' || t[pos] == '[') return true;
+    if (std::strchr(chars, t[pos]) != nullptr) return true;
   }
   return false;
+}
+
+}  // namespace
+
+bool line_has_parameter_or_expression(const std::string& source) {
+  return line_has_any_of(source, "#[");
+}
+
+bool line_has_polar_word(const std::string& source) {
+  return line_has_any_of(source, "@^");
 }
 
 bool has_cutter_comp_code(const std::string& source) {

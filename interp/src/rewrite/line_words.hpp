@@ -45,6 +45,8 @@ bool line_has_g_code(const std::string& source, int code);
 // Whether a line's words use parameters or expressions ('#' or '[' outside
 // comments; parameter settings included). Never throws.
 bool line_has_parameter_or_expression(const std::string& source);
+// Whether a line has polar words ('@' '^'). Never throws.
+bool line_has_polar_word(const std::string& source);
 
 // Whether a line has G41, G42, G41.1 or G42.1. Never throws.
 bool has_cutter_comp_code(const std::string& source);

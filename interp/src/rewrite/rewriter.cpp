@@ -6,6 +6,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <optional>
 #include <set>
 #include <stdexcept>
 
@@ -404,9 +405,13 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
   // Motion calls per line of the main file outside them: a rewritten line
   // must make one.
   std::map<int, int> motions_per_line;
+  std::map<int, long> block_of_line;  // -1: the line runs more than once
   for (const CanonCall& c : program.calls)
-    if (is_motion(c.op) && c.context.file == 0 && !expansion_at(expansions, c.context.outer_line))
+    if (is_motion(c.op) && c.context.file == 0 && !expansion_at(expansions, c.context.outer_line)) {
       ++motions_per_line[c.context.line];
+      const auto [at, fresh] = block_of_line.try_emplace(c.context.line, c.context.executed_block);
+      if (!fresh && at->second != c.context.executed_block) at->second = -1;
+    }
   // A, C on every expanded move when the program moves them at all.
   const bool program_uses_ac =
       std::any_of(program.calls.begin(), program.calls.end(), [](const CanonCall& c) {
@@ -427,7 +432,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
   std::map<int, RewrittenLine> expected;
   // Lines of another operation kept as they are, after a G1 back from a
   // corrected point to the original one: where that G1 ends.
-  std::map<int, Axes6> returns;
+  std::map<int, ReturnMove> returns;
   ToolPath path(o.kinematics);
   double feed_upm = 0;
   // The feed in force before the current line: the output has the same
@@ -603,7 +608,8 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     // the interpreter's note).
     bool incremental = false;
   };
-  bool incremental_before = false;  // G91 in force at the last call before
+  bool incremental_before = false;       // G91 in force at the last call before
+  bool incremental_before_line = false;  // ... before the current line's calls
   OpenExpansion ex;
   std::set<int> closed_expansions;
   std::map<int, long> expanded_moves;  // by first line
@@ -839,6 +845,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       line_file = c.context.file;
       line_no = c.context.line;
       feed_before_line = feed_upm;
+      incremental_before_line = incremental_before;
     }
     if (expansion && !ex.e) {
       if (closed_expansions.count(expansion->first_line))
@@ -939,12 +946,43 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       // after it (the next operation's retract): written with all of X Y Z
       // (and A and C when they were turned), so the axes it does not name
       // come back to the original position.
-      if (ctx.file == 0 && motions_per_line[ctx.line] != 1) refuse_canned_cycle(file, ctx.line);
-      if (ctx.file != 0 || motions_per_line[ctx.line] != 1)
+      if (ctx.file != 0 || block_of_line[ctx.line] < 0)
         throw GcodeError({file, ctx.line, 0},
-                         "rapid after a compensated move makes several moves (loop, subroutine "
-                         "or G28/G30): it cannot be rewritten");
-      const LineWords words = split_move_line(raw[ctx.line - 1].content, file, ctx.line);
+                         "rapid after a compensated move runs more than once or in a subroutine "
+                         "file: the way back to the original point cannot be written before it");
+      const std::string& source = raw[ctx.line - 1].content;
+      std::optional<LineWords> split;
+      const bool g91 = incremental_before_line;
+      if (motions_per_line[ctx.line] == 1 && !g91 && !ctx.incremental) try {
+          split = split_move_line(source, file, ctx.line);
+        } catch (const GcodeError&) {
+          // Words the rewrite cannot move (parameters, G53 ...): below.
+        }
+      if (!split) {
+        // The line cannot take the original point in its words (it computes
+        // them, moves in machine coordinates, makes several moves: G28, a
+        // canned cycle ...): a G0 back to the original point is written
+        // before it, and the line kept as it is.
+        const bool block_delete = source.find_first_not_of(" \t") != std::string::npos &&
+                                  source[source.find_first_not_of(" \t")] == '/';
+        const Axes6 back = path.to_program(move.start, ctx);
+        Axes6 expect = back;
+        PlannedLine pl;
+        pl.moves.push_back(std::string(block_delete ? "/" : "") + (g91 ? "G90 G0" : "G0") +
+                           exact_words(back, turned, turned, expect));
+        if (g91) pl.moves.push_back(block_delete ? "/G91" : "G91");
+        pl.moves.push_back(source);
+        pl.last_verbatim = true;
+        plan[ctx.line] = std::move(pl);
+        returns[ctx.line] = {expect, true};
+        ++s.returns_written;
+        path.finish(move);
+        out_mode = orig_mode;
+        displaced = false;
+        turned = false;
+        continue;
+      }
+      const LineWords& words = *split;
       const Axes6 end = end_of(c.op);
       PlannedLine pl;
       pl.residual = words.residual;
@@ -1011,7 +1049,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       pl.moves = {line, source};
       pl.last_verbatim = true;
       plan[ctx.line] = std::move(pl);
-      returns[ctx.line] = expect;
+      returns[ctx.line] = {expect, false};
       ++s.returns_written;
       path.finish(move);
       out_mode = orig_mode;
@@ -1123,11 +1161,18 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
   s.mean_compensation_mm = s.points_compensated > 0 ? sum_mm / s.points_compensated : 0.0;
 
   // Lines that switch compensation on without a move of their own lose
-  // their G41/G42 words too.
+  // their G41/G42 words too; not those that run only inside written-out
+  // loops and calls (a subroutine's definition no longer called).
+  std::set<int> runs_outside_expansions;
+  if (expands_comp && !expansions.empty())
+    for (const CanonCall& c : program.calls)
+      if (c.context.file == 0 && !expansion_at(expansions, c.context.outer_line))
+        runs_outside_expansions.insert(c.context.line);
   if (expands_comp)
     for (size_t i = 0; i < raw.size(); ++i) {
       const int line = static_cast<int>(i) + 1;
       if (plan.count(line) || !has_cutter_comp_code(raw[i].content)) continue;
+      if (!expansions.empty() && !runs_outside_expansions.count(line)) continue;
       plan[line].residual = split_move_line(raw[i].content, name, line).residual;
       expected[line].context.line = line;
     }
@@ -1176,11 +1221,22 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       origin.push_back({1, OutputLine::kResidual});
     }
     if (!returns.empty()) {
-      r.text += "(truecut rewrite: " + std::to_string(returns.size()) + " G1 move" +
-                (returns.size() == 1 ? "" : "s") +
-                " back from a corrected point to the original one written before the next "
-                "operation's first feed, which is kept as it is)\n";
-      origin.push_back({1, OutputLine::kResidual});
+      size_t rapids = 0;
+      for (const auto& [line, back] : returns)
+        rapids += back.traverse ? 1 : 0;
+      const size_t feeds = returns.size() - rapids;
+      if (feeds > 0)
+        r.text += "(truecut rewrite: " + std::to_string(feeds) + " G1 move" +
+                  (feeds == 1 ? "" : "s") +
+                  " back from a corrected point to the original one written before the next "
+                  "operation's first feed, which is kept as it is)\n";
+      if (rapids > 0)
+        r.text += "(truecut rewrite: " + std::to_string(rapids) + " G0 move" +
+                  (rapids == 1 ? "" : "s") +
+                  " back from a corrected point to the original one written before a rapid "
+                  "whose line cannot take it, which is kept as it is)\n";
+      for (int l = (feeds > 0) + (rapids > 0); l > 0; --l)
+        origin.push_back({1, OutputLine::kResidual});
     }
     if (s.expansions > 0) {
       r.text +=

@@ -41,6 +41,13 @@ struct RewrittenLine {
   std::vector<std::string> others;
 };
 
+// A move back from a corrected point to the original one, written before a
+// line kept as it is: a G1, or a G0 before a rapid.
+struct ReturnMove {
+  Axes6 end;
+  bool traverse = false;
+};
+
 struct CheckInput {
   const CanonProgram& original;
   const std::map<int, RewrittenLine>& rewritten;
@@ -49,7 +56,7 @@ struct CheckInput {
   const std::string& name;
   // Lines kept as they are after a G1 back to the original point (written
   // before them): where that G1 must end.
-  const std::map<int, Axes6>* returns = nullptr;
+  const std::map<int, ReturnMove>* returns = nullptr;
 };
 
 // How the check prints calls to compare them.
