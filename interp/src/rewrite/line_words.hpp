@@ -23,7 +23,7 @@ struct LineWords {
 
 // `source` is the line without its terminator. Throws GcodeError at the
 // offending column for anything that cannot stay beside a rewritten move:
-// parameters and expressions, G91, G53, G4, G10, G28, G30, G92, M0 M1 M2
+// parameters and expressions, G91, G4, G10, G28, G30, G92, M0 M1 M2
 // M30 M60 and unknown words.
 LineWords split_move_line(const std::string& source, const std::string& file, int line);
 
