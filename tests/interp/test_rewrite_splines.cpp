@@ -111,18 +111,20 @@ void expect_on_curve(const std::string& program, const std::function<P2(double)>
   EXPECT_LT(worst, o.chord_tolerance_mm + 1e-6);
 }
 
+// The quadratic Bezier curve through p0 and p2 with control point p1.
+std::function<P2(double)> quadratic_bezier(const P2& p0, const P2& p1, const P2& p2) {
+  return [=](double t) {
+    const double a = (1 - t) * (1 - t), b = 2 * t * (1 - t), c = t * t;
+    return P2{a * p0[0] + b * p1[0] + c * p2[0], a * p0[1] + b * p1[1] + c * p2[1]};
+  };
+}
+
 TEST(RewriteSplines, AQuadraticSplineIsWrittenAsCorrectedChordsOfItsCurve) {
   const std::string program =
       "G21 G90 G94\n(OPERATION: FACE)\nT2 M6\nG43 H2\nG0 X0 Y0 Z1\nG1 Z0 F100\n"
       "G5.1 X4 Y0 I2 J2\nG0 Z1\nM30\n";
   const P2 p0{0, 0}, p1{2, 2}, p2{4, 0};
-  expect_on_curve(
-      program,
-      [&](double t) {
-        const double a = (1 - t) * (1 - t), b = 2 * t * (1 - t), c = t * t;
-        return P2{a * p0[0] + b * p1[0] + c * p2[0], a * p0[1] + b * p1[1] + c * p2[1]};
-      },
-      p2);
+  expect_on_curve(program, quadratic_bezier(p0, p1, p2), p2);
 }
 
 TEST(RewriteSplines, ACubicSplineIsWrittenAsCorrectedChordsOfItsCurve) {
@@ -194,12 +196,8 @@ TEST(RewriteSplines, ANurbsBlockIsWrittenOutAsCorrectedChordsInPlaceOfItsLines) 
       "G5.2 X2 Y2 P1 L3\nX4 Y0 P1\nG5.3\nG0 Z1\nM30\n";
   const P2 p0{0, 0}, p1{2, 2}, p2{4, 0};
   expect_on_curve(
-      program,
-      [&](double t) {
-        const double a = (1 - t) * (1 - t), b = 2 * t * (1 - t), c = t * t;
-        return P2{a * p0[0] + b * p1[0] + c * p2[0], a * p0[1] + b * p1[1] + c * p2[1]};
-      },
-      p2, "(truecut rewrite: lines 7-9, the NURBS block G5.2 ... G5.3, written out as the ");
+      program, quadratic_bezier(p0, p1, p2), p2,
+      "(truecut rewrite: lines 7-9, the NURBS block G5.2 ... G5.3, written out as the ");
   const RewriteResult r = rewrite_program(program, "s.ngc", constant_matrix(), options());
   EXPECT_EQ(r.text.find("\nG5.2"), std::string::npos) << r.text;
   // The rapid after it leaves the corrected end with all of X Y Z.

@@ -4,7 +4,6 @@
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
-#include <cstring>
 
 #include "line_lexer.hpp"
 
@@ -197,8 +196,9 @@ LineWords split_line(const std::string& source, const std::string& file, int lin
 
 namespace {
 
-// The G codes (x10) written on a line; empty when it cannot be read.
-std::vector<int> g_codes_of_line(const std::string& source) {
+// The line as the interpreter reads it (lower case, no blanks), without its
+// comments; "" when it cannot be read.
+std::string words_of_line(const std::string& source) {
   LexedLine lx;
   try {
     lx = lex_line(source, "", 0);
@@ -206,7 +206,7 @@ std::vector<int> g_codes_of_line(const std::string& source) {
     return {};
   }
   const std::string& t = lx.text;
-  std::vector<int> codes;
+  std::string words;
   for (size_t pos = 0; pos < t.size(); ++pos) {
     if (t[pos] == '(') {
       pos = t.find(')', pos);
@@ -214,6 +214,16 @@ std::vector<int> g_codes_of_line(const std::string& source) {
       continue;
     }
     if (t[pos] == ';') break;
+    words += t[pos];
+  }
+  return words;
+}
+
+// The G codes (x10) written on a line; empty when it cannot be read.
+std::vector<int> g_codes_of_line(const std::string& source) {
+  const std::string t = words_of_line(source);
+  std::vector<int> codes;
+  for (size_t pos = 0; pos < t.size(); ++pos) {
     if (t[pos] != 'g') continue;
     size_t end = pos + 1;
     while (end < t.size() && (std::isdigit(static_cast<unsigned char>(t[end])) || t[end] == '.'))
@@ -237,23 +247,8 @@ namespace {
 
 // Whether the line's text outside comments holds one of `chars`.
 bool line_has_any_of(const std::string& source, const char* chars) {
-  LexedLine lx;
-  try {
-    lx = lex_line(source, "", 0);
-  } catch (const GcodeError&) {
-    return false;
-  }
-  const std::string& t = lx.text;
-  for (size_t pos = 0; pos < t.size(); ++pos) {
-    if (t[pos] == '(') {
-      pos = t.find(')', pos);
-      if (pos == std::string::npos) break;
-      continue;
-    }
-    if (t[pos] == ';') break;
-    if (std::strchr(chars, t[pos]) != nullptr) return true;
-  }
-  return false;
+  const std::string t = words_of_line(source);
+  return t.find_first_of(chars) != std::string::npos;
 }
 
 }  // namespace

@@ -762,6 +762,20 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     cycle_words_pending = false;
   };
 
+  // A line kept as it is after a move back from a corrected point to the
+  // original one (pl: that move, then the line).
+  auto keep_after_return = [&](int line, PlannedLine pl, const Axes6& back, bool traverse,
+                               const ToolPath::Move& move) {
+    pl.last_verbatim = true;
+    plan[line] = std::move(pl);
+    returns[line] = {back, traverse};
+    ++s.returns_written;
+    path.finish(move);
+    out_mode = orig_mode;
+    displaced = false;
+    turned = false;
+  };
+
   // The calls of one canned-cycle block inside an expansion: its holes are
   // corrected as on a cycle line that runs once, by the correction at each
   // hole's bottom (the cycle is written out as its moves).
@@ -972,14 +986,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
                            exact_words(back, turned, turned, expect));
         if (g91) pl.moves.push_back(block_delete ? "/G91" : "G91");
         pl.moves.push_back(source);
-        pl.last_verbatim = true;
-        plan[ctx.line] = std::move(pl);
-        returns[ctx.line] = {expect, true};
-        ++s.returns_written;
-        path.finish(move);
-        out_mode = orig_mode;
-        displaced = false;
-        turned = false;
+        keep_after_return(ctx.line, std::move(pl), expect, true, move);
         continue;
       }
       const LineWords& words = *split;
@@ -1047,14 +1054,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
           (block_delete ? "/G1" : "G1") + exact_words(back, turned, turned, expect);
       PlannedLine pl;
       pl.moves = {line, source};
-      pl.last_verbatim = true;
-      plan[ctx.line] = std::move(pl);
-      returns[ctx.line] = {expect, false};
-      ++s.returns_written;
-      path.finish(move);
-      out_mode = orig_mode;
-      displaced = false;
-      turned = false;
+      keep_after_return(ctx.line, std::move(pl), expect, false, move);
       continue;
     }
     if (!in_op || !feed) {
