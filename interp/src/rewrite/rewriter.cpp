@@ -1074,7 +1074,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     if (motions_per_line[ctx.line] != 1 && !ctx.cutter_comp && !spline_lines.count(ctx.line)) {
       refuse_canned_cycle(file, ctx.line);
       throw GcodeError({file, ctx.line, 0},
-                       "line makes several moves (loop, subroutine or G28/G30): it cannot be "
+                       "line makes several moves in one run (G28/G30): it cannot be "
                        "rewritten");
     }
 
