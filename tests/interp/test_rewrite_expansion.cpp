@@ -133,6 +133,17 @@ CompensationMatrixData constant(const V& offset) {
   return testing::plane_matrix(-50, 50, -50, 50, -5, 1, offset);
 }
 
+// The program rewritten with the constant correction `offset`: accepted,
+// and its moves the original's shifted (expect_same_path_shifted).
+void expect_rewritten_shifted(const std::string& program, const V& offset) {
+  try {
+    const RewriteResult r = rewrite_program(program, "p.ngc", constant(offset), options());
+    expect_same_path_shifted(program, r.text, options(), offset);
+  } catch (const GcodeError& e) {
+    ADD_FAILURE() << e.what();
+  }
+}
+
 const std::string kHead = "G21 G17 G90 G94\nT2 M6\nG43 H2\nG0 X0 Y0 Z5\n(OPERATION: POCKET)\n";
 
 TEST(RewriteExpansion, AWhileLoopOfPassesIsWrittenOutCorrected) {
@@ -267,12 +278,7 @@ TEST(RewriteExpansion, DrawnLoopProgramsComeOutShiftedByTheirCorrection) {
     p += "G0 Z20\nM30\n";
     const V offset(uniform(-0.05, 0.05), uniform(-0.05, 0.05), uniform(-0.05, 0.05));
     SCOPED_TRACE("seed " + std::to_string(seed) + "\n" + p);
-    try {
-      const RewriteResult r = rewrite_program(p, "p.ngc", constant(offset), options());
-      expect_same_path_shifted(p, r.text, options(), offset);
-    } catch (const GcodeError& e) {
-      ADD_FAILURE() << e.what();
-    }
+    expect_rewritten_shifted(p, offset);
   }
 }
 
@@ -365,12 +371,7 @@ TEST(RewriteExpansion, RapidsAfterACorrectedPointLeaveFromTheOriginalPoint) {
        {"#1 = 7\nG0 Z#1\n", "G53 G0 Z0\n", "G91 G0 Z4\nG90\n", "G28\n", "G0 Z[2 + 3]\n"}) {
     const std::string program = head + rapid + "G0 X-3\nM30\n";
     SCOPED_TRACE(program);
-    try {
-      const RewriteResult r = rewrite_program(program, "p.ngc", constant(offset), options());
-      expect_same_path_shifted(program, r.text, options(), offset);
-    } catch (const GcodeError& e) {
-      ADD_FAILURE() << e.what();
-    }
+    expect_rewritten_shifted(program, offset);
   }
 }
 
