@@ -200,7 +200,7 @@ TEST(RewriteCycles, CyclesThatCannotBeKeptAreWrittenOutOrRefusedByName) {
   const std::string head =
       "G21 G17 G90 G94\nT2 M6\nG43 H2\nS1000 M3\nG0 X0 Y0 Z10\n(OPERATION: HOLES)\n";
   const std::vector<Hole> holes = {{V(10, 5, -3), V(0.02, 0, 0)}, {V(20, 5, -3), V(0.02, 0, 0)}};
-  for (const std::string& line :
+  for (const std::string line :
        {"G91 G98 G81 X10 Y5 Z-5 R-8 F100\nG90 G80\n", "G98 G81 X10 Y5 Z[-3] R2 F100\nG80\n",
         "G98 G81 @11.18033988749895 ^26.56505117707799 Z-3 R2 F100\nG80\n"}) {
     const RewriteResult r =
