@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "rewrite_path_oracle.hpp"
 #include "rewrite_test_util.hpp"
 #include "test_paths.hpp"
 #include "truecut/interp/error.hpp"
@@ -26,6 +27,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using V = Eigen::Vector3d;
+using testing::expect_same_path_shifted;
 
 std::string rt_number(double v) {
   char buf[32];
@@ -44,89 +46,6 @@ RewriteOptions options(const fs::path& sub_dir = {}) {
   o.interpreter.tools = ToolTable::parse(kTools, "tools.tbl");
   if (!sub_dir.empty()) o.interpreter.subroutine_path = {sub_dir};
   return o;
-}
-
-struct Motion {
-  Axes6 end;
-  bool feed_of_op;   // a feed of the operation (corrected), else kept exactly
-  double feed;       // F in force
-  bool arc = false;  // an arc in the XY plane about `center`
-  Axes6 center{};
-};
-
-std::vector<Motion> motions(const std::string& text, const std::string& name,
-                            const RewriteOptions& o) {
-  const CanonProgram p = Interpreter(o.interpreter).run_text(text, name);
-  std::vector<Motion> out;
-  double feed = 0;
-  for (const CanonCall& c : p.calls) {
-    if (const auto* f = std::get_if<SetFeedRate>(&c.op)) feed = f->units_per_minute;
-    if (const auto* t = std::get_if<StraightTraverse>(&c.op)) out.push_back({t->end, false, feed});
-    if (const auto* f = std::get_if<StraightFeed>(&c.op))
-      out.push_back({f->end, c.context.operation == o.operation, feed});
-    if (const auto* a = std::get_if<ArcFeed>(&c.op))
-      out.push_back({a->end, c.context.operation == o.operation, feed, true, a->center});
-  }
-  return out;
-}
-
-V xyz(const Axes6& a) {
-  return V(a.x, a.y, a.z);
-}
-
-// The new program's moves against the original's: each original move's end
-// (shifted by `offset` when it is a feed of the operation) is met in order,
-// and the new program's feeds of the operation between two such ends lie on
-// the shifted original segment.
-void expect_same_path_shifted(const std::string& original, const std::string& rewritten,
-                              const RewriteOptions& o, const V& offset,
-                              const std::string& name = "p.ngc") {
-  const std::vector<Motion> want = motions(original, name, o);
-  const std::vector<Motion> got = motions(rewritten, name, o);
-  size_t g = 0;
-  V prev_want = V::Zero();
-  for (size_t i = 0; i < want.size(); ++i) {
-    const V target = xyz(want[i].end) + (want[i].feed_of_op ? offset : V::Zero());
-    const V from = prev_want;
-    bool found = false;
-    for (; g < got.size(); ++g) {
-      const V p = xyz(got[g].end);
-      if ((p - target).norm() <= 2e-6 && got[g].feed_of_op == want[i].feed_of_op) {
-        EXPECT_EQ(got[g].feed, want[i].feed) << "move " << i << " of the original";
-        found = true;
-        ++g;
-        break;
-      }
-      // A move back from a corrected point to the original one (the last
-      // original end), before a line the rewrite keeps as it is.
-      if (i > 0 && !want[i].feed_of_op && !got[g].feed_of_op && (p - prev_want).norm() <= 2e-6)
-        continue;
-      // A point in between: on the segment from the last end to this one.
-      ASSERT_TRUE(want[i].feed_of_op && got[g].feed_of_op)
-          << "at move " << i << " of the original, " << g << " of the new program: "
-          << "the new program makes an extra move to " << p.transpose() << " before move " << i
-          << " of the original (" << target.transpose() << ")\n"
-          << rewritten;
-      const V a = from, b = target - offset, q = p - offset;
-      if (want[i].arc) {  // on the circle through the arc's start
-        const double r = std::hypot(a.x() - want[i].center.x, a.y() - want[i].center.y);
-        EXPECT_NEAR(std::hypot(q.x() - want[i].center.x, q.y() - want[i].center.y), r, 2e-6)
-            << "point " << p.transpose() << " off the arc (move " << i << ")";
-        continue;
-      }
-      const V d = b - a;
-      const double t =
-          d.squaredNorm() > 0 ? std::clamp((q - a).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
-      EXPECT_LE((a + t * d - q).norm(), 2e-6)
-          << "point " << p.transpose() << " off the path from " << a.transpose() << " to "
-          << b.transpose() << " (move " << i << ")";
-    }
-    ASSERT_TRUE(found) << "move " << i << " of the original (to " << target.transpose()
-                       << ") is not in the new program\n"
-                       << rewritten;
-    prev_want = xyz(want[i].end);
-  }
-  EXPECT_EQ(g, got.size()) << "the new program makes more moves than the original\n" << rewritten;
 }
 
 CompensationMatrixData constant(const V& offset) {
@@ -367,7 +286,7 @@ TEST(RewriteExpansion, RapidsAfterACorrectedPointLeaveFromTheOriginalPoint) {
       "G21 G17 G90 G94\nT2 M6\nG43 H2\nG10 L2 P1 X10 Y-5 Z-20\nG54\n"
       "G0 X0 Y0 Z5\n(OPERATION: POCKET)\nG1 Z-1 F100\nG1 X10 F300\n";
   const V offset(0.03, 0.01, -0.02);
-  for (const std::string& rapid :
+  for (const std::string rapid :
        {"#1 = 7\nG0 Z#1\n", "G53 G0 Z0\n", "G91 G0 Z4\nG90\n", "G28\n", "G0 Z[2 + 3]\n"}) {
     const std::string program = head + rapid + "G0 X-3\nM30\n";
     SCOPED_TRACE(program);
@@ -375,16 +294,97 @@ TEST(RewriteExpansion, RapidsAfterACorrectedPointLeaveFromTheOriginalPoint) {
   }
 }
 
-TEST(RewriteExpansion, WhatAnExpansionCannotWriteIsRefusedNamingTheLoop) {
-  const std::string spindle = kHead +
-                              "o1 repeat [2]\n"
+TEST(RewriteExpansion, SpindleAndCoolantInALoopSwitchWhereTheyDidInTheOriginal) {
+  const std::string program = kHead +
+                              "#1 = 0\n"
+                              "o100 while [#1 lt 3]\n"
+                              "S[1000 + 100 * #1] M3\n"
+                              "M8\n"
                               "G1 Z-1 F100\n"
-                              "M3 S1000\n"
+                              "M7\n"
+                              "G1 X[10 + #1] F300\n"
+                              "M9\n"
+                              "G96 D2000 S100 M4\n"
+                              "G1 Y4\n"
+                              "G97 S500\n"
+                              "M5\n"
                               "G0 Z5\n"
-                              "o1 endrepeat\n"
+                              "#1 = [#1 + 1]\n"
+                              "o100 endwhile\n"
+                              "M8\n"
                               "M30\n";
+  expect_rewritten_shifted(program, V(0.02, -0.01, 0.015));
+  const RewriteResult r =
+      rewrite_program(program, "p.ngc", constant(V(0.02, -0.01, 0.015)), options());
+  EXPECT_EQ(r.summary.expansions, 1) << r.text;
+}
+
+// G93 inside a loop: every written feed line carries its F, the pieces of a
+// move its share of the move's time; feed-mode words switch where they did.
+TEST(RewriteExpansion, InverseTimeFeedsInALoopKeepEachMovesTime) {
+  const std::string switched_inside = kHead +
+                                      "#1 = 0\n"
+                                      "o100 while [#1 lt 2]\n"
+                                      "G93\n"
+                                      "G1 Z-1 F2\n"
+                                      "G1 X[10 + #1] Y3 F4\n"
+                                      "G2 X[20 + #1] Y3 I5 J0 F1.5\n"
+                                      "G94\n"
+                                      "G1 X0 F300\n"
+                                      "G0 Z5\n"
+                                      "#1 = [#1 + 1]\n"
+                                      "o100 endwhile\n"
+                                      "M30\n";
+  expect_rewritten_shifted(switched_inside, V(0.02, -0.01, 0.015));
+  const std::string in_force_before = kHead +
+                                      "G93\n"
+                                      "o1 repeat [3]\n"
+                                      "G91 G1 X4 Y1 Z-0.5 F[60 / 0.333]\n"
+                                      "G90\n"
+                                      "o1 endrepeat\n"
+                                      "G1 X0 Y0 F3\n"
+                                      "G94 G0 Z5\n"
+                                      "M30\n";
+  expect_rewritten_shifted(in_force_before, V(-0.01, 0.03, 0.005));
+}
+
+// G33 inside a loop: each threading move stays one G33 line with its K (a
+// G33 waits for the spindle's index pulse, so pieces would restart the
+// thread), its end corrected.
+TEST(RewriteExpansion, ThreadingMovesInALoopStayOneG33LineEach) {
+  const std::string program = kHead +
+                              "S400 M3\n"
+                              "#1 = 0\n"
+                              "o100 while [#1 lt 3]\n"
+                              "G0 X[-1 - 0.1 * #1] Z1\n"
+                              "G33 Z-20 K1.5\n"
+                              "G0 X5\n"
+                              "G0 Z1\n"
+                              "#1 = [#1 + 1]\n"
+                              "o100 endwhile\n"
+                              "M30\n";
+  const V offset(0.02, -0.01, 0.015);
+  expect_rewritten_shifted(program, offset);
+  const RewriteResult r = rewrite_program(program, "p.ngc", constant(offset), options());
+  size_t g33_lines = 0;
+  for (size_t at = r.text.find("G33 "); at != std::string::npos; at = r.text.find("G33 ", at + 1)) {
+    ++g33_lines;
+    const size_t eol = r.text.find('\n', at);
+    EXPECT_NE(r.text.substr(at, eol - at).find(" K1.5"), std::string::npos) << r.text;
+  }
+  EXPECT_EQ(g33_lines, 3u) << r.text;
+}
+
+TEST(RewriteExpansion, WhatAnExpansionCannotWriteIsRefusedNamingTheLoop) {
+  const std::string output = kHead +
+                             "o1 repeat [2]\n"
+                             "G1 Z-1 F100\n"
+                             "M64 P0\n"
+                             "G0 Z5\n"
+                             "o1 endrepeat\n"
+                             "M30\n";
   try {
-    rewrite_program(spindle, "bad.ngc", constant(V(0.01, 0, 0)), options());
+    rewrite_program(output, "bad.ngc", constant(V(0.01, 0, 0)), options());
     ADD_FAILURE() << "no error";
   } catch (const GcodeError& e) {
     EXPECT_EQ(e.where().line, 8) << e.what();

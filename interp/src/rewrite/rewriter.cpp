@@ -607,6 +607,8 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     // G91 in force at the last call inside (a change of mode makes a call,
     // the interpreter's note).
     bool incremental = false;
+    bool inverse_time = false;  // G93 in force at the last call inside
+    double sync_k = 0;          // > 0: the feeds follow the spindle (G33 K)
   };
   bool incremental_before = false;       // G91 in force at the last call before
   bool incremental_before_line = false;  // ... before the current line's calls
@@ -619,7 +621,8 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     PlannedLine& pl = plan[ex.e->first_line];
     if (const auto it = parameters_set.find(ex.e->first_line); it != parameters_set.end())
       pl.moves.insert(pl.moves.end(), it->second.begin(), it->second.end());
-    if (ex.out_feed != feed_upm) pl.moves.push_back("F" + feed_text(feed_upm));
+    // In G93 every feed line carries its own F: none is restored.
+    if (!ex.inverse_time && ex.out_feed != feed_upm) pl.moves.push_back("F" + feed_text(feed_upm));
     if (ex.incremental) pl.moves.push_back("G91");
     incremental_before = ex.incremental;
     expanded_moves[ex.e->first_line] = ex.moves;
@@ -634,14 +637,15 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
         {file_of(program, c.context, name), c.context.line, 0},
         what + ", inside " + e.what + " (lines " + std::to_string(e.first_line) + "-" +
             std::to_string(e.last_line) + "), which the rewrite writes out move by move (" + e.why +
-            "): an expansion writes moves, feeds, dwells, planes, path modes and comments "
-            "only");
+            "): an expansion writes moves, feeds, dwells, planes, path modes, spindle, coolant "
+            "and comments only");
   };
   // One call inside an expansion.
   // `cycle_end`: a canned cycle's move, written to that end (program units).
   auto expand_call = [&](const CanonCall& c, const Axes6* cycle_end = nullptr) {
     const CallContext& ctx = c.context;
     ex.incremental = ctx.incremental;
+    ex.inverse_time = ctx.feed_mode == FeedMode::kInverseTime;
     const int first = ex.e->first_line;
     PlannedLine& pl = plan[first];
     RewrittenLine& rl = expected[first];
@@ -668,6 +672,49 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
         text = m->mode == PathMode::kExactStop   ? "G61.1"
                : m->mode == PathMode::kExactPath ? "G61"
                                                  : "G64 P" + exact(m->tolerance);
+      } else if (const auto* sync = std::get_if<SpeedFeedSync>(&c.op)) {
+        // G33 makes START_SPEED_FEED_SYNC, its feed, STOP_SPEED_FEED_SYNC:
+        // the feed is written as that G33 line (below).
+        ex.sync_k = sync->on ? sync->units_per_rev : 0;
+        rl.others.push_back(format_rs274(c.op, check_format()));
+        return;
+      } else if (const auto* fm = std::get_if<SetFeedMode>(&c.op)) {
+        text = fm->mode == FeedMode::kInverseTime          ? "G93"
+               : fm->mode == FeedMode::kUnitsPerRevolution ? "G95"
+                                                           : "G94";
+        // A change of feed mode clears F: the next feed line writes its own.
+        ex.out_feed = std::numeric_limits<double>::quiet_NaN();
+      } else if (const auto* sp = std::get_if<SetSpindleSpeed>(&c.op)) {
+        // G96 makes SET_SPINDLE_MODE then SET_SPINDLE_SPEED: its S goes onto
+        // the G96 line just written, which LinuxCNC refuses without one.
+        if (!pl.moves.empty() && pl.moves.back().rfind("G96", 0) == 0 &&
+            pl.moves.back().find(" S") == std::string::npos) {
+          pl.moves.back() += " S" + exact(sp->rpm);
+          rl.others.push_back(format_rs274(c.op, check_format()));
+          return;
+        }
+        text = "S" + exact(sp->rpm);
+      } else if (const auto* m = std::get_if<SetSpindleMode>(&c.op)) {
+        // rs274 passes 1e30 for a G96 without D.
+        text = !m->constant_surface_speed ? "G97"
+               : m->css_max_rpm >= 1e29   ? "G96"
+                                          : "G96 D" + exact(m->css_max_rpm);
+      } else if (const auto* st = std::get_if<StartSpindle>(&c.op)) {
+        text = st->clockwise ? "M3" : "M4";
+      } else if (std::holds_alternative<StopSpindle>(c.op)) {
+        text = "M5";
+      } else if (const auto* k = std::get_if<Coolant>(&c.op)) {
+        if (k->on) {
+          text = k->kind == Coolant::kMist ? "M7" : "M8";
+        } else if (k->kind == Coolant::kMist) {
+          text = "M9";  // M9 makes MIST_OFF then FLOOD_OFF
+        } else {
+          if (pl.moves.empty() || pl.moves.back() != "M9" || rl.others.empty() ||
+              rl.others.back() != format_rs274(Coolant{Coolant::kMist, false}, check_format()))
+            throw expansion_error(c, "this line makes FLOOD_OFF without MIST_OFF");
+          rl.others.push_back(format_rs274(c.op, check_format()));
+          return;
+        }
       } else if (const auto* q = std::get_if<SetNaivecamTolerance>(&c.op)) {
         // G64 makes both calls: its Q goes onto the G64 line just written.
         if (pl.moves.empty() || pl.moves.back().rfind("G64 P", 0) != 0)
@@ -675,6 +722,11 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
         pl.moves.back() += " Q" + exact(q->tolerance);
         rl.others.push_back(format_rs274(c.op, check_format()));
         return;
+      } else if (std::holds_alternative<ProbeSwitch>(c.op) ||
+                 std::holds_alternative<StraightProbe>(c.op)) {
+        throw expansion_error(c, std::string("this line makes ") + call_name(c.op) +
+                                     " (probing: where the probe stops, and so what follows, "
+                                     "is known only on the machine)");
       } else {
         throw expansion_error(c, std::string("this line makes ") + call_name(c.op));
       }
@@ -685,8 +737,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     if (std::holds_alternative<NurbsFeed>(c.op)) throw expansion_error(c, "NURBS block here");
     if (ctx.spline != SplineMode::kNone) throw expansion_error(c, "BSPLINE/CSPLINE point here");
     const bool feed = !std::holds_alternative<StraightTraverse>(c.op);
-    if (feed && ctx.feed_mode == FeedMode::kInverseTime)
-      throw expansion_error(c, "feed in G93 (inverse time) on this line");
+    const bool inverse_time = feed && ctx.feed_mode == FeedMode::kInverseTime;
     path.rebase(ctx);
     const ToolPath::Move move = std::holds_alternative<ArcFeed>(c.op)
                                     ? path.arc_to(std::get<ArcFeed>(c.op), ctx)
@@ -698,10 +749,13 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     rl.contexts.push_back(ctx);
     const int decimals = o.decimals > 0 ? o.decimals : ctx.units == LengthUnits::kInch ? 5 : 4;
     // A line of the expansion: X Y Z (A C) exactly, or rounded when corrected.
-    auto write = [&](const Axes6& q, bool traverse, bool corrected, bool with_ac) {
+    // `pieces`: the original move is written as that many lines; in G93 each
+    // takes its share of the move's time 1/F.
+    auto write = [&](const Axes6& q, bool traverse, bool corrected, bool with_ac, size_t pieces) {
       std::string line = ex.first_move && incremental_before ? "G90 " : "";
       ex.first_move = false;
-      line += traverse ? "G0" : "G1";
+      const bool sync = !traverse && ex.sync_k > 0;
+      line += traverse ? "G0" : sync ? "G33" : "G1";
       Axes6 read = q;
       if (corrected) {
         const char letters[] = {'X', 'Y', 'Z', 'A', 'B', 'C'};
@@ -714,20 +768,27 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       } else {
         line += exact_words(q, with_ac, with_ac, read);
       }
-      if (!traverse && ex.out_feed != feed_upm) {
+      double feed_at = feed_upm;
+      if (sync) {
+        line += " K" + exact(ex.sync_k);
+      } else if (!traverse && inverse_time) {
+        const std::string f = exact(ctx.inverse_time_f * static_cast<double>(pieces));
+        line += " F" + f;
+        feed_at = std::strtod(f.c_str(), nullptr);
+      } else if (!traverse && ex.out_feed != feed_upm) {
         line += " F" + feed_text(feed_upm);
         ex.out_feed = feed_upm;
       }
       pl.moves.push_back(line);
       rl.expected.push_back(read);
       rl.traverse_at.push_back(traverse ? 1 : 0);
-      rl.feed_at.push_back(feed_upm);
+      rl.feed_at.push_back(feed_at);
       rl.context_at.push_back(context_index);
       ++ex.moves;
     };
     if (cycle_end) {
       const bool moved = *cycle_end != end_of(c.op);
-      write(*cycle_end, !feed, moved, program_uses_ac || turned);
+      write(*cycle_end, !feed, moved, program_uses_ac || turned, 1);
       if (in_op) ++s.moves_kept;
       displaced = moved;
       turned = false;
@@ -735,27 +796,31 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       Densified d = densify(move, ctx, file_of(program, ctx, name));
       count_corrections(d.corrections);
       const bool with_ac = program_uses_ac || d.rotated || turned;
+      // A G33 move stays one line: each G33 waits for the spindle's index
+      // pulse, so pieces would start the thread anew. Its end is corrected.
+      if (ex.sync_k > 0) d.points.erase(d.points.begin(), d.points.end() - 1);
       for (const Vec5& p : d.points)
-        write(path.to_program(p, ctx), false, true, with_ac);
-      s.points_written += d.n;
+        write(path.to_program(p, ctx), false, true, with_ac, d.points.size());
+      s.points_written += static_cast<long>(d.points.size());
       ++s.moves_rewritten;
       displaced = d.points.back() != move.end;
       turned = d.points.back()[3] != move.end[3] || d.points.back()[4] != move.end[4];
     } else {
       const bool with_ac = program_uses_ac || turned;
       // Another operation's feed starts from the original point.
-      if (feed && displaced) write(path.to_program(move.start, ctx), false, false, with_ac);
-      const int n = feed ? pieces_for_chord(move, o) : 1;
+      // (In G93 that step takes as long as the move: any F will do.)
+      if (feed && displaced) write(path.to_program(move.start, ctx), false, false, with_ac, 1);
+      const int n = feed && ex.sync_k == 0 ? pieces_for_chord(move, o) : 1;
       for (int k = 1; k <= n; ++k)
         write(k == n ? end_of(c.op)
                      : path.to_program(ToolPath::at(move, static_cast<double>(k) / n), ctx),
-              !feed, false, with_ac);
+              !feed, false, with_ac, static_cast<size_t>(n));
       if (in_op) ++s.moves_kept;
       displaced = false;
       turned = false;
     }
     path.finish(move);
-    out_mode = feed ? 1 : 0;
+    out_mode = feed ? (ex.sync_k > 0 ? 33 : 1) : 0;
     // Compensated moves are written where the compensated tool went; the
     // first move after the G40 exit, after the expansion, with all of X Y Z.
     after_comp = ctx.cutter_comp;

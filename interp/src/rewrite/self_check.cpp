@@ -221,7 +221,10 @@ void check_rewrite(const std::string& text, const CheckInput& in) {
             c.context.g92_mm != want.g92_mm || c.context.tool_offset_mm != want.tool_offset_mm)
           fail(line, "an expanded move runs in another mode than the original (" +
                          format_rs274(c.op, fmt) + ")");
-        if (!traverse && feeds[k] != rw.feed_at[k])
+        // In G93 the feed is the line's own F (its share of the move's time).
+        const double feed_k =
+            want.feed_mode == FeedMode::kInverseTime ? c.context.inverse_time_f : feeds[k];
+        if (!traverse && feed_k != rw.feed_at[k])
           fail(line, "an expanded move runs at another feed than the original (" +
                          format_rs274(c.op, fmt) + ")");
       }
