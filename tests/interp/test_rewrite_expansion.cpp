@@ -348,9 +348,9 @@ TEST(RewriteExpansion, InverseTimeFeedsInALoopKeepEachMovesTime) {
   expect_rewritten_shifted(in_force_before, V(-0.01, 0.03, 0.005));
 }
 
-// G33 inside a loop: each threading move stays one G33 line with its K (a
-// G33 waits for the spindle's index pulse, so pieces would restart the
-// thread), its end corrected.
+// G33 inside a loop or alone: each threading move stays one G33 line with
+// its K (a G33 waits for the spindle's index pulse, so pieces would restart
+// the thread), its end corrected.
 TEST(RewriteExpansion, ThreadingMovesInALoopStayOneG33LineEach) {
   const std::string program = kHead +
                               "S400 M3\n"
@@ -373,6 +373,14 @@ TEST(RewriteExpansion, ThreadingMovesInALoopStayOneG33LineEach) {
     EXPECT_NE(r.text.substr(at, eol - at).find(" K1.5"), std::string::npos) << r.text;
   }
   EXPECT_EQ(g33_lines, 3u) << r.text;
+
+  // Outside a loop the G33 line is written out the same way.
+  const std::string once = kHead + "S400 M3\nG0 X-1 Z1\nG33 Z-20 K1.5\nG0 X5\nM30\n";
+  expect_rewritten_shifted(once, offset);
+  const RewriteResult r1 = rewrite_program(once, "p.ngc", constant(offset), options());
+  EXPECT_EQ(r1.summary.expansions, 1) << r1.text;
+  EXPECT_NE(r1.text.find("G33 X-0.980000 Y-0.010000 Z-19.985000 K1.5"), std::string::npos)
+      << r1.text;
 }
 
 TEST(RewriteExpansion, WhatAnExpansionCannotWriteIsRefusedNamingTheLoop) {

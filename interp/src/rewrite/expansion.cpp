@@ -84,8 +84,10 @@ Expansions find_expansions(const CanonProgram& program, const std::vector<RawLin
     return at->second;
   };
   Expansions out;
+  bool synced = false;  // between START_SPEED_FEED_SYNC and its STOP (G33)
   for (const CanonCall& c : program.calls) {
     const CallContext& ctx = c.context;
+    if (const auto* sync = std::get_if<SpeedFeedSync>(&c.op)) synced = sync->on;
     if (!is_feed_of_op(c)) continue;
     std::string why;
     if (ctx.file != 0)
@@ -99,6 +101,8 @@ Expansions find_expansions(const CanonProgram& program, const std::vector<RawLin
       why = "a canned cycle of operation '" + operation + "' in polar coordinates";
     else if (ctx.incremental)
       why = "a feed move of operation '" + operation + "' in G91, incremental distance";
+    else if (synced)
+      why = "a G33 threading move of operation '" + operation + "', written as one G33 line";
     else
       continue;
     const int outer = ctx.outer_loop_line > 0 ? ctx.outer_loop_line : ctx.outer_line;
