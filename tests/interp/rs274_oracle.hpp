@@ -8,9 +8,11 @@
 //   if (!rs274) TRUECUT_ORACLE_MISSING(rs274_missing(why));
 #pragma once
 
+#include <algorithm>
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "oracle.hpp"
 #include "run_process.hpp"
@@ -42,6 +44,26 @@ inline const std::optional<Rs274Oracle>& rs274_oracle(std::string& why) {
   }();
   why = reason;
   return oracle;
+}
+
+// The .ngc files under `dir` (a folder of programs, such as LinuxCNC's
+// samples), sorted.
+// Directory symlinks are not followed (the package links nc_files to
+// ncfiles) and remap_subs folders, subroutine libraries, are left out.
+inline std::vector<std::filesystem::path> ngc_programs_under(const std::filesystem::path& dir) {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> out;
+  if (!fs::exists(dir)) return out;
+  for (auto it = fs::recursive_directory_iterator(dir); it != fs::recursive_directory_iterator();
+       ++it) {
+    if (it->is_directory() && it->path().filename() == "remap_subs") {
+      it.disable_recursion_pending();
+      continue;
+    }
+    if (it->is_regular_file() && it->path().extension() == ".ngc") out.push_back(it->path());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
 }
 
 // What to install when rs274 is missing.

@@ -36,20 +36,9 @@ namespace fs = std::filesystem;
 using V = Eigen::Vector3d;
 
 std::vector<fs::path> sample_programs(const fs::path& share) {
-  std::vector<fs::path> out;
-  for (const fs::path& dir : {share / "linuxcnc/ncfiles", share / "doc/linuxcnc/examples"}) {
-    if (!fs::exists(dir)) continue;
-    // Directory symlinks are not followed: the package links nc_files to ncfiles.
-    for (auto it = fs::recursive_directory_iterator(dir); it != fs::recursive_directory_iterator();
-         ++it) {
-      if (it->is_directory() && it->path().filename() == "remap_subs") {
-        it.disable_recursion_pending();  // subroutine libraries, not programs
-        continue;
-      }
-      if (it->is_regular_file() && it->path().extension() == ".ngc") out.push_back(it->path());
-    }
-  }
-  std::sort(out.begin(), out.end());
+  std::vector<fs::path> out = testing::ngc_programs_under(share / "linuxcnc/ncfiles");
+  for (const fs::path& p : testing::ngc_programs_under(share / "doc/linuxcnc/examples"))
+    out.push_back(p);
   return out;
 }
 

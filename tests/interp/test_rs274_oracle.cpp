@@ -159,22 +159,6 @@ std::string key_of(const fs::path& p) {
   return p.parent_path().filename().string() + "/" + p.filename().string();
 }
 
-std::vector<fs::path> programs_under(const fs::path& dir) {
-  std::vector<fs::path> out;
-  if (!fs::exists(dir)) return out;
-  // Directory symlinks are not followed: the package links nc_files to ncfiles.
-  for (auto it = fs::recursive_directory_iterator(dir); it != fs::recursive_directory_iterator();
-       ++it) {
-    if (it->is_directory() && it->path().filename() == "remap_subs") {
-      it.disable_recursion_pending();  // subroutine libraries, not programs
-      continue;
-    }
-    if (it->is_regular_file() && it->path().extension() == ".ngc") out.push_back(it->path());
-  }
-  std::sort(out.begin(), out.end());
-  return out;
-}
-
 #define REQUIRE_ORACLE(o)      \
   std::string why;             \
   const auto& o = oracle(why); \
@@ -183,7 +167,7 @@ std::vector<fs::path> programs_under(const fs::path& dir) {
 TEST(Rs274Oracle, OwnCorpusMatches) {
   REQUIRE_ORACLE(o);
   int compared = 0;
-  for (const auto& p : programs_under(source_dir() / "tests/interp/corpus")) {
+  for (const auto& p : ngc_programs_under(source_dir() / "tests/interp/corpus")) {
     if (p.filename().string().rfind("sinumerik", 0) == 0) continue;  // not LinuxCNC G-code
     const Outcome r = run_both(*o, p);
     expect_agreement(r, p.string());
@@ -740,8 +724,8 @@ TEST(Rs274Oracle, FiveAxisDemosMatch) {
 
 TEST(Rs274Oracle, LinuxCncSamplePrograms) {
   REQUIRE_ORACLE(o);
-  std::vector<fs::path> programs = programs_under(o->share / "linuxcnc/ncfiles");
-  for (const auto& p : programs_under(o->share / "doc/linuxcnc/examples"))
+  std::vector<fs::path> programs = ngc_programs_under(o->share / "linuxcnc/ncfiles");
+  for (const auto& p : ngc_programs_under(o->share / "doc/linuxcnc/examples"))
     programs.push_back(p);
   int matched = 0, rejected = 0, not_runnable = 0;
   std::set<std::string> seen_out_of_scope;
