@@ -31,9 +31,9 @@ struct RewrittenLine {
   int cycle_normal_axis = -1;
   // An expanded loop or call (expansion.hpp) on lines first..last_line:
   // per written move, whether it is a G0, the feed in force (in G93 the
-  // line's F) and the context
-  // of the original move (an index into contexts); the original's other
-  // calls (rs274 text, feeds apart) in order, which the new lines must make.
+  // line's F) and the context of the original move (an index into
+  // contexts); the original's other calls (rs274 text, feeds apart) in
+  // order, which the new lines must make.
   int last_line = 0;  // > 0: expanded
   std::vector<char> traverse_at;
   std::vector<double> feed_at;
