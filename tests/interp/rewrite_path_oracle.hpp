@@ -63,9 +63,7 @@ inline Eigen::Vector3d arc_axis(Plane plane, const CallContext& ctx) {
   return {n.x, n.y, 0};
 }
 
-inline std::vector<PathMove> path_moves(const std::string& text, const std::string& name,
-                                        const RewriteOptions& o) {
-  const CanonProgram p = Interpreter(o.interpreter).run_text(text, name);
+inline std::vector<PathMove> path_moves(const CanonProgram& p, const RewriteOptions& o) {
   std::vector<PathMove> out;
   double feed = 0;
   for (const CanonCall& c : p.calls) {
@@ -121,9 +119,7 @@ struct MachineSwitch {
   size_t moves_before;
 };
 
-inline std::vector<MachineSwitch> machine_switches(const std::string& text, const std::string& name,
-                                                   const RewriteOptions& o) {
-  const CanonProgram p = Interpreter(o.interpreter).run_text(text, name);
+inline std::vector<MachineSwitch> machine_switches(const CanonProgram& p) {
   std::vector<MachineSwitch> out;
   size_t moves = 0;
   for (const CanonCall& c : p.calls) {
@@ -148,8 +144,11 @@ inline void expect_same_path_shifted(const std::string& original, const std::str
                                      const std::string& name = "p.ngc",
                                      double tolerance_mm = 2e-6) {
   using V = Eigen::Vector3d;
-  const std::vector<PathMove> want = path_moves(original, name, o);
-  const std::vector<PathMove> got = path_moves(rewritten, name, o);
+  // Each program run once; its moves and switches taken from that run.
+  const CanonProgram original_run = Interpreter(o.interpreter).run_text(original, name);
+  const CanonProgram rewritten_run = Interpreter(o.interpreter).run_text(rewritten, name);
+  const std::vector<PathMove> want = path_moves(original_run, o);
+  const std::vector<PathMove> got = path_moves(rewritten_run, o);
   size_t g = 0;
   std::vector<size_t> matched(want.size());  // the new program's move for each
   V prev_want = V::Zero();
@@ -235,8 +234,8 @@ inline void expect_same_path_shifted(const std::string& original, const std::str
 
   // Each switch after the new program's match of the original move before
   // it and no later than that of the move after it.
-  const std::vector<MachineSwitch> want_switches = machine_switches(original, name, o);
-  const std::vector<MachineSwitch> got_switches = machine_switches(rewritten, name, o);
+  const std::vector<MachineSwitch> want_switches = machine_switches(original_run);
+  const std::vector<MachineSwitch> got_switches = machine_switches(rewritten_run);
   ASSERT_EQ(got_switches.size(), want_switches.size()) << rewritten;
   for (size_t i = 0; i < want_switches.size(); ++i) {
     const MachineSwitch& w = want_switches[i];
