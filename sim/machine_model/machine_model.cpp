@@ -164,7 +164,7 @@ void MachineModel::joint_outputs(int j, MachineState& st, double cmd, double per
 
 void MachineModel::advance_joint(int j, MachineState& st, double cmd,
                                  double period_s) const noexcept {
-  if (dynamic(j)) servo_step(servo_[j], st.joints[j], cmd, period_s);
+  if (dynamic(j)) servo_step(servo_[j], st.joints[j], cmd, period_s, st.servo_linear[j]);
   if (const auto* e = params_.effects.thermal_drift.active(j))
     st.thermal_mm[j] =
         thermal_drift_step(*e, st.thermal_mm[j], thermal_drive(*e, st.spindle_power_kw), period_s);

@@ -29,12 +29,17 @@ int servo_substeps(double period_s) noexcept {
   return n > kMaxSubsteps ? kMaxSubsteps : int(n);
 }
 
-void servo_step(const ServoParams& p, ServoState& s, double cmd, double period_s) noexcept {
+namespace {
+
+double velocity_reference(const ServoParams& p, ServoState& s, double cmd,
+                          double period_s) noexcept {
   const double enc = encoder_reading(p, s.pos);
   const double v_ref = p.ff1 * (cmd - s.prev_cmd) / period_s + p.kv_per_s * (cmd - enc);
   s.prev_cmd = cmd;
+  return v_ref;
+}
 
-  const int n = servo_substeps(period_s);
+void substeps(const ServoParams& p, ServoState& s, double v_ref, double period_s, int n) noexcept {
   const double h = period_s / n;
   const double a_max = std::abs(p.max_accel);
   for (int i = 0; i < n; ++i) {
@@ -63,6 +68,20 @@ void servo_step(const ServoParams& p, ServoState& s, double cmd, double period_s
     else
       s.table = s.pos;
   }
+}
+
+}  // namespace
+
+void servo_step(const ServoParams& p, ServoState& s, double cmd, double period_s) noexcept {
+  const double v_ref = velocity_reference(p, s, cmd, period_s);
+  substeps(p, s, v_ref, period_s, servo_substeps(period_s));
+}
+
+void servo_step(const ServoParams& p, ServoState& s, double cmd, double period_s,
+                ServoLinearCache& cache) noexcept {
+  const double v_ref = velocity_reference(p, s, cmd, period_s);
+  const int n = servo_substeps(period_s);
+  if (!servo_linear_step(p, s, v_ref, period_s, n, cache)) substeps(p, s, v_ref, period_s, n);
 }
 
 }  // namespace truecut::sim

@@ -66,6 +66,9 @@ struct MachineState {
   bool started = false;
   bool fault = false;
   bool limit_fault = false;
+  // The drives' one-step maps of the periods last seen (servo_linear_step.hpp):
+  // what makes a period cheap, never what it computes.
+  std::array<ServoLinearCache, kJointCount> servo_linear{};
 };
 
 class MachineModel {

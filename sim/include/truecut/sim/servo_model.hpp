@@ -20,6 +20,8 @@
 
 #include <cmath>
 
+#include "truecut/sim/servo_linear_step.hpp"
+
 namespace truecut::sim {
 
 struct ServoParams {
@@ -55,5 +57,10 @@ int servo_substeps(double period_s) noexcept;
 // Advances the state from the start of a period to its end, with `cmd` the
 // command of this period. Reads the encoder at the start, as the drive does.
 void servo_step(const ServoParams& p, ServoState& s, double cmd, double period_s) noexcept;
+// The same, taking the period's sub-steps as one where they are provably
+// linear (servo_linear_step.hpp), with the maps kept in `cache`; the state
+// differs from the one-by-one sub-steps only by rounding.
+void servo_step(const ServoParams& p, ServoState& s, double cmd, double period_s,
+                ServoLinearCache& cache) noexcept;
 
 }  // namespace truecut::sim
