@@ -1,8 +1,12 @@
 // Every command's --help as a user reads it: it exits 0, starts with its
 // usage line, and every `truecut <name>` it cites is a command that exists
-// (issue 23: `diagnose --help` cited a `truecut measure` that never was).
+// (issue 23: `diagnose --help` cited a `truecut measure` that never was),
+// and its words are words (issue 23: "parameterswith").
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
 #include <regex>
 #include <set>
 #include <string>
@@ -54,5 +58,38 @@ TEST(HelpTexts, EveryCommandHasHelpCitingOnlyRealCommands) {
     for (std::sregex_iterator it(help.out.begin(), help.out.end(), cited), end; it != end; ++it)
       EXPECT_TRUE(commands.count((*it)[1])) << "`truecut " << name << " --help` cites `truecut "
                                             << (*it)[1] << "`, which is not a command";
+  }
+}
+
+// Two words glued where a string literal ended ("parameters" "with") make
+// a word the documentation never uses: every word of five letters or more
+// of every --help must be one docs/ or the README uses, or one of the few
+// ordinary words below that they happen not to.
+TEST(HelpTexts, EveryWordOfTheHelpTextsIsAWord) {
+  const auto lower_words = [](const std::string& text, std::size_t min_length) {
+    std::set<std::string> words;
+    std::string w;
+    for (const char c : text + " ") {
+      if (std::isalpha(static_cast<unsigned char>(c))) {
+        w += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      } else {
+        if (w.size() >= min_length) words.insert(w);
+        w.clear();
+      }
+    }
+    return words;
+  };
+  std::string docs = read_file(source_dir() / "README.md");
+  for (const auto& entry : std::filesystem::directory_iterator(source_dir() / "docs"))
+    if (entry.path().extension() == ".md") docs += read_file(entry.path());
+  std::set<std::string> known = lower_words(docs, 1);
+  for (const char* w : {"append", "arises", "devices", "dialect", "dropping", "jumping", "locates",
+                        "mirrors", "resist", "substitution"})
+    known.insert(w);
+  for (const std::string& name : listed_commands()) {
+    const ProcessResult help = run_truecut({name, "--help"});
+    for (const std::string& w : lower_words(help.out, 5))
+      EXPECT_TRUE(known.count(w)) << "`truecut " << name << " --help`: \"" << w
+                                  << "\" is not a word the docs use (two words glued?)";
   }
 }
