@@ -26,14 +26,22 @@ TEST(SpscChannel, FifoOrderAndFullEmpty) {
 TEST(SpscChannel, TwoThreadsLoseNothingAndKeepOrder) {
   SpscChannel<uint64_t, 64> ch;
   constexpr uint64_t kN = 200'000;
+  // Each side yields when the other is behind: with more runnable threads
+  // than cores (ctest -j2 beside other tests) a spinning side would burn
+  // its time slice waiting for one that is not running.
   std::thread producer([&] {
     for (uint64_t i = 0; i < kN;)
-      if (ch.try_push(i)) ++i;
+      if (ch.try_push(i))
+        ++i;
+      else
+        std::this_thread::yield();
   });
   uint64_t expected = 0, v = 0;
   while (expected < kN) {
     if (ch.try_pop(v)) {
       ASSERT_EQ(expected++, v);
+    } else {
+      std::this_thread::yield();
     }
   }
   producer.join();
