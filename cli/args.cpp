@@ -1,10 +1,23 @@
 #include "args.hpp"
 
+#include <cerrno>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <system_error>
 
 namespace truecut::cli {
+
+namespace {
+
+// A range's bound as a person writes it: 1e-09, 0.001, 1000000000.
+std::string bound_text(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.10g", v);
+  return b;
+}
+
+}  // namespace
 
 ParsedArgs::ParsedArgs(const std::vector<std::string>& argv, const std::vector<OptionSpec>& specs) {
   for (size_t i = 0; i < argv.size(); ++i) {
@@ -31,6 +44,10 @@ ParsedArgs::ParsedArgs(const std::vector<std::string>& argv, const std::vector<O
         if (i + 1 >= argv.size()) throw UsageError("--" + name + " needs a value");
         val = argv[++i];
       }
+      // No option means anything by an empty value (an unset shell
+      // variable, most likely): `--out ""` would be the current folder's
+      // name "" to every later step.
+      if (val.empty()) throw UsageError("--" + name + " needs a value, not an empty one");
     } else if (has_inline) {
       throw UsageError("--" + name + " takes no value");
     }
@@ -59,8 +76,8 @@ double ParsedArgs::number(const std::string& name, double fallback, double min, 
   double d = std::strtod(v->c_str(), &end);
   if (v->empty() || *end != '\0') throw UsageError("--" + name + " '" + *v + "' is not a number");
   if (!(d >= min && d <= max))
-    throw UsageError("--" + name + " " + *v + " is outside " + std::to_string(min) + ".." +
-                     std::to_string(max));
+    throw UsageError("--" + name + " " + *v + " is outside " + bound_text(min) + ".." +
+                     bound_text(max));
   return d;
 }
 
@@ -68,9 +85,11 @@ long ParsedArgs::integer(const std::string& name, long fallback, long min, long 
   auto v = value(name);
   if (!v) return fallback;
   char* end = nullptr;
+  errno = 0;
   long n = std::strtol(v->c_str(), &end, 10);
   if (v->empty() || *end != '\0') throw UsageError("--" + name + " '" + *v + "' is not an integer");
-  if (n < min || n > max)
+  // Beyond a long, strtol returns its limit (and ERANGE): out of range too.
+  if (errno == ERANGE || n < min || n > max)
     throw UsageError("--" + name + " " + *v + " is outside " + std::to_string(min) + ".." +
                      std::to_string(max));
   return n;

@@ -1,4 +1,5 @@
 // truecut <command> ...: the command-line front end.
+#include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <exception>
@@ -19,6 +20,17 @@ void print_usage(std::FILE* to) {
   for (const auto& c : truecut::cli::commands())
     std::fprintf(to, "  %-10s %s\n", c.name, c.summary);
   std::fprintf(to, "\nexit codes: 0 ok, 1 runtime failure, 2 usage or input error\n");
+}
+
+// A command's standard output is often its product (`truecut canon`'s
+// calls) or its summary: when it could not all be written (a full disk, a
+// closed pipe), the command has not succeeded.
+int checked_stdout(const char* command, int code) {
+  errno = 0;
+  if (std::fflush(stdout) == 0 && !std::ferror(stdout)) return code;
+  std::fprintf(stderr, "truecut %s: writing the standard output failed (%s)\n", command,
+               errno ? std::strerror(errno) : "a full disk, or a closed pipe?");
+  return code == truecut::cli::kExitOk ? truecut::cli::kExitFailure : code;
 }
 
 }  // namespace
@@ -42,7 +54,7 @@ int main(int argc, char** argv) {
   for (const auto& c : truecut::cli::commands()) {
     if (args[0] != c.name) continue;
     try {
-      return c.run(std::vector<std::string>(args.begin() + 1, args.end()));
+      return checked_stdout(c.name, c.run(std::vector<std::string>(args.begin() + 1, args.end())));
     } catch (const truecut::cli::UsageError& e) {
       std::fprintf(stderr, "truecut %s: %s\n(see truecut %s --help)\n", c.name, e.what(), c.name);
       return truecut::cli::kExitUsage;
