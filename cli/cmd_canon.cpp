@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -12,6 +13,7 @@
 #include "commands.hpp"
 #include "output_spool.hpp"
 #include "parameter_file_args.hpp"
+#include "program_budget_args.hpp"
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/interpreter.hpp"
 #include "truecut/interp/operations.hpp"
@@ -96,9 +98,12 @@ int cmd_canon(const std::vector<std::string>& argv) {
                       {"spline-report", false},
                       {"spline-tolerance", true},
                       {"quiet", false},
+                      {"max-blocks", true},
                       {"help", false}});
   if (a.flag("help")) {
-    std::fputs((std::string(kCanonHelp) + kVarFileHelp + kCanonHelpOptions).c_str(), stdout);
+    std::fputs(
+        (std::string(kCanonHelp) + kVarFileHelp + kMaxBlocksHelp + kCanonHelpOptions).c_str(),
+        stdout);
     return kExitOk;
   }
   if (a.positionals().size() != 1) throw UsageError("expected one PROGRAM.ngc file");
@@ -116,14 +121,18 @@ int cmd_canon(const std::vector<std::string>& argv) {
   int n = 0;
   std::string line;
   interp::CanonProgram program;
+  std::set<std::string> operations_seen;  // with --operation, to name a typo
   try {
     interp::InterpreterOptions options;
     if (auto t = a.value("tool-table")) options.tools = interp::ToolTable::load(*t, tool_units);
     if (auto p = parameter_file_from_args(a)) options.parameters = std::move(*p);
     options.block_delete = a.flag("block-delete");
     options.has_b = a.flag("b-axis");
+    options.max_blocks = max_blocks_from_args(a);
     if (!whole_program)
       options.on_call = [&](const interp::CanonCall& call, const std::vector<std::string>& files) {
+        if (only && operations_seen.size() < 100'000)
+          operations_seen.insert(call.context.operation);
         if (only && (call.context.operation != *only || !interp::is_motion(call.op))) return;
         // rs274's columns: the call's number, then the block's N word as
         // written, padded to six characters, or "N....." without one.
@@ -165,6 +174,20 @@ int cmd_canon(const std::vector<std::string>& argv) {
     return kExitUsage;
   }
 
+  // An operation the program does not have (a typo) would print nothing and
+  // look like an operation without moves.
+  if (whole_program)
+    for (const auto& name : interp::operation_names(program))
+      operations_seen.insert(name);
+  if (only && !operations_seen.count(*only)) {
+    std::string names;
+    for (const auto& name : operations_seen)
+      if (!name.empty()) names += (names.empty() ? "" : ", ") + name;
+    std::fprintf(stderr, "truecut canon: %s has no operation '%s' (its operations: %s)\n",
+                 a.positionals()[0].c_str(), only->c_str(),
+                 names.empty() ? "none: no (OPERATION: NAME) comment" : names.c_str());
+    return kExitUsage;
+  }
   if (a.flag("list-operations")) {
     for (const auto& name : interp::operation_names(program))
       std::printf("%s\n", name.c_str());

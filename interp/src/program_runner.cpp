@@ -232,7 +232,7 @@ bool ProgramRunner::step() {
   if (++blocks_ > options_.max_blocks)
     fail(file.lines[frame.pc], 1,
          "more than " + std::to_string(options_.max_blocks) +
-             " blocks executed: endless loop? (InterpreterOptions::max_blocks)");
+             " blocks executed: an endless loop? (a longer program: --max-blocks N)");
   if (options_.progress && options_.progress_every_blocks > 0 &&
       blocks_ % options_.progress_every_blocks == 0)
     options_.progress(blocks_);

@@ -156,4 +156,63 @@ TEST(CanonCli, SplineReportShowsErBeforeAndAfterNodeInsertion) {
   }
 }
 
+// An operation the program does not have (a typo) is refused with the
+// program's operations, instead of printing nothing with exit 0.
+TEST(CanonCli, AnOperationThatIsNotInTheProgramIsRefused) {
+  const auto dir = scratch_dir();
+  const auto prog =
+      write(dir, "p.ngc", "(OPERATION: ROUGH)\nG0 X1\n(OPERATION: FINISH)\nG1 X2 F100\nM2\n");
+  for (const bool list : {false, true}) {
+    std::vector<std::string> args = {cli_path().string(), "canon", "--operation", "FINNISH"};
+    if (list) args.push_back("--list-operations");
+    args.push_back(prog.string());
+    auto r = run_process(args);
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(r.err.find("has no operation 'FINNISH' (its operations: FINISH, ROUGH)"),
+              std::string::npos)
+        << r.err;
+    EXPECT_EQ(r.out, "");
+  }
+  auto ok = run_process({cli_path().string(), "canon", "--operation", "FINISH", prog.string()});
+  EXPECT_EQ(ok.exit_code, 0) << ok.err;
+  EXPECT_NE(ok.out.find("STRAIGHT_FEED(2.0000"), std::string::npos) << ok.out;
+}
+
+// The calls are canon's product: when they cannot all be written (a full
+// disk) the command fails.
+TEST(CanonCli, OutputThatCannotBeWrittenIsAFailure) {
+  if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full on this system";
+  const auto dir = scratch_dir();
+  std::string text;
+  for (int i = 0; i < 5000; ++i)
+    text += "G1 X" + std::to_string(i) + " F100\n";
+  const auto prog = write(dir, "p.ngc", text + "M2\n");
+  auto r = run_process(
+      {"/bin/sh", "-c", "\"$0\" canon \"$1\" > /dev/full", cli_path().string(), prog.string()});
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("truecut canon: writing the standard output failed"), std::string::npos)
+      << r.err;
+}
+
+// The interpreter's block budget stops an endless loop and names the
+// option that raises it.
+TEST(CanonCli, MaxBlocksStopsAnEndlessLoopAndNamesItsOption) {
+  const auto dir = scratch_dir();
+  const auto loop = write(dir, "loop.ngc", "#1=0\no1 while [1]\n#1=[#1+1]\no1 endwhile\nM2\n");
+  auto r = run_process({cli_path().string(), "canon", "--max-blocks", "1000", loop.string()});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("more than 1000 blocks executed: an endless loop? (a longer program: "
+                       "--max-blocks N)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.out, "");
+  // A finite loop under the budget runs; the budget must be at least 1.
+  const auto finite =
+      write(dir, "finite.ngc", "#1=0\no1 while [#1 LT 100]\n#1=[#1+1]\no1 endwhile\nM2\n");
+  auto ok = run_process({cli_path().string(), "canon", "--max-blocks", "1000", finite.string()});
+  EXPECT_EQ(ok.exit_code, 0) << ok.err;
+  auto bad = run_process({cli_path().string(), "canon", "--max-blocks", "0", finite.string()});
+  EXPECT_EQ(bad.exit_code, 2) << bad.err;
+}
+
 }  // namespace truecut::test
