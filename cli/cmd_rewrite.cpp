@@ -1,5 +1,7 @@
 // truecut rewrite IN.ngc --matrix COMP.csv | --field FIELD.tcf --operation NAME ...:
 // the G-code rewriting fallback (docs/rewrite.md).
+#include <cerrno>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -11,6 +13,7 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "parameter_file_args.hpp"
+#include "program_budget_args.hpp"
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/rewrite.hpp"
 #include "truecut/interp/sha256.hpp"
@@ -79,7 +82,8 @@ const char* kRewriteHelp =
     "                       that get no compensation\n"
     "  --max-correction MM  refuse (exit 1, nothing written) when the compensation\n"
     "                       exceeds this (default 0.2, as truecut field)\n"
-    "  --force              write although it does (recorded in the audit)\n"
+    "  --force              write although it does, or although no point of the\n"
+    "                       operation gets a compensation (recorded in the audit)\n"
     "  --paper denkena      the optical-compensation source's recipe (with --matrix):\n"
     "                       --raw-matrix, --placement tip, --step 0.5, no smoothing;\n"
     "                       options given explicitly still win\n"
@@ -110,26 +114,62 @@ std::vector<std::int32_t> surface_list(const std::string& s) {
   std::string item;
   while (std::getline(ss, item, ',')) {
     char* end = nullptr;
+    errno = 0;
     const long v = std::strtol(item.c_str(), &end, 10);
     if (item.empty() || *end != '\0') throw UsageError("--surfaces: '" + item + "' is not an id");
+    // The matrix's surface ids are int32 (docs/formats.md): a larger number
+    // would wrap onto another surface.
+    if (errno == ERANGE || v < 0 || v > INT32_MAX)
+      throw UsageError("--surfaces: " + item + " is outside the surface ids 0.." +
+                       std::to_string(INT32_MAX));
     out.push_back(static_cast<std::int32_t>(v));
   }
   return out;
 }
 
+// The length of the valid UTF-8 sequence at s[i], or 0 when the byte there
+// does not start one (RFC 3629: no overlong forms, no surrogates, <= U+10FFFF).
+std::size_t utf8_sequence_length(const std::string& s, std::size_t i) {
+  const auto byte = [&](std::size_t k) { return static_cast<unsigned char>(s[k]); };
+  const unsigned char c = byte(i);
+  std::size_t n = c < 0x80           ? 1
+                  : (c >> 5) == 0x6  ? 2
+                  : (c >> 4) == 0xE  ? 3
+                  : (c >> 3) == 0x1E ? 4
+                                     : 0;
+  if (n == 0 || i + n > s.size()) return 0;
+  std::uint32_t cp = n == 1 ? c : n == 2 ? c & 0x1F : n == 3 ? c & 0x0F : c & 0x07;
+  for (std::size_t k = 1; k < n; ++k) {
+    if ((byte(i + k) >> 6) != 0x2) return 0;
+    cp = (cp << 6) | (byte(i + k) & 0x3F);
+  }
+  const std::uint32_t least[5] = {0, 0, 0x80, 0x800, 0x10000};
+  if (cp < least[n] || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF)) return 0;
+  return n;
+}
+
+// A JSON string of the bytes of s (a path or an operation name as the file
+// system or the program gives them): valid UTF-8 as it is, and every byte
+// that is not as the Latin-1 character of that value (an ISO-8859-1 file
+// name such as caf\xe9 comes out as "café"), so the audit is always JSON.
 std::string json_string(const std::string& s) {
   std::string o = "\"";
-  for (unsigned char c : s) {
+  for (std::size_t i = 0; i < s.size();) {
+    const unsigned char c = static_cast<unsigned char>(s[i]);
+    const std::size_t n = utf8_sequence_length(s, i);
     if (c == '"' || c == '\\') {
       o += '\\';
       o += static_cast<char>(c);
-    } else if (c < 0x20) {
+    } else if (n == 0 || c < 0x20) {
       char b[8];
       std::snprintf(b, sizeof b, "\\u%04x", c);
       o += b;
     } else {
-      o += static_cast<char>(c);
+      o.append(s, i, n);
+      i += n;
+      continue;
     }
+    ++i;
   }
   return o + "\"";
 }
@@ -149,16 +189,23 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
                       {"force", false},   {"cutting-length", true}, {"tools", true},
                       {"machine", true},  {"decimals", true},       {"rewrite-all", false},
                       {"out", true},      {"paper", true},          {"help", false},
-                      {"var-file", true}, {"var-units", true}});
+                      {"var-file", true}, {"var-units", true},      {"max-blocks", true}});
   if (a.flag("help")) {
-    std::fputs((std::string(kRewriteHelp) + kVarFileHelp).c_str(), stdout);
+    std::fputs((std::string(kRewriteHelp) + kVarFileHelp + kMaxBlocksHelp).c_str(), stdout);
     return kExitOk;
   }
   if (a.positionals().size() != 1) throw UsageError("expected one program IN.ngc");
   const std::string in_path = a.positionals()[0];
   const auto matrix_path = a.value("matrix"), field_path = a.value("field");
   if (!matrix_path == !field_path) throw UsageError("give exactly one of --matrix and --field");
-  if (a.flag("raw-matrix") && !matrix_path) throw UsageError("--raw-matrix goes with --matrix");
+  // What only the matrix's neighbour search reads: given with a field it
+  // would change nothing and still be recorded in the audit.
+  for (const char* matrix_only :
+       {"raw-matrix", "placement", "smooth", "surfaces", "reach", "cutting-length"})
+    if (a.flag(matrix_only) && !matrix_path)
+      throw UsageError(std::string("--") + matrix_only +
+                       " goes with --matrix (a --field is looked up at the tool centre, "
+                       "without the matrix's neighbour search)");
   // --paper denkena: the optical-compensation source's recipe — its mirror
   // vectors unsmoothed, the 3 points nearest the tool tip, 0.5 mm steps.
   const std::string paper = a.value("paper").value_or("");
@@ -215,6 +262,7 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
   if (auto s = a.value("surfaces")) o.surfaces = surface_list(*s);
   o.decimals = static_cast<int>(a.integer("decimals", 0, 3, 9));
   o.keep_unchanged_moves = !a.flag("rewrite-all");
+  o.interpreter.max_blocks = max_blocks_from_args(a);
 
   std::vector<Input> inputs;
   auto add_input = [&](const std::string& role, const std::string& path, const std::string& bytes) {
@@ -277,14 +325,29 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
   // correction this large on a finished part is a wrong input or unit.
   const double max_correction_mm =
       a.number("max-correction", offline::kFieldMaxCorrectionMm, 0.0, 100.0);
-  const bool forced = s.max_compensation_mm > max_correction_mm;
-  if (forced && !a.flag("force")) {
+  const bool too_large = s.max_compensation_mm > max_correction_mm;
+  const bool none_reached = s.points_compensated == 0;
+  const bool forced = too_large || none_reached;
+  if (too_large && !a.flag("force")) {
     std::fprintf(stderr,
                  "truecut rewrite: the compensation reaches %.4f mm, above --max-correction "
                  "%.4g mm (a wrong matrix, field or unit?); nothing written (--force writes it and "
                  "records that in the audit)\n",
                  s.max_compensation_mm, max_correction_mm);
     return kExitFailure;
+  }
+  // Nothing of the operation reached by the compensation: a matrix or field
+  // of another part, frame or unit (a rewrite that changes nothing is no
+  // compensation, whatever the summary's zeros say).
+  if (none_reached && !a.flag("force")) {
+    std::fprintf(stderr,
+                 "truecut rewrite: no point of operation '%s' (%d moves) got a compensation: "
+                 "the %s %s does not reach its moves (is it in the program's workpiece frame "
+                 "and units? docs/rewrite.md); nothing written (--force writes the program "
+                 "unchanged)\n",
+                 o.operation.c_str(), s.moves_read, matrix_path ? "matrix" : "field",
+                 (matrix_path ? *matrix_path : *field_path).c_str());
+    return kExitUsage;
   }
   // The radius of the operation's tool(s), from the tool table.
   std::optional<double> radius_mm;
@@ -353,10 +416,14 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
        ", \"lines_out\": " + std::to_string(s.lines_out) + ", \"tools\": [" + tools_json +
        "]}\n}\n";
 
-  if (forced)
+  if (too_large)
     std::fprintf(
         stderr, "truecut rewrite: WARNING: compensation %.4f mm above %.4g mm, written (--force)\n",
         s.max_compensation_mm, max_correction_mm);
+  if (none_reached)
+    std::fprintf(stderr,
+                 "truecut rewrite: WARNING: no point of the operation got a compensation, "
+                 "written unchanged (--force)\n");
   files->write(0, result.text);
   files->write(1, j);
   files->commit();

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <fstream>
 #include <regex>
 
@@ -135,9 +136,9 @@ TEST(CliRewrite, ParameterFilePlacesTheProgramAsOnTheMachine) {
   }
   moved += rest;
   write(c.dir / "m100.csv", moved);
-  const auto off = c.run(with(with(kArgs, "--var-file", "m.var"), "--out", "off.ngc"));
-  ASSERT_EQ(off.exit_code, 0) << off.err;
-  EXPECT_NE(off.out.find("  moves rewritten       0\n"), std::string::npos) << off.out;
+  // The matrix at program coordinates no longer reaches the moves: refused.
+  expect_refused(c, c.run(with(kArgs, "--var-file", "m.var")),
+                 "no point of operation 'FACE' (6 moves) got a compensation");
   const auto on = c.run(with(with(kArgs, "--var-file", "m.var"), "--matrix", "m100.csv"));
   ASSERT_EQ(on.exit_code, 0) << on.err;
   EXPECT_NE(on.out.find("  moves rewritten       2\n"), std::string::npos) << on.out;
@@ -195,6 +196,8 @@ TEST(CliRewrite, UsageErrors) {
   expect_refused(c, c.run(no_out), "--out OUT.ngc is required");
   std::vector<std::string> field = with(kArgs, "--matrix", "x");
   field.erase(field.begin() + 1, field.begin() + 3);
+  field.erase(std::find(field.begin(), field.end(), "--reach"),
+              std::find(field.begin(), field.end(), "--reach") + 2);  // matrix only
   write(c.dir / "f.tcf", "not a field\n");
   expect_refused(c, c.run(with(field, "--field", "f.tcf")), "f.tcf");
   // An output that is not a regular file is not replaced.
@@ -267,4 +270,72 @@ TEST(CliRewrite, Help) {
   EXPECT_NE(r.out.find("usage: truecut rewrite IN.ngc"), std::string::npos);
   auto list = run_process({cli_path().string(), "--help"});
   EXPECT_NE(list.out.find("rewrite"), std::string::npos);
+}
+
+// A matrix or field that reaches none of the operation's points (another
+// part, frame or unit) is refused, nothing written; --force writes the
+// program unchanged, says so and records it.
+TEST(CliRewrite, ACompensationThatReachesNoPointIsRefusedUnlessForced) {
+  const Case c = setup();
+  // The face matrix 1 m away along x.
+  std::string far =
+      "# truecut compensation matrix v1\n# frame: workpiece\n# units: mm\n"
+      "x,y,z,dx,dy,dz,valid,surface_id\n";
+  for (int i = -8; i <= 8; ++i)
+    for (int j = -8; j <= 8; ++j)
+      far += std::to_string(1000 + 0.5 * i) + "," + std::to_string(0.5 * j) + ",0,0,0,0.05,1,5\n";
+  write(c.dir / "far.csv", far);
+  expect_refused(c, c.run(with(kArgs, "--matrix", "far.csv")),
+                 "the matrix far.csv does not reach its moves");
+  std::vector<std::string> forced = with(kArgs, "--matrix", "far.csv");
+  forced.push_back("--force");
+  const auto r = c.run(forced);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("WARNING: no point of the operation got a compensation"), std::string::npos)
+      << r.err;
+  EXPECT_EQ(read_file(c.dir / "out.ngc"), kProgram);
+  EXPECT_NE(read_file(c.dir / "out.ngc.audit.json").find("\"forced\": true"), std::string::npos);
+}
+
+// Options that only the matrix's neighbour search reads are refused with a
+// field, instead of being recorded in the audit as if they had acted.
+TEST(CliRewrite, MatrixOnlyOptionsAreRefusedWithAField) {
+  const Case c = setup();
+  for (const auto& [option, value] :
+       std::vector<std::pair<std::string, std::string>>{{"--smooth", "5"},
+                                                        {"--surfaces", "7"},
+                                                        {"--placement", "tip"},
+                                                        {"--reach", "0.6"},
+                                                        {"--cutting-length", "3"}}) {
+    std::vector<std::string> args = {"p.ngc",   "--field", "f.tcf",   "--operation", "FACE",
+                                     "--type",  "face",    "--tools", "tools.tbl",   "--out",
+                                     "out.ngc", option,    value};
+    expect_refused(c, c.run(args), option + " goes with --matrix");
+  }
+}
+
+// A surface id beyond int32 would wrap onto another surface (4294967297 was
+// surface 1).
+TEST(CliRewrite, SurfaceIdsBeyondTheirRangeAreRefused) {
+  const Case c = setup();
+  expect_refused(c, c.run(with(kArgs, "--surfaces", "4294967297")),
+                 "--surfaces: 4294967297 is outside the surface ids 0..2147483647");
+  expect_refused(c, c.run(with(kArgs, "--surfaces", "99999999999999999999")),
+                 "is outside the surface ids");
+  expect_refused(c, c.run(with(kArgs, "--surfaces", "-1")), "is outside the surface ids");
+}
+
+// A file name (or an operation name) that is not UTF-8 still gives an audit
+// record that is JSON: its bytes are written as Latin-1 characters.
+TEST(CliRewrite, TheAuditIsJsonForANameThatIsNotUtf8) {
+  const Case c = setup();
+  const std::string latin1 = "caf\xe9.ngc";
+  write(c.dir / latin1, kProgram);
+  std::vector<std::string> args = kArgs;
+  args[0] = latin1;
+  const auto q = c.run(args);
+  ASSERT_EQ(q.exit_code, 0) << q.err;
+  const std::string audit = read_file(c.dir / "out.ngc.audit.json");
+  EXPECT_NE(audit.find("\"path\": \"caf\\u00e9.ngc\""), std::string::npos) << audit;
+  EXPECT_EQ(audit.find('\xe9'), std::string::npos) << "a raw Latin-1 byte is not JSON";
 }
