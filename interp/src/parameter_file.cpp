@@ -17,12 +17,36 @@ bool is_blank(char c) {
   return c == ' ' || c == '\t' || c == '\r';
 }
 
+// Where the parameter is an offset or a stored position (G28/G30 homes,
+// G92, the coordinate systems with their rotation), whether it holds an
+// angle (A B C, R) or a length (X Y Z U V W); nullopt for other parameters.
+enum class OffsetKind { kNone, kLength, kAngle };
+OffsetKind offset_kind(long number) {
+  const auto axis_kind = [](long k) {  // 1..9: X Y Z A B C U V W
+    return k >= 4 && k <= 6 ? OffsetKind::kAngle : OffsetKind::kLength;
+  };
+  for (long first : {5161L, 5181L, 5211L})
+    if (number >= first && number < first + 9) return axis_kind(number - first + 1);
+  if (number >= 5221 && number < 5221 + 9 * 20) {
+    const long k = (number - 5221) % 20 + 1;  // 1..9 axes, 10 the XY rotation R
+    if (k <= 9) return axis_kind(k);
+    if (k == 10) return OffsetKind::kAngle;
+  }
+  return OffsetKind::kNone;
+}
+
 }  // namespace
 
 ParameterFile ParameterFile::parse(std::string_view text, const std::string& name,
                                    LengthUnits units) {
   ParameterFile out;
   out.units = units;
+  // LinuxCNC skips a line that starts with anything but a number, so an
+  // editor's byte-order mark would silently drop the first parameter.
+  if (text.size() >= 3 && text.substr(0, 3) == "\xEF\xBB\xBF")
+    throw GcodeError({name, 1, 1},
+                     "the file starts with a UTF-8 byte-order mark: LinuxCNC would skip its first "
+                     "line and the value on it; save the file without it");
   const SourceFile src = source_from_text(text, name);
   int previous = 0;
   int previous_line = 0;
@@ -75,6 +99,25 @@ ParameterFile ParameterFile::parse(std::string_view text, const std::string& nam
                        "parameter 5220 (the active coordinate system) must be 1..9 (G54..G59.3), "
                        "got " +
                            value_text);
+    // No machine is larger than 100 m: an offset beyond it is a unit or
+    // typing mistake that would surface later as a misleading program error
+    // (a 1e300 mm G54 made "zero-radius arc" of the program's first arc).
+    const OffsetKind kind = offset_kind(number);
+    const double limit = kind == OffsetKind::kAngle    ? 1e6
+                         : units == LengthUnits::kInch ? 1e5 / 25.4
+                                                       : 1e5;
+    const char* unit = kind == OffsetKind::kAngle    ? "deg"
+                       : units == LengthUnits::kInch ? "inch"
+                                                     : "mm";
+    if (kind != OffsetKind::kNone && std::abs(value) > limit)
+      throw GcodeError(
+          {name, line, static_cast<int>(v) + 1},
+          "parameter " + number_text + ": " + value_text + " " + unit +
+              " is outside the offsets a machine can have (" +
+              (kind == OffsetKind::kAngle
+                   ? std::string("±1e6 deg")
+                   : std::string(units == LengthUnits::kInch ? "±3937 inch" : "±1e5 mm")) +
+              ": no machine is larger than 100 m)");
     out.values[static_cast<int>(number)] = value;
     previous = static_cast<int>(number);
     previous_line = line;

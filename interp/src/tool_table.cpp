@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "source_text.hpp"
@@ -88,6 +89,7 @@ ToolTable ToolTable::parse(std::string_view text, const std::string& name, Lengt
   ToolTable table;
   table.units_ = units;
   const SourceFile src = source_from_text(text, name);
+  std::map<int, int> line_of_tool;  // where each tool number was given
   for (size_t li = 0; li < src.lines.size(); ++li) {
     const int line = static_cast<int>(li) + 1;
     std::string s = src.lines[li];
@@ -98,6 +100,7 @@ ToolTable ToolTable::parse(std::string_view text, const std::string& name, Lengt
     }
     ToolEntry e;
     bool has_t = false;
+    std::map<char, size_t> column_of_field;  // a field given twice on a line
     size_t i = 0;
     while (i < s.size()) {
       if (std::isspace(static_cast<unsigned char>(s[i]))) {
@@ -110,6 +113,12 @@ ToolTable ToolTable::parse(std::string_view text, const std::string& name, Lengt
       const char key = static_cast<char>(std::toupper(static_cast<unsigned char>(s[i])));
       const double v = parse_number(s, i, end, name, line);
       const double v_mm = v * to_mm;
+      if (const auto [at, first] = column_of_field.try_emplace(key, i); !first)
+        throw GcodeError({name, line, static_cast<int>(i) + 1},
+                         std::string("field '") + key +
+                             "' is given twice on this line (also at column " +
+                             std::to_string(at->second + 1) +
+                             "): which one is meant? (LinuxCNC takes the last)");
       switch (key) {
         case 'T':
           e.number = whole_number(v, "tool number T", name, line, i);
@@ -165,6 +174,12 @@ ToolTable ToolTable::parse(std::string_view text, const std::string& name, Lengt
       if (s.find_first_not_of(" \t") == std::string::npos) continue;  // blank or comment only
       throw GcodeError({name, line, 1}, "tool table line without T<number>");
     }
+    if (const auto [at, first] = line_of_tool.try_emplace(e.number, line); !first)
+      throw GcodeError({name, line, 1}, "tool T" + std::to_string(e.number) +
+                                            " is already in the table at line " +
+                                            std::to_string(at->second) +
+                                            ": two entries for one tool (LinuxCNC keeps the "
+                                            "last); remove one");
     const size_t first = comment.find_first_not_of(' ');
     e.comment = first == std::string::npos ? "" : comment.substr(first);
     table.add(std::move(e));

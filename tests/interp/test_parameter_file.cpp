@@ -68,6 +68,37 @@ TEST(ParameterFile, RefusesWhatLinuxCncRefusesAndWhatItWouldSilentlyDrop) {
   EXPECT_THROW(ParameterFile::load(truecut::test::scratch_dir() / "missing.var"), GcodeError);
 }
 
+// Offsets and stored positions beyond any machine (a unit or typing
+// mistake): refused at their line, instead of a misleading program error
+// later (a 1e300 mm G54 X made the program's first arc "zero-radius").
+// A byte-order mark would make LinuxCNC skip the first line and its value.
+TEST(ParameterFile, OffsetsBeyondAnyMachineAndAByteOrderMarkAreRefused) {
+  EXPECT_EQ(error_of("5221 1e300\n"),
+            "m.var:1:6: parameter 5221: 1e300 mm is outside the offsets a machine can have "
+            "(±1e5 mm: no machine is larger than 100 m)");
+  EXPECT_NE(error_of("5211 -200000\n").find("parameter 5211: -200000 mm is outside"),
+            std::string::npos);  // G92 X
+  EXPECT_NE(error_of("5181 1e6\n").find("parameter 5181: 1e6 mm is outside"),
+            std::string::npos);      // G30 X
+  EXPECT_EQ(error_of("5390 2e6\n"),  // G59.3 R
+            "m.var:1:6: parameter 5390: 2e6 deg is outside the offsets a machine can have "
+            "(±1e6 deg: no machine is larger than 100 m)");
+  EXPECT_NE(error_of("5224 -1e7\n"), "no error");  // G54 A
+  // The largest plausible ones, and parameters that are no offsets, pass.
+  EXPECT_EQ(error_of("5221 -100000\n5224 3600\n5230 -45\n"), "no error");
+  EXPECT_EQ(error_of("100 1e300\n"), "no error");
+  try {
+    ParameterFile::parse("5221 4000\n", "i.var", LengthUnits::kInch);
+    ADD_FAILURE() << "4000 inch is over 100 m";
+  } catch (const GcodeError& e) {
+    EXPECT_NE(std::string(e.what()).find("4000 inch is outside"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(error_of("\xEF\xBB\xBF"
+                     "5221 10\n"),
+            "m.var:1:1: the file starts with a UTF-8 byte-order mark: LinuxCNC would skip its "
+            "first line and the value on it; save the file without it");
+}
+
 // The first SET_G5X_OFFSET, SET_G92_OFFSET and SET_XY_ROTATION of a program
 // started from `f`, and the machine position of its first move.
 struct Start {

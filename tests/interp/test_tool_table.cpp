@@ -80,6 +80,28 @@ TEST(ToolTable, ImplausibleEntriesAreRefusedAtTheirColumn) {
   EXPECT_EQ(t.find(99999)->diameter_mm, 1000.0);
 }
 
+// A tool given twice, or a field given twice on a line, was taken silently
+// (the last entry, the last value): refused at the line and column.
+TEST(ToolTable, AToolOrAFieldGivenTwiceIsRefused) {
+  try {
+    ToolTable::parse("T1 P1 D2 Z35\nT2 P2 D6\nT1 P3 D4\n", "x.tbl");
+    ADD_FAILURE();
+  } catch (const GcodeError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "x.tbl:3:1: tool T1 is already in the table at line 1: two entries for one tool "
+              "(LinuxCNC keeps the last); remove one");
+  }
+  try {
+    ToolTable::parse("T1 P1 D2.000 Z35 D3\n", "x.tbl");
+    ADD_FAILURE();
+  } catch (const GcodeError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "x.tbl:1:18: field 'D' is given twice on this line (also at column 7): which one "
+              "is meant? (LinuxCNC takes the last)");
+  }
+  EXPECT_NO_THROW(ToolTable::parse("T1 P1 D2\nT2 P1 D2 ; the same pocket is allowed\n", "x.tbl"));
+}
+
 // A table in inches (an inch machine's, or rs274's without an INI) is
 // stored in mm; its limits are checked in its own units. It was read as mm.
 TEST(ToolTable, InchTableIsReadInInchesAndStoredInMm) {
