@@ -115,12 +115,17 @@ int cmd_demo(const std::vector<std::string>& argv) {
   o.adapted_route = !a.flag("no-adapted");
   o.paper_routes = a.flag("paper");
   o.ideal_reference = !a.flag("no-ideal");
-  o.mesh_edge_mm = a.number("mesh-edge", 0.0, 0.0, 10.0);
-  o.stepover_mm = a.number("stepover", 0.0, 0.0, 10.0);
-  o.cmm_spacing_mm = a.number("cmm-spacing", 0.0, 0.0, 20.0);
+  // 0 stands for "each part's default" inside; a spacing given must be > 0
+  // (--mesh-edge 0 silently meant the default).
+  const auto spacing = [&](const char* name, double max_mm) {
+    return a.value(name) ? a.number(name, 0.0, 1e-3, max_mm) : 0.0;
+  };
+  o.mesh_edge_mm = spacing("mesh-edge", 10.0);
+  o.stepover_mm = spacing("stepover", 10.0);
+  o.cmm_spacing_mm = spacing("cmm-spacing", 20.0);
   o.field_resolution_mm = a.number("resolution", 1.0, 0.1, 20.0);
-  o.dexel_spacing_mm = a.number("dexel-spacing", 0.0, 0.0, 5.0);
-  o.point_spacing_mm = a.number("point-spacing", 0.0, 0.0, 10.0);
+  o.dexel_spacing_mm = spacing("dexel-spacing", 5.0);
+  o.point_spacing_mm = spacing("point-spacing", 10.0);
   o.edge_exclusion_mm = a.number("edge-exclusion", o.edge_exclusion_mm, 0.0, 10.0);
   o.seed = static_cast<std::uint64_t>(a.integer("seed", 1, 0, 1'000'000'000));
   const double tolerance_um = a.number("tolerance-um", 20.0, 0.1, 10000.0);

@@ -185,6 +185,15 @@ std::optional<std::pair<int, size_t>> ProgramRunner::find_sub(const std::string&
   for (const auto& d : dirs) {
     std::error_code ec;
     for (const auto& candidate : {d / (name + ".ngc"), d / (name + ".NGC")}) {
+      // A folder, a device or a pipe of that name is no subroutine file:
+      // say so instead of "unknown subroutine" (and never read a pipe).
+      if (std::filesystem::exists(candidate, ec) &&
+          !std::filesystem::is_regular_file(candidate, ec))
+        fail(at, 1,
+             candidate.string() +
+                 " is not a regular file (a folder, device or pipe), so "
+                 "it cannot hold " +
+                 label_text(label) + " sub");
       if (!std::filesystem::is_regular_file(candidate, ec)) continue;
       add_file(load_source(candidate));
       if (auto it = subs_.find(label); it != subs_.end()) return it->second;

@@ -53,3 +53,18 @@ TEST(CliOptions, RangesAreWrittenAsTheNumbersTheyAre) {
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("--spline-tolerance 1e-7 is outside 1e-06..10"), std::string::npos) << r.err;
 }
+
+// 0 stands for each part's default inside `truecut demo`: given on the
+// command line it silently meant the default instead of being refused.
+TEST(CliOptions, DemoSpacingsOfZeroAreRefused) {
+  const auto out = scratch_dir() / "demo";
+  for (const char* option :
+       {"--mesh-edge", "--stepover", "--cmm-spacing", "--dexel-spacing", "--point-spacing"}) {
+    const ProcessResult r =
+        run_process({cli_path().string(), "demo", option, "0", "--out", out.string()});
+    EXPECT_EQ(r.exit_code, 2) << option << ": " << r.err;
+    EXPECT_NE(r.err.find(std::string(option) + " 0 is outside 0.001.."), std::string::npos)
+        << r.err;
+    EXPECT_FALSE(std::filesystem::exists(out)) << option;
+  }
+}

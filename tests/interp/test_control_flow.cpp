@@ -69,6 +69,23 @@ TEST(Subroutines, NumberedFromAFileBesideTheProgram) {
   ASSERT_EQ(p.files.size(), 2u);
 }
 
+// A folder or a pipe where the subroutine file would be was "unknown
+// subroutine" (a pipe could have blocked the reader): named for what it is.
+TEST(Subroutines, AFileThatIsNotARegularFileIsNamedForWhatItIs) {
+  const auto dir = truecut::test::scratch_dir();
+  std::filesystem::create_directory(dir / "sub.ngc");
+  std::ofstream(dir / "main.ngc") << "o<sub> call\nM2\n";
+  try {
+    Interpreter(InterpreterOptions{}).run_file(dir / "main.ngc");
+    ADD_FAILURE();
+  } catch (const GcodeError& e) {
+    EXPECT_NE(std::string(e.what()).find("sub.ngc is not a regular file (a folder, device or "
+                                         "pipe), so it cannot hold o<sub> sub"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(ControlFlow, IfElseifElse) {
   const std::string sub =
       "o<c> sub\n o10 if [#1 GT 5]\n  G0 X3\n o10 elseif [#1 GT 2]\n  G0 X2\n"

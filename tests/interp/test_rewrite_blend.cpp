@@ -149,6 +149,18 @@ TEST(RewriteMatrix, BadInputNamesFileAndLine) {
   EXPECT_EQ(matrix_error("# only comments\n"),
             "bad.csv: no header line x,y,z,dx,dy,dz (empty compensation matrix)");
   EXPECT_EQ(matrix_error("x,y,z,dx,dy,dz\n"), "bad.csv: no compensation points");
+  // Beyond any machine or any compensation: a unit or writing mistake.
+  EXPECT_EQ(matrix_error("x,y,z,dx,dy,dz\n1e300,0,0,0,0,0.01\n"),
+            "bad.csv:2: x 1e300 mm is outside ±1e5 mm (no machine is larger than 100 m); check "
+            "the unit");
+  EXPECT_EQ(matrix_error("x,y,z,dx,dy,dz\n0,0,0,0,0,-2000\n"),
+            "bad.csv:2: dz -2000 mm is outside ±1e3 mm (no compensation of a finished part is a "
+            "metre); check the unit");
+  // One position, two vectors: which one the blend met first would decide.
+  EXPECT_EQ(matrix_error("x,y,z,dx,dy,dz\n1,2,3,0,0,0.01\n4,5,6,0,0,0\n1,2,3,0,0,0.02\n"),
+            "bad.csv:4: the point at x y z of line 2 is given again with another vector, surface "
+            "or validity: which one holds?");
+  EXPECT_EQ(matrix_error("x,y,z,dx,dy,dz\n1,2,3,0,0,0.01\n1,2,3,0,0,0.01\n"), "no error");
 }
 
 }  // namespace

@@ -1,7 +1,10 @@
 // Reader of the compensation matrix CSV (docs/formats.md).
+#include <algorithm>
+#include <array>
 #include <charconv>
 #include <cmath>
 #include <fstream>
+#include <numeric>
 #include <sstream>
 
 #include "truecut/interp/rewrite_matrix.hpp"
@@ -35,6 +38,36 @@ std::vector<std::string_view> split(std::string_view line) {
   return out;
 }
 
+// No machine is larger than 100 m, and no compensation of a finished part
+// is a metre: beyond these a value is a unit or writing mistake.
+constexpr double kMaxPositionMm = 1e5;
+constexpr double kMaxVectorMm = 1e3;
+
+// One point at one position: a second one with another vector (or surface)
+// would make the blend depend on which of the two the search meets first.
+void refuse_repeated_points(const CompensationMatrixData& m, const std::vector<int>& lines,
+                            const std::string& name) {
+  std::vector<std::size_t> order(m.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  const auto key = [&](std::size_t i) {
+    const auto& p = m.positions_mm[i];
+    return std::array<double, 3>{p.x(), p.y(), p.z()};
+  };
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return key(a) != key(b) ? key(a) < key(b) : a < b;
+  });
+  for (std::size_t k = 1; k < order.size(); ++k) {
+    const std::size_t a = order[k - 1], b = order[k];
+    if (key(a) != key(b)) continue;
+    if (m.vectors_mm[a] == m.vectors_mm[b] && m.surface_ids[a] == m.surface_ids[b] &&
+        m.valid[a] == m.valid[b])
+      continue;
+    fail(name, lines[b],
+         "the point at x y z of line " + std::to_string(lines[a]) +
+             " is given again with another vector, surface or validity: which one holds?");
+  }
+}
+
 }  // namespace
 
 CompensationMatrixData parse_compensation_matrix(std::string_view text, const std::string& name,
@@ -55,6 +88,7 @@ CompensationMatrixData parse_compensation_matrix(std::string_view text, const st
   size_t fields = 0;
   bool have_header = false;
   CompensationMatrixData m;
+  std::vector<int> line_of_point;
 
   int line_no = 0;
   size_t pos = 0;
@@ -102,6 +136,13 @@ CompensationMatrixData parse_compensation_matrix(std::string_view text, const st
              std::string(kNames[c]) + " '" + std::string(cell) + "' is not a number");
       if (!std::isfinite(v[c]))
         fail(name, line_no, std::string(kNames[c]) + " is not finite (" + std::string(cell) + ")");
+      const double limit = c <= kZ ? kMaxPositionMm : c <= kDz ? kMaxVectorMm : INFINITY;
+      if (std::abs(v[c]) > limit)
+        fail(name, line_no,
+             std::string(kNames[c]) + " " + std::string(cell) + " mm is outside ±" +
+                 (c <= kZ ? "1e5 mm (no machine is larger than 100 m)"
+                          : "1e3 mm (no compensation of a finished part is a metre)") +
+                 "; check the unit");
     }
     if (v[kValid] != 0 && v[kValid] != 1) fail(name, line_no, "valid must be 0 or 1");
     if (v[kSurface] != std::floor(v[kSurface]) || std::fabs(v[kSurface]) > 2e9)
@@ -110,9 +151,11 @@ CompensationMatrixData parse_compensation_matrix(std::string_view text, const st
     m.vectors_mm.emplace_back(v[kDx], v[kDy], v[kDz]);
     m.valid.push_back(static_cast<std::uint8_t>(v[kValid]));
     m.surface_ids.push_back(static_cast<std::int32_t>(v[kSurface]));
+    line_of_point.push_back(line_no);
   }
   if (!have_header) fail(name, 0, "no header line x,y,z,dx,dy,dz (empty compensation matrix)");
   if (m.size() == 0) fail(name, 0, "no compensation points");
+  refuse_repeated_points(m, line_of_point, name);
   return m;
 }
 
