@@ -7,6 +7,8 @@
 #include <sstream>
 #include <thread>
 
+#include <unistd.h>
+
 #include <nlohmann/json.hpp>
 
 #include "args.hpp"
@@ -65,6 +67,7 @@ const char* kHelp =
     "  --jobs N           steps run at once (default: the number of CPUs): other\n"
     "                     parts' and the same part's independent stages; the\n"
     "                     results do not depend on it\n"
+    "  --quiet            no progress on stderr (shown only on a terminal)\n"
     "  --help             this text\n";
 
 std::string read_text(const fs::path& path) {
@@ -82,25 +85,13 @@ nlohmann::ordered_json stats_json(const sim::measure::SurfaceDeviationStats& s) 
 }  // namespace
 
 int cmd_demo(const std::vector<std::string>& argv) {
-  ParsedArgs a(argv, {{"part", true},
-                      {"out", true},
-                      {"sigma-um", true},
-                      {"tolerance-um", true},
-                      {"iterations", true},
-                      {"no-rewrite", false},
-                      {"no-adapted", false},
-                      {"paper", false},
-                      {"no-ideal", false},
-                      {"mesh-edge", true},
-                      {"stepover", true},
-                      {"cmm-spacing", true},
-                      {"resolution", true},
-                      {"point-spacing", true},
-                      {"edge-exclusion", true},
-                      {"dexel-spacing", true},
-                      {"seed", true},
-                      {"jobs", true},
-                      {"help", false}});
+  ParsedArgs a(argv, {{"part", true},          {"out", true},           {"sigma-um", true},
+                      {"tolerance-um", true},  {"iterations", true},    {"no-rewrite", false},
+                      {"no-adapted", false},   {"paper", false},        {"no-ideal", false},
+                      {"mesh-edge", true},     {"stepover", true},      {"cmm-spacing", true},
+                      {"resolution", true},    {"point-spacing", true}, {"edge-exclusion", true},
+                      {"dexel-spacing", true}, {"seed", true},          {"jobs", true},
+                      {"quiet", false},        {"help", false}});
   if (a.flag("help")) {
     std::fputs(kHelp, stdout);
     return kExitOk;
@@ -125,7 +116,8 @@ int cmd_demo(const std::vector<std::string>& argv) {
   o.cmm_spacing_mm = spacing("cmm-spacing", 20.0);
   o.field_resolution_mm = a.number("resolution", 1.0, 0.1, 20.0);
   o.dexel_spacing_mm = spacing("dexel-spacing", 5.0);
-  o.point_spacing_mm = spacing("point-spacing", 10.0);
+  // 0 is a spacing of its own here: the nominal's vertices.
+  o.point_spacing_mm = a.value("point-spacing") ? a.number("point-spacing", 0.0, 0.0, 10.0) : -1.0;
   o.edge_exclusion_mm = a.number("edge-exclusion", o.edge_exclusion_mm, 0.0, 10.0);
   o.seed = static_cast<std::uint64_t>(a.integer("seed", 1, 0, 1'000'000'000));
   const double tolerance_um = a.number("tolerance-um", 20.0, 0.1, 10000.0);
@@ -148,6 +140,8 @@ int cmd_demo(const std::vector<std::string>& argv) {
   fs::create_directories(o.out_dir);
   std::vector<std::unique_ptr<DemoPart>> plans;
   StepGraph graph;
+  const bool progress = !a.flag("quiet") && isatty(STDERR_FILENO) != 0;
+  graph.show_progress(progress);
   for (const auto& part : parts) {
     plans.push_back(std::make_unique<DemoPart>(part, o));
     plans.back()->plan_generation(graph);
@@ -222,7 +216,7 @@ int cmd_demo(const std::vector<std::string>& argv) {
   analysis::report::ReportOptions ro;
   ro.tolerance_um = tolerance_um;
   ro.scanner_sigma_um = o.sigma_um;
-  std::fprintf(stderr, "demo: writing the report\n");
+  if (progress) std::fprintf(stderr, "demo: writing the report\n");
   rt::write_file_atomically(o.out_dir / "report.html",
                             analysis::report::closed_loop_html(report_parts, ro));
   rt::write_file_atomically(o.out_dir / "results.json", json.dump(2) + "\n");

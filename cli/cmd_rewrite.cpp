@@ -327,7 +327,7 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
       a.number("max-correction", offline::kFieldMaxCorrectionMm, 0.0, 100.0);
   const bool too_large = s.max_compensation_mm > max_correction_mm;
   const bool none_reached = s.points_compensated == 0;
-  const bool forced = too_large || none_reached;
+  const bool forced = too_large || (none_reached && s.points_covered == 0);
   if (too_large && !a.flag("force")) {
     std::fprintf(stderr,
                  "truecut rewrite: the compensation reaches %.4f mm, above --max-correction "
@@ -336,10 +336,11 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
                  s.max_compensation_mm, max_correction_mm);
     return kExitFailure;
   }
-  // Nothing of the operation reached by the compensation: a matrix or field
-  // of another part, frame or unit (a rewrite that changes nothing is no
-  // compensation, whatever the summary's zeros say).
-  if (none_reached && !a.flag("force")) {
+  // Nothing of the operation inside what the compensation covers: a matrix
+  // or field of another part, frame or unit. Inside a field's grid with no
+  // valid node along the moves (surfaces the field did not compensate), the
+  // operation simply gets nothing, and is written unchanged with a note.
+  if (none_reached && s.points_covered == 0 && !a.flag("force")) {
     std::fprintf(stderr,
                  "truecut rewrite: no point of operation '%s' (%d moves) got a compensation: "
                  "the %s %s does not reach its moves (is it in the program's workpiece frame "
@@ -403,9 +404,9 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
        ", \"expanded_holes\": " + std::to_string(s.expanded_holes) +
        ", \"points_written\": " + std::to_string(s.points_written) +
        ", \"points_compensated\": " + std::to_string(s.points_compensated) +
-       ", \"blend_points\": [" + std::to_string(s.blend_points[0]) + ", " +
-       std::to_string(s.blend_points[1]) + ", " + std::to_string(s.blend_points[2]) + ", " +
-       std::to_string(s.blend_points[3]) +
+       ", \"points_covered\": " + std::to_string(s.points_covered) + ", \"blend_points\": [" +
+       std::to_string(s.blend_points[0]) + ", " + std::to_string(s.blend_points[1]) + ", " +
+       std::to_string(s.blend_points[2]) + ", " + std::to_string(s.blend_points[3]) +
        "], \"max_compensation_mm\": " + rt::format_printf("%.17g", s.max_compensation_mm) +
        ", \"mean_compensation_mm\": " + rt::format_printf("%.17g", s.mean_compensation_mm) +
        ", \"points_rotated\": " + std::to_string(s.points_rotated) +
@@ -422,8 +423,11 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
         s.max_compensation_mm, max_correction_mm);
   if (none_reached)
     std::fprintf(stderr,
-                 "truecut rewrite: WARNING: no point of the operation got a compensation, "
-                 "written unchanged (--force)\n");
+                 s.points_covered == 0
+                     ? "truecut rewrite: WARNING: no point of the operation got a compensation, "
+                       "written unchanged (--force)\n"
+                     : "truecut rewrite: note: the field has no valid node along the operation's "
+                       "moves (surfaces it did not compensate?): written unchanged\n");
   files->write(0, result.text);
   files->write(1, j);
   files->commit();

@@ -197,9 +197,9 @@ void DemoPart::plan_stages(StepGraph& graph) {
                                   rt::format_printf("%g", o.field_resolution_mm),
                                   "--out",
                                   field_dir};
-    const double point_spacing = o.point_spacing_mm > 0 ? o.point_spacing_mm
-                                 : part == "implant"    ? 0.1
-                                                        : 0.0;
+    const double point_spacing = o.point_spacing_mm >= 0 ? o.point_spacing_mm
+                                 : part == "implant"     ? 0.1
+                                                         : 0.0;
     if (point_spacing > 0)
       args.insert(args.end(), {"--spacing", rt::format_printf("%g", point_spacing)});
     // Register on the surfaces the compensation does not touch, as a shop

@@ -25,7 +25,7 @@ struct DemoOptions {
   double field_resolution_mm = 1.0;
   // Compensation points for the field: even sampling at this spacing
   // (0: 0.1 for the implant, the nominal vertices for the larger parts).
-  double point_spacing_mm = 0;
+  double point_spacing_mm = -1;  // < 0: each part's default (0.1 implant, else vertices)
   // Error vectors are not taken this close to a sharp nominal edge: about one
   // scan point spacing (25 pt/mm²), where the scanned mesh rounds the edge.
   double edge_exclusion_mm = 0.2;

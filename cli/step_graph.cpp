@@ -68,7 +68,8 @@ void StepGraph::run(std::size_t workers) {
       state[i] = State::running;
       ++running;
       const std::size_t number = ++started_;
-      std::fprintf(stderr, "demo [%zu/%zu] %s\n", number, n, steps_[i].label.c_str());
+      if (show_progress_)
+        std::fprintf(stderr, "demo [%zu/%zu] %s\n", number, n, steps_[i].label.c_str());
       lock.unlock();
       const auto step_start = std::chrono::steady_clock::now();
       std::exception_ptr failure;
@@ -88,10 +89,11 @@ void StepGraph::run(std::size_t workers) {
       } else {
         state[i] = State::succeeded;
         succeeded_[i] = 1;
-        std::fprintf(stderr, "demo [%zu/%zu] %s: done in %.1f s (%zu of %zu done, %.0f s)\n",
-                     number, n, steps_[i].label.c_str(),
-                     std::chrono::duration<double>(now - step_start).count(), ended_, n,
-                     std::chrono::duration<double>(now - start_).count());
+        if (show_progress_)
+          std::fprintf(stderr, "demo [%zu/%zu] %s: done in %.1f s (%zu of %zu done, %.0f s)\n",
+                       number, n, steps_[i].label.c_str(),
+                       std::chrono::duration<double>(now - step_start).count(), ended_, n,
+                       std::chrono::duration<double>(now - start_).count());
       }
       changed.notify_all();
     }

@@ -24,8 +24,12 @@ class StepGraph {
   std::size_t add(GraphStep step);
   std::size_t size() const { return steps_.size(); }
 
+  // Whether run() prints its progress lines (default yes; the demo shows
+  // them on a terminal only, and not with --quiet).
+  void show_progress(bool shown) { show_progress_ = shown; }
+
   // Runs every step not run yet, at most `workers` at a time, and prints a
-  // line on stderr when each starts and ends. After a failure no step
+  // line on stderr when each starts and ends (show_progress). After a failure no step
   // starts; the running ones end, then the failure of the earliest-added
   // failed step is rethrown. Steps that need a failed one are not run.
   void run(std::size_t workers);
@@ -35,6 +39,7 @@ class StepGraph {
   std::vector<char> succeeded_;
   // Over all runs, for the progress lines "[started/steps]".
   std::size_t started_ = 0, ended_ = 0;
+  bool show_progress_ = true;
   std::chrono::steady_clock::time_point start_;
 };
 

@@ -54,12 +54,12 @@ TEST(CliOptions, RangesAreWrittenAsTheNumbersTheyAre) {
   EXPECT_NE(r.err.find("--spline-tolerance 1e-7 is outside 1e-06..10"), std::string::npos) << r.err;
 }
 
-// 0 stands for each part's default inside `truecut demo`: given on the
-// command line it silently meant the default instead of being refused.
+// 0 stood for each part's default inside `truecut demo`: given on the
+// command line it silently meant the default instead of being refused
+// (--point-spacing 0 has a meaning of its own: the nominal's vertices).
 TEST(CliOptions, DemoSpacingsOfZeroAreRefused) {
   const auto out = scratch_dir() / "demo";
-  for (const char* option :
-       {"--mesh-edge", "--stepover", "--cmm-spacing", "--dexel-spacing", "--point-spacing"}) {
+  for (const char* option : {"--mesh-edge", "--stepover", "--cmm-spacing", "--dexel-spacing"}) {
     const ProcessResult r =
         run_process({cli_path().string(), "demo", option, "0", "--out", out.string()});
     EXPECT_EQ(r.exit_code, 2) << option << ": " << r.err;

@@ -44,10 +44,11 @@ std::vector<std::string> face_rewrite(const std::vector<std::string>& extra) {
 
 TEST(CliRewriteMatrix, OfflineWriterAndRewriteReaderAgreeBitForBit) {
   offline::CompensationMatrix m;
-  // Awkward doubles: thirds, tiny and huge magnitudes, negative zero, values
-  // that need 17 significant digits.
+  // Awkward doubles: thirds, tiny magnitudes and the largest a position may
+  // have (positions up to 200 times these, within the reader's ±1e5 mm),
+  // negative zero, values that need 17 significant digits.
   const double values[] = {1.0 / 3.0,           -2.0 / 7.0, 0.1,  1e-300,
-                           -123456.78901234567, 5e-324,     -0.0, 1e300,
+                           -123.45678901234567, 5e-324,     -0.0, 499.99999999999994,
                            0.30000000000000004, 17.0};
   for (int i = 0; i < 200; ++i) {
     const double a = values[i % 10], b = values[(i / 10) % 10], c = values[(i * 7) % 10];

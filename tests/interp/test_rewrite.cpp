@@ -338,10 +338,27 @@ TEST(Rewrite, FieldAndMatrixAgreeOnAConstantOffset) {
   for (size_t k = 0; k < a.size(); ++k)
     for (int ax = 0; ax < 6; ++ax)
       EXPECT_NEAR(a[k][ax], b[k][ax], 1.0000001e-6);
-  // Outside the grid the field gives nothing: the program stays as it was.
+  EXPECT_GT(rewrite_program(kThreeOps, "p.ngc", field, o).summary.points_covered, 0);
+  // Inside the grid but without a valid node (surfaces the field did not
+  // compensate) the operation is covered and gets nothing: what `truecut
+  // rewrite` writes unchanged with a note, where a field that does not
+  // cover it at all is refused (CliRewrite.ACompensationThatReachesNoPoint...).
+  std::vector<rt::FieldLayer> invalid = layers;
+  for (auto& layer : invalid)
+    for (auto& node : layer.nodes)
+      node.weight = 0.0;
+  const RewriteResult none =
+      rewrite_program(kThreeOps, "p.ngc", rt::CorrectionField(g, invalid), o);
+  EXPECT_EQ(none.text, kThreeOps);
+  EXPECT_EQ(none.summary.points_compensated, 0);
+  EXPECT_GT(none.summary.points_covered, 0);
+  // Outside the grid the field gives nothing and covers nothing: the program
+  // stays as it was.
   g.origin_mm = V(100, 100, 100);
   const rt::CorrectionField away(g, layers);
-  EXPECT_EQ(rewrite_program(kThreeOps, "p.ngc", away, o).text, kThreeOps);
+  const RewriteResult outside = rewrite_program(kThreeOps, "p.ngc", away, o);
+  EXPECT_EQ(outside.text, kThreeOps);
+  EXPECT_EQ(outside.summary.points_covered, 0);
 }
 
 // Issue 19: a field that turns the tool. In joint space (no TRAORI, A = C = 0

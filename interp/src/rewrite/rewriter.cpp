@@ -51,6 +51,9 @@ struct Correction {
   Eigen::Vector3d shift_mm = Eigen::Vector3d::Zero();
   Eigen::Vector3d rotation_rad = Eigen::Vector3d::Zero();  // field mode: the tool's lean
   bool compensated = false;
+  // Inside what the compensation data covers (field: its grid; matrix: a
+  // point within reach), whether or not it holds a correction there.
+  bool covered = false;
   std::array<int, 4> blends{};  // matrix mode: blends by points used; [0] none at all
 };
 
@@ -517,6 +520,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     pl.moves.push_back(with_words_before_comment(words.residual, axis_words));
     plan[line] = std::move(pl);
     expected[line] = std::move(rl);
+    if (in_op && corr.covered) ++s.points_covered;
     if (in_op && corr.compensated) {
       ++s.points_compensated;
       const double mag = corr.shift_mm.norm();
@@ -585,6 +589,12 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       }
     }
     return Densified{n, std::move(points), std::move(corrections), all_zero, rotated};
+  };
+  // Counted for moves kept as they are too: what tells a field without a
+  // valid node there from one that does not reach the operation at all.
+  auto count_covered = [&](const std::vector<Correction>& corrections) {
+    for (const Correction& corr : corrections)
+      s.points_covered += corr.covered ? 1 : 0;
   };
   auto count_corrections = [&](const std::vector<Correction>& corrections) {
     for (const Correction& corr : corrections) {
@@ -794,6 +804,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       turned = false;
     } else if (in_op && feed) {
       Densified d = densify(move, ctx, file_of(program, ctx, name));
+      count_covered(d.corrections);
       count_corrections(d.corrections);
       const bool with_ac = program_uses_ac || d.rotated || turned;
       // A G33 move stays one line: each G33 waits for the spindle's index
@@ -894,6 +905,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
                 ends[i][ax] = q[ax];
           }
         }
+        if (corr.covered) ++s.points_covered;
         if (corr.compensated) {
           ++s.points_compensated;
           const double mag = corr.shift_mm.norm();
@@ -1149,6 +1161,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     const std::vector<Vec5>& points = d.points;
     const std::vector<Correction>& corrections = d.corrections;
     const bool all_zero = d.all_zero, rotated = d.rotated;
+    count_covered(corrections);
     const std::string& source = raw[ctx.line - 1].content;
     if (o.keep_unchanged_moves && all_zero && !displaced && !ctx.cutter_comp && !follows_comp &&
         !spline_lines.count(ctx.line)) {
@@ -1378,7 +1391,7 @@ RewriteResult rewrite_program(std::string_view text, const std::string& name,
                                  : search.reach_mm() / 2;
       const rewrite::SweptCorrection sc = rewrite::swept_correction(search, tp, length, band_mm);
       c.shift_mm = sc.correction_mm;
-      c.compensated = sc.blends > 0;
+      c.compensated = c.covered = sc.blends > 0;
       c.blends = sc.blends_by_points;
       if (sc.blends == 0) c.blends[0] = 1;
       return c;
@@ -1392,7 +1405,7 @@ RewriteResult rewrite_program(std::string_view text, const std::string& name,
     const BlendResult b =
         blend_compensation(std::span(p, nn.count), std::span(v, nn.count), nn.query_mm);
     c.shift_mm = b.correction_mm;
-    c.compensated = b.points_used > 0;
+    c.compensated = c.covered = b.points_used > 0;
     c.blends[b.points_used] = 1;
     return c;
   };
@@ -1411,6 +1424,7 @@ RewriteResult rewrite_program(std::string_view text, const std::string& name,
     if (s.status == rt::FieldStatus::kNonFinite)
       throw RewriteError("the correction field gave a non-finite correction");
     rewrite::Correction c;
+    c.covered = s.status == rt::FieldStatus::kOk;
     if (s.status == rt::FieldStatus::kOk && s.weight > 0) {
       c.shift_mm = s.correction_mm;
       c.rotation_rad = s.rotation_rad;

@@ -112,6 +112,9 @@ struct RewriteSummary {
   int expanded_holes = 0;       // canned-cycle holes of the operation among them
   long points_written = 0;      // G1 points written
   long points_compensated = 0;  // points with a correction from >= 1 point / field weight > 0
+  // Points the compensation data covers, a correction or none: inside the
+  // field's grid (its weight may be 0 there), or a matrix point within reach.
+  long points_covered = 0;
   // Matrix mode: [1..3] blends (eqs. 2-5) by the number of points they used,
   // one per densified point with kTip, several per point with kEveryPass;
   // [0] densified points that no compensation point reached.
