@@ -10,10 +10,13 @@
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include "args.hpp"
 #include "commands.hpp"
 #include "parameter_file_args.hpp"
 #include "program_budget_args.hpp"
+#include "stage_progress.hpp"
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/rewrite.hpp"
 #include "truecut/interp/sha256.hpp"
@@ -88,6 +91,7 @@ const char* kRewriteHelp =
     "                       --raw-matrix, --placement tip, --step 0.5, no smoothing;\n"
     "                       options given explicitly still win\n"
     "  --out FILE           the rewritten program\n"
+    "  --quiet              no progress on stderr (shown only on a terminal, after 1 s)\n"
     "  --help               this text\n"
     "\n"
     "exit codes: 0 ok, 1 refused (--max-correction) or runtime failure, 2 usage or\n"
@@ -189,7 +193,8 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
                       {"force", false},   {"cutting-length", true}, {"tools", true},
                       {"machine", true},  {"decimals", true},       {"rewrite-all", false},
                       {"out", true},      {"paper", true},          {"help", false},
-                      {"var-file", true}, {"var-units", true},      {"max-blocks", true}});
+                      {"var-file", true}, {"var-units", true},      {"max-blocks", true},
+                      {"quiet", false}});
   if (a.flag("help")) {
     std::fputs((std::string(kRewriteHelp) + kVarFileHelp + kMaxBlocksHelp).c_str(), stdout);
     return kExitOk;
@@ -273,6 +278,10 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
 
   interp::RewriteResult result;
   try {
+    // On a terminal, once it has taken a second; gone (its line ended)
+    // before any message of the handlers below.
+    StageProgress progress("truecut rewrite", !a.flag("quiet") && isatty(STDERR_FILENO) != 0);
+    progress.stage("reading the inputs");
     add_input("tools", *tools_path, read_bytes(*tools_path, "tool table"));
     o.interpreter.tools = interp::ToolTable::load(*tools_path);
     if (auto var = a.value("var-file"))
@@ -291,6 +300,7 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
       const auto matrix = interp::parse_compensation_matrix(
           bytes, *matrix_path,
           raw_matrix ? interp::MatrixVectors::kRaw : interp::MatrixVectors::kSmoothed);
+      progress.stage("rewriting operation " + o.operation);
       result = interp::rewrite_program(program, in_path, matrix, o);
     } else {
       const std::string bytes = read_bytes(*field_path, "correction field");
@@ -302,6 +312,7 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
         throw interp::RewriteError(*field_path +
                                    ": the field turns the tool (rotation channels rx ry rz); give "
                                    "--machine MACHINE.json, whose pivots A and C turn about");
+      progress.stage("rewriting operation " + o.operation);
       result = interp::rewrite_program(program, in_path, field.field, o);
     }
   } catch (const interp::GcodeError& e) {

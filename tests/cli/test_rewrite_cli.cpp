@@ -339,3 +339,16 @@ TEST(CliRewrite, TheAuditIsJsonForANameThatIsNotUtf8) {
   EXPECT_NE(audit.find("\"path\": \"caf\\u00e9.ngc\""), std::string::npos) << audit;
   EXPECT_EQ(audit.find('\xe9'), std::string::npos) << "a raw Latin-1 byte is not JSON";
 }
+
+// Progress is for a terminal: with stderr a pipe, a rewrite says nothing
+// there, and --quiet is accepted as by every other command.
+TEST(CliRewrite, NoProgressOffATerminalAndQuietIsAccepted) {
+  const Case c = setup();
+  for (const bool quiet : {false, true}) {
+    std::vector<std::string> args = kArgs;
+    if (quiet) args.push_back("--quiet");
+    const auto r = c.run(args);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(r.err, "");
+  }
+}
