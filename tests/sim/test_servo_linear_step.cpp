@@ -47,6 +47,18 @@ Excursion unlimited_excursion(const ServoParams& p, ServoState s, double v_ref, 
   return e;
 }
 
+// The sub-steps one by one from `s` with velocity reference `v_ref`: a
+// command giving exactly v_ref (from a state at position 0) on a drive
+// without feedforward or encoder steps; prev_cmd left as it was.
+ServoState substeps_from(const ServoParams& p, ServoState s, double v_ref, double period_s) {
+  ServoParams q = p;
+  q.ff1 = 0.0, q.encoder_resolution = 0.0, q.kv_per_s = 1.0;
+  const double prev_cmd = s.prev_cmd;
+  servo_step(q, s, s.pos + v_ref, period_s);
+  s.prev_cmd = prev_cmd;
+  return s;
+}
+
 double scale_of(const ServoState& s) {
   return 1.0 + std::abs(s.pos) + std::abs(s.vel) * 1e-3 + std::abs(s.vel_integral) * 1e3;
 }
@@ -189,14 +201,7 @@ TEST(ServoLinearStep, RefusedWhereTheAccelerationLimitIsReached) {
     ServoState above = s;
     if (servo_linear_step(p, above, v_ref, period, servo_substeps(period), cache)) {
       ++taken_above;
-      // The loop's own period from the same state and reference: a command
-      // giving exactly v_ref on a drive without feedforward or encoder steps.
-      ServoParams q = p;
-      q.ff1 = 0.0, q.encoder_resolution = 0.0, q.kv_per_s = 1.0;
-      ServoState ref = s;
-      servo_step(q, ref, ref.pos + v_ref, period);
-      ref.prev_cmd = above.prev_cmd;
-      expect_same_state(ref, above, "case " + std::to_string(c));
+      expect_same_state(substeps_from(p, s, v_ref, period), above, "case " + std::to_string(c));
     }
   }
   EXPECT_GT(taken_above, 150) << "the bound of the transient is not far above its peak";
@@ -228,14 +233,8 @@ TEST(ServoLinearStep, WithBacklashOnlyPeriodsThatKeepTheirDirection) {
     if (reverses) {
       EXPECT_FALSE(taken) << "case " << c << ": the motor reverses in the period";
     }
-    if (taken) {
-      ServoParams q = p;
-      q.ff1 = 0.0, q.kv_per_s = 1.0;
-      ServoState ref = s;
-      servo_step(q, ref, ref.pos + v_ref, period);
-      ref.prev_cmd = fast.prev_cmd;
-      expect_same_state(ref, fast, "case " + std::to_string(c));
-    }
+    if (taken)
+      expect_same_state(substeps_from(p, s, v_ref, period), fast, "case " + std::to_string(c));
   }
   EXPECT_GT(reversing, 20) << "the sweep must contain reversals to show anything";
 }
@@ -252,12 +251,8 @@ TEST(ServoLinearStep, NotTakenFromStandstillWithFrictionOrForAnUnstableSubStep) 
   EXPECT_FALSE(servo_linear_step(p, moving, 5.0, 1e-3, servo_substeps(1e-3), cache))
       << "moving against the reference: friction changes sign in the period";
   moving.vel = 4.9;
-  ServoState ref = moving;
+  const ServoState ref = substeps_from(p, moving, 5.0, 1e-3);
   EXPECT_TRUE(servo_linear_step(p, moving, 5.0, 1e-3, servo_substeps(1e-3), cache));
-  ServoParams q = p;
-  q.ff1 = 0.0, q.kv_per_s = 1.0;
-  servo_step(q, ref, ref.pos + 5.0, 1e-3);
-  ref.prev_cmd = moving.prev_cmd;
   expect_same_state(ref, moving, "moving with friction");
   p.coulomb_accel = 0.0;
   EXPECT_TRUE(servo_linear_step(p, s, 5.0, 1e-3, servo_substeps(1e-3), cache));
