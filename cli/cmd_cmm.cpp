@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -27,7 +28,9 @@ const char* kCmmHelp =
     "nominal surface). Points come from an even sampling of the nominal surfaces\n"
     "(default: those part.json marks compensate) or from POINTS.csv\n"
     "(x y z nx ny nz [surface]). Prints RMS, max |dev|, P95 |dev|, mean and std dev\n"
-    "per surface in um. Model: docs/measurement.md.\n"
+    "per surface in um (\"-\" for a surface no probe found). When no probe finds the\n"
+    "surface the measurement has failed: exit 1, nothing written. Model:\n"
+    "docs/measurement.md.\n"
     "\n"
     "options:\n"
     "  --out FILE          CSV of the probed points\n"
@@ -35,6 +38,8 @@ const char* kCmmHelp =
     "  --part FILE         part.json with the surface id of every nominal triangle\n"
     "  --surfaces LIST     surface ids to probe, comma-separated\n"
     "  --spacing MM        distance between probed points (default 1.0)\n"
+    "  --max-points N      budget: refuse (exit 2) a --spacing or --points file that\n"
+    "                      would probe more points (default 2000000, about 0.5 KB each)\n"
     "  --points FILE       probe these points instead\n"
     "  --sigma-um S        probing noise, 0..20 um (default 2)\n"
     "  --search-mm D       search distance along the normal each way (default 1.0)\n"
@@ -71,6 +76,7 @@ int cmd_cmm(const std::vector<std::string>& argv) {
     throw UsageError("give --nominal and --part, or --points");
   refuse_output_over_input("out", *out, {mesh_file, points_file, nominal_file, part_file});
   require_replaceable(*out);
+  require_writable_file("out", *out);
   const CmmSettings settings = cmm_settings(a, "");
   const sim::measure::CmmOptions& opt = settings.options;
 
@@ -81,6 +87,7 @@ int cmd_cmm(const std::vector<std::string>& argv) {
     if (machined.triangles.empty()) return input_error(mesh_file + ": no triangles");
     if (points_file) {
       points = sim::measure::read_cmm_points(*points_file);
+      check_probe_budget(points.size(), *points_file, settings);
     } else {
       points = cmm_points_on_part(*nominal_file, *part_file, settings);
     }
@@ -95,11 +102,26 @@ int cmd_cmm(const std::vector<std::string>& argv) {
   }
 
   std::fprintf(stderr, "cmm: probing %zu points on %s\n", points.size(), mesh_file.c_str());
-  const auto measurements = sim::measure::probe(machined, points, opt);
+  std::vector<sim::measure::CmmMeasurement> measurements;
+  try {
+    measurements = sim::measure::probe(machined, points, opt);
+  } catch (const std::invalid_argument& e) {
+    return input_error(e.what());
+  }
+  const auto overall = sim::measure::overall_statistics(measurements);
+  // A report in which every probe failed is a failed measurement, not a
+  // perfect part: no table of zeros, no file.
+  if (overall.valid == 0) {
+    std::fprintf(stderr,
+                 "truecut cmm: none of the %zu points found the surface of %s within %g mm along "
+                 "its normal: no measurement, nothing written (is the mesh in mm and in the "
+                 "workpiece frame? --search-mm widens the search)\n",
+                 overall.points, mesh_file.c_str(), opt.search_distance_mm);
+    return kExitFailure;
+  }
   sim::measure::write_cmm_csv(*out, measurements);
 
   print_cmm_table(measurements);
-  const auto overall = sim::measure::overall_statistics(measurements);
   if (overall.valid < overall.points)
     std::fprintf(
         stderr, "cmm: %zu of %zu points found no surface within %.3f mm (valid = 0 in %s)\n",

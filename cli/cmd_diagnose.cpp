@@ -1,21 +1,28 @@
 // truecut diagnose --recording REC.csv --out DIR: what the machine does that
 // the believed model does not (trace mode), and --surface / --cmm with the
 // program that machined the part (surface mode); docs/diagnosis.md.
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "measure_options.hpp"
 #include "run_support.hpp"
 #include "truecut/analysis/diagnosis/diagnosis.hpp"
 #include "truecut/analysis/diagnosis/surface.hpp"
 #include "truecut/analysis/recording.hpp"
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/tool_table.hpp"
+#include "truecut/offline/mesh_io_error.hpp"
 #include "truecut/offline/stl_io.hpp"
 #include "truecut/rt/atomic_write.hpp"
+#include "truecut/rt/input_file.hpp"
+#include "truecut/rt/number_format.hpp"
 #include "truecut/sim/machine_description.hpp"
 #include "truecut/sim/measure/part_surfaces.hpp"
 
@@ -80,7 +87,9 @@ const char* kDiagnoseHelp =
     "                          longest extent (default 0.3)\n"
     "  --candidates LIST       comma-separated effects to test (default: all)\n"
     "  --spacing MM            scan: nominal point spacing (default 0.5)\n"
-    "  --work DIR              where re-machinings are kept and reused (default DIR/runs)\n"
+    "  --work DIR              re-machinings are kept in DIR/runs/ and reused from there\n"
+    "                          (default: the --out DIR, so DIR/runs/); on bad input the\n"
+    "                          runs this diagnosis made are removed\n"
     "  --component-path DIR    also search DIR for components\n"
     "  --help                  this text\n";
 
@@ -107,13 +116,85 @@ void write_outputs(const std::string& out_dir, const std::string& json,
               (dir / "fitted_machine.json").c_str(), (dir / "diagnosis.html").c_str());
 }
 
+// An input file of surface mode, checked as every reader checks it (a
+// regular file within the input budget); a default beside the program names
+// the option that gives another.
 fs::path existing(const std::optional<std::string>& given, const fs::path& beside, const char* name,
-                  const char* option) {
+                  const char* what, const char* option) {
   const fs::path p = given ? fs::path(*given) : beside / name;
-  if (!fs::is_regular_file(p))
-    throw UsageError(p.string() + " not found" +
+  try {
+    rt::check_input_file(p, what);
+  } catch (const rt::InputFileError& e) {
+    throw UsageError(std::string(e.what()) +
                      (given ? std::string() : std::string(" (give ") + option + ")"));
+  }
   return p;
+}
+
+const char* const kOutputFiles[] = {"diagnosis.json", "fitted_machine.json", "diagnosis.html"};
+
+// Every file written into --out DIR against every input (links included):
+// `--machine DIR/fitted_machine.json --out DIR`, the natural next
+// iteration, replaced the believed model.
+void refuse_outputs_over_inputs(const ParsedArgs& a, const std::string& out_dir,
+                                const std::vector<std::optional<std::string>>& extra = {}) {
+  std::vector<std::optional<std::string>> inputs = extra;
+  for (const char* option :
+       {"recording", "holdout", "machine", "tools", "surface", "cmm", "program", "nominal", "part"})
+    inputs.push_back(a.value(option));
+  for (const char* name : kOutputFiles)
+    refuse_output_over_input("out", (fs::path(out_dir) / name).string(), inputs);
+}
+
+// "tool_radius_error, tool_length_error, ...": what --candidates may name.
+std::string known_candidates() {
+  std::string names;
+  for (const auto& k : dg::surface_candidate_effects())
+    names += (names.empty() ? "" : ", ") + k;
+  return names;
+}
+
+// --candidates LIST, each a surface-mode effect.
+std::vector<std::string> candidate_list(const std::string& text) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (char ch : text + ",") {
+    if (ch != ',') {
+      cur += ch;
+    } else if (!cur.empty()) {
+      out.push_back(cur);
+      cur.clear();
+    }
+  }
+  const auto& known = dg::surface_candidate_effects();
+  for (const auto& c : out)
+    if (std::find(known.begin(), known.end(), c) == known.end())
+      throw UsageError("--candidates: '" + c +
+                       "' is not a surface-mode effect; known: " + known_candidates());
+  if (out.empty())
+    throw UsageError("--candidates '" + text + "': no effect named; known: " + known_candidates());
+  return out;
+}
+
+// With --tools: every value of the recording's `tool` channel is a whole
+// number the table has (99 or 2.5 used to pass, and such rows got no length).
+void check_tool_channel(const analysis::Recording& rec, const std::map<int, double>& table,
+                        const std::string& table_file) {
+  const auto it = rec.channels.find("tool");
+  if (it == rec.channels.end()) return;
+  std::string known;
+  for (const auto& [tool, length] : table)
+    known += (known.empty() ? "" : ", ") + std::to_string(tool);
+  for (std::size_t k = 0; k < it->second.size(); ++k) {
+    const double v = it->second[k];
+    const std::string at = rec.file + ": sample " + std::to_string(k + 1) +
+                           " (t = " + rt::format_shortest(rec.t_s[k]) + " s): tool " +
+                           rt::format_shortest(v);
+    if (v != std::floor(v)) throw dg::DiagnosisError(at + " is not a whole tool number");
+    if (!table.count(static_cast<int>(v)))
+      throw dg::DiagnosisError(at + " is not in the tool table " + table_file + " (tools " +
+                               (known.empty() ? std::string("none") : known) + ")");
+  }
 }
 
 int surface_mode(const ParsedArgs& a, const std::string& out_dir) {
@@ -122,28 +203,22 @@ int surface_mode(const ParsedArgs& a, const std::string& out_dir) {
   if (!a.value("machine")) throw UsageError("surface mode needs --machine BELIEVED.json");
   if (a.value("holdout")) throw UsageError("surface mode: use --split (a held-out region)");
   dg::SurfaceJob job;
-  job.program = *program;
-  if (!fs::is_regular_file(job.program)) throw UsageError(*program + " not found");
+  job.program = existing(program, ".", "", "G-code program", "--program");
   const fs::path beside = job.program.has_parent_path() ? job.program.parent_path() : ".";
-  job.nominal = existing(a.value("nominal"), beside, "nominal.stl", "--nominal");
-  job.part = existing(a.value("part"), beside, "part.json", "--part");
-  job.tools = existing(a.value("tools"), beside, "tools.tbl", "--tools");
+  job.nominal = existing(a.value("nominal"), beside, "nominal.stl", "nominal mesh", "--nominal");
+  job.part = existing(a.value("part"), beside, "part.json", "part file", "--part");
+  job.tools = existing(a.value("tools"), beside, "tools.tbl", "tool table", "--tools");
+  job.machine_file = *a.value("machine");
   job.component_path = component_path(a);
   job.work_dir = a.value("work") ? fs::path(*a.value("work")) : fs::path(out_dir);
   dg::SurfaceOptions options;
   options.holdout_fraction = a.number("split", 0.3, 0.0, 0.9);
   options.bic_threshold = a.number("bic-threshold", 10.0, 0.0, 1e6);
-  if (const auto c = a.value("candidates")) {
-    std::string cur;
-    for (char ch : *c + ",") {
-      if (ch != ',') {
-        cur += ch;
-      } else if (!cur.empty()) {
-        options.candidates.push_back(cur);
-        cur.clear();
-      }
-    }
-  }
+  if (const auto c = a.value("candidates")) options.candidates = candidate_list(*c);
+  refuse_outputs_over_inputs(a, out_dir,
+                             {job.nominal.string(), job.part.string(), job.tools.string()});
+  require_writable_folder("out", out_dir);
+  if (a.value("work")) require_writable_folder("work", *a.value("work"));
   options.progress = [](const std::string& line) {
     std::fprintf(stderr, "diagnose: %s\n", line.c_str());
   };
@@ -166,6 +241,8 @@ int surface_mode(const ParsedArgs& a, const std::string& out_dir) {
   } catch (const dg::DiagnosisError& e) {
     return bad_input(e);
   } catch (const sim::measure::PartFileError& e) {
+    return bad_input(e);
+  } catch (const offline::MeshIoError& e) {
     return bad_input(e);
   }
   write_outputs(out_dir, dg::surface_diagnosis_json(result), result.fitted,
@@ -215,6 +292,22 @@ int cmd_diagnose(const std::vector<std::string>& argv) {
   if (!recording) return surface_mode(a, *out_dir);
   const auto holdout = a.value("holdout");
   if (holdout && a.value("split")) throw UsageError("--holdout and --split exclude each other");
+  if (holdout) {
+    std::error_code ec;
+    if (fs::equivalent(*holdout, *recording, ec) && !ec)
+      throw UsageError("--holdout " + *holdout + " is the --recording " + *recording +
+                       ": a fit proven on its own data proves nothing; give another recording "
+                       "or use --split");
+  }
+  if (a.value("candidates"))
+    throw UsageError(
+        "--candidates selects the effects of surface mode (--surface or --cmm; "
+        "known: " +
+        known_candidates() +
+        "); trace mode tests every effect of the machine "
+        "description");
+  refuse_outputs_over_inputs(a, *out_dir);
+  require_writable_folder("out", *out_dir);
 
   dg::DiagnosisOptions options;
   options.holdout_fraction = a.number("split", 0.3, 0.0, 0.9);
@@ -235,7 +328,6 @@ int cmd_diagnose(const std::vector<std::string>& argv) {
     options.tcp_datum_known = *d == "known";
   }
   if (const auto t = a.value("tools")) {
-    if (!fs::is_regular_file(*t)) throw UsageError(*t + " not found");
     try {
       const auto table = interp::ToolTable::load(*t);
       for (const auto& e : table.entries())
@@ -262,6 +354,10 @@ int cmd_diagnose(const std::vector<std::string>& argv) {
     if (holdout) {
       std::fprintf(stderr, "diagnose: reading %s\n", holdout->c_str());
       held = analysis::read_recording(*holdout, ro);
+    }
+    if (const auto t = a.value("tools")) {
+      check_tool_channel(rec, options.tool_length_mm, *t);
+      if (held) check_tool_channel(*held, options.tool_length_mm, *t);
     }
     const auto believed = a.value("machine") ? sim::read_machine_description(*a.value("machine"))
                                              : dg::ideal_machine_for(rec);

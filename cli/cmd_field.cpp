@@ -15,6 +15,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "measure_options.hpp"
 #include "parameter_file_args.hpp"
 #include "side_by_side.hpp"
 #include "stage_progress.hpp"
@@ -135,6 +136,10 @@ const char* kFieldHelp =
     "                        compensation points than this (default 20000000)\n"
     "  --max-grid-nodes N    budget: refuse (exit 2) a --resolution whose field grid\n"
     "                        would exceed this many nodes per layer (default 16777216)\n"
+    "  --max-memory-mb N     budget: refuse (exit 2) a --spacing, --resolution or\n"
+    "                        scan whose estimated memory (compensation points with\n"
+    "                        their placements and sphere support lists, the scan,\n"
+    "                        the field grid) exceeds N MB (default 4096)\n"
     "  --max-correction MM   refuse (exit 1) above this correction (default 0.2)\n"
     "  --force               write although the correction exceeds --max-correction\n"
     "  --strict-mesh         refuse a mesh with degenerate (zero-area) facets or facets\n"
@@ -169,8 +174,8 @@ std::vector<std::int32_t> id_list(const std::string& option, const std::string& 
   return ids;
 }
 
-// "T=MM" pairs of a repeatable option.
-std::map<int, double> tool_values(const ParsedArgs& a, const std::string& option) {
+// "T=MM" pairs of a repeatable option; MM >= 0, or > 0 when `positive`.
+std::map<int, double> tool_values(const ParsedArgs& a, const std::string& option, bool positive) {
   std::map<int, double> out;
   for (const std::string& v : a.values(option)) {
     const std::size_t eq = v.find('=');
@@ -179,8 +184,13 @@ std::map<int, double> tool_values(const ParsedArgs& a, const std::string& option
     const long tool = std::strtol(t.c_str(), &e1, 10);
     const double mm = std::strtod(x.c_str(), &e2);
     if (eq == std::string::npos || t.empty() || x.empty() || *e1 || *e2 || tool < 0 ||
-        !(mm >= 0 && mm < 1e4))
-      throw UsageError("--" + option + " '" + v + "': expected TOOL=MM");
+        tool > 99999 || !(mm >= 0 && mm < 1e4))
+      throw UsageError("--" + option + " '" + v +
+                       "': expected TOOL=MM (tool 0 to 99999, MM 0 to "
+                       "10000)");
+    if (positive && !(mm > 0))
+      throw UsageError("--" + option + " '" + v +
+                       "': must be greater than 0 mm (a tool cuts along some length)");
     out[static_cast<int>(tool)] = mm;
   }
   return out;
@@ -217,8 +227,8 @@ PartFile read_part_file(const fs::path& file) {
 
 std::vector<ToolShape> tool_shapes(const interp::ToolTable& table, const fs::path& table_file,
                                    const std::optional<PartFile>& part, const ParsedArgs& a) {
-  const std::map<int, double> corner = tool_values(a, "corner-radius");
-  const std::map<int, double> cutting = tool_values(a, "cutting-length");
+  const std::map<int, double> corner = tool_values(a, "corner-radius", false);
+  const std::map<int, double> cutting = tool_values(a, "cutting-length", true);
   std::vector<ToolShape> shapes;
   for (const interp::ToolEntry& e : table.entries()) {
     ToolShape s;
@@ -422,6 +432,9 @@ offline::FieldPipelineOptions pipeline_options(const ParsedArgs& a, const Inputs
   }
   if (auto d = a.value("datum")) o.datum_surfaces = id_list("datum", *d);
   o.register_scan = !a.flag("no-register");
+  if (!o.register_scan && a.value("register-significance"))
+    throw UsageError(
+        "--register-significance tests a registration, and --no-register makes none; give one");
   // Neither source tests the registration or a surface's error against the
   // scan's noise: both apply what they find.
   o.icp.significance_level =
@@ -454,7 +467,8 @@ offline::FieldPipelineOptions pipeline_options(const ParsedArgs& a, const Inputs
   o.ray.max_distance_mm = a.number("max-distance", o.ray.max_distance_mm, 0.001, 100.0);
   o.significance.significance_level =
       a.number("significance", paper.empty() ? o.significance.significance_level : 0.0, 0.0, 0.5);
-  o.significance.noise_mm = a.number("scan-noise", 0.0, 0.0, 10.0);
+  // Absent: estimated from the scan; given, it is the scanner's noise (> 0).
+  o.significance.noise_mm = a.value("scan-noise") ? a.number("scan-noise", 0.0, 1e-6, 10.0) : 0.0;
   o.truss.kb_over_kc = a.number("kb-kc", o.truss.kb_over_kc, 0.0, 1e6);
   // A kb/kc given is used as given; the default scales with the scan's noise.
   if (a.value("kb-kc") || sortino) o.truss_reference_noise_mm = 0.0;
@@ -467,6 +481,7 @@ offline::FieldPipelineOptions pipeline_options(const ParsedArgs& a, const Inputs
   o.fit.smoothness = a.number("smoothness", o.fit.smoothness, 0.0, 1e6);
   o.max_compensation_points = a.number("max-points", o.max_compensation_points, 1.0, 1e12);
   o.max_grid_nodes = a.number("max-grid-nodes", o.max_grid_nodes, 8.0, 1e12);
+  o.max_memory_mb = a.number("max-memory-mb", o.max_memory_mb, 1.0, 1e9);
   o.path.step_mm = a.number("path-step", o.path.step_mm, 0.001, 10.0);
   o.placement.contact_tolerance_mm =
       a.number("contact-tolerance", o.placement.contact_tolerance_mm, 1e-6, 10.0);
@@ -532,6 +547,17 @@ void print_summary(const offline::FieldPipelineResult& r,
   std::printf("total %.3f s\n", r.total_wall_s);
 }
 
+// Every file written into DIR against every input, by identity (links
+// included): `--base DIR/field.tcf --out DIR`, the natural next iteration,
+// replaced the base field.
+void refuse_outputs_over_inputs(const ParsedArgs& a, const std::string& out) {
+  std::vector<std::optional<std::string>> inputs = {a.positionals()[0], a.positionals()[1]};
+  for (const char* option : {"program", "tools", "part", "base", "expected", "var-file"})
+    inputs.push_back(a.value(option));
+  for (const char* name : offline::kFieldOutputFiles)
+    refuse_output_over_input("out", (fs::path(out) / name).string(), inputs);
+}
+
 double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
@@ -547,6 +573,8 @@ int run_field(const ParsedArgs& a, const std::vector<std::string>& argv) {
   const bool quiet = a.flag("quiet");
   const bool verbose = a.flag("verbose") && !quiet;
   if (a.flag("verbose") && quiet) throw UsageError("--verbose and --quiet exclude each other");
+  refuse_outputs_over_inputs(a, *out);
+  require_writable_folder("out", *out);
   std::optional<StageProgress> shown;
   shown.emplace("truecut field", !quiet && isatty(STDERR_FILENO) != 0);
   shown->stage("reading the inputs");
@@ -563,7 +591,10 @@ int run_field(const ParsedArgs& a, const std::vector<std::string>& argv) {
   pin.scan = &in.scan;
   pin.program = &in.program;
   pin.tools = tool_shapes(in.tools, *tools, in.part, a);
-  if (in.base) pin.base_field = &*in.base;
+  if (in.base) {
+    pin.base_field = &*in.base;
+    pin.base_field_name = "--base " + *a.value("base");
+  }
   if (in.expected) pin.expected = &*in.expected;
   if (in.part) {
     // part.json numbers the triangles of the file, dropped ones included.
@@ -603,6 +634,11 @@ int run_field(const ParsedArgs& a, const std::vector<std::string>& argv) {
   }
   shown.reset();
   if (!quiet) std::fprintf(stderr, "field: %s\n", totals_message(result).c_str());
+  if (result.base_samples_outside > 0)
+    std::fprintf(stderr,
+                 "truecut field: WARNING: %zu of the %zu tool centres that cut the compensated "
+                 "surfaces lie outside the grid of --base %s; they get the new increment alone\n",
+                 result.base_samples_outside, result.base_samples, a.value("base")->c_str());
 
   const bool exceeded = result.max_correction_mm > max_correction;
   if (exceeded && !a.flag("force")) {
@@ -654,6 +690,7 @@ int cmd_field(const std::vector<std::string>& argv) {
                       {"max-scan-offset", true},
                       {"max-points", true},
                       {"max-grid-nodes", true},
+                      {"max-memory-mb", true},
                       {"max-scan-outliers", true},
                       {"sphere-radius", true},
                       {"sphere-max-points", true},

@@ -1,5 +1,6 @@
 // truecut iso230 --recording REC.csv --out DIR: ISO 230-2 positioning and
 // ISO 230-4 circular-test evaluations of a recording (docs/iso230.md).
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <optional>
@@ -8,6 +9,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "measure_options.hpp"
 #include "truecut/analysis/iso230_report.hpp"
 #include "truecut/analysis/recording.hpp"
 #include "truecut/rt/atomic_write.hpp"
@@ -114,8 +116,11 @@ int cmd_iso230(const std::vector<std::string>& argv) {
 
   std::vector<std::string> axes;
   if (auto list = a.value("axis"))
-    for (const auto& j : split_list(*list))
+    for (const auto& j : split_list(*list)) {
+      if (std::find(axes.begin(), axes.end(), j) != axes.end())
+        throw UsageError("--axis " + *list + ": joint '" + j + "' is named twice");
       axes.push_back(joint_arg(j, "--axis"));
+    }
   std::vector<analysis::CircleOptions> circles;
   for (const auto& spec : a.values("circle")) {
     const auto pq = split_list(spec);
@@ -128,6 +133,10 @@ int cmd_iso230(const std::vector<std::string>& argv) {
     circles.push_back(c);
   }
   if (a.value("radius") && circles.empty()) throw UsageError("--radius needs --circle P,Q");
+
+  for (const char* name : {"iso230.json", "iso230.html"})
+    refuse_output_over_input("out", (fs::path(*out_dir) / name).string(), {recording});
+  require_writable_folder("out", *out_dir);
 
   std::string map_text;
   for (const auto& m : a.values("map"))
@@ -202,9 +211,16 @@ int cmd_iso230(const std::vector<std::string>& argv) {
                 mm(ax.A).c_str(), mm(ax.E).c_str(), mm(ax.M).c_str(), mm(ax.R).c_str(),
                 mm(ax.B).c_str(), u, ax.targets.size());
   }
-  for (const auto& c : report.circles)
+  for (const auto& c : report.circles) {
     std::printf("%s%s circle: G=%s H=%s F=%s mm\n", c.axis_p.c_str(), c.axis_q.c_str(),
                 mm(c.G_mm).c_str(), mm(c.H_mm).c_str(), mm(c.F_mm).c_str());
+    // A G over less than a full circle is not ISO 230-4's: said where it is read.
+    for (const auto& note : c.notes) {
+      std::printf("  note: %s\n", note.c_str());
+      std::fprintf(stderr, "truecut iso230: WARNING: %s%s circle: %s\n", c.axis_p.c_str(),
+                   c.axis_q.c_str(), note.c_str());
+    }
+  }
   std::printf("wrote %s and %s\n", (dir / "iso230.json").c_str(), (dir / "iso230.html").c_str());
   return kExitOk;
 }

@@ -37,6 +37,19 @@ const char* kScanHelp =
     "  --mesh-out FILE              also a triangulated scan mesh (.ply or .stl)\n"
     "  --help                       this text\n";
 
+// Whether two output names reach the same file, which need not exist yet
+// (refuse_output_over_input covers existing files): the same folder, by
+// identity, and the same name in it.
+bool same_new_file(const std::string& a, const std::string& b) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::equivalent(a, b, ec) && !ec) return true;
+  const fs::path pa = fs::absolute(a), pb = fs::absolute(b);
+  const fs::path da = pa.parent_path(), db = pb.parent_path();
+  const bool same_folder = da == db || (fs::equivalent(da, db, ec) && !ec);
+  return same_folder && pa.filename() == pb.filename();
+}
+
 }  // namespace
 
 int cmd_scan(const std::vector<std::string>& argv) {
@@ -59,8 +72,14 @@ int cmd_scan(const std::vector<std::string>& argv) {
 
   refuse_output_over_input("out", *out, {mesh_file, mesh_out});
   if (mesh_out) refuse_output_over_input("mesh-out", *mesh_out, {mesh_file});
+  if (mesh_out && same_new_file(*out, *mesh_out))
+    throw UsageError("--out " + *out + " and --mesh-out " + *mesh_out +
+                     " name the same file: the scan mesh would replace the point cloud; choose "
+                     "two names");
   require_replaceable(*out);
   if (mesh_out) require_replaceable(*mesh_out);
+  require_writable_file("out", *out);
+  if (mesh_out) require_writable_file("mesh-out", *mesh_out);
   ScanSettings settings = scan_settings(a, "");
   const sim::measure::ScannerOptions& opt = settings.options;
   settings.options.build_mesh = mesh_out.has_value();

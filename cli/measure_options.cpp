@@ -1,12 +1,18 @@
 #include "measure_options.hpp"
 
+#include <stdlib.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 
 #include "truecut/offline/mesh_io.hpp"
 #include "truecut/rt/atomic_write.hpp"
+#include "truecut/rt/number_format.hpp"
 #include "truecut/sim/measure/part_surfaces.hpp"
 
 namespace truecut::cli {
@@ -30,11 +36,75 @@ std::vector<std::int32_t> parse_surface_list(const std::string& option, const st
 
 void print_row(const sim::measure::SurfaceDeviationStats& s, const char* indent) {
   const std::string name = s.surface < 0 ? "all" : std::to_string(s.surface);
+  if (s.valid == 0) {
+    std::printf("%s%-8s %7zu %7zu %9s %9s %9s %9s %9s\n", indent, name.c_str(), s.points, s.valid,
+                "-", "-", "-", "-", "-");
+    return;
+  }
   std::printf("%s%-8s %7zu %7zu %9.2f %9.2f %9.2f %9.2f %9.2f\n", indent, name.c_str(), s.points,
               s.valid, s.mean_um, s.std_um, s.rms_um, s.max_abs_um, s.p95_abs_um);
 }
 
+// The area of the triangles of `surfaces` (empty: all).
+double surfaces_area_mm2(const offline::TriangleMesh& mesh, const std::vector<std::int32_t>& ids,
+                         const std::vector<std::int32_t>& surfaces) {
+  double area = 0.0;
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    if (!surfaces.empty() && std::find(surfaces.begin(), surfaces.end(), ids[t]) == surfaces.end())
+      continue;
+    const auto& [a, b, c] = mesh.triangles[t];
+    const Eigen::Vector3d &pa = mesh.vertices_mm[a], &pb = mesh.vertices_mm[b],
+                          &pc = mesh.vertices_mm[c];
+    area += 0.5 * (pb - pa).cross(pc - pa).norm();
+  }
+  return area;
+}
+
+namespace fs = std::filesystem;
+
+// DIR itself when it exists, else its nearest existing parent.
+fs::path nearest_existing(const fs::path& dir) {
+  std::error_code ec;
+  fs::path p = fs::absolute(dir, ec);
+  if (ec) p = dir;
+  while (!p.empty() && !fs::exists(p, ec) && p != p.parent_path())
+    p = p.parent_path();
+  return p;
+}
+
+void probe_folder(const std::string& option, const std::string& given, const fs::path& folder) {
+  std::error_code ec;
+  if (!fs::is_directory(folder, ec))
+    throw UsageError("--" + option + " " + given + ": " + folder.string() + " is not a folder");
+  std::string name = (folder / ".truecut-write-probe-XXXXXX").string();
+  const int fd = ::mkstemp(name.data());
+  if (fd < 0)
+    throw UsageError("--" + option + " " + given + ": cannot write in " + folder.string() + ": " +
+                     std::strerror(errno) + " (checked before any work; nothing written)");
+  ::close(fd);
+  ::unlink(name.c_str());
+}
+
 }  // namespace
+
+void require_writable_folder(const std::string& option, const std::string& dir) {
+  if (dir.empty()) throw UsageError("--" + option + ": an empty folder name");
+  std::error_code ec;
+  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
+    throw UsageError("--" + option + " " + dir + ": exists and is not a folder");
+  probe_folder(option, dir, nearest_existing(dir));
+}
+
+void require_writable_file(const std::string& option, const std::string& file) {
+  if (file.empty()) throw UsageError("--" + option + ": an empty file name");
+  const fs::path parent = fs::path(file).parent_path();
+  const fs::path folder = parent.empty() ? fs::path(".") : parent;
+  std::error_code ec;
+  if (!fs::is_directory(folder, ec))
+    throw UsageError("--" + option + " " + file + ": the folder " + folder.string() +
+                     " does not exist");
+  probe_folder(option, file, folder);
+}
 
 void require_replaceable(const std::string& file) {
   try {
@@ -109,7 +179,7 @@ std::string scan_comment(const ScanSettings& s) {
 
 std::vector<OptionSpec> cmm_option_specs(const std::string& prefix) {
   std::vector<OptionSpec> specs;
-  for (const char* name : {"sigma-um", "search-mm", "seed", "spacing", "surfaces"})
+  for (const char* name : {"sigma-um", "search-mm", "seed", "spacing", "surfaces", "max-points"})
     specs.push_back({prefix + name, true});
   return specs;
 }
@@ -121,6 +191,8 @@ CmmSettings cmm_settings(const ParsedArgs& a, const std::string& p) {
       a.number(p + "search-mm", s.options.search_distance_mm, 1e-3, 100.0);
   s.options.seed = static_cast<std::uint64_t>(a.integer(p + "seed", 1, 0, 0x7fffffffffffffffL));
   s.spacing_mm = a.number(p + "spacing", 1.0, 0.01, 1000.0);
+  s.max_points = a.number(p + "max-points", s.max_points, 1.0, 1e12);
+  s.prefix = p;
   if (const auto list = a.value(p + "surfaces"))
     s.surfaces = parse_surface_list(p + "surfaces", *list);
   return s;
@@ -141,11 +213,32 @@ std::vector<sim::measure::CmmPoint> cmm_points_on_part(const std::string& nomina
       throw MeasureInputError(part_file + ": key 'surfaces' has no surface " + std::to_string(id));
   const std::vector<std::int32_t> surfaces =
       settings.surfaces.empty() ? labels.compensated_ids() : settings.surfaces;
+  const double area_mm2 = surfaces_area_mm2(nominal, labels.triangle_surface_ids, surfaces);
+  const double estimate = area_mm2 / (settings.spacing_mm * settings.spacing_mm);
+  if (estimate > settings.max_points)
+    throw MeasureInputError(rt::format_printf(
+        "--%sspacing %g mm would probe about %.3g points on the %.4g mm² of the selected "
+        "surfaces of %s, more than --%smax-points %.0f (about 0.5 KB each); choose a larger "
+        "--%sspacing or fewer --%ssurfaces, or raise --%smax-points (a nominal in µm instead "
+        "of mm is 1000 times too large)",
+        settings.prefix.c_str(), settings.spacing_mm, estimate, area_mm2, nominal_file.c_str(),
+        settings.prefix.c_str(), settings.max_points, settings.prefix.c_str(),
+        settings.prefix.c_str(), settings.prefix.c_str()));
   auto points = sim::measure::cmm_points_on_surfaces(nominal, labels.triangle_surface_ids,
                                                      settings.spacing_mm, surfaces);
   if (points.empty())
     throw MeasureInputError(nominal_file + ": no points on the selected surfaces");
   return points;
+}
+
+void check_probe_budget(std::size_t points, const std::string& source,
+                        const CmmSettings& settings) {
+  if (double(points) <= settings.max_points) return;
+  throw MeasureInputError(rt::format_printf(
+      "%s: %zu points to probe, more than --%smax-points %.0f (about 0.5 KB each); raise "
+      "--%smax-points",
+      source.c_str(), points, settings.prefix.c_str(), settings.max_points,
+      settings.prefix.c_str()));
 }
 
 void print_cmm_table(const std::vector<sim::measure::CmmMeasurement>& measurements,

@@ -20,6 +20,15 @@ namespace truecut::cli {
 // folder. UsageError "FILE: exists and is not a regular file; not replaced".
 void require_replaceable(const std::string& file);
 
+// Refuse (UsageError, before any work) an output that could not be written
+// at the end: --OPTION DIR that exists and is not a folder, or in which (or,
+// when it does not exist yet, in whose nearest existing parent) no file can
+// be created (a read-only place, /proc). A probe file is created and removed
+// at once; nothing stays behind.
+void require_writable_folder(const std::string& option, const std::string& dir);
+// The same for the folder that --OPTION FILE is written in.
+void require_writable_file(const std::string& option, const std::string& file);
+
 // true when FILE ends in one of `extensions` (lower-case, with the dot) and
 // the mesh writers know the format.
 bool has_extension(const std::string& file, std::initializer_list<const char*> extensions);
@@ -49,9 +58,13 @@ struct CmmSettings {
   sim::measure::CmmOptions options;
   double spacing_mm = 1.0;
   std::vector<std::int32_t> surfaces;  // empty: part.json's compensated surfaces
+  // Budget: a sampling or point list of more probes is refused before any
+  // is made (each costs about 0.5 KB: two rays, their hits, the result).
+  double max_points = 2e6;
+  std::string prefix;  // of the options, for messages ("cmm-" in truecut run)
 };
 
-// --PREFIXsigma-um, search-mm, seed, spacing, surfaces.
+// --PREFIXsigma-um, search-mm, seed, spacing, surfaces, max-points.
 std::vector<OptionSpec> cmm_option_specs(const std::string& prefix);
 CmmSettings cmm_settings(const ParsedArgs& a, const std::string& prefix);
 
@@ -62,12 +75,18 @@ struct MeasureInputError : std::runtime_error {
 };
 
 // Nominal points on the selected surfaces of NOMINAL (ids from part.json).
-// Throws MeasureInputError, offline::MeshIoError or sim::PartFileError.
+// Throws MeasureInputError (also when the sampling would make more than
+// settings.max_points probes, estimated from the surfaces' area before any
+// is made), offline::MeshIoError or sim::PartFileError.
 std::vector<sim::measure::CmmPoint> cmm_points_on_part(const std::string& nominal_file,
                                                        const std::string& part_file,
                                                        const CmmSettings& settings);
 
-// The per-surface table and the overall row, on stdout, with `indent`.
+// Throws MeasureInputError when `points` probes exceed settings.max_points.
+void check_probe_budget(std::size_t points, const std::string& source, const CmmSettings& settings);
+
+// The per-surface table and the overall row, on stdout, with `indent`; a
+// row without a valid point shows "-" (no measurement), not 0.00.
 void print_cmm_table(const std::vector<sim::measure::CmmMeasurement>& measurements,
                      const char* indent = "");
 

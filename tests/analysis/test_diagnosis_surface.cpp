@@ -10,14 +10,17 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <string>
 #include <system_error>
 
 #include "surface_diagnosis_fixture.hpp"
 #include "test_paths.hpp"
 #include "truecut/analysis/diagnosis/surface.hpp"
+#include "truecut/offline/mesh_io.hpp"
 #include "truecut/offline/stl_io.hpp"
 #include "truecut/sim/benchmark_parts.hpp"
+#include "truecut/sim/measure/scanner.hpp"
 #include "truecut/sim/soft_cnc.hpp"
 
 namespace truecut::analysis::test {
@@ -204,6 +207,78 @@ TEST_F(SurfaceDiagnosis, ToolDeflectionFoundAsACompliance) {
   if (r.has_heldout) {
     EXPECT_LT(r.heldout.rms_after_mm, r.heldout.rms_before_mm) << s;
   }
+}
+
+// Issue 23 (sweep F2): a point cloud of the 1.6 mm shaft was read at the
+// nominal points by averaging every cloud point near the normal line, so
+// the neighbouring faces' points came in at every edge (the shaft's faces
+// read about -120 µm, the top -253 µm) and the base's bottom, which the
+// scanner never sees, got the walls' points (-413 µm): the verdict was an
+// unexplained mismatch where the mesh and the CMM find the planted tool
+// radius error. Now a cloud point counts for a nominal point only on the
+// same surface and facing the same way: the reading agrees with the CMM of
+// the same machined part, the unseen bottom is reported as not measured,
+// and the diagnosis finds the planted -0.02 mm.
+TEST_F(SurfaceDiagnosis, APointCloudScanIsReadOnEachFaceAndFindsThePlantedRadiusError) {
+  MachineDescription truth = believed();
+  truth.machine.effects.tool_radius_error.enabled = true;
+  truth.machine.effects.tool_radius_error.params.radius_mm = -0.02;
+  measure(truth, "cloud_radius", 14);
+  const fs::path dir = *dir_ / "cloud_radius";
+  const offline::TriangleMesh machined = offline::read_stl(dir / "machined.stl");
+  measure::ScannerOptions so;
+  so.sigma0_mm = 0.005;
+  so.seed = 3;
+  offline::write_point_cloud(dir / "scan.ply", measure::scan(machined, so).cloud);
+  const dg::SurfaceMeasurement m =
+      dg::read_scan_measurement(dir / "scan.ply", part_->mesh, part_->triangle_surface, 0.5);
+
+  // The machined surface at the same nominal points, probed exactly where
+  // the registration put the scan (ICP onto the nominal moves this part's
+  // cloud by about 7 µm in z: the diagnosis profiles that out), away from
+  // the edges and corners the tool's ends and corners shape (as the cases'
+  // CMM points are: there a disc of cloud points and a point probe see
+  // different things).
+  std::vector<measure::CmmPoint> nominal;
+  for (const auto& p : m.points)
+    nominal.push_back(p.nominal);
+  measure::CmmOptions exact;
+  exact.sigma_mm = 0.0;
+  ASSERT_TRUE(m.scan_to_nominal);
+  offline::TriangleMesh registered = machined;
+  for (auto& v : registered.vertices_mm)
+    v = *m.scan_to_nominal * v;
+  const auto truth_at = measure::probe(registered, nominal, exact);
+  std::map<int, std::pair<double, int>> diff, valid;  // per surface: sum, count
+  for (std::size_t i = 0; i < m.points.size(); ++i) {
+    const int surface = m.points[i].nominal.surface;
+    valid[surface].second += 1;
+    if (!m.points[i].valid) continue;
+    valid[surface].first += 1;
+    const Eigen::Vector3d& x = m.points[i].nominal.position_mm;
+    const bool edge =
+        (std::abs(std::abs(x.x()) - 0.8) < 0.15 && std::abs(std::abs(x.y()) - 0.8) < 0.15) ||
+        (surface != kTop && (x.z() > 16.7 || x.z() < 0.3)) ||
+        (surface == kTop && (std::abs(x.x()) > 0.65 || std::abs(x.y()) > 0.65));
+    if (!truth_at[i].valid || (surface <= kTop && edge)) continue;
+    diff[surface].first += m.points[i].deviation_mm - truth_at[i].deviation_mm;
+    diff[surface].second += 1;
+  }
+  for (int face : {kXPos, kXNeg, kYPos, kYNeg, kTop}) {
+    ASSERT_GE(diff[face].second, face == kTop ? 1 : 10) << "surface " << face;
+    EXPECT_LT(std::abs(diff[face].first / diff[face].second), 0.003) << "surface " << face;
+  }
+  constexpr int kBaseBottom = 8;
+  ASSERT_GT(valid[kBaseBottom].second, 0);
+  EXPECT_EQ(valid[kBaseBottom].first, 0.0) << "the scanner has no pose from below";
+
+  const auto r = diagnose(m, {"tool_radius_error", "tool_length_error"});
+  const auto s = dg::surface_diagnosis_summary(r);
+  EXPECT_NE(s.find("not measured (no valid point): surface 8 (base_bottom)"), std::string::npos)
+      << s;
+  const auto* e = find(r, "tool_radius_error");
+  ASSERT_NE(e, nullptr) << s;
+  EXPECT_NEAR(e->parameters[0].value, -0.02, 0.15 * 0.02) << s;
 }
 
 TEST_F(SurfaceDiagnosis, CorrectBelievedModelSelectsNothing) {

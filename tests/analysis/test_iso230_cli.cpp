@@ -180,5 +180,49 @@ TEST(Iso230Cli, BadInputExitsTwoAndWritesNothing) {
   EXPECT_TRUE(files_in(out).empty());
 }
 
+// Issue 23 (sweep F28): a recording named in Latin-1 ended iso230 after all
+// its work with nlohmann's type_error.316 (exit 1, no file named). The name
+// is written with U+FFFD for the byte that is not UTF-8.
+TEST(Iso230Cli, ANameThatIsNotUtf8IsWrittenSafely) {
+  const auto dir = scratch_dir();
+  const fs::path latin1 = dir / "caf\xe9.csv";
+  fs::rename(positioning_recording(dir), latin1);
+  const auto out = dir / "out";
+  const auto r = run_process(
+      {cli_path().string(), "iso230", "--recording", latin1.string(), "--out", out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(read_file(out / "iso230.json"));
+  EXPECT_NE(j.dump().find("caf\xef\xbf\xbd.csv"), std::string::npos) << j.dump().substr(0, 300);
+}
+
+// Issue 23 (sweep, low): --axis x,x was accepted; a circle of 180° gave G
+// with exit 0 and said "less than a full circle" only in the JSON.
+TEST(Iso230Cli, AnAxisTwiceIsRefusedAndAPartialCircleIsSaid) {
+  const auto dir = scratch_dir();
+  const auto out = dir / "out";
+  auto r =
+      run_process({cli_path().string(), "iso230", "--recording",
+                   positioning_recording(dir).string(), "--axis", "x,x", "--out", out.string()});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--axis x,x: joint 'x' is named twice"), std::string::npos) << r.err;
+  EXPECT_TRUE(files_in(out).empty());
+
+  std::string csv = "t,x_cmd,y_cmd,x_act,y_act\n";
+  for (int k = 0; k <= 1800; ++k) {  // half a circle, counter-clockwise
+    const double th = k * M_PI / 1800;
+    char b[200];
+    std::snprintf(b, sizeof b, "%.4f,%.9f,%.9f,%.9f,%.9f\n", k * 0.001, 50 * std::cos(th),
+                  50 * std::sin(th), 50.002 * std::cos(th), 50.002 * std::sin(th));
+    csv += b;
+  }
+  std::ofstream(dir / "half.csv", std::ios::binary) << csv;
+  r = run_process({cli_path().string(), "iso230", "--recording", (dir / "half.csv").string(),
+                   "--circle", "x,y", "--radius", "50", "--out", out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("  note: ccw run covers 1"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("°, less than a full circle"), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("WARNING: xy circle: ccw run covers 1"), std::string::npos) << r.err;
+}
+
 }  // namespace
 }  // namespace truecut::test

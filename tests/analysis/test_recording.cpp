@@ -139,6 +139,56 @@ TEST(RecordingErrors, TimeMustIncrease) {
       << msg;
 }
 
+// Issue 23 (sweep F11): a header naming a channel twice (the second x_act
+// 5 mm off) was read taking one of the columns without a word.
+TEST(RecordingErrors, AChannelNamedTwiceIsAmbiguous) {
+  auto p = write("dup.csv", "t,x_cmd,x_act,x_act\n0,1,1,6\n0.1,2,2,7\n");
+  const auto msg = error_of(p);
+  EXPECT_NE(
+      msg.find(p.string() + ":1: columns 3 and 4 are both named 'x_act': an ambiguous channel"),
+      std::string::npos)
+      << msg;
+  // A column the channels do not use may repeat.
+  auto q = write("dup_note.csv", "t,x_cmd,x_act,note,note\n0,1,1,a,b\n0.1,2,2,c,d\n");
+  EXPECT_EQ(read_recording(q).rows(), 2u);
+}
+
+// Issue 23 (sweep, low): a camonitor date that does not exist, or a stamp
+// centuries from the others (t of 2.5e11 s, beyond the recordings' 1e9 s),
+// was read.
+TEST(RecordingErrors, CamonitorStampsMustExistAndStayWithinTheTimeRange) {
+  RecordingOptions o;
+  o.map = parse_column_map("x_cmd=X:Cmd,x_act=X:Act");
+  auto bad_day =
+      write("day.log", "X:Cmd 2022-02-28 10:00:00.000000 1\nX:Act 2022-02-30 10:00:00.000000 1\n");
+  std::string msg;
+  try {
+    read_camonitor(bad_day, o);
+  } catch (const RecordingError& e) {
+    msg = e.what();
+  }
+  EXPECT_NE(msg.find("day.log:2: PV 'X:Act': bad time stamp '2022-02-30 10:00:00.000000'"),
+            std::string::npos)
+      << msg;
+  auto far = write("far.log",
+                   "X:Cmd 2022-02-28 10:00:00.000000 1\nX:Act 2022-02-28 10:00:00.000000 1\n"
+                   "X:Act 9999-01-01 10:00:00.000000 2\n");
+  msg.clear();
+  try {
+    read_camonitor(far, o);
+  } catch (const RecordingError& e) {
+    msg = e.what();
+  }
+  EXPECT_NE(msg.find("far.log:3: time stamp '9999-01-01 10:00:00.000000' is "), std::string::npos)
+      << msg;
+  EXPECT_NE(msg.find("after the stamp '2022-02-28 10:00:00.000000' on line 1"), std::string::npos)
+      << msg;
+  auto leap = write("leap.log",
+                    "X:Cmd 2024-02-29 10:00:00.000000 1\nX:Act 2024-02-29 10:00:00.000000 1\n"
+                    "X:Act 2024-02-29 10:00:01.000000 2\n");
+  EXPECT_EQ(read_camonitor(leap, o).rows(), 2u);
+}
+
 TEST(RecordingErrors, BadMapSyntax) {
   EXPECT_THROW(parse_column_map("x_cmd"), RecordingError);
   EXPECT_THROW(parse_column_map("speed=Feed"), RecordingError);

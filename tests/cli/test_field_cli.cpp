@@ -613,4 +613,126 @@ TEST(FieldCli, MalformedInputsExit2AndWriteNothing) {
   EXPECT_FALSE(fs::exists(root / "never"));
 }
 
+// Issue 23 (sweep F16): `--base DIR/field.tcf --out DIR`, the natural next
+// iteration, replaced the base field it read. Every output is checked
+// against every input (by identity: a link too); the input stays.
+TEST(FieldCli, AnOutputThatIsAnInputIsRefusedAndTheInputKept) {
+  const fs::path root = scratch_dir();
+  const Part p = make_part_and_scan(root, 0.05);
+  const fs::path it = root / "it";
+  ASSERT_EQ(truecut(field_args(p, it)).exit_code, 0);
+  const std::string before = read_file(it / "field.tcf");
+  fs::create_symlink(it / "field.tcf", root / "base.tcf");
+  for (const fs::path& base : {it / "field.tcf", root / "base.tcf"}) {
+    std::vector<std::string> args = field_args(p, it);
+    args.insert(args.end(), {"--base", base.string()});
+    const ProcessResult r = truecut(args);
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(r.err.find("--out " + (it / "field.tcf").string() + " is the input " + base.string()),
+              std::string::npos)
+        << r.err;
+  }
+  EXPECT_EQ(read_file(it / "field.tcf"), before);
+  // The part file as --out's audit.json.
+  fs::create_directories(root / "o2");
+  write_text(root / "o2" / "audit.json", read_file(p.part));
+  std::vector<std::string> args = field_args(p, root / "o2");
+  args[8] = (root / "o2" / "audit.json").string();
+  const ProcessResult r = truecut(args);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("is the input"), std::string::npos) << r.err;
+}
+
+// A .tcf field (docs/formats.md) of one constant vector for `tools` on
+// 5 x 5 x 5 nodes of 5 mm from `origin`, with its CRC-64/XZ.
+void write_constant_field(const fs::path& file, const std::string& origin, const std::string& tools,
+                          int layers) {
+  std::string payload;
+  const double node[4] = {0.01, 0.0, 0.0, 1.0};
+  for (int n = 0; n < 125 * layers; ++n)
+    payload.append(reinterpret_cast<const char*>(node), sizeof node);
+  const std::string header = "TRUECUT-FIELD 1\nframe: workpiece\nunits: mm\norigin: " + origin +
+                             "\nspacing: 5 5 5\ndims: 5 5 5\ntools: " + tools +
+                             "\ninterpolation: tricubic-bspline\nchannels: dx dy dz weight\n"
+                             "encoding: float64-le\npayload_bytes: " +
+                             std::to_string(payload.size()) + "\n";
+  std::uint64_t crc = ~std::uint64_t{0};
+  for (unsigned char b : header + payload) {
+    crc ^= b;
+    for (int k = 0; k < 8; ++k)
+      crc = (crc >> 1) ^ ((crc & 1) ? 0xC96C5795D7870F42ull : 0);
+  }
+  char line[40];
+  std::snprintf(line, sizeof line, "crc64: %016llx\n", static_cast<unsigned long long>(~crc));
+  write_text(file, header + line + "end_header\n" + payload);
+}
+
+// Issue 23 (sweep F3, the CLI side; the pipeline's test has the zero
+// field): a base field with no layer for the program's tools, or whose grid
+// lies off the part, was dropped without a word (the new field byte for byte
+// the one made without it).
+TEST(FieldCli, ABaseFieldThatAddsNothingIsRefused) {
+  const fs::path root = scratch_dir();
+  const Part p = make_part_and_scan(root, 0.05);
+  write_constant_field(root / "t9.tcf", "-10 -10 -10", "9", 1);
+  write_constant_field(root / "far.tcf", "500 500 500", "1 2", 2);
+  for (const auto& [base, says] : std::vector<std::pair<std::string, std::string>>{
+           {"t9.tcf", " has no layer for any tool the program cuts with (T1"},
+           {"far.tcf", " adds nothing at any of the"}}) {
+    std::vector<std::string> args = field_args(p, root / "out");
+    args.insert(args.end(), {"--base", (root / base).string()});
+    const ProcessResult r = truecut(args);
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(r.err.find("--base " + (root / base).string() + says), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(root / "out"));
+  }
+}
+
+// Issue 23 (sweep F28): a scan named in Latin-1 ended the field after all
+// its work with nlohmann's type_error.316 (exit 1, no file named); audit.json
+// is written with U+FFFD for the byte that is not UTF-8.
+TEST(FieldCli, ANameThatIsNotUtf8IsWrittenSafelyInTheAudit) {
+  const fs::path root = scratch_dir();
+  Part p = make_part_and_scan(root, 0.05);
+  const fs::path latin1 = root / "scan\xe9.stl";
+  fs::rename(p.scan, latin1);
+  p.scan = latin1;
+  const ProcessResult r = truecut(field_args(p, root / "out"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json audit = nlohmann::json::parse(read_file(root / "out" / "audit.json"));
+  EXPECT_NE(audit.dump().find("scan\xef\xbf\xbd.stl"), std::string::npos);
+}
+
+// Issue 23 (sweep, low): values and combinations that mean nothing were
+// accepted: a cutting length of 0, a scan noise of 0 (read as "estimate"),
+// --register-significance with --no-register; and an --out that cannot be
+// written was found only after all the work.
+TEST(FieldCli, MeaninglessOptionsAndAnUnwritableOutAreRefusedAtOnce) {
+  const fs::path root = scratch_dir();
+  const Part p = make_part_and_scan(root, 0.05);
+  const fs::path out = root / "out";
+  struct Case {
+    std::vector<std::string> options;
+    std::string says;
+  };
+  std::vector<Case> cases{
+      {{"--cutting-length", "1=0"}, "--cutting-length '1=0': must be greater than 0 mm"},
+      {{"--scan-noise", "0"}, "--scan-noise"},
+      {{"--no-register", "--register-significance", "0.01"},
+       "--register-significance tests a registration, and --no-register makes none"},
+  };
+  if (fs::is_directory("/proc/self")) cases.push_back({{}, "cannot write in /proc"});
+  for (const Case& c : cases) {
+    std::vector<std::string> args = field_args(p, c.options.empty() ? "/proc/truecut-field" : out);
+    args.insert(args.end(), c.options.begin(), c.options.end());
+    const ProcessResult r = truecut(args);
+    EXPECT_EQ(r.exit_code, 2) << c.says << ": " << r.err;
+    EXPECT_NE(r.err.find(c.says), std::string::npos) << r.err;
+    // No stage line ("field: registration ..."): refused before the work.
+    EXPECT_NE(r.err.rfind("truecut field: ", 0), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("\nfield: "), std::string::npos) << "work was done: " << r.err;
+    EXPECT_FALSE(fs::exists(out));
+  }
+}
+
 }  // namespace

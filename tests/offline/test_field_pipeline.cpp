@@ -711,5 +711,106 @@ TEST(FieldPipeline, NothingCutIsAnError) {
   EXPECT_THROW(run_case(c), std::invalid_argument);
 }
 
+// A base field of constant value 0.01 mm along x for `tools`, on a grid of
+// 5 mm spacing from `origin_mm` over 11 x 7 x 5 nodes (50 x 30 x 20 mm).
+rt::CorrectionField constant_base(const Eigen::Vector3d& origin_mm,
+                                  const std::vector<std::int32_t>& tools, double dx_mm = 0.01) {
+  rt::FieldGrid g;
+  g.origin_mm = origin_mm;
+  g.spacing_mm = Eigen::Vector3d::Constant(5.0);
+  g.dims = {11, 7, 5};
+  std::vector<rt::FieldLayer> layers;
+  for (std::int32_t t : tools)
+    layers.push_back({t, std::vector<rt::FieldNode>(std::size_t(g.node_count()),
+                                                    rt::FieldNode{dx_mm, 0.0, 0.0, 1.0})});
+  return rt::CorrectionField(g, std::move(layers));
+}
+
+FieldPipelineResult run_with_base(const PlateCase& c, const rt::CorrectionField& base) {
+  FieldPipelineInputs in;
+  in.nominal = &c.nominal;
+  in.scan = &c.scan;
+  in.program = &c.program;
+  in.tools = c.tools;
+  in.base_field = &base;
+  in.base_field_name = "--base b.tcf";
+  FieldPipelineOptions o;
+  o.register_scan = false;
+  o.fit.spacing_mm = 1.0;
+  return run_field_pipeline(in, o);
+}
+
+std::string refusal(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "(not refused)";
+}
+
+// Issue 23 (sweep F3): a base field with no layer for the program's tool, or
+// whose grid lies off the part, was dropped without a word: the new field
+// was byte for byte the one made without it. Both are refused; a base that
+// covers the part is added.
+TEST(FieldPipeline, ABaseFieldThatAddsNothingIsRefused) {
+  const PlateCase c = plate_case(kConstant, 0.0);
+  const rt::CorrectionField t9 = constant_base({-5, -5, -10}, {9});
+  std::string why = refusal([&] { run_with_base(c, t9); });
+  EXPECT_NE(why.find("--base b.tcf has no layer for any tool the program cuts with (T1; T1 first "
+                     "at line"),
+            std::string::npos)
+      << why;
+  EXPECT_NE(why.find("its layers: T9"), std::string::npos) << why;
+  const rt::CorrectionField far = constant_base({500, 500, 500}, {1});
+  why = refusal([&] { run_with_base(c, far); });
+  EXPECT_NE(why.find("--base b.tcf adds nothing at any of the"), std::string::npos) << why;
+  EXPECT_NE(why.find("(500, 500, 500) .. (550, 530, 520) mm"), std::string::npos) << why;
+  const rt::CorrectionField zero = constant_base({-5, -5, -10}, {1}, 0.0);
+  why = refusal([&] { run_with_base(c, zero); });
+  EXPECT_NE(why.find("adds nothing"), std::string::npos) << why;
+
+  const rt::CorrectionField covering = constant_base({-5, -5, -10}, {1});
+  const FieldPipelineResult r = run_with_base(c, covering);
+  EXPECT_GT(r.base_samples, 0u);
+  EXPECT_EQ(r.base_samples_corrected, r.base_samples);
+  EXPECT_EQ(r.base_samples_outside, 0u);
+}
+
+// Issue 23 (sweep F20): --spacing 0.01 on the implant placed 1.1 million
+// points, inside --max-points, and ran 73 s into std::bad_alloc (the sphere
+// supports and placements, about 4 KB a point). The memory estimate refuses
+// such a run before any work, naming the limit and the option.
+TEST(FieldPipeline, AnEstimateOverTheMemoryBudgetIsRefusedBeforeAnyWork) {
+  const PlateCase c = plate_case(kConstant, 0.0);
+  FieldPipelineInputs in;
+  in.nominal = &c.nominal;
+  in.scan = &c.scan;
+  in.program = &c.program;
+  in.tools = c.tools;
+  FieldPipelineOptions o;
+  o.register_scan = false;
+  o.fit.spacing_mm = 1.0;
+  o.method = ErrorMethod::kSphere;
+  o.spacing_mm = 0.01;  // 800 mm² / 1e-4 mm²: 8e6 points, inside --max-points
+  int stages = 0;
+  const std::string why = refusal([&] {
+    run_field_pipeline(in, o, [&](const std::string&, double, const std::string&) { ++stages; });
+  });
+  EXPECT_NE(why.find("this run would need about"), std::string::npos) << why;
+  EXPECT_NE(why.find("more than --max-memory-mb 4096"), std::string::npos) << why;
+  EXPECT_NE(why.find("raise --max-memory-mb"), std::string::npos) << why;
+  EXPECT_EQ(stages, 0);
+  // Within a budget raised enough, the estimate lets the same inputs pass
+  // the check (a coarser spacing, so that the test stays quick).
+  o.spacing_mm = 0.5;
+  o.max_memory_mb = 50;
+  const FieldPipelineResult r = run_field_pipeline(in, o);
+  EXPECT_GT(r.estimated_memory_mb, 0.0);
+  EXPECT_LT(r.estimated_memory_mb, 50.0);
+  o.max_memory_mb = 0.5 * r.estimated_memory_mb;
+  EXPECT_NE(refusal([&] { run_field_pipeline(in, o); }).find("--max-memory-mb"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace truecut::offline

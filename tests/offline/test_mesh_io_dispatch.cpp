@@ -1,6 +1,10 @@
 #include "mesh_io_test_util.hpp"
 #include "test_paths.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <functional>
 #include <limits>
 
@@ -50,7 +54,29 @@ TEST(MeshIoDispatch, UnknownAndEmptyFiles) {
   write_bytes(dir / "empty.ply", "");
   expect_error([&] { read_mesh(dir / "empty.ply"); }, {"empty.ply", "empty file"});
   expect_error([&] { read_mesh(dir / "absent.stl"); }, {"absent.stl", "cannot open"});
-  expect_error([&] { read_mesh(dir); }, {"is a directory"});
+  expect_error([&] { read_mesh(dir); }, {"is a folder, not a mesh or point cloud"});
+}
+
+// Issue 23 (sweep F25): the mesh and point readers opened a FIFO (which
+// blocks until a writer comes) and /dev/zero ("cannot read the file size:
+// Operation not supported"); they now take the check every other reader
+// makes. The test holds the FIFO's write end itself, so the old reader's
+// open could not block.
+TEST(MeshIoDispatch, ADeviceOrAPipeIsNotARegularFile) {
+  const auto dir = test::scratch_dir();
+  const std::filesystem::path fifo = dir / "scan.stl";
+  ASSERT_EQ(0, ::mkfifo(fifo.c_str(), 0600));
+  const int writer = ::open(fifo.c_str(), O_RDWR | O_NONBLOCK);
+  ASSERT_GE(writer, 0);
+  const char* says = "is not a regular file (a device, pipe or socket is read without end)";
+  expect_error([&] { read_mesh(fifo); }, {"scan.stl: ", says});
+  expect_error([&] { read_point_cloud(fifo); }, {"scan.stl: ", says});
+  expect_error([&] { read_stl(fifo); }, {"scan.stl: ", says});
+  ::close(writer);
+  if (std::filesystem::exists("/dev/zero")) {
+    expect_error([&] { read_mesh("/dev/zero"); }, {"/dev/zero: ", says});
+    expect_error([&] { read_point_text("/dev/zero"); }, {"/dev/zero: ", says});
+  }
 }
 
 TEST(MeshIoDispatch, ReadMeshAndPointCloudFromAnyFormat) {

@@ -5,7 +5,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 #include <random>
+#include <string>
 
 namespace truecut::offline {
 namespace {
@@ -195,6 +197,40 @@ TEST(RayScene, RejectsIndexOutOfRange) {
     EXPECT_NE(std::string(e.what()).find("triangle 0 refers to vertex 3"), std::string::npos)
         << e.what();
   }
+}
+
+// Issue 23 (sweep F1): a CMM point at x = 1e20 mm reached Embree, which
+// asserted and ended the process (SIGABRT). Such rays and query points are
+// refused with an exception, in every batch mode; a far but real ray works.
+TEST(RayScene, RaysAndPointsEmbreeCannotTakeAreRefused) {
+  const TriangleMesh m = test_geo::plate(10, 10, 4, 4, [](double, double) { return 0.0; });
+  const RayScene scene(m);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<Ray> bad = {
+      {{1e20, 0, 5}, {1, 0, 0}, 0.0, 1.0},
+      {{nan, 0, 5}, {0, 0, -1}, 0.0, 1.0},
+      {{5, 5, 1}, {0, 0, 0}, 0.0, 1.0},
+      {{5, 5, 1}, {0, 0, -1}, nan, 1.0},
+  };
+  for (const RayBatch batch : {RayBatch::kSingle, RayBatch::kPacket16, RayBatch::kStream})
+    for (std::size_t k = 0; k < bad.size(); ++k) {
+      std::vector<Ray> rays = {{{5, 5, 1}, {0, 0, -1}, 0.0, 5.0}, bad[k]};
+      std::vector<RayHit> hits(rays.size());
+      try {
+        scene.intersect(rays, hits, {batch, true});
+        ADD_FAILURE() << "ray " << k << " was cast";
+      } catch (const RayEngineError& e) {
+        EXPECT_NE(std::string(e.what()).find("ray 2 of 2: origin"), std::string::npos) << e.what();
+      }
+    }
+  std::vector<std::uint32_t> near;
+  EXPECT_THROW(scene.triangles_within({1e20, 0, 0}, 1.0, near), RayEngineError);
+  EXPECT_THROW(scene.triangles_within({0, nan, 0}, 1.0, near), RayEngineError);
+  const std::vector<Ray> far = {{{5, 5, 1e8}, {0, 0, -1}, 0.0, 2e8}};
+  std::vector<RayHit> hit(1);
+  scene.intersect(far, hit);
+  ASSERT_TRUE(hit[0].hit());
+  EXPECT_NEAR(hit[0].distance_mm, 1e8, 1e-6);
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "effect_params.hpp"
 #include "locate.hpp"
 #include "model_fit.hpp"
+#include "report_text.hpp"
 #include "tcp_stage.hpp"
 #include "trace.hpp"
 #include "truecut/analysis/diagnosis/diagnosis.hpp"
@@ -942,8 +943,11 @@ void take_fit(const ModelFit& fit, const Recording& train_rec,
   res.candidates_tested.insert(res.candidates_tested.begin(), "logging_delay");
   res.fitted = believed;
   res.fitted.machine = fit.params;
-  res.fitted.name = (believed.name.empty() ? std::string("machine") : believed.name) +
-                    " + diagnosis of " + train_rec.file;
+  // The machine description's writer takes UTF-8 only; a Latin-1 file name
+  // made it throw after all the work.
+  res.fitted.name =
+      report_text::utf8_safe((believed.name.empty() ? std::string("machine") : believed.name) +
+                             " + diagnosis of " + train_rec.file);
 }
 
 }  // namespace

@@ -144,7 +144,7 @@ std::string diagnosis_json(const DiagnosisResult& r) {
                     {"white", r.whiteness.white}};
   j["notes"] = r.notes;
   j["verdict"] = r.verdict;
-  return j.dump(2) + "\n";
+  return report_text::json_text(j);
 }
 
 // "glitch rows: 2 (row 313 x_cmd, ...), left out" or nothing; rows of the

@@ -92,4 +92,23 @@ inline nlohmann::json json_number(double v) {
   return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
 }
 
+// The document as indented JSON text. A string that is not UTF-8 (a Latin-1
+// file name, an operation name from a program in another encoding) has each
+// invalid byte replaced by U+FFFD: the report is written, and names the
+// input as nearly as UTF-8 can; nlohmann's default threw type_error.316
+// after all the work.
+template <class Json>
+std::string json_text(const Json& j) {
+  return j.dump(2, ' ', false, Json::error_handler_t::replace) + "\n";
+}
+
+// `s` with each byte that is not UTF-8 replaced by U+FFFD, as json_text
+// writes it: for a name that goes into JSON through another writer (the
+// fitted machine's name, which carries the recording's file name).
+inline std::string utf8_safe(const std::string& s) {
+  return nlohmann::json::parse(
+             nlohmann::json(s).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace))
+      .get<std::string>();
+}
+
 }  // namespace truecut::analysis::report_text

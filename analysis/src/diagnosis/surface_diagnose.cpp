@@ -31,6 +31,14 @@ namespace {
 
 namespace fs = std::filesystem;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr std::size_t kMinSurfacePoints = 20;  // points both measured and re-machined
+
+std::string join(const std::vector<std::string>& names) {
+  std::string s;
+  for (const auto& n : names)
+    s += (s.empty() ? "" : ", ") + n;
+  return s;
+}
 
 std::uint64_t fnv1a(const std::string& s) {
   std::uint64_t h = 1469598103934665603ULL;
@@ -39,6 +47,14 @@ std::uint64_t fnv1a(const std::string& s) {
     h *= 1099511628211ULL;
   }
   return h;
+}
+
+std::string replace_all(std::string text, const std::string& from, const std::string& to) {
+  if (from.empty()) return text;
+  for (std::size_t at = text.find(from); at != std::string::npos;
+       at = text.find(from, at + to.size()))
+    text.replace(at, from.size(), to);
+  return text;
 }
 
 struct Run {
@@ -95,7 +111,7 @@ class Machinist {
     const fs::path done = dir / "done";
     if (!fs::exists(done)) {
       if (options_.progress) options_.progress("re-machining (" + why + ") in " + dir.string());
-      fs::create_directories(dir);
+      create_directories_tracked(dir);
       sim::write_machine_description(dir / "machine.json", m);
       sim::SoftCncJob j;
       j.machine = dir / "machine.json";
@@ -106,10 +122,17 @@ class Machinist {
       j.out_dir = dir;
       j.component_path = job_.component_path;
       j.record_every = 100;
-      const auto r = sim::run_soft_cnc(j);
+      sim::SoftCncResult r;
+      try {
+        r = sim::run_soft_cnc(j);
+      } catch (const sim::SoftCncInputError& e) {
+        // Bad input (a program that leaves the travel, a tool table that does
+        // not read): named with the --machine file, not the internal copy.
+        throw DiagnosisError(replace_all(e.what(), j.machine.string(), machine_name(why)));
+      }
       if (!r.finished || r.limit_fault)
         throw std::runtime_error(
-            "re-machining " + job_.program.string() + " on " + (dir / "machine.json").string() +
+            "re-machining " + job_.program.string() + " on " + machine_name(why) +
             (r.limit_fault ? " left the machine's travel" : " did not finish"));
       std::ofstream(done) << "ok\n";
       ++runs_;
@@ -129,7 +152,36 @@ class Machinist {
   }
   int runs() const { return runs_; }
 
+  // Removes the folders this diagnosis created (after a failure: bad input
+  // leaves nothing behind); runs reused from an earlier diagnosis stay.
+  void remove_created() {
+    std::error_code ec;
+    for (auto it = created_.rbegin(); it != created_.rend(); ++it)
+      fs::remove_all(*it, ec);
+    created_.clear();
+  }
+
  private:
+  // create_directories that remembers the outermost folder it made.
+  void create_directories_tracked(const fs::path& dir) {
+    fs::path outermost;
+    for (fs::path p = dir; !p.empty() && !fs::exists(p); p = p.parent_path()) {
+      outermost = p;
+      if (p == p.parent_path()) break;
+    }
+    fs::create_directories(dir);
+    if (!outermost.empty()) created_.push_back(outermost);
+  }
+
+  // The machine as the user named it: the --machine file, or the model
+  // derived from it for this re-machining.
+  std::string machine_name(const std::string& why) const {
+    const std::string file = job_.machine_file.empty() ? std::string("the believed machine")
+                                                       : job_.machine_file.string();
+    return why == "believed model" ? file : file + " (" + why + ")";
+  }
+
+  std::vector<fs::path> created_;
   const SurfaceJob& job_;
   const std::vector<sim::measure::CmmPoint>& points_;
   const SurfaceOptions& options_;
@@ -245,9 +297,10 @@ std::vector<std::size_t> usable_points(const SurfaceMeasurement& measurement, co
   std::vector<std::size_t> use;
   for (std::size_t i = 0; i < measurement.points.size(); ++i)
     if (measurement.points[i].valid && std::isfinite(base.deviation_mm[i])) use.push_back(i);
-  if (use.size() < 20)
+  if (use.size() < kMinSurfacePoints)
     throw DiagnosisError(measurement.source + ": only " + std::to_string(use.size()) +
-                         " points are both measured and on the re-machined surface (need 20)");
+                         " points are both measured and on the re-machined surface (need " +
+                         std::to_string(kMinSurfacePoints) + ")");
   return use;
 }
 
@@ -774,21 +827,88 @@ SurfaceDiagnosisResult result_header(const SurfaceMeasurement& measurement, cons
   return res;
 }
 
+void diagnose_with(Machinist& machinist, const SurfaceMeasurement& measurement,
+                   const SurfaceJob& job, const sim::MachineDescription& believed,
+                   const SurfaceOptions& options, SurfaceDiagnosisResult& res);
+
+// Refused before any re-machining: a name that is no surface-mode effect
+// (a typo, or a trace-mode effect such as backlash) would test nothing.
+void check_candidates(const std::vector<std::string>& candidates) {
+  const auto& known = surface_candidate_effects();
+  for (const auto& c : candidates)
+    if (std::find(known.begin(), known.end(), c) == known.end())
+      throw DiagnosisError("candidate '" + c +
+                           "' is not a surface-mode effect; known: " + join(known));
+}
+
+// A measurement with fewer usable points than a fit needs is refused before
+// any re-machining.
+void check_measured_points(const SurfaceMeasurement& measurement) {
+  std::size_t valid = 0;
+  for (const auto& p : measurement.points)
+    valid += p.valid ? 1 : 0;
+  if (valid < kMinSurfacePoints)
+    throw DiagnosisError(measurement.source + ": only " + std::to_string(valid) + " of " +
+                         std::to_string(measurement.points.size()) +
+                         " points are measured (valid, with a deviation); need " +
+                         std::to_string(kMinSurfacePoints));
+}
+
+// "surface 6 (base_bottom)" for each surface with nominal points of which
+// none was measured (a face the scanner never saw).
+std::vector<std::string> unmeasured_surfaces(const SurfaceMeasurement& measurement,
+                                             const OperationMap& ops) {
+  std::map<int, std::size_t> valid;
+  for (const auto& p : measurement.points)
+    valid[p.nominal.surface] += p.valid ? 1 : 0;
+  std::vector<std::string> out;
+  for (const auto& [surface, count] : valid) {
+    if (count > 0) continue;
+    const auto it = ops.surface_name.find(surface);
+    out.push_back("surface " + std::to_string(surface) +
+                  (it != ops.surface_name.end() ? " (" + it->second + ")" : ""));
+  }
+  return out;
+}
+
 }  // namespace
+
+const std::vector<std::string>& surface_candidate_effects() {
+  static const std::vector<std::string> names{"tool_radius_error",    "tool_length_error",
+                                              "rotary_location",      "tool_deflection",
+                                              "workpiece_deflection", "squareness"};
+  return names;
+}
 
 SurfaceDiagnosisResult diagnose_surface(const SurfaceMeasurement& measurement,
                                         const SurfaceJob& job,
                                         const sim::MachineDescription& believed,
                                         const SurfaceOptions& options) {
-  auto progress = [&](const std::string& s) {
-    if (options.progress) options.progress(s);
-  };
+  check_candidates(options.candidates);
+  check_measured_points(measurement);
   SurfaceDiagnosisResult res = result_header(measurement, job, believed);
 
   std::vector<sim::measure::CmmPoint> nominal;
   for (const auto& p : measurement.points)
     nominal.push_back(p.nominal);
   Machinist machinist(job, nominal, options);
+  try {
+    diagnose_with(machinist, measurement, job, believed, options, res);
+  } catch (...) {
+    machinist.remove_created();
+    throw;
+  }
+  return res;
+}
+
+namespace {
+
+void diagnose_with(Machinist& machinist, const SurfaceMeasurement& measurement,
+                   const SurfaceJob& job, const sim::MachineDescription& believed,
+                   const SurfaceOptions& options, SurfaceDiagnosisResult& res) {
+  auto progress = [&](const std::string& s) {
+    if (options.progress) options.progress(s);
+  };
   const Run base = machinist.machine(believed, "believed model");
   const bool five_axis = base.a_range_deg > 1.0 || base.c_range_deg > 1.0;
 
@@ -809,7 +929,9 @@ SurfaceDiagnosisResult diagnose_surface(const SurfaceMeasurement& measurement,
     used_nominal.push_back(measurement.points[i].nominal);
   const SurfaceNoise noise = surface_noise_floor(used_nominal, r0, sp.tr);
   res.noise_floor_mm = noise.floor_mm;
-  res.mismatch = locate_regions(measurement, sp, r0, read_operations(job.part), res.noise_floor_mm);
+  const OperationMap ops = read_operations(job.part);
+  res.mismatch = locate_regions(measurement, sp, r0, ops, res.noise_floor_mm);
+  res.unmeasured_surfaces = unmeasured_surfaces(measurement, ops);
 
   WorkpieceGeometry geometry;
   geometry.clamp_point_mm = {sp.centroid.x(), sp.centroid.y(), sp.lo.z()};
@@ -846,8 +968,10 @@ SurfaceDiagnosisResult diagnose_surface(const SurfaceMeasurement& measurement,
   }
   res.before_mm = before;
   res.after_mm = after;
-  res.verdict = surface_verdict(G.selected, !res.mismatch.empty());
-  return res;
+  res.verdict = S.groups.empty() ? "nothing tested: no candidate effect moves a measured point"
+                                 : surface_verdict(G.selected, !res.mismatch.empty());
 }
+
+}  // namespace
 
 }  // namespace truecut::analysis::diagnosis

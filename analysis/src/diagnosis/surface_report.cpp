@@ -73,6 +73,7 @@ std::string surface_diagnosis_json(const SurfaceDiagnosisResult& r) {
                   {"max_mm", num(g.max_mm)},
                   {"ratio_to_floor", num(g.ratio_to_floor)}});
   j["mismatch"] = mm;
+  j["unmeasured_surfaces"] = r.unmeasured_surfaces;
   json ex = json::array();
   for (const auto& e : r.explanations) {
     json p = json::object(), ci = json::object();
@@ -107,7 +108,7 @@ std::string surface_diagnosis_json(const SurfaceDiagnosisResult& r) {
   }
   j["fit"] = {{"train", fit_json(r.train)}, {"heldout", heldout}};
   j["verdict"] = r.verdict;
-  return j.dump(2) + "\n";
+  return report_text::json_text(j);
 }
 
 std::string surface_diagnosis_summary(const SurfaceDiagnosisResult& r) {
@@ -126,10 +127,14 @@ std::string surface_diagnosis_summary(const SurfaceDiagnosisResult& r) {
     << rt::format_printf("%.3g", r.registration_rotation_urad.z()) << ") µrad\n";
   o << "noise floor " << rt::format_printf("%.4g", r.noise_floor_mm * 1e3) << " µm; "
     << r.resimulations << " re-machinings\n";
+  for (const auto& u : r.unmeasured_surfaces)
+    o << "not measured (no valid point): " << u << "\n";
   if (!r.mismatch.empty()) o << "above the noise floor:\n";
   for (const auto& g : r.mismatch)
-    o << "  " << g.where << " " << g.what << ": rms " << rt::format_printf("%.4g", g.rms_mm * 1e3)
-      << " µm, mean " << rt::format_printf("%.4g", g.mean_mm * 1e3) << " µm ("
+    // "surface 3 (shaft_y_pos)" names its kind already ("surface surface 3" before).
+    o << "  " << (g.what.rfind(g.where + " ", 0) == 0 ? g.what : g.where + " " + g.what) << ": rms "
+      << rt::format_printf("%.4g", g.rms_mm * 1e3) << " µm, mean "
+      << rt::format_printf("%.4g", g.mean_mm * 1e3) << " µm ("
       << rt::format_printf("%.3g", g.ratio_to_floor) << "× floor)\n";
   for (const auto& e : r.explanations) {
     o << "found " << e.effect << (e.axis.empty() ? "" : ":" + e.axis) << ":";

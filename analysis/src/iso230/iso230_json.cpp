@@ -1,6 +1,7 @@
 // iso230.json: lengths carry _mm (x y z) or _deg (a c) in their key.
 #include <nlohmann/json.hpp>
 
+#include "diagnosis/report_text.hpp"
 #include "truecut/analysis/iso230_report.hpp"
 
 namespace truecut::analysis {
@@ -135,7 +136,7 @@ std::string iso230_json(const Iso230Report& r) {
   j["circles"] = ordered_json::array();
   for (const auto& c : r.circles)
     j["circles"].push_back(circle_json(c));
-  return j.dump(2) + "\n";
+  return report_text::json_text(j);
 }
 
 }  // namespace truecut::analysis

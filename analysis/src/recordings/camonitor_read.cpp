@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <string_view>
@@ -18,6 +19,7 @@
 #include "channel_range.hpp"
 #include "line_reader.hpp"
 #include "truecut/analysis/recording.hpp"
+#include "truecut/rt/number_format.hpp"
 
 namespace truecut::analysis {
 namespace {
@@ -56,6 +58,12 @@ std::int64_t days_from_civil(int y, int m, int d) {
   return era * 146097 + std::int64_t(doe) - 719468;
 }
 
+int days_in_month(int y, int m) {
+  static constexpr int kDays[] = {31, 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
+  const bool leap = (y % 4 == 0 && y % 100 != 0) || y % 400 == 0;
+  return m == 2 && leap ? 29 : kDays[m - 1];
+}
+
 bool is_date(std::string_view s) {
   int v = 0;
   return s.size() == 10 && digits(s, 0, 4, v) && s[4] == '-' && digits(s, 5, 2, v) && s[7] == '-' &&
@@ -78,7 +86,8 @@ bool parse_stamp(std::string_view date, std::string_view time, double& seconds) 
   digits(time, 0, 2, h);
   digits(time, 3, 2, mi);
   digits(time, 6, 2, s);
-  if (mo < 1 || mo > 12 || d < 1 || d > 31 || h > 23 || mi > 59 || s > 60) return false;
+  if (mo < 1 || mo > 12 || d < 1 || d > days_in_month(y, mo) || h > 23 || mi > 59 || s > 60)
+    return false;
   double fraction = 0;
   if (time.size() > 8) {
     if (time[8] != '.' || time.size() == 9) return false;
@@ -103,6 +112,13 @@ struct Event {
   double time;
   std::size_t channel;
   double value;
+};
+
+// A time stamp and where it was read, for the span check.
+struct Stamp {
+  double time = 0;
+  std::size_t line = 0;
+  std::string text;
 };
 
 std::string list(const std::vector<std::string>& names) {
@@ -146,6 +162,7 @@ Recording read_camonitor(const std::filesystem::path& file, const RecordingOptio
   detail::LineReader in(file);
   std::string line;
   std::vector<Event> events;
+  std::optional<Stamp> earliest, latest;
   std::vector<std::string> pvs;  // every PV of the log, in order of appearance
   std::set<std::string> seen;
   while (in.next(line)) {
@@ -167,9 +184,13 @@ Recording read_camonitor(const std::filesystem::path& file, const RecordingOptio
     double time = 0, value = 0;
     if (!parse_stamp(tok[1], tok[2], time))
       throw RecordingError(where() + ": bad time stamp '" + std::string(tok[1]) + " " +
-                           std::string(tok[2]) + "' (expected YYYY-MM-DD HH:MM:SS.ffffff)");
+                           std::string(tok[2]) +
+                           "' (expected a date and time that exist, YYYY-MM-DD HH:MM:SS.ffffff)");
     if (!parse_number(tok[3], value))
       throw RecordingError(where() + ": value '" + std::string(tok[3]) + "' is not a number");
+    const std::string stamp_text = std::string(tok[1]) + " " + std::string(tok[2]);
+    if (!earliest || time < earliest->time) earliest = Stamp{time, in.line_number(), stamp_text};
+    if (!latest || time > latest->time) latest = Stamp{time, in.line_number(), stamp_text};
     for (std::size_t c : it->second) {
       if (const std::string bad = detail::implausible_value(channels[c], value * scales[c]);
           !bad.empty())
@@ -191,6 +212,18 @@ Recording read_camonitor(const std::filesystem::path& file, const RecordingOptio
       throw RecordingError(name + ": --map " + channels[chans.front()] + "=" + pv +
                            ": the log has no PV '" + pv + "'; PVs in the log: " + list(pvs));
 
+  // Times are taken from the first row; a recording spans at most the
+  // recording readers' 1e9 s (a year 9999 among 2022's stamps gave 2.5e11 s).
+  if (earliest && latest) {
+    const std::string bad = detail::implausible_value("t", latest->time - earliest->time);
+    if (!bad.empty())
+      throw RecordingError(
+          name + ":" + std::to_string(latest->line) + ": time stamp '" + latest->text + "' is " +
+          rt::format_shortest(latest->time - earliest->time) + " s after the stamp '" +
+          earliest->text + "' on line " + std::to_string(earliest->line) +
+          ": a recording spans at most 1e9 s ("
+          "31 years); check the dates");
+  }
   std::stable_sort(events.begin(), events.end(),
                    [](const Event& a, const Event& b) { return a.time < b.time; });
   std::vector<double> value(channels.size(), 0.0);

@@ -128,8 +128,16 @@ std::vector<Binding> bind_channels(const std::string& at, const std::vector<std:
   // The column called `name`: exactly, else without its unit, else ignoring
   // case (without the unit); an ambiguous match is an error.
   auto find = [&](const std::string& name) -> std::optional<std::size_t> {
-    for (std::size_t i = 0; i < columns.size(); ++i)
-      if (columns[i] == name) return i;
+    for (std::size_t i = 0; i < columns.size(); ++i) {
+      if (columns[i] != name) continue;
+      // The same name twice is an ambiguous channel: which column holds it?
+      for (std::size_t k = i + 1; k < columns.size(); ++k)
+        if (columns[k] == name)
+          throw RecordingError(at + ": columns " + std::to_string(i + 1) + " and " +
+                               std::to_string(k + 1) + " are both named '" + name +
+                               "': an ambiguous channel; remove or rename one of them");
+      return i;
+    }
     for (const bool fold : {false, true}) {
       std::optional<std::size_t> hit;
       for (std::size_t i = 0; i < columns.size(); ++i) {

@@ -11,6 +11,7 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <mutex>
 
 namespace truecut::offline {
@@ -19,6 +20,21 @@ namespace {
 
 constexpr unsigned kAllMask = 0xffffffffu;  // one geometry, every ray sees it
 constexpr std::size_t kRaysPerTask = 1024;
+// Embree asserts (and ends the process) on a ray it cannot hold in float: a
+// NaN, or a coordinate beyond 1.8e18. Queries farther than this from the
+// scene's centre, or not finite, are refused before any reaches it; no
+// query of a real part comes near (a CMM point at x = 1e20 mm did).
+constexpr double kMaxQueryOffsetMm = 1e9;
+
+std::string format_vector(const Eigen::Vector3d& v) {
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "(%g, %g, %g)", v.x(), v.y(), v.z());
+  return buf;
+}
+
+bool usable_offset(const Eigen::Vector3d& offset_mm) {
+  return offset_mm.allFinite() && offset_mm.cwiseAbs().maxCoeff() <= kMaxQueryOffsetMm;
+}
 
 const char* error_name(RTCError code) {
   switch (code) {
@@ -87,6 +103,27 @@ struct RayScene::Impl {
     r.direction = mesh_from_world.linear() * ray.direction;
     return r;
   }
+  // Throws RayEngineError for a ray Embree cannot take (kMaxQueryOffsetMm).
+  void check_ray(const Ray& world, std::size_t i, std::size_t n) const {
+    const Ray r = to_mesh(world);
+    const double d = r.direction.norm();
+    const bool ok = usable_offset(r.origin_mm - origin_mm) && r.direction.allFinite() && d > 0.0 &&
+                    d <= kMaxQueryOffsetMm && !std::isnan(r.t_min_mm) && !std::isnan(r.t_max_mm);
+    if (ok) return;
+    throw RayEngineError("ray " + std::to_string(i + 1) + " of " + std::to_string(n) + ": origin " +
+                         format_vector(world.origin_mm) + " mm, direction " +
+                         format_vector(world.direction) +
+                         ": not finite, zero or farther than 1e9 mm from the mesh; the ray "
+                         "engine cannot take it");
+  }
+  // Throws RayEngineError for a query point Embree cannot take.
+  void check_point(const Eigen::Vector3d& p_mesh) const {
+    if (usable_offset(p_mesh - origin_mm)) return;
+    throw RayEngineError("query point " + format_vector(p_mesh) +
+                         " mm: not finite or farther than 1e9 mm from the mesh; the ray engine "
+                         "cannot take it");
+  }
+
   // A hit found with to_mesh(ray): its normal back in the world frame.
   void to_world(RayHit& hit) const {
     if (posed && hit.hit()) hit.normal = world_from_mesh.linear() * hit.normal;
@@ -235,6 +272,8 @@ void RayScene::intersect(std::span<const Ray> rays, std::span<RayHit> hits,
                          std::to_string(hits.size()) + " hits");
   }
   const Impl& m = *impl_;
+  for (std::size_t i = 0; i < rays.size(); ++i)
+    m.check_ray(rays[i], i, rays.size());
   const bool refine = options.refine_in_double;
   auto miss = [](RayHit& h) { h = RayHit{}; };
 
@@ -384,6 +423,7 @@ template <class Found>
 void RayScene::collect_within(const Eigen::Vector3d& p, double radius_mm,
                               std::vector<Found>& out) const {
   const Impl& m = *impl_;
+  m.check_point(p);
   const std::size_t first = out.size();
   ProximityQuery<Found> q{&m.vertices_mm, &m.triangles, p, radius_mm * radius_mm, &out};
   const Eigen::Vector3d local = p - m.origin_mm;

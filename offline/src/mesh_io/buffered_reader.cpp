@@ -1,6 +1,7 @@
 #include "mesh_io/buffered_reader.hpp"
 
 #include "truecut/offline/mesh_io_error.hpp"
+#include "truecut/rt/input_file.hpp"
 
 #include <cerrno>
 #include <cstring>
@@ -8,10 +9,28 @@
 
 namespace truecut::offline::mesh_io {
 
+namespace {
+
+// What is not a regular file goes through the check every reader shares: a
+// FIFO would block the open, a device never ends. A regular file's size is
+// left to the readers (scans may exceed the general input budget; they check
+// the counts of their headers against the bytes that follow).
+void check_regular_file(const std::filesystem::path& file) {
+  std::error_code ec;
+  if (std::filesystem::is_regular_file(file, ec) && !ec) return;
+  try {
+    rt::check_input_file(file, "mesh or point cloud");
+  } catch (const rt::InputFileError& e) {
+    throw MeshIoError(file, e.reason());
+  }
+}
+
+}  // namespace
+
 BufferedReader::BufferedReader(const std::filesystem::path& file, std::size_t capacity)
     : path_(file), buffer_(capacity) {
+  check_regular_file(file);
   std::error_code ec;
-  if (std::filesystem::is_directory(file, ec)) throw MeshIoError(file, "is a directory");
   file_ = std::fopen(file.c_str(), "rb");
   if (!file_) throw MeshIoError(file, std::string("cannot open: ") + std::strerror(errno));
   std::setvbuf(file_, nullptr, _IONBF, 0);  // this class is the buffer

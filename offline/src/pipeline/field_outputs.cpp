@@ -305,12 +305,14 @@ std::string audit_json(const FieldPipelineResult& r, const FieldPipelineOptions&
     stages.push_back({{"name", s.name}, {"wall_s", s.wall_s}, {"peak_rss_mb", s.peak_rss_mb}});
   j["stages"] = stages;
   j["total_wall_s"] = r.total_wall_s;
-  return j.dump(2) + "\n";
+  // Invalid UTF-8 in a string (a Latin-1 file name or operation name) becomes
+  // U+FFFD: nlohmann's default threw type_error.316 after all the work.
+  return j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
 }
 
 std::vector<FileDigest> write_field_outputs(const fs::path& dir, const FieldPipelineResult& r,
                                             const FieldPipelineOptions& o, const AuditContext& c) {
-  const char* names[] = {"field.tcf", "compensation_matrix.csv", "adapted.stl", "audit.json"};
+  const auto& names = kFieldOutputFiles;
   rt::StagedFiles files({dir / names[0], dir / names[1], dir / names[2], dir / names[3]}, ".new");
   std::error_code ec;
   fs::create_directories(dir, ec);

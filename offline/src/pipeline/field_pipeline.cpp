@@ -8,6 +8,8 @@
 #include <map>
 #include <mutex>
 #include <stdexcept>
+#include <string>
+#include <variant>
 
 #include <sys/resource.h>
 #include <tbb/parallel_for.h>
@@ -317,24 +319,137 @@ void smooth_and_adapt(const TriangleMesh& nominal, const FieldPipelineOptions& o
                                opt.truss.kb_over_kc, static_cast<long long>(r.truss.edge_count)));
 }
 
+// Memory per compensation point, measured on the implant (sphere method,
+// `--spacing` 0.05 and 0.025: 44,544 and 178,176 points, 229 and 771 MB peak,
+// 4.25 KB a point between them): its tool-centre placements and fit samples
+// (about eleven passes cut each point there), its vectors and statuses,
+// about 2.6 KB; and 12 bytes for each scan point of its sphere's support
+// list (about 141 there). A scan point costs about 150 bytes (its copy in
+// the registration, the k-d tree, the normals), a field grid node 135 bytes
+// per layer while fitting.
+constexpr double kBytesPerPoint = 2600.0;
+constexpr double kBytesPerSupportEntry = 12.0;
+constexpr double kBytesPerScanPoint = 150.0;
+constexpr double kBytesPerGridNode = 135.0;
+
+// The tools the program cuts with (feed moves), each with the line and
+// operation of its first cut.
+struct CuttingTool {
+  int line = 0;
+  std::string operation;
+};
+std::map<std::int32_t, CuttingTool> cutting_tools(const interp::CanonProgram& program,
+                                                  const std::vector<ToolShape>& shapes) {
+  std::map<std::int32_t, CuttingTool> out;
+  for (const interp::CanonCall& call : program.calls) {
+    if (!interp::is_motion(call.op) || std::holds_alternative<interp::StraightTraverse>(call.op))
+      continue;
+    const auto t = std::find_if(shapes.begin(), shapes.end(),
+                                [&](const ToolShape& s) { return s.tool == call.context.tool; });
+    if (t != shapes.end() && !out.count(t->tool))
+      out[t->tool] = {call.context.line, call.context.operation};
+  }
+  return out;
+}
+
+// The base field's layers, "T1, T2" (or "none").
+std::string layer_list(const rt::CorrectionField& field) {
+  std::string layers;
+  for (std::int32_t t : field.tools())
+    layers += (layers.empty() ? "T" : ", T") + std::to_string(t);
+  return layers.empty() ? "none" : layers;
+}
+
+bool has_layer(const rt::CorrectionField& field, std::int32_t tool) {
+  const auto tools = field.tools();
+  return std::find(tools.begin(), tools.end(), tool) != tools.end();
+}
+
+// Before any work: a base field with a layer for none of the tools the
+// program cuts with (a field of another part or tool set) cannot be the one
+// the scanned part was cut with. A layer missing for one tool is found at
+// the fit (check_base_layer): a tool that cut no compensated surface has no
+// layer in the field of the last iteration, rightly.
+void check_base_layers(const FieldPipelineInputs& in) {
+  if (!in.base_field) return;
+  const auto tools = cutting_tools(*in.program, in.tools);
+  if (tools.empty()) return;
+  std::string cut;
+  for (const auto& [tool, first] : tools) {
+    if (has_layer(*in.base_field, tool)) return;
+    cut += (cut.empty() ? "T" : ", T") + std::to_string(tool);
+  }
+  const auto& [tool, first] = *tools.begin();
+  throw std::invalid_argument(rt::format_printf(
+      "%s has no layer for any tool the program cuts with (%s; T%d first at line %d%s); its "
+      "layers: %s. A base field is the field the scanned part was cut with",
+      in.base_field_name.c_str(), cut.c_str(), tool, first.line,
+      first.operation.empty() ? "" : (", operation '" + first.operation + "'").c_str(),
+      layer_list(*in.base_field).c_str()));
+}
+
+// At the fit: a tool whose cuts carry compensation has a layer in the base
+// (rewrite refuses a field without one likewise).
+void check_base_layer(const FieldPipelineInputs& in, std::int32_t tool, std::size_t samples) {
+  if (!in.base_field || samples == 0 || has_layer(*in.base_field, tool)) return;
+  throw std::invalid_argument(rt::format_printf(
+      "%s has no layer for tool %d, which cuts %zu compensated points' passes; its layers: %s. "
+      "Without one the next part would get only the new increment there",
+      in.base_field_name.c_str(), tool, samples, layer_list(*in.base_field).c_str()));
+}
+
+// The memory estimate (kBytesPerPoint ...) against opt.max_memory_mb.
+void check_memory(const FieldPipelineInputs& in, const FieldPipelineOptions& opt, double points,
+                  double nominal_area_mm2, double grid_nodes, FieldPipelineResult& r) {
+  double support = 3.0;  // ray method: the corners of the hit facet
+  if (opt.method == ErrorMethod::kSphere) {
+    // The scan's density over the nominal's whole area, in a sphere of Rs.
+    const double density = double(in.scan->vertices_mm.size()) / std::max(nominal_area_mm2, 1e-9);
+    support = density * M_PI * opt.sphere.radius_mm * opt.sphere.radius_mm;
+    if (opt.sphere.max_points_per_sphere > 0)
+      support = std::min(support, double(opt.sphere.max_points_per_sphere));
+  }
+  const double layers = std::max<double>(1.0, double(cutting_tools(*in.program, in.tools).size()));
+  const double bytes = points * (kBytesPerPoint + support * kBytesPerSupportEntry) +
+                       double(in.scan->vertices_mm.size()) * kBytesPerScanPoint +
+                       grid_nodes * layers * kBytesPerGridNode;
+  r.estimated_memory_mb = bytes / double(1 << 20);
+  if (r.estimated_memory_mb <= opt.max_memory_mb) return;
+  throw std::invalid_argument(rt::format_printf(
+      "this run would need about %.0f MB (%.3g compensation points at about %.1f KB each with "
+      "%.0f scan points in each one's %s, %zu scan points, a field grid of %.3g nodes x %.0f "
+      "layers), more than --max-memory-mb %.0f; choose a larger --spacing or --resolution, or "
+      "raise --max-memory-mb",
+      r.estimated_memory_mb, points, (kBytesPerPoint + support * kBytesPerSupportEntry) / 1024.0,
+      support, opt.method == ErrorMethod::kSphere ? "sphere" : "support",
+      in.scan->vertices_mm.size(), grid_nodes, layers, opt.max_memory_mb));
+}
+
 // What spacing and resolution would cost, from the nominal alone.
 void check_budgets(const FieldPipelineInputs& in, const FieldPipelineOptions& opt,
-                   const std::vector<std::int32_t>& ids) {
+                   const std::vector<std::int32_t>& ids, FieldPipelineResult& r) {
   const TriangleMesh& nominal = *in.nominal;
-  double area_mm2 = 0.0;
+  double area_mm2 = 0.0, nominal_area_mm2 = 0.0;
   Eigen::AlignedBox3d box;
+  std::vector<std::uint8_t> vertex_selected(nominal.vertices_mm.size(), 0);
   for (std::size_t t = 0; t < nominal.triangles.size(); ++t) {
-    if (!selected(opt.surfaces, ids[t])) continue;
     const auto& [a, b, c] = nominal.triangles[t];
     const Eigen::Vector3d &pa = nominal.vertices_mm[a], &pb = nominal.vertices_mm[b],
                           &pc = nominal.vertices_mm[c];
-    area_mm2 += 0.5 * (pb - pa).cross(pc - pa).norm();
+    const double facet_mm2 = 0.5 * (pb - pa).cross(pc - pa).norm();
+    nominal_area_mm2 += facet_mm2;
+    if (!selected(opt.surfaces, ids[t])) continue;
+    area_mm2 += facet_mm2;
     box.extend(pa);
     box.extend(pb);
     box.extend(pc);
+    vertex_selected[a] = vertex_selected[b] = vertex_selected[c] = 1;
   }
+  double points = 0.0;
+  for (std::uint8_t v : vertex_selected)
+    points += v;
   if (opt.spacing_mm > 0.0) {
-    const double points = area_mm2 / (opt.spacing_mm * opt.spacing_mm);
+    points = area_mm2 / (opt.spacing_mm * opt.spacing_mm);
     if (points > opt.max_compensation_points)
       throw std::invalid_argument(rt::format_printf(
           "--spacing %g mm would place about %.3g compensation points on the %.4g mm² of the "
@@ -342,7 +457,7 @@ void check_budgets(const FieldPipelineInputs& in, const FieldPipelineOptions& op
           "--max-points",
           opt.spacing_mm, points, area_mm2, opt.max_compensation_points));
   }
-  if (box.isEmpty()) return;
+  if (box.isEmpty()) return check_memory(in, opt, points, nominal_area_mm2, 0.0, r);
   // The tool centres lie about a tool radius off the surfaces they cut (a
   // flank cut holds the tip lower, which this estimate leaves out; the
   // fit's own limit of 2^26 nodes per layer stays the backstop).
@@ -363,6 +478,23 @@ void check_budgets(const FieldPipelineInputs& in, const FieldPipelineOptions& op
         "%.0f (about 135 bytes each while fitting); choose a coarser --resolution or raise "
         "--max-grid-nodes (a field file holds at most 2^26 nodes per layer)",
         h, nodes, extent.x(), extent.y(), extent.z(), reach_mm, opt.max_grid_nodes));
+  check_memory(in, opt, points, nominal_area_mm2, nodes, r);
+}
+
+// A base field that adds nothing where the part is cut (its grid elsewhere,
+// or zero there) would be dropped without a word: refused.
+void check_base_coverage(const FieldPipelineInputs& in, const FieldPipelineResult& r) {
+  if (!in.base_field || r.base_samples == 0 || r.base_samples_corrected > 0) return;
+  const rt::FieldGrid& g = in.base_field->grid();
+  Eigen::Vector3d end = g.origin_mm;
+  for (int k = 0; k < 3; ++k)
+    end[k] += g.spacing_mm[k] * (g.dims[k] - 1);
+  throw std::invalid_argument(rt::format_printf(
+      "%s adds nothing at any of the %zu tool centres that cut the compensated surfaces: its "
+      "grid (%g, %g, %g) .. (%g, %g, %g) mm does not reach them, or it is zero there. A base "
+      "field is the field the scanned part was cut with; without one, omit --base",
+      in.base_field_name.c_str(), r.base_samples, g.origin_mm.x(), g.origin_mm.y(), g.origin_mm.z(),
+      end.x(), end.y(), end.z()));
 }
 
 }  // namespace
@@ -440,7 +572,8 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
       throw std::invalid_argument("the datum surfaces have no triangles in the nominal model");
   }
 
-  check_budgets(in, opt, r.triangle_surface_ids);
+  check_budgets(in, opt, r.triangle_surface_ids, r);
+  check_base_layers(in);
 
   // Compensation points (and, for the truss, the vertices of the compensated surfaces).
   auto started = timer.now();
@@ -683,6 +816,10 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
       if (in.base_field) {
         const rt::FieldSample b = in.base_field->evaluate(tp.tool, pp.tcp_mm);
         if (b.status == rt::FieldStatus::kOk) s.vector_mm += b.correction_mm;
+        ++r.base_samples;
+        if (b.status != rt::FieldStatus::kOk) ++r.base_samples_outside;
+        if (b.status == rt::FieldStatus::kOk && b.correction_mm.squaredNorm() > 0.0)
+          ++r.base_samples_corrected;
       }
       s.surface_id = r.points.surface_ids[pp.point];
       // What the scan measured: along the normal (rays; spheres on one
@@ -692,12 +829,14 @@ FieldPipelineResult run_field_pipeline(const FieldPipelineInputs& in,
       max_field = std::max(max_field, s.vector_mm.norm());
       ts.samples.push_back(s);
     }
+    check_base_layer(in, ts.tool, ts.samples.size());
     fit_samples += ts.samples.size();
     r.tool_samples.push_back(std::move(ts));
   }
   if (fit_samples == 0)
     throw std::invalid_argument(
         "no valid compensation point is cut by any tool of the program: nothing to fit");
+  check_base_coverage(in, r);
   // A base field that turns the tool keeps doing so in the next iteration.
   if (opt.tool_rotation || (in.base_field != nullptr && in.base_field->has_rotation())) {
     r.fit = fit_with_tool_rotation(r, in, opt);

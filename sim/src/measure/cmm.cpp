@@ -41,6 +41,8 @@ std::vector<CmmMeasurement> probe(const offline::TriangleMesh& machined,
     if (!p.position_mm.allFinite() || !p.normal.allFinite() || !(length > 1e-12))
       throw std::invalid_argument("CMM point " + std::to_string(i + 1) +
                                   ": non-finite coordinate or zero normal");
+    if (const std::string bad = cmm_coordinate_error(p.position_mm); !bad.empty())
+      throw std::invalid_argument("CMM point " + std::to_string(i + 1) + ": " + bad);
     out[i].nominal = p;
     out[i].nominal.normal = p.normal / length;
     for (int side = 0; side < 2; ++side) {

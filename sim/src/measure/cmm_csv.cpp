@@ -11,6 +11,8 @@
 #include <vector>
 
 #include "truecut/rt/atomic_write.hpp"
+#include "truecut/rt/input_file.hpp"
+#include "truecut/rt/number_format.hpp"
 #include "truecut/sim/measure/cmm.hpp"
 
 namespace truecut::sim::measure {
@@ -39,6 +41,14 @@ bool parse_number(const std::string& text, double& value) {
   return end != begin && *end == '\0';
 }
 
+// "x 1e+20 mm is outside ±1e+05 mm (...)", or "" for a coordinate a machine can reach.
+std::string implausible_coordinate(const char* axis, double value_mm) {
+  if (std::abs(value_mm) <= kMaxCmmCoordinateMm) return "";
+  return std::string(axis) + " " + rt::format_shortest(value_mm) + " mm is outside ±" +
+         rt::format_shortest(kMaxCmmCoordinateMm) +
+         " mm (no machine is larger than 100 m; check the unit)";
+}
+
 void append_number(std::string& out, double value) {
   char buf[32];
   const auto [ptr, ec] = std::to_chars(buf, buf + sizeof buf, value);
@@ -47,7 +57,23 @@ void append_number(std::string& out, double value) {
 
 }  // namespace
 
+std::string cmm_coordinate_error(const Eigen::Vector3d& position_mm) {
+  for (int k = 0; k < 3; ++k)
+    if (std::string bad = implausible_coordinate(k == 0   ? "x"
+                                                 : k == 1 ? "y"
+                                                          : "z",
+                                                 position_mm[k]);
+        !bad.empty())
+      return bad;
+  return "";
+}
+
 std::vector<CmmPoint> read_cmm_points(const std::filesystem::path& file) {
+  try {
+    rt::check_input_file(file, "CMM point list");
+  } catch (const rt::InputFileError& e) {
+    throw CmmInputError(e.what());
+  }
   std::ifstream in(file, std::ios::binary);
   if (!in) throw CmmInputError(file.string() + ": cannot open");
   const std::string name = file.string();
@@ -103,6 +129,8 @@ std::vector<CmmPoint> read_cmm_points(const std::filesystem::path& file) {
     }
     CmmPoint p;
     p.position_mm = {v[0], v[1], v[2]};
+    if (const std::string bad = cmm_coordinate_error(p.position_mm); !bad.empty())
+      throw CmmInputError(where + bad);
     p.normal = {v[3], v[4], v[5]};
     if (!(p.normal.norm() > 1e-12)) throw CmmInputError(where + "zero normal");
     p.normal.normalize();

@@ -10,6 +10,7 @@
 // nothing in the folder has changed.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -62,6 +63,10 @@ struct AuditContext {
   double max_correction_limit_mm = kFieldMaxCorrectionMm;
   bool forced = false;  // --force: written although max_correction_mm exceeds the limit
 };
+
+// The files write_field_outputs writes into its folder, in this order.
+inline constexpr std::array<const char*, 4> kFieldOutputFiles{
+    "field.tcf", "compensation_matrix.csv", "adapted.stl", "audit.json"};
 
 // The audit record as JSON text (schema: docs/offline.md, "audit.json").
 std::string audit_json(const FieldPipelineResult& result, const FieldPipelineOptions& options,

@@ -66,6 +66,11 @@ struct FieldPipelineOptions {
   // the largest tool radius), exceed them.
   double max_compensation_points = 20e6;
   double max_grid_nodes = double(std::int64_t{1} << 24);
+  // And the memory the run would take, estimated from what decides it: the
+  // compensation points (each with its placements, fit samples and, for the
+  // sphere method, its support list of scan points), the scan and the field
+  // grid; refused above this many MB (--max-memory-mb).
+  double max_memory_mb = 4096;
   // Run the scan chain (registration, error vectors, truss) and the program
   // chain (tool path, placement) concurrently; false: one after the other
   // (per-stage CPU times in the benchmark). The results are the same.
@@ -97,6 +102,12 @@ struct FieldPipelineInputs {
   // gets base(tool, tcp) added), so the residual error of a compensated part
   // refines the correction instead of replacing it.
   const rt::CorrectionField* base_field = nullptr;
+  // Its file, for messages. A base field without a layer for any tool the
+  // program cuts with (before any work), without one for a tool whose passes
+  // carry compensation, or adding nothing at the tool centres that cut the
+  // compensated surfaces (at the fit) is std::invalid_argument: a base
+  // dropped without a word cut the next part with the new increment alone.
+  std::string base_field_name = "the base field";
 };
 
 // Statistics of a set of vectors (error or compensation), over the valid ones.
@@ -163,7 +174,12 @@ struct FieldPipelineResult {
   ToolPath path;
   PlacementResult placement;
   std::vector<ToolSamples> tool_samples;  // what the fit got, per tool
-  std::optional<FieldFitResult> fit;      // set when the pipeline returns
+  // With a base field: the fit samples, those it added a correction to, and
+  // those outside its grid.
+  std::size_t base_samples = 0, base_samples_corrected = 0, base_samples_outside = 0;
+  // The estimate the memory budget was checked against, MB.
+  double estimated_memory_mb = 0.0;
+  std::optional<FieldFitResult> fit;  // set when the pipeline returns
   // With tool_rotation: over all tools, the estimate's counts
   // (tool_rotation.hpp): samples given a rotation, samples whose rotation
   // the machine could not give in full, and the most left out of one, rad.

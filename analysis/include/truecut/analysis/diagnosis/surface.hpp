@@ -26,6 +26,8 @@ namespace truecut::analysis::diagnosis {
 // The job that machined the part (as `truecut run` takes it).
 struct SurfaceJob {
   std::filesystem::path program, nominal, part, tools;
+  // The believed machine's file, as the user named it (messages only).
+  std::filesystem::path machine_file;
   std::vector<std::filesystem::path> component_path;
   // Re-machinings go to work_dir/runs/<hash of the machine description and
   // the job's files>/ and are reused when already there (the simulation is
@@ -98,6 +100,9 @@ struct SurfaceDiagnosisResult {
   Eigen::Vector3d centroid_mm = Eigen::Vector3d::Zero();
   double noise_floor_mm = 0;
   std::vector<SurfaceRegion> mismatch;
+  // Surfaces with nominal points of which none was measured ("surface 6
+  // (base_bottom)"): a face the scanner never saw, or the CMM never probed.
+  std::vector<std::string> unmeasured_surfaces;
   std::vector<Explanation> explanations;
   std::vector<NotIdentifiable> not_identifiable;
   std::vector<std::string> candidates_tested;
@@ -119,6 +124,14 @@ struct SurfaceDiagnosisResult {
   sim::MachineDescription believed, fitted;
 };
 
+// The effects surface mode can test (SurfaceOptions::candidates).
+const std::vector<std::string>& surface_candidate_effects();
+
+// Throws DiagnosisError before any re-machining for a candidate that is not
+// a surface-mode effect or a measurement with fewer than 20 valid points;
+// the folders it created under job.work_dir are removed again when it
+// fails. A program that leaves the machine's travel, or a tool table that
+// does not read, is a DiagnosisError naming job.machine_file.
 SurfaceDiagnosisResult diagnose_surface(const SurfaceMeasurement& measurement,
                                         const SurfaceJob& job,
                                         const sim::MachineDescription& believed,

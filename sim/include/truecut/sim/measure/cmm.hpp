@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <span>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "truecut/offline/mesh.hpp"
@@ -43,7 +44,8 @@ struct CmmMeasurement {
 };
 
 // Throws std::invalid_argument for out-of-range options or a point with a
-// non-finite coordinate or a zero normal (normals are normalised).
+// non-finite coordinate, one beyond kMaxCmmCoordinateMm or a zero normal
+// (normals are normalised).
 // Deterministic: the noise of point i depends only on (seed, i).
 std::vector<CmmMeasurement> probe(const offline::TriangleMesh& machined,
                                   std::span<const CmmPoint> points, const CmmOptions& options = {});
@@ -82,9 +84,18 @@ class CmmInputError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// A probed point lies within ±1e5 mm of the workpiece origin, the range of
+// the recording and machine readers (no machine is larger than 100 m).
+constexpr double kMaxCmmCoordinateMm = 1e5;
+// "" when every coordinate is within kMaxCmmCoordinateMm, else what is wrong
+// ("x 1e+20 mm is outside ±1e+05 mm (no machine is larger than 100 m; ...)").
+std::string cmm_coordinate_error(const Eigen::Vector3d& position_mm);
+
 // "x y z nx ny nz [surface]" per line; blanks, ',' or ';' separate; '#'
 // starts a comment; an optional first line of column names (any order,
-// other columns ignored: a cmm.csv reads back).
+// other columns ignored: a cmm.csv reads back). The file must be a regular
+// file within the input budget (truecut/rt/input_file.hpp) and every
+// coordinate within kMaxCmmCoordinateMm.
 std::vector<CmmPoint> read_cmm_points(const std::filesystem::path& file);
 
 // CSV with the header x,y,z,nx,ny,nz,surface,deviation_mm,valid (nominal
