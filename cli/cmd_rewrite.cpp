@@ -154,8 +154,8 @@ std::size_t utf8_sequence_length(const std::string& s, std::size_t i) {
 
 // A JSON string of the bytes of s (a path or an operation name as the file
 // system or the program gives them): valid UTF-8 as it is, and every byte
-// that is not as the Latin-1 character of that value (an ISO-8859-1 file
-// name such as caf\xe9 comes out as "café"), so the audit is always JSON.
+// that is not as U+FFFD, the replacement character (as the other commands'
+// JSON writers do), so the audit is always JSON.
 std::string json_string(const std::string& s) {
   std::string o = "\"";
   for (std::size_t i = 0; i < s.size();) {
@@ -164,7 +164,9 @@ std::string json_string(const std::string& s) {
     if (c == '"' || c == '\\') {
       o += '\\';
       o += static_cast<char>(c);
-    } else if (n == 0 || c < 0x20) {
+    } else if (n == 0) {
+      o += "\\ufffd";
+    } else if (c < 0x20) {
       char b[8];
       std::snprintf(b, sizeof b, "\\u%04x", c);
       o += b;
