@@ -50,7 +50,7 @@ const char* kHelpOptions =
     "  --dexel-spacing MM     cutting model's surface sampling (default 0.1)\n"
     "  --cut-threads N        threads that cut (default 0: one per CPU; same result for any)\n"
     "  --record-every N       record every N-th cycle (default 1)\n"
-    "  --max-dexels N         cutting model's size limit (default 20000000, at most 50000000)\n"
+    "  --max-dexels N         cutting model's size limit (default 10000000, at most 50000000)\n"
     "  --max-blocks N         blocks the interpreter may execute (default 50000000)\n"
     "  --max-program-time S   longest planned program, s (default 86400: 24 h)\n"
     "  --component-path DIR   also search DIR for components (repeatable)\n"

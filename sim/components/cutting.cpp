@@ -30,7 +30,7 @@
 // OUT/machined.stl and OUT/machined.ply. threads=N (default 0: one per
 // hardware thread) cuts each tool instance's grid rows on N threads (the
 // servo thread and N − 1 helpers the model starts); the result is the same
-// bit for bit for any N. max-dexels (default 20 million, at most 50
+// bit for bit for any N. max-dexels (default 10 million, at most 50
 // million) bounds the model: a nominal that would need more at this spacing
 // (estimated from its triangles before any dexel is made) fails the load.
 #include <algorithm>

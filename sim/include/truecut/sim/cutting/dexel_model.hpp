@@ -23,12 +23,14 @@
 
 namespace truecut::sim::cutting {
 
-// The dexel model's size: by default at most this many dexels (about
-// kBytesPerDexel each while the model is built), and never more than
-// kMaxDexels (the index shares a word with flags).
-inline constexpr std::size_t kDefaultMaxDexels = 20'000'000;
+// The dexel model's size: by default at most this many dexels, and never
+// more than kMaxDexels (the index shares a word with flags). A run takes
+// about kBytesPerDexel each (measured: the implant at 0.05 and 0.025 mm,
+// 0.55 and 2.1 million dexels, 211 and 741 MB peak); benchmark004 at the
+// default 0.1 mm has 5.4 million.
+inline constexpr std::size_t kDefaultMaxDexels = 10'000'000;
 inline constexpr std::size_t kMaxDexels = 50'000'000;
-inline constexpr std::size_t kBytesPerDexel = 200;
+inline constexpr std::size_t kBytesPerDexel = 350;
 
 struct DexelOptions {
   double spacing_mm = 0.1;     // longest distance between neighbouring dexels of a triangle
