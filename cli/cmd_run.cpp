@@ -101,8 +101,6 @@ bool machine_form(const std::vector<std::string>& argv) {
   return (!positionals.empty() && ends_with_json(positionals[0])) || positionals.size() == 2;
 }
 
-// Whether the run went as far as --time or --cycles asked (neither given:
-// false).
 uint64_t fastest_thread_cycles(const rt::hal::RunReport& r) {
   uint64_t cycles = 0;
   for (const auto& t : r.threads)
@@ -110,6 +108,8 @@ uint64_t fastest_thread_cycles(const rt::hal::RunReport& r) {
   return cycles;
 }
 
+// Whether the run went as far as --time or --cycles asked (neither given:
+// false).
 bool limit_reached(const rt::hal::RunLimits& limits, const rt::hal::RunReport& r) {
   if (limits.duration_ns > 0) return r.simulated_ns >= limits.duration_ns;
   if (limits.max_cycles > 0) return fastest_thread_cycles(r) >= limits.max_cycles;
