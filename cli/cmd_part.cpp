@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <optional>
 #include <string>
@@ -12,6 +13,7 @@
 #include "commands.hpp"
 #include "stage_progress.hpp"
 #include "truecut/interp/interpreter.hpp"
+#include "truecut/offline/field_outputs.hpp"
 #include "truecut/offline/mesh_io.hpp"
 #include "truecut/rt/number_format.hpp"
 #include "truecut/sim/benchmark_parts.hpp"
@@ -36,19 +38,38 @@ const char* kPartHelp =
     "\n"
     "options:\n"
     "  --out DIR            output folder (created)\n"
-    "  --mesh-edge MM       longest mesh edge (default 0.5)\n"
+    "  --mesh-edge MM       longest mesh edge (default 0.5; 0.001 to 20)\n"
     "  --max-triangles N    budget: refuse (exit 2) a --mesh-edge that would make more\n"
     "                       triangles (default 20000000)\n"
-    "  --stepover MM        distance between passes (default 0.5)\n"
-    "  --point-spacing MM   distance between points along a curved pass (default 0.5)\n"
-    "  --step-down MM       axial depth per level (default 1.0)\n"
+    "  --stepover MM        distance between passes (default 0.5; 0.001 to 10)\n"
+    "  --point-spacing MM   distance between points along a curved pass (default 0.5;\n"
+    "                       0.001 to 10)\n"
+    "  --step-down MM       axial depth per level (default 1.0; 0.001 to 17)\n"
     "  --adapted MESH       generate the program for this adapted geometry (the\n"
     "                       adapted.stl of truecut field, made from this part's\n"
     "                       nominal with the same options): every finishing pass\n"
     "                       placed on the adapted surface, the model-adaptation\n"
     "                       route (benchmark004 only; nominal.stl stays the nominal)\n"
+    "  --max-correction MM  with --adapted: refuse (exit 2) an adapted mesh whose vertices\n"
+    "                       lie farther than this from the nominal's (default 0.2)\n"
     "  --quiet              no progress on stderr (shown only on a terminal, after 1 s)\n"
     "  --help               this text\n";
+
+// The largest distance between a corner of a nominal facet and the same
+// corner of the adapted mesh (the same facets in the same order).
+double largest_vertex_move_mm(const offline::TriangleMesh& nominal,
+                              const offline::TriangleMesh& adapted) {
+  double largest = 0;
+  for (std::size_t f = 0; f < nominal.triangles.size(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const double d = (adapted.vertices_mm[adapted.triangles[f][c]] -
+                        nominal.vertices_mm[nominal.triangles[f][c]])
+                           .norm();
+      if (std::isnan(d)) return d;
+      largest = std::max(largest, d);
+    }
+  return largest;
+}
 
 }  // namespace
 
@@ -60,6 +81,7 @@ int cmd_part(const std::vector<std::string>& argv) {
                       {"point-spacing", true},
                       {"step-down", true},
                       {"adapted", true},
+                      {"max-correction", true},
                       {"quiet", false},
                       {"help", false}});
   if (a.flag("help")) {
@@ -75,10 +97,20 @@ int cmd_part(const std::vector<std::string>& argv) {
   const auto out = a.value("out");
   if (!out) throw UsageError("--out DIR is required");
   sim::PartOptions opt;
-  opt.mesh_edge_mm = a.number("mesh-edge", opt.mesh_edge_mm, 0.001, 100);
-  opt.stepover_mm = a.number("stepover", opt.stepover_mm, 0.001, 100);
-  opt.point_spacing_mm = a.number("point-spacing", opt.point_spacing_mm, 0.001, 100);
-  opt.step_down_mm = a.number("step-down", opt.step_down_mm, 0.001, 100);
+  // The ranges PartOptions takes (benchmark_parts.hpp): a value outside
+  // is exit 2 naming the option, not the library's exit 1.
+  opt.mesh_edge_mm =
+      a.number("mesh-edge", opt.mesh_edge_mm, sim::kMinPartOptionMm, sim::kMaxMeshEdgeMm);
+  opt.stepover_mm =
+      a.number("stepover", opt.stepover_mm, sim::kMinPartOptionMm, sim::kMaxStepoverMm);
+  opt.point_spacing_mm = a.number("point-spacing", opt.point_spacing_mm, sim::kMinPartOptionMm,
+                                  sim::kMaxPointSpacingMm);
+  opt.step_down_mm =
+      a.number("step-down", opt.step_down_mm, sim::kMinPartOptionMm, sim::kMaxStepDownMm);
+  const double max_correction_mm =
+      a.number("max-correction", offline::kFieldMaxCorrectionMm, 1e-6, 100.0);
+  if (a.value("max-correction") && !a.value("adapted"))
+    throw UsageError("--max-correction goes with --adapted");
   const double max_triangles = a.number("max-triangles", 20e6, 1.0, 1e12);
   // Budget: the triangle count grows as 1 / mesh-edge²; a mesh at 1 mm
   // (a fraction of a second) tells what the requested edge would give.
@@ -121,10 +153,24 @@ int cmd_part(const std::vector<std::string>& argv) {
           "must come from this nominal (give the --mesh-edge it was made with)",
           adapted_file->c_str(), adapted.triangles.size(), a.positionals()[0].c_str(),
           opt.mesh_edge_mm, nominal.mesh.triangles.size()));
+    const double moved_mm = largest_vertex_move_mm(nominal.mesh, adapted);
+    if (!(moved_mm <= max_correction_mm))
+      return input_error(rt::format_printf(
+          "%s moves the nominal's surface by up to %.4g mm, more than --max-correction %g mm: "
+          "an adapted geometry is the nominal moved by its compensation (truecut field keeps "
+          "that within its own --max-correction); a wrong file or unit?",
+          adapted_file->c_str(), moved_mm, max_correction_mm));
     const sim::DriveSurface drive(nominal.mesh, adapted);
     driven = sim::make_part(*id, opt, drive);
     std::printf("program driven by %s: %zu surface queries, %zu found no facet (offset 0)\n",
                 adapted_file->c_str(), drive.queries(), drive.misses());
+    if (2 * drive.misses() > drive.queries())
+      return input_error(rt::format_printf(
+          "%s: %zu of the %zu surface queries (%.0f %%) found no facet within %g mm of the "
+          "nominal surface: the program would follow the nominal there; the adapted geometry "
+          "does not fit this part",
+          adapted_file->c_str(), drive.misses(), drive.queries(),
+          100.0 * double(drive.misses()) / double(drive.queries()), sim::DriveSurface::kReachMm));
   }
   const sim::BenchmarkPart part = driven ? std::move(*driven) : sim::make_part(*id, opt);
   progress->stage("checking the program against the travel");

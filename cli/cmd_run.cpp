@@ -1,6 +1,7 @@
 // truecut run CONFIG.hal: load a HAL configuration and run its threads.
 #include <unistd.h>
 
+#include <algorithm>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -24,7 +25,9 @@ const char* kRunHelp =
     "       truecut run MACHINE.json PROGRAM.ngc --out DIR [options]  (see --help there)\n"
     "\n"
     "Loads a .hal wiring file (loadrt, net, setp, addf, ...) and runs its threads.\n"
-    "Without --time or --cycles it runs until a component stops it or Ctrl-C.\n"
+    "Without --time or --cycles it runs until a component stops it or Ctrl-C (a\n"
+    "recorder's trace has no size limit meanwhile). Ctrl-C before --time or --cycles\n"
+    "is reached exits 130; the outputs hold the run up to there.\n"
     "\n"
     "options:\n"
     "  --ini FILE             INI file for [SECTION]KEY substitution in the .hal file\n"
@@ -69,15 +72,80 @@ void print_show(const rt::hal::Hal& h) {
                 h.get_signal(s.name).to_text().c_str());
 }
 
+bool ends_with_json(const std::string& arg) {
+  return arg.size() > 5 && arg.compare(arg.size() - 5, 5, ".json") == 0;
+}
+
+// The arguments that are not options or option values. Options that take a
+// value in either form take the next argument unless written --name=value.
+std::vector<std::string> positional_arguments(const std::vector<std::string>& argv) {
+  static const char* const kFlags[] = {"--realtime", "--no-mlock", "--show", "--dry-run", "--help"};
+  std::vector<std::string> positionals;
+  for (std::size_t i = 0; i < argv.size(); ++i) {
+    const std::string& arg = argv[i];
+    if (arg.rfind("--", 0) != 0) {
+      positionals.push_back(arg);
+      continue;
+    }
+    const bool flag = std::find(std::begin(kFlags), std::end(kFlags), arg) != std::end(kFlags);
+    if (!flag && arg.find('=') == std::string::npos) ++i;  // its value
+  }
+  return positionals;
+}
+
+// The machine form: MACHINE.json PROGRAM.ngc, i.e. a first argument ending in
+// .json (a folder or device of that name included: its reader says what it
+// is) or two of them, where CONFIG.hal takes one.
+bool machine_form(const std::vector<std::string>& argv) {
+  const std::vector<std::string> positionals = positional_arguments(argv);
+  return (!positionals.empty() && ends_with_json(positionals[0])) || positionals.size() == 2;
+}
+
+uint64_t fastest_thread_cycles(const rt::hal::RunReport& r) {
+  uint64_t cycles = 0;
+  for (const auto& t : r.threads)
+    cycles = std::max(cycles, t.cycles);
+  return cycles;
+}
+
+// Whether the run went as far as --time or --cycles asked (neither given:
+// false).
+bool limit_reached(const rt::hal::RunLimits& limits, const rt::hal::RunReport& r) {
+  if (limits.duration_ns > 0) return r.simulated_ns >= limits.duration_ns;
+  if (limits.max_cycles > 0) return fastest_thread_cycles(r) >= limits.max_cycles;
+  return false;
+}
+
+void report_interrupted_run(const rt::hal::RunLimits& limits, const rt::hal::RunReport& r) {
+  if (limits.duration_ns > 0)
+    std::fprintf(stderr,
+                 "truecut run: interrupted at %.6f s of the %.6f s asked for (--time); the "
+                 "outputs hold the run up to there\n",
+                 r.simulated_ns * 1e-9, limits.duration_ns * 1e-9);
+  else if (limits.max_cycles > 0)
+    std::fprintf(stderr,
+                 "truecut run: interrupted after %llu of the %llu cycles asked for (--cycles); "
+                 "the outputs hold the run up to there\n",
+                 static_cast<unsigned long long>(fastest_thread_cycles(r)),
+                 static_cast<unsigned long long>(limits.max_cycles));
+}
+
+// Removes the output folder at the end if this run created it and left it
+// empty (a dry run, a configuration that failed to load).
+struct OutputFolderGuard {
+  std::filesystem::path dir;
+  bool created;
+  ~OutputFolderGuard() {
+    std::error_code ec;
+    if (created && std::filesystem::is_empty(dir, ec)) std::filesystem::remove(dir, ec);
+  }
+};
+
 }  // namespace
 
 int cmd_run(const std::vector<std::string>& argv) {
   // `truecut run MACHINE.json PROGRAM.ngc ...` machines a part (run_machine.cpp).
-  for (const auto& arg : argv) {
-    if (arg.rfind("--", 0) == 0) continue;
-    if (arg.size() > 5 && arg.compare(arg.size() - 5, 5, ".json") == 0) return run_machine(argv);
-    break;
-  }
+  if (machine_form(argv)) return run_machine(argv);
   ParsedArgs a(argv, {{"ini", true},
                       {"time", true},
                       {"cycles", true},
@@ -126,15 +194,17 @@ int cmd_run(const std::vector<std::string>& argv) {
     std::fprintf(stderr, "truecut run: %s: no such file\n", config.c_str());
     return kExitUsage;
   }
-  if (!a.flag("dry-run")) {
-    std::error_code ec;
-    std::filesystem::create_directories(opt.output_dir, ec);
-    if (ec) {
-      std::fprintf(stderr, "truecut run: cannot create output folder %s: %s\n",
-                   opt.output_dir.c_str(), ec.message().c_str());
-      return kExitUsage;
-    }
+  // A dry run loads the components too (a recorder creates its temporary
+  // file at load), so it needs the folder; one it created is removed again.
+  std::error_code ec;
+  const bool dir_created = !std::filesystem::exists(opt.output_dir, ec);
+  std::filesystem::create_directories(opt.output_dir, ec);
+  if (ec) {
+    std::fprintf(stderr, "truecut run: cannot create output folder %s: %s\n",
+                 opt.output_dir.c_str(), ec.message().c_str());
+    return kExitUsage;
   }
+  const OutputFolderGuard folder{opt.output_dir, dir_created};
 
   rt::hal::Hal h(opt);
   try {
@@ -150,6 +220,7 @@ int cmd_run(const std::vector<std::string>& argv) {
   }
   if (a.flag("show")) print_show(h);
   if (a.flag("dry-run")) {
+    if (h.unload() > 0) return kExitFailure;
     std::printf("%s: configuration loads without error\n", config.c_str());
     return kExitOk;
   }
@@ -160,7 +231,8 @@ int cmd_run(const std::vector<std::string>& argv) {
   if (limits.duration_ns == 0 && limits.max_cycles == 0)
     std::fprintf(stderr, "running until a component stops or Ctrl-C (--time S to limit)\n");
 
-  rt::hal::RunReport r = run_interruptible(h, limits, realtime, wall);
+  const InterruptibleRun run = run_interruptible(h, limits, realtime, wall);
+  const rt::hal::RunReport& r = run.report;
   if (progress.tty && progress.last_ns >= 0) std::fputs("\n", stderr);
 
   std::printf("truecut run %s\n", config.c_str());
@@ -189,6 +261,11 @@ int cmd_run(const std::vector<std::string>& argv) {
     std::fprintf(stderr, "truecut run: %d output file(s) could not be written (see above)\n",
                  errors);
     return kExitFailure;
+  }
+  const bool limited = limits.duration_ns > 0 || limits.max_cycles > 0;
+  if (run.interrupted && limited && !limit_reached(limits, r)) {
+    report_interrupted_run(limits, r);
+    return kExitInterrupted;
   }
   return kExitOk;
 }

@@ -13,6 +13,7 @@
 #include "run_measure.hpp"
 #include "run_support.hpp"
 #include "truecut/rt/hal_file.hpp"
+#include "truecut/rt/input_file.hpp"
 #include "truecut/sim/machine_description.hpp"
 #include "truecut/sim/soft_cnc.hpp"
 
@@ -49,6 +50,9 @@ const char* kHelpOptions =
     "  --dexel-spacing MM     cutting model's surface sampling (default 0.1)\n"
     "  --cut-threads N        threads that cut (default 0: one per CPU; same result for any)\n"
     "  --record-every N       record every N-th cycle (default 1)\n"
+    "  --max-dexels N         cutting model's size limit (default 10000000, at most 50000000)\n"
+    "  --max-blocks N         blocks the interpreter may execute (default 50000000)\n"
+    "  --max-program-time S   longest planned program, s (default 86400: 24 h)\n"
     "  --component-path DIR   also search DIR for components (repeatable)\n"
     "  --realtime             run against the wall clock instead of simulated time\n"
     "                         (same outputs; prints cycle timing and overruns)\n"
@@ -64,14 +68,65 @@ const char* kHelpOptions =
     "                         --nominal --part): CSV\n"
     "  --cmm-sigma-um S       and --cmm-seed, --cmm-spacing, --cmm-surfaces, --cmm-search-mm\n";
 
-fs::path existing(const std::optional<std::string>& given, const fs::path& beside,
-                  const char* default_name, const char* option) {
-  const fs::path p = given ? fs::path(*given) : beside / default_name;
-  if (!fs::is_regular_file(p))
-    throw UsageError(
-        p.string() + ": no such file" +
-        (given ? std::string() : std::string(" (looked beside the program; give ") + option + ")"));
+// An input file that must be there: a missing one, a folder or a device
+// each named as what it is (rt/input_file.hpp).
+fs::path input_file(const fs::path& p, const char* what, const std::string& hint = {}) {
+  try {
+    rt::check_input_file(p, what);
+  } catch (const rt::InputFileError& e) {
+    throw UsageError(e.what() + hint);
+  }
   return p;
+}
+
+fs::path existing(const std::optional<std::string>& given, const fs::path& beside,
+                  const char* default_name, const char* option, const char* what) {
+  const fs::path p = given ? fs::path(*given) : beside / default_name;
+  return input_file(
+      p, what,
+      given ? std::string() : std::string(" (looked beside the program; give ") + option + ")");
+}
+
+// A rate or magnitude limit of truecut_comp: at 0 the field is never applied.
+double comp_limit(const ParsedArgs& a, const char* option, double fallback, double max,
+                  const char* unit) {
+  const double v = a.number(option, fallback, 0.0, max);
+  if (v > 0) return v;
+  throw UsageError(std::string("--") + option + " 0 " + unit +
+                   " would hold the field's correction at zero; it must be > 0 (up to " +
+                   std::to_string(static_cast<int>(max)) + ")");
+}
+
+// Every file the run reads, for the outputs to be checked against.
+std::vector<fs::path> job_inputs(const sim::SoftCncJob& job) {
+  std::vector<fs::path> inputs = {job.machine, job.program, job.nominal, job.part, job.tools};
+  if (job.field) inputs.push_back(*job.field);
+  if (job.parameters) inputs.push_back(*job.parameters);
+  return inputs;
+}
+
+// The run's own outputs must not replace what it reads (`--out` the part's
+// folder with `--nominal` named machined.stl, say).
+void refuse_outputs_over_inputs(const sim::SoftCncJob& job) {
+  for (const char* name : {"machined.stl", "machined.ply", "trace.csv", "soft_cnc.hal", "run.ini"})
+    for (const fs::path& input : job_inputs(job)) {
+      std::error_code ec;
+      if (fs::equivalent(job.out_dir / name, input, ec) && !ec)
+        throw UsageError("--out " + job.out_dir.string() + ": the run writes " + name +
+                         " there, which is the input " + input.string() +
+                         "; choose another folder");
+    }
+}
+
+// A field that corrected nothing of the cut: at every service point at
+// which the tool cut, the correction was zero.
+void warn_if_never_corrected(const sim::SoftCncJob& job, const sim::SoftCncResult& r) {
+  if (!job.field || r.cutting_samples == 0 || r.corrected_cutting_samples > 0) return;
+  std::fprintf(stderr,
+               "truecut run: WARNING: %s never corrected the cut: the correction was zero "
+               "whenever the tool cut (%lld checks, every 10 ms); does the field's grid cover "
+               "the part, and is it the field for this part?\n",
+               job.field->string().c_str(), static_cast<long long>(r.cutting_samples));
 }
 
 }  // namespace
@@ -92,6 +147,9 @@ int run_machine(const std::vector<std::string>& argv) {
                              {"dexel-spacing", true},
                              {"cut-threads", true},
                              {"record-every", true},
+                             {"max-blocks", true},
+                             {"max-dexels", true},
+                             {"max-program-time", true},
                              {"component-path", true, true},
                              {"realtime", false},
                              {"cpu", true},
@@ -106,30 +164,28 @@ int run_machine(const std::vector<std::string>& argv) {
   const auto out = a.value("out");
   if (!out) throw UsageError("--out DIR is required");
   sim::SoftCncJob job;
-  job.machine = a.positionals()[0];
-  job.program = a.positionals()[1];
-  if (!fs::is_regular_file(job.machine)) throw UsageError(job.machine.string() + ": no such file");
-  if (!fs::is_regular_file(job.program)) throw UsageError(job.program.string() + ": no such file");
+  job.machine = input_file(a.positionals()[0], "machine description");
+  job.program = input_file(a.positionals()[1], "program file");
   const fs::path beside = job.program.has_parent_path() ? job.program.parent_path() : ".";
-  job.nominal = existing(a.value("nominal"), beside, "nominal.stl", "--nominal");
-  job.part = existing(a.value("part"), beside, "part.json", "--part");
-  job.tools = existing(a.value("tools"), beside, "tools.tbl", "--tools");
-  if (auto f = a.value("field")) {
-    if (!fs::is_regular_file(*f)) throw UsageError(*f + ": no such file");
-    job.field = *f;
-  }
-  if (auto v = a.value("var-file")) {
-    if (!fs::is_regular_file(*v)) throw UsageError(*v + ": no such file");
-    job.parameters = *v;
-  }
+  job.nominal = existing(a.value("nominal"), beside, "nominal.stl", "--nominal", "nominal mesh");
+  job.part = existing(a.value("part"), beside, "part.json", "--part", "part file");
+  job.tools = existing(a.value("tools"), beside, "tools.tbl", "--tools", "tool table");
+  if (auto f = a.value("field")) job.field = input_file(*f, "correction field");
+  if (auto v = a.value("var-file")) job.parameters = input_file(*v, "parameter file");
   job.parameters_in_inches = length_units_option(a, "var-units") == interp::LengthUnits::kInch;
   job.out_dir = *out;
   job.period_us = a.number("period-us", 1000.0, 50.0, 100000.0);
   job.dexel_spacing_mm = a.number("dexel-spacing", 0.1, 0.01, 5.0);
+  job.max_dexels = static_cast<std::size_t>(
+      a.integer("max-dexels", static_cast<long>(sim::cutting::kDefaultMaxDexels), 1,
+                static_cast<long>(sim::cutting::kMaxDexels)));
   job.cut_threads = static_cast<int>(a.integer("cut-threads", 0, 0, 256));
   job.record_every = a.integer("record-every", 1, 1, 1000000);
-  job.max_correction_mm = a.number("max-correction", sim::kSoftCncMaxCorrectionMm, 0.0, 10.0);
-  job.max_rate_mm_per_s = a.number("max-rate", 5.0, 0.0, 1000.0);
+  job.max_correction_mm = comp_limit(a, "max-correction", sim::kSoftCncMaxCorrectionMm, 10.0, "mm");
+  job.max_rate_mm_per_s = comp_limit(a, "max-rate", 5.0, 1000.0, "mm/s");
+  job.max_blocks = a.integer("max-blocks", 50'000'000, 1, 1'000'000'000'000L);
+  job.max_program_time_s =
+      a.number("max-program-time", sim::kSoftCncMaxProgramTimeS, 1.0, 365.0 * 24 * 3600);
   job.fade_time_s = a.number("fade-time", 0.2, 0.0, 60.0);
   job.component_path = component_path(a);
   job.wall_clock = a.flag("realtime");
@@ -137,7 +193,9 @@ int run_machine(const std::vector<std::string>& argv) {
     throw UsageError("--cpu and --fifo need --realtime");
   job.wall_clock_options.cpu = static_cast<int>(a.integer("cpu", -1, 0, 1023));
   job.wall_clock_options.fifo_priority = static_cast<int>(a.integer("fifo", 0, 1, 99));
-  RunMeasurement measure = prepare_run_measurement(a, job.out_dir, job.nominal, job.part);
+  refuse_outputs_over_inputs(job);
+  RunMeasurement measure =
+      prepare_run_measurement(a, job.out_dir, job.nominal, job.part, job_inputs(job));
 
   Progress progress;
   progress.tty = isatty(STDERR_FILENO) != 0;
@@ -197,6 +255,7 @@ int run_machine(const std::vector<std::string>& argv) {
   if (job.field)
     std::printf("  correction  max %.4g mm: limited in %d cycles\n", job.max_correction_mm,
                 r.clamped_cycles);
+  warn_if_never_corrected(job, r);
   if (r.clamped_cycles > 0)
     std::fprintf(stderr,
                  "truecut run: WARNING: --max-correction %.4g mm limited the field's correction "

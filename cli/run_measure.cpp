@@ -14,11 +14,32 @@ namespace fs = std::filesystem;
 constexpr const char* kRunOutputs[] = {"machined.stl", "machined.ply", "trace.csv",
                                        "soft_cnc.hal", "run.ini",      "field.tcf"};
 
-fs::path output_file(const std::string& option, const std::string& given, const fs::path& out_dir) {
-  const fs::path file = fs::path(given).is_absolute() ? fs::path(given) : out_dir / given;
+// NAME inside the run's folder: no absolute path, no '..' (the run writes
+// only into --out, as the recorder's file= does).
+void require_inside_out_dir(const std::string& option, const std::string& given) {
+  const fs::path named(given);
+  bool outside = named.is_absolute();
+  for (const auto& part : named)
+    outside = outside || part == "..";
+  if (outside)
+    throw UsageError("--" + option + " " + given +
+                     ": outside the output folder; the run writes a name inside --out (no "
+                     "absolute path, no '..')");
+}
+
+fs::path output_file(const std::string& option, const std::string& given, const fs::path& out_dir,
+                     const std::vector<fs::path>& inputs) {
+  require_inside_out_dir(option, given);
+  const fs::path file = out_dir / given;
   for (const char* name : kRunOutputs)
     if (fs::absolute(file).lexically_normal() == fs::absolute(out_dir / name).lexically_normal())
       throw UsageError("--" + option + " " + given + ": the run writes " + name + " itself");
+  for (const fs::path& input : inputs) {
+    std::error_code ec;
+    if (fs::equivalent(file, input, ec) && !ec)
+      throw UsageError("--" + option + " " + given + " is the input " + input.string() +
+                       ": writing it would replace what is being read; choose another file");
+  }
   require_replaceable(file.string());
   return file;
 }
@@ -43,18 +64,19 @@ std::vector<OptionSpec> run_measure_option_specs() {
 }
 
 RunMeasurement prepare_run_measurement(const ParsedArgs& a, const fs::path& out_dir,
-                                       const fs::path& nominal, const fs::path& part) {
+                                       const fs::path& nominal, const fs::path& part,
+                                       const std::vector<fs::path>& inputs) {
   refuse_orphans(a, scan_option_specs("scan-"), "scan");
   refuse_orphans(a, cmm_option_specs("cmm-"), "cmm");
   RunMeasurement m;
   if (const auto scan = a.value("scan")) {
     if (!has_extension(*scan, {".ply", ".xyz", ".txt", ".csv"}))
       throw UsageError("--scan " + *scan + ": the point cloud must be .ply, .xyz, .txt or .csv");
-    m.scan_file = output_file("scan", *scan, out_dir);
+    m.scan_file = output_file("scan", *scan, out_dir, inputs);
     m.scan = scan_settings(a, "scan-");
   }
   if (const auto cmm = a.value("cmm")) {
-    m.cmm_file = output_file("cmm", *cmm, out_dir);
+    m.cmm_file = output_file("cmm", *cmm, out_dir, inputs);
     if (m.scan_file && fs::absolute(*m.scan_file).lexically_normal() ==
                            fs::absolute(*m.cmm_file).lexically_normal())
       throw UsageError("--scan and --cmm name the same file");

@@ -25,12 +25,13 @@ struct RunMeasurement {
 std::vector<OptionSpec> run_measure_option_specs();
 
 // Everything checked before the run, so that a bad option or input is exit 2
-// with nothing written: option values, output names (relative to out_dir;
-// never a run output, never a device or FIFO), the CMM's points from
-// `nominal` and `part`. Throws UsageError.
+// with nothing written: option values, output names (inside out_dir: no
+// absolute path, no '..'; never a run output, one of `inputs`, a device or
+// FIFO), the CMM's points from `nominal` and `part`. Throws UsageError.
 RunMeasurement prepare_run_measurement(const ParsedArgs& a, const std::filesystem::path& out_dir,
                                        const std::filesystem::path& nominal,
-                                       const std::filesystem::path& part);
+                                       const std::filesystem::path& part,
+                                       const std::vector<std::filesystem::path>& inputs);
 
 // After the run: scans and/or probes `machined_stl`, writes the files and
 // prints a summary. Returns false (message on stderr) when the scanner

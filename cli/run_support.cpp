@@ -1,5 +1,7 @@
 #include "run_support.hpp"
 
+#include <signal.h>
+
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -9,7 +11,9 @@ namespace truecut::cli {
 namespace {
 
 rt::hal::Hal* g_running_hal = nullptr;
+volatile std::sig_atomic_t g_interrupted = 0;
 void on_sigint(int) {
+  g_interrupted = 1;
   if (g_running_hal) g_running_hal->request_stop();
 }
 
@@ -54,16 +58,23 @@ void print_progress(void* user, int64_t t_ns) {
     std::fprintf(stderr, "%s  %.1f s%s", p.tty ? "\r" : "", t_ns * 1e-9, p.tty ? "" : "\n");
 }
 
-rt::hal::RunReport run_interruptible(rt::hal::Hal& h, const rt::hal::RunLimits& limits,
-                                     bool wall_clock, const rt::hal::WallClockOptions& wall) {
+InterruptibleRun run_interruptible(rt::hal::Hal& h, const rt::hal::RunLimits& limits,
+                                   bool wall_clock, const rt::hal::WallClockOptions& wall) {
   rt::hal::Executor exec(h);
+  g_interrupted = 0;
   g_running_hal = &h;
-  auto previous = std::signal(SIGINT, on_sigint);
+  // sigaction, not std::signal: the cleanup handler comes back as it was
+  // installed (its mask of the three signals, rt/interrupt_cleanup.hpp).
+  struct sigaction stop {
+  }, previous{};
+  stop.sa_handler = on_sigint;
+  sigemptyset(&stop.sa_mask);
+  sigaction(SIGINT, &stop, &previous);
   rt::hal::RunReport r =
       wall_clock ? exec.run_wall_clock(limits, wall) : exec.run_simulated(limits);
-  std::signal(SIGINT, previous);
+  sigaction(SIGINT, &previous, nullptr);
   g_running_hal = nullptr;
-  return r;
+  return {r, g_interrupted != 0};
 }
 
 }  // namespace truecut::cli

@@ -12,6 +12,10 @@
 
 namespace truecut::cli {
 
+// Exit status of a run stopped by Ctrl-C before it was done: 128 + SIGINT,
+// what a shell reports for a process that Ctrl-C ended.
+constexpr int kExitInterrupted = 130;
+
 // --component-path folders, then $TRUECUT_COMPONENT_PATH, then the folders
 // beside the truecut binary.
 std::vector<std::filesystem::path> component_path(const ParsedArgs& a);
@@ -25,8 +29,13 @@ struct Progress {
 };
 void print_progress(void* user, int64_t time_ns);
 
-// Runs the executor with Ctrl-C asking the HAL to stop.
-rt::hal::RunReport run_interruptible(rt::hal::Hal& h, const rt::hal::RunLimits& limits,
-                                     bool wall_clock, const rt::hal::WallClockOptions& wall);
+// Runs the executor with Ctrl-C asking the HAL to stop; `interrupted` says
+// whether it did (a component's stop request is not an interrupt).
+struct InterruptibleRun {
+  rt::hal::RunReport report;
+  bool interrupted = false;
+};
+InterruptibleRun run_interruptible(rt::hal::Hal& h, const rt::hal::RunLimits& limits,
+                                   bool wall_clock, const rt::hal::WallClockOptions& wall);
 
 }  // namespace truecut::cli

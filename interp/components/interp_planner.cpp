@@ -7,6 +7,11 @@
 //          [vmax=X,Y,Z,A,C] [amax=X,Y,Z,A,C] [jmax=X,Y,Z,A,C] [start=X,Y,Z,A,C]
 //          [x-rot-point=0] [y-rot-point=0] [z-rot-point=0] [y-offset=0]
 //          [z-offset=0] [tool-offset=0] [conventional-directions=0]
+//          [max-blocks=50000000] [max-program-time=S]
+//
+// max-blocks bounds the blocks the interpreter executes (an endless loop);
+// max-program-time (s, default none) refuses a program whose plan takes
+// longer, naming the line where it passes the limit.
 //
 // Pins (docs/formats.md): out tcp-x/y/z (mm), axis-i/j/k, joint-x/y/z (mm),
 // joint-a/c (deg), feed (mm/s), spindle-rpm (commanded, 0 when stopped),
@@ -137,6 +142,19 @@ PlannerOptions planner_options(rt::hal::component::Args& args) {
   return o;
 }
 
+// The first segment at which the plan's time passes max_s: refused there.
+void check_program_time(const Plan& plan, const std::string& program, double max_s) {
+  double t_s = 0;
+  for (const PlanSegment& seg : plan.segments) {
+    t_s += seg.law.duration_s;
+    if (t_s <= max_s) continue;
+    std::ostringstream m;
+    m << program << ":" << seg.line << ": the planned program passes max-program-time=" << max_s
+      << " s at this line (the whole program takes " << plan.stats.duration_s << " s)";
+    throw rt::hal::component::InitError(m.str());
+  }
+}
+
 }  // namespace
 
 extern "C" TC_COMPONENT_EXPORT int truecut_component_init(const tc_hal_api_t* api, tc_hal_t* hal,
@@ -160,6 +178,12 @@ extern "C" TC_COMPONENT_EXPORT int truecut_component_init(const tc_hal_api_t* ap
     if (auto file = args.take("parameter-file"); file && !file->empty())
       iopt.parameters = ParameterFile::load(*file, machine_units);
     const PlannerOptions popt = planner_options(args);
+    iopt.max_blocks =
+        args.take_long("max-blocks", static_cast<long>(iopt.max_blocks), 1, 1'000'000'000'000L);
+    const double max_program_time_s = args.take_double("max-program-time", 0);
+    if (!(max_program_time_s >= 0) || !std::isfinite(max_program_time_s))
+      throw InitError("max-program-time=" + std::to_string(max_program_time_s) +
+                      " must be a number of seconds >= 0 (0: no limit)");
     auto names = instance_names(args, "interp_planner", 1);
     args.expect_consumed("interp_planner");
 
@@ -173,6 +197,7 @@ extern "C" TC_COMPONENT_EXPORT int truecut_component_init(const tc_hal_api_t* ap
     for (const auto& n : names) {
       auto inst = std::make_unique<Instance>();
       inst->plan = plan_program(canon, popt);
+      if (max_program_time_s > 0) check_program_time(inst->plan, *program, max_program_time_s);
       inst->api = api;
       inst->hal = hal;
       refill(inst.get());

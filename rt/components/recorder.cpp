@@ -13,6 +13,7 @@
 // anywhere. The temporary file is created at load time, so a file that
 // cannot be written fails the load. Samples that find the queue full are
 // dropped and counted on `<inst>.overruns`.
+#include <algorithm>
 #include <boost/lockfree/spsc_queue.hpp>
 #include <cerrno>
 #include <charconv>
@@ -140,7 +141,17 @@ void drain(void* arg) {
   }
 }
 
+// Counted before any name is parsed: the duplicate check below compares
+// each name with the ones before it.
+void check_column_count(const std::string& spec) {
+  const std::size_t count = 1 + static_cast<std::size_t>(std::count(spec.begin(), spec.end(), ','));
+  if (count > kMaxColumns)
+    throw component::InitError("columns= lists " + std::to_string(count) + " columns, at most " +
+                               std::to_string(kMaxColumns));
+}
+
 std::vector<Column> parse_columns(const std::string& spec) {
+  check_column_count(spec);
   std::vector<Column> cols;
   std::string cur;
   for (char c : spec + ",") {
@@ -170,8 +181,6 @@ std::vector<Column> parse_columns(const std::string& spec) {
     cols.push_back(col);
     cur.clear();
   }
-  if (cols.size() > kMaxColumns)
-    throw component::InitError("at most " + std::to_string(kMaxColumns) + " columns");
   return cols;
 }
 

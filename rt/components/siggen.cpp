@@ -24,12 +24,21 @@ struct Siggen {
   double index;  // phase in [0, 1)
 };
 
+// The cycles of one period. The period in seconds first: frequency ×
+// period_ns overflowed for a frequency of 1e308 Hz, and the phase became
+// inf − inf = NaN in every output. An advance that is not finite does not
+// move the phase.
+double phase_step(double frequency_hz, long period_ns) {
+  const double cycles = frequency_hz * (double(period_ns) * 1e-9);
+  return std::isfinite(cycles) ? cycles : 0.0;
+}
+
 void update(void* arg, long period_ns) {
   auto& s = *static_cast<Siggen*>(arg);
   if (*s.reset) {
     s.index = 0.0;
   } else {
-    s.index += *s.frequency * double(period_ns) * 1e-9;
+    s.index += phase_step(*s.frequency, period_ns);
     s.index -= std::floor(s.index);
   }
   const double a = *s.amplitude, o = *s.offset, i = s.index;

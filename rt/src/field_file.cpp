@@ -11,6 +11,7 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -107,7 +108,8 @@ double get_le(const char* p) {
 
 struct Header {
   std::map<std::string, std::string, std::less<>> values;
-  std::size_t crc_line_offset = 0;  // the checksum covers the bytes before it
+  std::map<std::string, std::size_t, std::less<>> lines;  // 1-based line of each key
+  std::size_t crc_line_offset = 0;                        // the checksum covers the bytes before it
   std::size_t payload_offset = 0;
 };
 
@@ -115,18 +117,33 @@ class Decoder {
  public:
   Decoder(std::string_view bytes, std::string_view name) : bytes_(bytes), name_(name) {}
 
+  // The header alone (the payload need not be there): grid, tools, channels,
+  // each in the range of a real machine, and the memory loading would take.
+  FieldFileHeader header_only() {
+    header_ = parse_header();
+    FieldFileHeader h;
+    h.grid.origin_mm = vector3(header_, "origin");
+    h.grid.spacing_mm = vector3(header_, "spacing");
+    check_origin(h.grid.origin_mm);
+    check_spacing(h.grid.spacing_mm);
+    h.grid.dims = dims(header_);
+    h.tools = tool_list(header_);
+    h.interpolation = interpolation_of(header_);
+    expect_value(header_, "frame", "workpiece");
+    expect_value(header_, "units", "mm");
+    h.rotation = has_rotation_channels(header_);
+    expect_value(header_, "encoding", kEncoding);
+    check_memory(h);
+    return h;
+  }
+
   LoadedField run() {
-    const Header header = parse_header();
-    FieldGrid grid;
-    grid.origin_mm = vector3(header, "origin");
-    grid.spacing_mm = vector3(header, "spacing");
-    grid.dims = dims(header);
-    const std::vector<int32_t> tools = tool_list(header);
-    const FieldInterpolation interpolation = interpolation_of(header);
-    expect_value(header, "frame", "workpiece");
-    expect_value(header, "units", "mm");
-    const bool rotation = has_rotation_channels(header);
-    expect_value(header, "encoding", kEncoding);
+    const FieldFileHeader h = header_only();
+    const Header& header = header_;
+    const FieldGrid& grid = h.grid;
+    const std::vector<int32_t>& tools = h.tools;
+    const FieldInterpolation interpolation = h.interpolation;
+    const bool rotation = h.rotation;
 
     const uint64_t expected = static_cast<uint64_t>(tools.size()) *
                               static_cast<uint64_t>(grid.node_count()) * bytes_per_node(rotation);
@@ -161,6 +178,39 @@ class Decoder {
  private:
   [[noreturn]] void fail(const std::string& what) const {
     throw FieldFileError(std::string(name_) + ": " + what);
+  }
+
+  std::string at_line(std::string_view key) const {
+    const auto it = header_.lines.find(key);
+    return it == header_.lines.end() ? std::string() : "line " + std::to_string(it->second) + ": ";
+  }
+
+  void check_origin(const Eigen::Vector3d& origin_mm) const {
+    for (int a = 0; a < 3; ++a)
+      if (!(std::abs(origin_mm[a]) <= kMaxFieldCoordinateMm))
+        fail(at_line("origin") + "origin " + format_shortest(origin_mm[a]) + " mm (" + "xyz"[a] +
+             ") is outside ±" + format_shortest(kMaxFieldCoordinateMm) +
+             " mm (no machine is larger than 100 m; check the unit)");
+  }
+
+  void check_spacing(const Eigen::Vector3d& spacing_mm) const {
+    for (int a = 0; a < 3; ++a)
+      if (!(spacing_mm[a] >= kMinFieldSpacingMm && spacing_mm[a] <= kMaxFieldSpacingMm))
+        fail(at_line("spacing") + "spacing " + format_shortest(spacing_mm[a]) + " mm (" + "xyz"[a] +
+             ") is outside " + format_shortest(kMinFieldSpacingMm) + " .. " +
+             format_shortest(kMaxFieldSpacingMm) +
+             " mm (a node spacing from 1 um to 1 m; check the unit)");
+  }
+
+  void check_memory(const FieldFileHeader& h) const {
+    const uint64_t need = field_load_bytes(h), limit = max_field_load_bytes();
+    if (need <= limit) return;
+    fail(at_line("dims") + "loading this field would take about " + std::to_string(need >> 20) +
+         " MB (" + std::to_string(h.grid.node_count()) + " nodes x " +
+         std::to_string(h.tools.size()) + " tool layer(s) x " +
+         std::to_string(channel_count(h.rotation)) + " channels), more than the " +
+         std::to_string(limit >> 20) +
+         " MB a field may take; the environment variable TRUECUT_MAX_FIELD_MB raises the limit");
   }
 
   Header parse_header() {
@@ -200,6 +250,7 @@ class Decoder {
         fail("line " + std::to_string(line_no) + ": unknown header key " + printable(key));
       if (!h.values.emplace(key, trim(line.substr(colon + 1))).second)
         fail("line " + std::to_string(line_no) + ": header key '" + key + "' given twice");
+      h.lines.emplace(key, line_no);
       if (key == "crc64") {
         h.crc_line_offset = line_offset;
         after_crc = true;
@@ -359,6 +410,7 @@ class Decoder {
   std::string_view bytes_;
   std::string_view name_;
   std::size_t line_no_ = 0;
+  Header header_;
 };
 
 void check_one_line(const std::string& what, const std::string& value) {
@@ -436,11 +488,52 @@ std::string encode_field_file(const CorrectionField& field, const FieldFileInfo&
   return header + payload;
 }
 
+uint64_t field_load_bytes(const FieldFileHeader& h) noexcept {
+  // Measured: the file's bytes, the layers read from them, and while the
+  // field is built the prefilter's vectors, steps and coefficients (a
+  // 250 MB translation field peaked at 950 MB).
+  const uint64_t per_node = h.rotation ? 240 : 136;
+  return static_cast<uint64_t>(h.grid.node_count()) * h.tools.size() * per_node;
+}
+
+uint64_t max_field_load_bytes() {
+  const char* env = std::getenv("TRUECUT_MAX_FIELD_MB");
+  if (!env || !*env) return kDefaultMaxFieldLoadMb << 20;
+  char* end = nullptr;
+  errno = 0;
+  const unsigned long long mb = std::strtoull(env, &end, 10);
+  if (*end != '\0' || errno != 0 || mb == 0 || mb > (1ull << 40))
+    throw FieldFileError(std::string("TRUECUT_MAX_FIELD_MB='") + env +
+                         "' must be a whole number of MB from 1 to 2^40");
+  return static_cast<uint64_t>(mb) << 20;
+}
+
 LoadedField decode_field_file(std::string_view bytes, std::string_view name) {
   return Decoder(bytes, name).run();
 }
 
+FieldFileHeader decode_field_file_header(std::string_view bytes, std::string_view name) {
+  return Decoder(bytes, name).header_only();
+}
+
+FieldFileHeader read_field_file_header(const std::filesystem::path& path) {
+  try {
+    check_input_file(path, "correction field");
+  } catch (const InputFileError& e) {
+    throw FieldFileError(e.what());
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw FieldFileError(path.string() + ": cannot open the correction field");
+  std::string head(kMaxHeaderBytes + 1, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(in.gcount()));
+  return decode_field_file_header(head, path.string());
+}
+
 LoadedField read_field_file(const std::filesystem::path& path) {
+  // The header first: a field too large to load is refused before its
+  // payload is read.
+  (void)read_field_file_header(path);
   std::string bytes;
   try {
     bytes = read_input_file(path, "correction field");

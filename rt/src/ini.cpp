@@ -25,6 +25,11 @@ Ini Ini::parse(const std::string& text, const std::string& file_name) {
   int line_no = 0;
   while (std::getline(in, raw)) {
     ++line_no;
+    // A value is handed on as C text, which ends at a NUL: "RADIUS = 5<NUL>0"
+    // was read as 5.
+    if (const auto nul = raw.find('\0'); nul != std::string::npos)
+      throw IniError(file_name + ":" + std::to_string(line_no) +
+                     ": not a text file (a NUL byte at column " + std::to_string(nul + 1) + ")");
     std::string line = trim(raw);
     if (line.empty() || line[0] == '#' || line[0] == ';') continue;
     auto where = [&] { return file_name + ":" + std::to_string(line_no) + ": "; };

@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <system_error>
 
 namespace truecut::rt {
@@ -50,7 +51,15 @@ std::string read_input_file(const fs::path& path, std::string_view what) {
   if (!in)
     throw InputFileError(path,
                          "cannot open the " + std::string(what) + ": " + std::strerror(errno));
-  std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  // Sized from the file first: growing a string while reading took twice
+  // the file's size for a moment.
+  std::error_code ec;
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  std::string bytes(ec ? 0 : static_cast<std::size_t>(size), '\0');
+  in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  bytes.resize(static_cast<std::size_t>(in.gcount()));
+  if (in.eof()) in.clear();  // shorter than its size said: the file shrank meanwhile
+  bytes.append(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
   if (in.bad()) throw InputFileError(path, "cannot read the " + std::string(what));
   return bytes;
 }

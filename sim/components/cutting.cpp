@@ -3,11 +3,12 @@
 //
 //   loadrt cutting nominal=FILE.stl part=PART.json [out=FOLDER] [spacing=MM]
 //                  [surfaces=ID,ID,...] [max-stock=MM] [max-depth=MM] [names=NAME]
-//                  [sampling=swept|cycle] [threads=N]
+//                  [sampling=swept|cycle] [threads=N] [max-dexels=N]
 //
 // FILE and PART are read at load time (relative to the working folder); a bad
-// file fails the load naming the file and key. OUT (default ".") is relative
-// to the HAL's output folder. Pins of instance <i> (default "cutting.0"):
+// file fails the load naming the file and key. OUT (default ".") is a folder
+// inside the HAL's output folder (relative to it, no '..'; an absolute path
+// only at or below it). Pins of instance <i> (default "cutting.0"):
 //   in   <i>.tcp-x/-y/-z            true tool tip, workpiece frame (mm)
 //   in   <i>.tool-i/-j/-k           true tool axis (tip → spindle), workpiece frame
 //   in   <i>.tool-radius, <i>.tool-corner-radius, <i>.tool-flute-length (mm)
@@ -29,7 +30,9 @@
 // OUT/machined.stl and OUT/machined.ply. threads=N (default 0: one per
 // hardware thread) cuts each tool instance's grid rows on N threads (the
 // servo thread and N − 1 helpers the model starts); the result is the same
-// bit for bit for any N.
+// bit for bit for any N. max-dexels (default 10 million, at most 50
+// million) bounds the model: a nominal that would need more at this spacing
+// (estimated from its triangles before any dexel is made) fails the load.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -177,6 +180,33 @@ void update(void* arg, long period_ns) {
   }
 }
 
+std::filesystem::path normal_absolute(const std::filesystem::path& p) {
+  std::filesystem::path n = std::filesystem::absolute(p).lexically_normal();
+  return n.filename().empty() ? n.parent_path() : n;
+}
+
+// OUT inside the HAL's output folder `hal_out` and nowhere else, as the
+// recorder's file=: a relative name without '..', or an absolute path at or
+// below the folder (run.ini files of earlier versions name it so). An
+// absolute OUT_DIR made a repeated run with another --out write its part
+// into the first run's folder.
+std::filesystem::path output_folder(const std::filesystem::path& hal_out, const std::string& out) {
+  using truecut::rt::hal::component::InitError;
+  const std::filesystem::path named(out);
+  bool up = false;
+  for (const auto& part : named)
+    up = up || part == "..";
+  const std::filesystem::path folder = normal_absolute(hal_out);
+  const std::filesystem::path resolved =
+      normal_absolute(named.is_absolute() ? named : hal_out / named);
+  const auto [f, r] = std::mismatch(folder.begin(), folder.end(), resolved.begin(), resolved.end());
+  if (up || f != folder.end())
+    throw InitError("out=" + out + ": outside the output folder " + folder.string() +
+                    "; the cutting component writes machined.stl and machined.ply inside it "
+                    "(a relative name without '..')");
+  return resolved;
+}
+
 std::vector<int> parse_ids(const std::string& text) {
   std::vector<int> ids;
   std::string cur;
@@ -212,6 +242,8 @@ extern "C" TC_COMPONENT_EXPORT int truecut_component_init(const tc_hal_api_t* ap
     options.max_stock_mm = args.take_double("max-stock", options.max_stock_mm);
     options.max_depth_mm = args.take_double("max-depth", options.max_depth_mm);
     options.threads = static_cast<int>(args.take_long("threads", 0, 0, 256));
+    options.max_dexels = static_cast<std::size_t>(args.take_long(
+        "max-dexels", static_cast<long>(kDefaultMaxDexels), 1, static_cast<long>(kMaxDexels)));
     if (auto ids = args.take("surfaces")) options.surfaces = parse_ids(*ids);
     const std::string sampling = args.take_or("sampling", "swept");
     if (sampling != "swept" && sampling != "cycle")
@@ -226,7 +258,7 @@ extern "C" TC_COMPONENT_EXPORT int truecut_component_init(const tc_hal_api_t* ap
 
     auto s = std::make_unique<State>();
     s->name = names.at(0);
-    s->out_dir = std::filesystem::path(api->output_dir(hal)) / out;
+    s->out_dir = output_folder(api->output_dir(hal), out);
     s->model = load_dexel_model(*nominal, *part, options);
     s->per_cycle = sampling == "cycle";
 

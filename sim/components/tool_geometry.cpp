@@ -17,6 +17,7 @@
 
 #include "truecut/rt/component_support.hpp"
 #include "truecut/sim/part_file.hpp"
+#include "truecut/sim/part_plausibility.hpp"
 
 namespace {
 
@@ -58,6 +59,8 @@ int read_tools(const std::string& file, std::array<ToolRow, kMaxTools>& rows) {
   truecut::sim::PartFile part;
   try {
     part = truecut::sim::read_part_file(file, truecut::sim::kPartTools);
+    truecut::sim::check_part_units(part, file);
+    truecut::sim::check_part_tools(part, file);
   } catch (const truecut::sim::PartFileError& e) {
     throw InitError(e.what());
   }

@@ -4,6 +4,7 @@
 #include <array>
 #include <bit>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <span>
 #include <stdexcept>
@@ -25,7 +26,6 @@ int flag_group(std::uint32_t entry) {
   return static_cast<int>((~entry) >> 29);
 }
 
-constexpr std::size_t kMaxDexels = 50'000'000;
 constexpr std::uint32_t kNone = 0xFFFFFFFFu;
 
 // Unit directions into the face from the sharp edges a dexel lies on.
@@ -232,8 +232,24 @@ void check_options(const DexelOptions& o) {
   positive(o.tolerance_mm, "tolerance_mm", 1e-6);
   positive(o.cell_mm, "cell_mm", 0);
   if (o.max_substeps < 1) throw std::invalid_argument("DexelOptions::max_substeps must be >= 1");
+  if (o.max_dexels < 1 || o.max_dexels > kMaxDexels)
+    throw std::invalid_argument("DexelOptions::max_dexels must be 1 .. " +
+                                std::to_string(kMaxDexels));
   if (o.threads < 0 || o.threads > 256)
     throw std::invalid_argument("DexelOptions::threads must be 0 (one per hardware thread) .. 256");
+}
+
+// Refuses a model of more dexels than options.max_dexels before any is made.
+void check_dexel_budget(double expected_dexels, const DexelOptions& o) {
+  if (expected_dexels <= static_cast<double>(o.max_dexels)) return;
+  char text[512];
+  std::snprintf(text, sizeof text,
+                "cutting: the nominal at a dexel spacing of %g mm would make about %.3g dexels "
+                "(about %.3g GB), more than max-dexels %zu; check the nominal's unit (mm), raise "
+                "the spacing (--dexel-spacing) or the limit (--max-dexels, at most %zu)",
+                o.spacing_mm, expected_dexels, expected_dexels * double(kBytesPerDexel) * 1e-9,
+                o.max_dexels, kMaxDexels);
+  throw std::length_error(text);
 }
 
 }  // namespace
@@ -315,6 +331,7 @@ DexelModel DexelModel::build(const offline::TriangleMesh& nominal,
     const double n = pieces_per_edge(V, nominal.triangles[f], options.spacing_mm);
     expected_dexels += (n - 1) * (n - 2) / 2 + 1.5 * (n - 1) + 0.5;
   }
+  check_dexel_budget(expected_dexels, options);
   // (Capped: an estimate is not worth gigabytes; past it the table grows.)
   auto dexel_key = [&m](std::uint32_t i) { return weld_key(m.surface_[i], m.position_[i]); };
   WeldTable welded(static_cast<std::size_t>(std::min(expected_dexels, 16e6)) + 16, dexel_key);

@@ -77,7 +77,7 @@ TEST(CliRun, BadConfigurationGivesFileLineAndNoOutput) {
   EXPECT_NE(std::string::npos,
             r.err.find("bad.hal:4: type mismatch: pin 'recorder.0.a' is float, signal 'a' is bit"))
       << r.err;
-  EXPECT_TRUE(std::filesystem::is_empty(dir / "out")) << "nothing half-written";
+  EXPECT_FALSE(std::filesystem::exists(dir / "out")) << "nothing half-written";
 }
 
 TEST(CliRun, MissingFilesAreUsageErrors) {
@@ -91,6 +91,64 @@ TEST(CliRun, MissingFilesAreUsageErrors) {
   EXPECT_EQ(2, noini.exit_code);
   EXPECT_NE(std::string::npos, noini.err.find("circle.hal:10: '[EMCMOT]SERVO_PERIOD' needs an INI"))
       << noini.err;
+}
+
+// Issue 23: --dry-run with an --out that did not exist failed, the recorder
+// could not create its temporary file there.
+TEST(CliRun, DryRunIntoANewFolderLoadsAndLeavesNothing) {
+  const auto out = scratch_dir() / "new";
+  auto r = run_truecut({"run", example("circle.hal"), "--ini", example("circle.ini"), "--dry-run",
+                        "--out", out.string()});
+  ASSERT_EQ(0, r.exit_code) << r.err;
+  EXPECT_NE(std::string::npos, r.out.find("configuration loads without error"));
+  EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+namespace {
+// The circle example's recorder, stopped by a SIGINT the test_interrupt
+// component raises in the given cycle.
+std::filesystem::path interrupted_hal(const std::filesystem::path& dir, int at_cycle) {
+  const auto hal = dir / "interrupt.hal";
+  std::ofstream(hal) << "loadrt threads name1=t period1=1000000\n"
+                        "loadrt siggen\n"
+                        "loadrt test_interrupt at="
+                     << at_cycle
+                     << "\n"
+                        "loadrt recorder file=trace.csv columns=s\n"
+                        "net s siggen.0.sine => recorder.0.s\n"
+                        "addf siggen.0.update t\n"
+                        "addf test_interrupt.update t\n"
+                        "addf recorder.0.sample t\n";
+  return hal;
+}
+}  // namespace
+
+// Issue 23: `run CONFIG.hal --time 100000` stopped by Ctrl-C exited 0 with
+// the trace of the part that ran, as if the run had been done.
+TEST(CliRun, ARunInterruptedBeforeItsTimeOrCyclesExits130) {
+  const auto dir = scratch_dir();
+  const std::string components = test_component_dir().string();
+  auto timed = run_truecut({"run", interrupted_hal(dir, 100).string(), "--time", "100000",
+                            "--component-path", components, "--out", (dir / "a").string()});
+  EXPECT_EQ(130, timed.exit_code) << timed.err;
+  EXPECT_NE(std::string::npos,
+            timed.err.find("interrupted at 0.100000 s of the 100000.000000 s asked for (--time)"))
+      << timed.err;
+  const std::string trace = read_file(dir / "a" / "trace.csv");
+  EXPECT_EQ(101, std::count(trace.begin(), trace.end(), '\n')) << "the trace up to there";
+  auto cycles = run_truecut({"run", interrupted_hal(dir, 10).string(), "--cycles", "1000",
+                             "--component-path", components, "--out", (dir / "b").string()});
+  EXPECT_EQ(130, cycles.exit_code) << cycles.err;
+  EXPECT_NE(std::string::npos, cycles.err.find("interrupted after 10 of the 1000 cycles"))
+      << cycles.err;
+  // Without --time or --cycles Ctrl-C is how a run ends.
+  auto open_ended = run_truecut({"run", interrupted_hal(dir, 10).string(), "--component-path",
+                                 components, "--out", (dir / "c").string()});
+  EXPECT_EQ(0, open_ended.exit_code) << open_ended.err;
+  // Done before the interrupt would have come.
+  auto done = run_truecut({"run", interrupted_hal(dir, 100).string(), "--cycles", "50",
+                           "--component-path", components, "--out", (dir / "d").string()});
+  EXPECT_EQ(0, done.exit_code) << done.err;
 }
 
 TEST(CliRun, DryRunChecksWithoutRunning) {
@@ -163,7 +221,7 @@ TEST(CliRun, ARecorderThatCannotCreateItsFileFailsTheLoad) {
                        "create "))
       << r.err;
   EXPECT_NE(std::string::npos, r.err.find("No such file or directory")) << r.err;
-  EXPECT_TRUE(std::filesystem::is_empty(dir / "out")) << "nothing half-written";
+  EXPECT_FALSE(std::filesystem::exists(dir / "out")) << "nothing half-written";
 }
 
 namespace {

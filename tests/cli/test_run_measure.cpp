@@ -174,7 +174,10 @@ TEST(RunMeasure, BadOptionsAreExitTwoWithNothingWritten) {
       {{"--cmm", "cmm.csv", "--cmm-surfaces", "5,99"}, "key 'surfaces' has no surface 99"},
       {{"--cmm", "cmm.csv", "--cmm-surfaces", "5,x"}, "'x' is not a surface id"},
       {{"--cmm", "trace.csv"}, "--cmm trace.csv: the run writes trace.csv itself"},
-      {{"--cmm", "/dev/null"}, "/dev/null: exists and is not a regular file; not replaced"},
+      {{"--cmm", "/dev/null"}, "--cmm /dev/null: outside the output folder"},
+      {{"--cmm", "../outside.csv"}, "--cmm ../outside.csv: outside the output folder"},
+      {{"--scan", (dir / "abs.xyz").string()},
+       "--scan " + (dir / "abs.xyz").string() + ": outside the output folder"},
       {{"--scan", "m.csv", "--cmm", "m.csv"}, "--scan and --cmm name the same file"},
   };
   for (const Case& c : cases) {
@@ -184,6 +187,21 @@ TEST(RunMeasure, BadOptionsAreExitTwoWithNothingWritten) {
     EXPECT_FALSE(fs::exists(out)) << c.message << ": nothing written";
   }
   EXPECT_TRUE(fs::is_character_file("/dev/null"));
+  EXPECT_FALSE(fs::exists(dir / "outside.csv"));
+  EXPECT_FALSE(fs::exists(dir / "abs.xyz"));
+}
+
+// Issue 23: `--out PART_DIR --cmm tools.tbl` replaced the tool table the run
+// had read with the CMM's CSV, exit 0.
+TEST(RunMeasure, AMeasurementOverAnInputIsRefusedAndTheInputKept) {
+  const fs::path dir = scratch_dir();
+  const fs::path part = tiny_job(dir);
+  const std::string tools = read_file(part / "tools.tbl");
+  const ProcessResult r = truecut(with(run_args(part, part), {"--cmm", "tools.tbl"}));
+  EXPECT_EQ(2, r.exit_code) << r.err;
+  EXPECT_NE(std::string::npos, r.err.find("--cmm tools.tbl is the input ")) << r.err;
+  EXPECT_EQ(tools, read_file(part / "tools.tbl"));
+  EXPECT_FALSE(fs::exists(part / "trace.csv"));
 }
 
 }  // namespace

@@ -366,3 +366,77 @@ TEST(FieldFile, IdentityRoundTripsAndIsOptional) {
 
 }  // namespace
 }  // namespace truecut::rt
+
+namespace truecut::rt {
+namespace {
+
+// Issue 23: a grid 1e300 mm away or 1e-300 mm fine was read, and the field
+// corrected nothing with exit 0. Refused at the header line.
+TEST(FieldFile, AnOriginOrSpacingBeyondAnyMachineIsRefusedAtItsLine) {
+  const std::string good = encode_field_file(sample_field(), kInfo);
+  auto edited = [&](const std::string& from, const std::string& to) {
+    std::string s = good;
+    replace_once(s, from, to);
+    return with_fresh_crc(s);
+  };
+  expect_error(edited("origin: -10.1 ", "origin: 1e300 "),
+               {"line 4: origin 1e+300 mm (x) is outside ±1e+05 mm"});
+  expect_error(edited("spacing: 2.5 ", "spacing: 1e-300 "),
+               {"line 5: spacing 1e-300 mm (x) is outside 0.001 .. 1000 mm"});
+  expect_error(edited("spacing: 2.5 ", "spacing: 5000 "), {"line 5: spacing 5000 mm (x)"});
+  EXPECT_NO_THROW(decode_field_file(good, "part7.tcf"));
+}
+
+// Issue 23: a 1 GB field (inside the input budget and the nodes per layer)
+// needed about 4 GB to load, and ended in std::bad_alloc. The header says
+// what loading takes; the payload need not even be read.
+TEST(FieldFile, AFieldTooLargeToLoadIsRefusedFromItsHeader) {
+  std::string big = encode_field_file(sample_field(), kInfo);
+  replace_once(big, "dims: 4 3 5\n", "dims: 1024 1024 30\n");
+  big.resize(payload_offset(big));  // the header alone
+  for (const bool header_only : {true, false}) {
+    try {
+      if (header_only)
+        (void)decode_field_file_header(big, "big.tcf");
+      else
+        (void)decode_field_file(big, "big.tcf");
+      ADD_FAILURE() << "a field of 2 x 31 million nodes was accepted";
+    } catch (const FieldFileError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("big.tcf: line 6: loading this field would take about 8160 MB "
+                          "(31457280 nodes x 2 tool layer(s) x 4 channels), more than the "
+                          "3072 MB a field may take; the environment variable "
+                          "TRUECUT_MAX_FIELD_MB raises the limit"),
+                std::string::npos)
+          << what;
+    }
+  }
+  const FieldFileHeader h = decode_field_file_header(encode_field_file(sample_field(), kInfo), "f");
+  EXPECT_EQ((std::array<int32_t, 3>{4, 3, 5}), h.grid.dims);
+  EXPECT_EQ((std::vector<int32_t>{2, 7}), h.tools);
+  EXPECT_FALSE(h.rotation);
+}
+
+TEST(FieldFile, TheLoadBudgetIsRaisedByTheEnvironment) {
+  std::string big = encode_field_file(sample_field(), kInfo);
+  replace_once(big, "dims: 4 3 5\n", "dims: 1024 1024 30\n");
+  big.resize(payload_offset(big));
+  ::setenv("TRUECUT_MAX_FIELD_MB", "9000", 1);
+  // Past the budget: the payload is checked, and is missing.
+  EXPECT_THROW(
+      {
+        try {
+          (void)decode_field_file(big, "big.tcf");
+        } catch (const FieldFileError& e) {
+          EXPECT_NE(std::string(e.what()).find("payload"), std::string::npos) << e.what();
+          throw;
+        }
+      },
+      FieldFileError);
+  ::setenv("TRUECUT_MAX_FIELD_MB", "many", 1);
+  EXPECT_THROW((void)decode_field_file_header(big, "big.tcf"), FieldFileError);
+  ::unsetenv("TRUECUT_MAX_FIELD_MB");
+}
+
+}  // namespace
+}  // namespace truecut::rt

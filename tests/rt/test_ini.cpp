@@ -30,3 +30,17 @@ TEST(Ini, MalformedLinesNameFileAndLine) {
   EXPECT_EQ("m.ini:3: section header without ']'", err("[A]\nK=1\n[B\n"));
   EXPECT_THROW(Ini::load("/nonexistent/x.ini"), IniError);
 }
+
+// Issue 23: "RADIUS = 5<NUL>0" ran a 5 mm circle (values are handed on as C
+// text, which ends at the NUL); the .hal reader already refused NUL bytes.
+TEST(Ini, ANulByteIsRefusedAtItsLine) {
+  const std::string text = std::string("[DEMO]\nNAME = circle\nRADIUS = 5") + '\0' + "0\n";
+  try {
+    Ini::parse(text, "circle.ini");
+    FAIL() << "a NUL byte was read";
+  } catch (const IniError& e) {
+    EXPECT_EQ("circle.ini:3: not a text file (a NUL byte at column 11)", std::string(e.what()));
+  }
+  // In a comment too: the file is not text.
+  EXPECT_THROW(Ini::parse(std::string("# a") + '\0' + "\n[A]\nK = 1\n", "c.ini"), IniError);
+}

@@ -53,6 +53,30 @@ TEST(Cutting, InitialHeightIsTheStockAllowance) {
   EXPECT_NEAR(800.0, area, 1e-9);
 }
 
+// Issue 23: a nominal in µm (17 m across) grew past 2.8 GB before the dexel
+// limit was reached. The plate (about 205,000 dexels at 0.1 mm) is refused
+// against a budget of 10,000 before any dexel is made, and built within one
+// of 300,000.
+TEST(Cutting, AModelBeyondItsDexelBudgetIsRefusedBeforeItIsBuilt) {
+  const Plate plate;
+  DexelOptions o;
+  o.spacing_mm = 0.1;
+  o.max_dexels = 10'000;
+  try {
+    (void)DexelModel::build(plate.mesh, plate.ids, plate.stock, o);
+    FAIL() << "built beyond the budget";
+  } catch (const std::length_error& e) {
+    EXPECT_NE(std::string::npos, std::string(e.what()).find("dexels (about")) << e.what();
+    EXPECT_NE(std::string::npos, std::string(e.what()).find("more than max-dexels 10000"))
+        << e.what();
+  }
+  o.max_dexels = 300'000;
+  EXPECT_GT(DexelModel::build(plate.mesh, plate.ids, plate.stock, o).size(), 80'000u);
+  o.max_dexels = kMaxDexels + 1;
+  EXPECT_THROW((void)DexelModel::build(plate.mesh, plate.ids, plate.stock, o),
+               std::invalid_argument);
+}
+
 TEST(Cutting, FlatEndMillStraightCutLeavesTheProgrammedDepth) {
   // The path is off the dexel rows (y = 10.03): a tool edge exactly on a row
   // of dexels is a tangency that misses them, half a row of area per side.

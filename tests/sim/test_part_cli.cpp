@@ -7,6 +7,7 @@
 
 #include "run_process.hpp"
 #include "test_paths.hpp"
+#include "truecut/offline/mesh_io.hpp"
 #include "truecut/sim/machine_description.hpp"
 
 using namespace truecut::test;
@@ -106,6 +107,65 @@ TEST(PartCli, BadArgumentsAreUsageErrorsAndWriteNothing) {
                             "--stepover", "0"})
                    .exit_code);
   EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+// Issue 23: --stepover 0.001 (the documented minimum) and --stepover 100
+// (inside the 0.001..100 then given) ended with exit 1 and a message about
+// the PartOptions struct. The options take the ranges the generator takes.
+TEST(PartCli, EachResolutionOptionIsRefusedOutsideItsOwnRange) {
+  const auto out = scratch_dir() / "x";
+  for (const auto& [option, value] :
+       std::vector<std::pair<std::string, std::string>>{{"--stepover", "100"},
+                                                        {"--mesh-edge", "50"},
+                                                        {"--point-spacing", "11"},
+                                                        {"--step-down", "20"},
+                                                        {"--stepover", "0.0009"}}) {
+    const auto r =
+        run_process({cli_path().string(), "part", "implant", "--out", out.string(), option, value});
+    EXPECT_EQ(2, r.exit_code) << option << " " << value << ": " << r.err;
+    EXPECT_NE(std::string::npos, r.err.find(option + " " + value + " is outside ")) << r.err;
+    EXPECT_EQ(std::string::npos, r.err.find("PartOptions")) << r.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists(out));
+  const auto at_max = run_process({cli_path().string(), "part", "implant", "--out", out.string(),
+                                   "--mesh-edge", "4", "--stepover", "10", "--step-down", "17"});
+  EXPECT_EQ(0, at_max.exit_code) << at_max.err;
+}
+
+// Issue 23: an "adapted" mesh 30 mm above the nominal gave a complete
+// program, exit 0, with 72 % of the surface queries finding no facet.
+TEST(PartCli, AnAdaptedMeshFarFromTheNominalIsRefused) {
+  const auto root = scratch_dir();
+  const std::vector<std::string> coarse = {"--mesh-edge",     "3", "--stepover",  "2",
+                                           "--point-spacing", "2", "--step-down", "5"};
+  auto part = [&](const std::string& out, std::vector<std::string> extra) {
+    std::vector<std::string> args{cli_path().string(), "part", "benchmark004", "--out",
+                                  (root / out).string()};
+    args.insert(args.end(), coarse.begin(), coarse.end());
+    args.insert(args.end(), extra.begin(), extra.end());
+    return run_process(args);
+  };
+  ASSERT_EQ(0, part("nominal", {}).exit_code);
+  truecut::offline::TriangleMesh up = truecut::offline::read_mesh(root / "nominal" / "nominal.stl");
+  for (auto& v : up.vertices_mm)
+    v.z() += 30.0;
+  const std::string up30 = (root / "up30.stl").string();
+  truecut::offline::write_mesh(up30, up);
+
+  const auto far = part("far", {"--adapted", up30});
+  EXPECT_EQ(2, far.exit_code) << far.err;
+  EXPECT_NE(std::string::npos,
+            far.err.find(up30 + " moves the nominal's surface by up to 30 mm, more than "
+                                "--max-correction 0.2 mm"))
+      << far.err;
+  // Let through the move, and most queries find no facet.
+  const auto misses = part("misses", {"--adapted", up30, "--max-correction", "50"});
+  EXPECT_EQ(2, misses.exit_code) << misses.err;
+  EXPECT_NE(std::string::npos, misses.err.find(" surface queries (")) << misses.err;
+  EXPECT_NE(std::string::npos, misses.err.find("found no facet within 0.5 mm")) << misses.err;
+  for (const char* out : {"far", "misses"})
+    EXPECT_FALSE(std::filesystem::exists(root / out)) << out;
+  EXPECT_EQ(2, part("x", {"--max-correction", "1"}).exit_code) << "without --adapted";
 }
 
 // The six files are written all or none: when the last cannot be written,

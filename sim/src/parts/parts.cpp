@@ -63,13 +63,13 @@ namespace {
 
 void check_options(const PartOptions& o) {
   const auto ok = [](double v, double max_mm) {
-    return std::isfinite(v) && v > 1e-3 && v <= max_mm;
+    return std::isfinite(v) && v >= kMinPartOptionMm && v <= max_mm;
   };
-  if (!ok(o.mesh_edge_mm, 20) || !ok(o.stepover_mm, 10) || !ok(o.point_spacing_mm, 10) ||
-      !ok(o.step_down_mm, 17)) {
+  if (!ok(o.mesh_edge_mm, kMaxMeshEdgeMm) || !ok(o.stepover_mm, kMaxStepoverMm) ||
+      !ok(o.point_spacing_mm, kMaxPointSpacingMm) || !ok(o.step_down_mm, kMaxStepDownMm)) {
     throw std::invalid_argument(
         "PartOptions: mesh_edge_mm (≤ 20), stepover_mm, point_spacing_mm (≤ 10) and "
-        "step_down_mm (≤ 17) must be positive and at least 0.001 mm");
+        "step_down_mm (≤ 17) must be at least 0.001 mm");
   }
 }
 

@@ -69,7 +69,8 @@ const std::string& soft_cnc_hal_text() {
   return text;
 }
 
-std::string soft_cnc_ini_text(const SoftCncJob& job, const MachineDescription& machine) {
+std::string soft_cnc_ini_text(const SoftCncJob& job, const MachineDescription& machine,
+                              const std::vector<int32_t>& field_tools) {
   const KinematicsParams& k = machine.machine.kinematics;
   IniText ini;
   ini.set("RUN", "MACHINE", absolute_text(job.machine));
@@ -79,11 +80,13 @@ std::string soft_cnc_ini_text(const SoftCncJob& job, const MachineDescription& m
   ini.set("RUN", "PARAMETER_UNITS", job.parameters_in_inches ? "inch" : "mm");
   ini.set("RUN", "PART", absolute_text(job.part));
   ini.set("RUN", "NOMINAL", absolute_text(job.nominal));
-  ini.set("RUN", "OUT_DIR", absolute_text(job.out_dir));
   ini.set("RUN", "DEXEL_SPACING", number_text(job.dexel_spacing_mm));
+  ini.set("RUN", "MAX_DEXELS", std::to_string(job.max_dexels));
   ini.set("RUN", "CUT_THREADS", std::to_string(job.cut_threads));
   ini.set("RUN", "SERVO_PERIOD_NS", std::to_string(servo_period_ns(job)));
   ini.set("RUN", "RECORD_EVERY", std::to_string(job.record_every));
+  ini.set("RUN", "MAX_BLOCKS", std::to_string(job.max_blocks));
+  ini.set("RUN", "MAX_PROGRAM_TIME", number_text(job.max_program_time_s));
   const std::array<double, 5> start = start_joints(machine);
   std::string start_text;
   for (double v : start)
@@ -97,6 +100,10 @@ std::string soft_cnc_ini_text(const SoftCncJob& job, const MachineDescription& m
   ini.set("KINS", "CONVENTIONAL_DIRECTIONS", k.ac.conventional_directions ? "1" : "0");
   ini.set("COMP", "FIELD", job.field ? absolute_text(*job.field) : "");
   ini.set("COMP", "ENABLE", job.field ? "1" : "0");
+  std::string tools;
+  for (const int32_t t : field_tools)
+    tools += (tools.empty() ? "" : ",") + std::to_string(t);
+  ini.set("COMP", "TOOLS", job.field ? tools : "");
   ini.set("COMP", "MAX_CORRECTION", number_text(job.max_correction_mm));
   ini.set("COMP", "MAX_RATE", number_text(job.max_rate_mm_per_s));
   ini.set("COMP", "FADE_TIME", number_text(job.fade_time_s));

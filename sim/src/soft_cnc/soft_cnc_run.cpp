@@ -1,8 +1,10 @@
 // Runs a soft-CNC job: writes the wiring and its INI, loads, runs, shuts down.
 #include <algorithm>
+#include <memory>
 #include <stdexcept>
 #include <vector>
 
+#include "program_checks.hpp"
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/interpreter.hpp"
 #include "truecut/interp/tool_table.hpp"
@@ -11,6 +13,7 @@
 #include "truecut/rt/hal.hpp"
 #include "truecut/rt/hal_file.hpp"
 #include "truecut/rt/ini.hpp"
+#include "truecut/rt/interrupt_cleanup.hpp"
 #include "truecut/sim/program_travel.hpp"
 #include "truecut/sim/soft_cnc.hpp"
 
@@ -31,13 +34,23 @@ struct ServiceHook {
   std::size_t next_swap = 0;
   bool reload_high = false;
   int32_t limit_fault_line = 0;
+  int64_t cutting_samples = 0;    // service points at which the tool cut
+  int64_t corrected_samples = 0;  // ... with a correction other than zero
 };
+
+// Whether the field ever corrected the cut (sampled at the service points).
+void sample_correction(ServiceHook& hook) {
+  if (!hook.hal->get_pin_or_param("cut.engaged").b) return;
+  ++hook.cutting_samples;
+  if (hook.hal->get_pin_or_param("comp.corr-mag").as_double() > 0) ++hook.corrected_samples;
+}
 
 void on_service(void* user, int64_t time_ns) {
   auto& hook = *static_cast<ServiceHook*>(user);
   const double t_s = double(time_ns) * 1e-9;
   if (hook.limit_fault_line == 0 && hook.hal->get_pin_or_param("machine.limit-fault").b)
     hook.limit_fault_line = std::max<int32_t>(1, hook.hal->get_pin_or_param("planner.line").s);
+  if (!hook.field_file.empty()) sample_correction(hook);
   if (hook.reload_high) {
     hook.hal->set_pin_or_param("comp.reload", "0");
     hook.reload_high = false;
@@ -52,20 +65,36 @@ void on_service(void* user, int64_t time_ns) {
 
 // The program as the planner component will interpret and plan it, checked
 // against the machine's travel before anything is written.
-void check_program(const SoftCncJob& job, const MachineDescription& machine) {
+// Also: positions no machine reaches, the planned time against the job's
+// budget, and the tools it cuts with against the field, part.json and the
+// tool table (program_checks.hpp).
+// Returns the tools the program cuts with (the field must have their layers).
+std::vector<int32_t> check_program(const SoftCncJob& job, const MachineDescription& machine) {
   try {
     interp::InterpreterOptions io;
     io.tools = interp::ToolTable::load(job.tools);
+    io.max_blocks = job.max_blocks;
     const interp::LengthUnits units =
         job.parameters_in_inches ? interp::LengthUnits::kInch : interp::LengthUnits::kMm;
     io.parameters.units = units;  // as the planner component: units with or without a file
     if (job.parameters) io.parameters = interp::ParameterFile::load(*job.parameters, units);
-    const interp::Plan plan = interp::plan_program(interp::Interpreter(io).run_file(job.program),
-                                                   soft_cnc_planner_options(job, machine));
+    const interp::CanonProgram canon = interp::Interpreter(io).run_file(job.program);
+    soft_cnc::check_program_positions(canon);
+    const interp::PlannerOptions planner = soft_cnc_planner_options(job, machine);
+    soft_cnc::check_program_time_bound(canon, planner.start_joints, job.max_program_time_s);
+    const interp::Plan plan = interp::plan_program(canon, planner);
+    soft_cnc::check_planned_time(plan, job.program.string(), job.max_program_time_s);
     const ProgramTravel travel = program_travel(plan, machine.machine, job.program.string());
     if (!travel.inside())
       throw SoftCncInputError(travel.first_excursion->message + " (machine " +
                               job.machine.string() + ")");
+    const auto tools = soft_cnc::cutting_tools(canon);
+    soft_cnc::check_part_tools(job.part, job.tools, io.tools, tools, job.program.string());
+    if (job.field) soft_cnc::check_field_layers(*job.field, tools, job.program.string());
+    std::vector<int32_t> numbers;
+    for (const auto& [tool, line] : tools)
+      numbers.push_back(tool);
+    return numbers;
   } catch (const interp::GcodeError& e) {
     throw SoftCncInputError(e.what());
   }
@@ -89,12 +118,15 @@ SoftCncResult run_soft_cnc(const SoftCncJob& given, const SoftCncProgress& progr
   for (const auto& swap : given.field_swaps)
     if (!fs::is_regular_file(swap.field))
       throw std::runtime_error(swap.field.string() + ": no such file (field swap)");
-  check_program(given, machine);
+  const std::vector<int32_t> cutting_tools = check_program(given, machine);
   const bool dir_created = !fs::exists(given.out_dir);
   fs::create_directories(given.out_dir);
   SoftCncJob job = given;
   const fs::path hal_file = job.out_dir / "soft_cnc.hal", ini_file = job.out_dir / "run.ini";
   std::vector<fs::path> written;
+  // The wiring and its INI belong to the run's outputs: a run ended by a
+  // signal removes them as it removes trace.csv.tmp.
+  std::vector<std::unique_ptr<rt::PendingFile>> interrupted_removes;
   rt::hal::HalOptions options;
   options.component_path = job.component_path;
   options.output_dir = job.out_dir;
@@ -109,7 +141,9 @@ SoftCncResult run_soft_cnc(const SoftCncJob& given, const SoftCncProgress& progr
     written.push_back(hal_file);
     rt::write_file_atomically(hal_file, soft_cnc_hal_text());
     written.push_back(ini_file);
-    rt::write_file_atomically(ini_file, soft_cnc_ini_text(job, machine));
+    rt::write_file_atomically(ini_file, soft_cnc_ini_text(job, machine, cutting_tools));
+    for (const fs::path& f : written)
+      interrupted_removes.push_back(std::make_unique<rt::PendingFile>(f));
     const rt::hal::Ini ini = rt::hal::Ini::load(ini_file);
     rt::hal::load_hal_file(h, hal_file, &ini);
   } catch (const rt::hal::HalFileError& e) {
@@ -144,6 +178,8 @@ SoftCncResult run_soft_cnc(const SoftCncJob& given, const SoftCncProgress& progr
   result.field_generation = h.get_pin_or_param("comp.field-generation").s;
   result.field_load_errors = h.get_pin_or_param("comp.load-errors").s;
   result.clamped_cycles = h.get_pin_or_param("comp.clamp-count").s;
+  result.cutting_samples = hook.cutting_samples;
+  result.corrected_cutting_samples = hook.corrected_samples;
   result.output_errors = h.unload();  // the recorder and the cutting write their files
   return result;
 }

@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "truecut/rt/core/correction_field.hpp"
 
@@ -43,9 +44,38 @@ struct LoadedField {
 // empty text (and 1 for a text whose low bits are 0).
 uint32_t field_identity_id(std::string_view text) noexcept;
 
+// A field's header: what it covers and which tools it has layers for.
+struct FieldFileHeader {
+  FieldGrid grid;
+  std::vector<int32_t> tools;  // in file order
+  FieldInterpolation interpolation = FieldInterpolation::kTricubicBspline;
+  bool rotation = false;  // the rotation channels rx ry rz
+};
+
+// Where a field's grid may lie: the range of a real machine. The reader
+// refuses an origin or spacing outside, at its header line (a grid 1e300 mm
+// away or 1e-300 mm fine corrected nothing, without a word).
+inline constexpr double kMaxFieldCoordinateMm = 1e5;  // no machine is larger than 100 m
+inline constexpr double kMinFieldSpacingMm = 1e-3;    // 1 um
+inline constexpr double kMaxFieldSpacingMm = 1e3;     // 1 m
+
+// Loading a field takes about 4x its file (the bytes, the layers, the
+// prefilter); a field that would take more than max_field_load_bytes() is
+// refused from its header, naming the file, the estimate and the limit:
+// $TRUECUT_MAX_FIELD_MB (a positive whole number of MB) or this default.
+// 3072 MB hold one layer of 2^24 nodes, `truecut field`'s default
+// --max-grid-nodes.
+inline constexpr uint64_t kDefaultMaxFieldLoadMb = 3072;
+uint64_t field_load_bytes(const FieldFileHeader& header) noexcept;
+uint64_t max_field_load_bytes();  // throws FieldFileError for a malformed variable
+
 LoadedField read_field_file(const std::filesystem::path& path);
 // `name` is used in error messages in place of a path.
 LoadedField decode_field_file(std::string_view bytes, std::string_view name);
+// Only the header (its first 64 KB are read), checked as read_field_file
+// checks it, the memory budget included; the payload is not looked at.
+FieldFileHeader read_field_file_header(const std::filesystem::path& path);
+FieldFileHeader decode_field_file_header(std::string_view bytes, std::string_view name);
 
 // Writes PATH.tmp, flushes it to disk, then renames it over `path`, so that a
 // reader sees either the old file or the complete new one.

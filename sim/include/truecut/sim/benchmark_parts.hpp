@@ -39,8 +39,16 @@ struct BenchmarkPart {
   PartMetadata metadata;
 };
 
+// The PartOptions make_part takes (mm): each from kMinPartOptionMm up to
+// its own maximum.
+inline constexpr double kMinPartOptionMm = 0.001;
+inline constexpr double kMaxMeshEdgeMm = 20.0;
+inline constexpr double kMaxStepoverMm = 10.0;
+inline constexpr double kMaxPointSpacingMm = 10.0;
+inline constexpr double kMaxStepDownMm = 17.0;
+
 // Deterministic: the same id and options give byte-identical outputs.
-// Throws std::invalid_argument on a non-positive or absurd resolution.
+// Throws std::invalid_argument on a resolution outside those ranges.
 BenchmarkPart make_part(PartId id, const PartOptions& options = {});
 // The part with its program generated for the adapted geometry `drive`
 // instead of the nominal (the nominal mesh and metadata are unchanged).

@@ -17,6 +17,7 @@
 #include "truecut/offline/field_outputs.hpp"
 #include "truecut/rt/comp.hpp"
 #include "truecut/rt/executor.hpp"
+#include "truecut/sim/cutting/dexel_model.hpp"
 #include "truecut/sim/machine_description.hpp"
 
 namespace truecut::sim {
@@ -39,6 +40,11 @@ inline constexpr double kSoftCncMaxCorrectionMm = 0.5;
 static_assert(kSoftCncMaxCorrectionMm >= offline::kFieldMaxCorrectionMm &&
               kSoftCncMaxCorrectionMm <= rt::comp::kDefaultMaxCorrectionMm);
 
+// The planned program may take at most this long unless
+// --max-program-time says otherwise: 24 h of machining, above any job of
+// the benchmark parts (benchmark004 takes 37 minutes).
+inline constexpr double kSoftCncMaxProgramTimeS = 24.0 * 3600.0;
+
 struct SoftCncJob {
   std::filesystem::path machine;  // machine description (JSON)
   std::filesystem::path program;  // G-code
@@ -53,11 +59,17 @@ struct SoftCncJob {
   std::filesystem::path out_dir;
   double period_us = 1000.0;
   double dexel_spacing_mm = 0.1;  // the cutting model's surface sampling (docs/cutting.md)
+  std::size_t max_dexels = cutting::kDefaultMaxDexels;  // the cutting model's size budget
   int cut_threads = 0;  // threads that cut (0: one per hardware thread); same result for any
   long record_every = 1;
   double max_correction_mm = kSoftCncMaxCorrectionMm;  // truecut_comp's limit
   double max_rate_mm_per_s = 5.0;
   double fade_time_s = 0.2;
+  // Budgets of the interpreter (blocks executed: an endless loop) and of
+  // the planned program (a dwell or feed off by orders of magnitude runs
+  // for days): refused at load, naming the line.
+  std::int64_t max_blocks = 50'000'000;  // InterpreterOptions::max_blocks
+  double max_program_time_s = kSoftCncMaxProgramTimeS;
   std::vector<std::filesystem::path> component_path;  // where the components' .so are
 
   // Field swaps in time order; they need `field`. With swaps the component
@@ -85,6 +97,12 @@ struct SoftCncResult {
   // Cycles in which max-correction limited the field's correction
   // (comp.clamp-count): the part got less correction than the field asked.
   int32_t clamped_cycles = 0;
+  // With a field: the service points (every 10 ms) at which the tool cut,
+  // and those at which the field's correction was not zero. None of the
+  // second with some of the first: the field corrected nothing of the cut
+  // (a grid away from the part, a zero field).
+  int64_t cutting_samples = 0;
+  int64_t corrected_cutting_samples = 0;
   // Errors the components reported while writing their files at the end
   // (machined.stl, trace.csv: a full disk, a folder gone); messages on stderr.
   int32_t output_errors = 0;
@@ -92,8 +110,11 @@ struct SoftCncResult {
 };
 
 // Bad input, found before the machine runs: the program or the tool table
-// does not interpret, the program cannot be planned, its planned path
-// leaves the machine's travel, or a component refuses its files. The
+// does not interpret, the program cannot be planned, moves beyond any
+// machine, takes longer than max_program_time_s, its planned path leaves
+// the machine's travel, it cuts with a tool the field has no layer for or
+// part.json does not describe (or describes with another radius than the
+// tool table), or a component refuses its files. The
 // message names the file and line or key, e.g.
 // "part/program.ngc:123: joint z leaves travel [-50, 350] at 362.5 mm".
 class SoftCncInputError : public std::runtime_error {
@@ -103,8 +124,11 @@ class SoftCncInputError : public std::runtime_error {
 
 // The shipped wiring, compiled in (sim/hal/soft_cnc.hal).
 const std::string& soft_cnc_hal_text();
-// The run.ini the wiring reads for this job (absolute paths).
-std::string soft_cnc_ini_text(const SoftCncJob& job, const MachineDescription& machine);
+// The run.ini the wiring reads for this job (absolute paths of the inputs;
+// the outputs go into the folder the run is given, --out). `field_tools`:
+// the tools truecut_comp must find a layer for (tools=).
+std::string soft_cnc_ini_text(const SoftCncJob& job, const MachineDescription& machine,
+                              const std::vector<int32_t>& field_tools = {});
 
 // The options the wiring gives interp_planner for this job (run.ini's
 // [KINS], START and SERVO_PERIOD_NS): what run_soft_cnc plans the program

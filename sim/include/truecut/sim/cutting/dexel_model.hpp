@@ -23,6 +23,15 @@
 
 namespace truecut::sim::cutting {
 
+// The dexel model's size: by default at most this many dexels, and never
+// more than kMaxDexels (the index shares a word with flags). A run takes
+// about kBytesPerDexel each (measured: the implant at 0.05 and 0.025 mm,
+// 0.55 and 2.1 million dexels, 211 and 741 MB peak); benchmark004 at the
+// default 0.1 mm has 5.4 million.
+inline constexpr std::size_t kDefaultMaxDexels = 10'000'000;
+inline constexpr std::size_t kMaxDexels = 50'000'000;
+inline constexpr std::size_t kBytesPerDexel = 350;
+
 struct DexelOptions {
   double spacing_mm = 0.1;     // longest distance between neighbouring dexels of a triangle
   double max_stock_mm = 3.0;   // initial h is capped here (material beyond it is ignored)
@@ -31,6 +40,10 @@ struct DexelOptions {
   int max_substeps = 4096;     // per cut() call; a longer move is sampled more coarsely
   double cell_mm = 0;          // spatial grid cell; 0 = automatic
   std::vector<int> surfaces;   // surface ids to model; empty = all
+  // The dexels the model may have, estimated from the modelled triangles and
+  // the spacing before any is made (a nominal in µm instead of mm asked for
+  // 2.8 GB and more); at most kMaxDexels.
+  std::size_t max_dexels = kDefaultMaxDexels;
   // Threads that cut (the caller and threads − 1 helper threads the model
   // starts); 0 = one per hardware thread. The result is the same bit for bit
   // whatever the number.
