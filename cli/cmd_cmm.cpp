@@ -10,6 +10,7 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "measure_options.hpp"
+#include "quiet_option.hpp"
 #include "truecut/offline/mesh_io.hpp"
 #include "truecut/sim/measure/cmm.hpp"
 #include "truecut/sim/measure/part_surfaces.hpp"
@@ -44,6 +45,8 @@ const char* kCmmHelp =
     "  --sigma-um S        probing noise, 0..20 um (default 2)\n"
     "  --search-mm D       search distance along the normal each way (default 1.0)\n"
     "  --seed N            noise seed (default 1)\n"
+    "  --quiet             nothing on stderr but warnings and errors\n"
+    "                      (progress is shown on a terminal only)\n"
     "  --help              this text\n";
 
 int input_error(const std::string& message) {
@@ -55,9 +58,12 @@ int input_error(const std::string& message) {
 
 int cmd_cmm(const std::vector<std::string>& argv) {
   std::vector<OptionSpec> specs = cmm_option_specs("");
-  specs.insert(
-      specs.end(),
-      {{"out", true}, {"nominal", true}, {"part", true}, {"points", true}, {"help", false}});
+  specs.insert(specs.end(), {{"out", true},
+                             {"nominal", true},
+                             {"part", true},
+                             {"points", true},
+                             kQuietOption,
+                             {"help", false}});
   ParsedArgs a(argv, specs);
   if (a.flag("help")) {
     std::fputs(kCmmHelp, stdout);
@@ -101,7 +107,8 @@ int cmd_cmm(const std::vector<std::string>& argv) {
     return input_error(e.what());
   }
 
-  std::fprintf(stderr, "cmm: probing %zu points on %s\n", points.size(), mesh_file.c_str());
+  if (progress_shown(a))
+    std::fprintf(stderr, "cmm: probing %zu points on %s\n", points.size(), mesh_file.c_str());
   std::vector<sim::measure::CmmMeasurement> measurements;
   try {
     measurements = sim::measure::probe(machined, points, opt);

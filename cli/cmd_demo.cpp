@@ -219,7 +219,9 @@ int cmd_demo(const std::vector<std::string>& argv) {
   if (progress) std::fprintf(stderr, "demo: writing the report\n");
   rt::write_file_atomically(o.out_dir / "report.html",
                             analysis::report::closed_loop_html(report_parts, ro));
-  rt::write_file_atomically(o.out_dir / "results.json", json.dump(2) + "\n");
+  rt::write_file_atomically(
+      o.out_dir / "results.json",
+      json.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n");
   std::printf("report: %s\nresults: %s\n", (o.out_dir / "report.html").string().c_str(),
               (o.out_dir / "results.json").string().c_str());
   return kExitOk;

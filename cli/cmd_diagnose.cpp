@@ -12,6 +12,7 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "measure_options.hpp"
+#include "quiet_option.hpp"
 #include "run_support.hpp"
 #include "truecut/analysis/diagnosis/diagnosis.hpp"
 #include "truecut/analysis/diagnosis/surface.hpp"
@@ -91,6 +92,8 @@ const char* kDiagnoseHelp =
     "                          (default: the --out DIR, so DIR/runs/); on bad input the\n"
     "                          runs this diagnosis made are removed\n"
     "  --component-path DIR    also search DIR for components\n"
+    "  --quiet                 nothing on stderr but warnings and errors\n"
+    "                          (progress is shown on a terminal only)\n"
     "  --help                  this text\n";
 
 // Input that cannot be diagnosed: the message, exit 2.
@@ -219,9 +222,10 @@ int surface_mode(const ParsedArgs& a, const std::string& out_dir) {
                              {job.nominal.string(), job.part.string(), job.tools.string()});
   require_writable_folder("out", out_dir);
   if (a.value("work")) require_writable_folder("work", *a.value("work"));
-  options.progress = [](const std::string& line) {
-    std::fprintf(stderr, "diagnose: %s\n", line.c_str());
-  };
+  if (progress_shown(a))
+    options.progress = [](const std::string& line) {
+      std::fprintf(stderr, "diagnose: %s\n", line.c_str());
+    };
   dg::SurfaceDiagnosisResult result;
   try {
     const auto believed = sim::read_machine_description(*a.value("machine"));
@@ -275,6 +279,7 @@ int cmd_diagnose(const std::vector<std::string>& argv) {
                       {"bic-threshold", true},
                       {"min-effect", true},
                       {"tcp-datum", true},
+                      kQuietOption,
                       {"help", false}});
   if (a.flag("help")) {
     std::fputs(kDiagnoseHelp, stdout);
@@ -336,9 +341,10 @@ int cmd_diagnose(const std::vector<std::string>& argv) {
       throw UsageError(e.what());
     }
   }
-  options.progress = [](const std::string& line) {
-    std::fprintf(stderr, "diagnose: %s\n", line.c_str());
-  };
+  if (progress_shown(a))
+    options.progress = [](const std::string& line) {
+      std::fprintf(stderr, "diagnose: %s\n", line.c_str());
+    };
 
   std::string map_text;
   for (const auto& m : a.values("map"))
@@ -348,11 +354,11 @@ int cmd_diagnose(const std::vector<std::string>& argv) {
   try {
     analysis::RecordingOptions ro;
     ro.map = analysis::parse_column_map(map_text);
-    std::fprintf(stderr, "diagnose: reading %s\n", recording->c_str());
+    if (progress_shown(a)) std::fprintf(stderr, "diagnose: reading %s\n", recording->c_str());
     const auto rec = analysis::read_recording(*recording, ro);
     std::optional<analysis::Recording> held;
     if (holdout) {
-      std::fprintf(stderr, "diagnose: reading %s\n", holdout->c_str());
+      if (progress_shown(a)) std::fprintf(stderr, "diagnose: reading %s\n", holdout->c_str());
       held = analysis::read_recording(*holdout, ro);
     }
     if (const auto t = a.value("tools")) {

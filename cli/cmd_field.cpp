@@ -17,6 +17,7 @@
 #include "commands.hpp"
 #include "measure_options.hpp"
 #include "parameter_file_args.hpp"
+#include "program_budget_args.hpp"
 #include "side_by_side.hpp"
 #include "stage_progress.hpp"
 #include "truecut/interp/error.hpp"
@@ -352,6 +353,7 @@ Inputs read_inputs(const ParsedArgs& a, const fs::path& program_file, const fs::
       [&] {
         try {
           interp::InterpreterOptions io;
+          io.max_blocks = max_blocks_from_args(a);
           in.tools = interp::ToolTable::load(tools_file);
           io.tools = in.tools;
           if (auto p = parameter_file_from_args(a)) io.parameters = std::move(*p);
@@ -573,6 +575,10 @@ int run_field(const ParsedArgs& a, const std::vector<std::string>& argv) {
   const bool quiet = a.flag("quiet");
   const bool verbose = a.flag("verbose") && !quiet;
   if (a.flag("verbose") && quiet) throw UsageError("--verbose and --quiet exclude each other");
+  // Options checked before the inputs, which may take a while to read.
+  (void)max_blocks_from_args(a);
+  (void)tool_values(a, "corner-radius", false);
+  (void)tool_values(a, "cutting-length", true);
   refuse_outputs_over_inputs(a, *out);
   require_writable_folder("out", *out);
   std::optional<StageProgress> shown;
@@ -719,9 +725,10 @@ int cmd_field(const std::vector<std::string>& argv) {
                       {"strict-mesh", false},
                       {"var-file", true},
                       {"var-units", true},
+                      {"max-blocks", true},
                       {"help", false}});
   if (a.flag("help")) {
-    std::fputs((std::string(kFieldHelp) + kVarFileHelp).c_str(), stdout);
+    std::fputs((std::string(kFieldHelp) + kMaxBlocksHelp + kVarFileHelp).c_str(), stdout);
     return kExitOk;
   }
   try {

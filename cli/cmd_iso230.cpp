@@ -10,6 +10,7 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "measure_options.hpp"
+#include "quiet_option.hpp"
 #include "truecut/analysis/iso230_report.hpp"
 #include "truecut/analysis/recording.hpp"
 #include "truecut/rt/atomic_write.hpp"
@@ -48,6 +49,8 @@ const char* kIso230Help =
     "  --min-dwell S             shortest standstill that is a reading, s (default 0.5)\n"
     "  --target-tol T            commanded positions closer than T are one target (default 0.001)\n"
     "  --min-runs N              approaches per target and direction (default 2)\n"
+    "  --quiet                   nothing on stderr but warnings and errors\n"
+    "                            (progress is shown on a terminal only)\n"
     "  --help                    this text\n";
 
 std::vector<std::string> split_list(const std::string& s) {
@@ -95,6 +98,7 @@ int cmd_iso230(const std::vector<std::string>& argv) {
                       {"min-dwell", true},
                       {"target-tol", true},
                       {"min-runs", true},
+                      kQuietOption,
                       {"help", false}});
   if (a.flag("help")) {
     std::fputs(kIso230Help, stdout);

@@ -12,6 +12,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "quiet_option.hpp"
 #include "run_machine.hpp"
 #include "run_support.hpp"
 #include "truecut/rt/executor.hpp"
@@ -42,6 +43,8 @@ const char* kRunHelp =
     "  --spin-us N            (wall clock) busy-wait the last N us before each deadline\n"
     "  --show                 print threads, pins and signals after loading\n"
     "  --dry-run              load and check the configuration, run nothing\n"
+    "  --quiet                nothing on stderr but warnings and errors\n"
+    "                         (progress is shown on a terminal only)\n"
     "  --help                 this text\n"
     "\n"
     "Components are looked for built in, then as NAME.so in --component-path,\n"
@@ -79,7 +82,8 @@ bool ends_with_json(const std::string& arg) {
 // The arguments that are not options or option values. Options that take a
 // value in either form take the next argument unless written --name=value.
 std::vector<std::string> positional_arguments(const std::vector<std::string>& argv) {
-  static const char* const kFlags[] = {"--realtime", "--no-mlock", "--show", "--dry-run", "--help"};
+  static const char* const kFlags[] = {"--realtime", "--no-mlock", "--show",
+                                       "--dry-run",  "--quiet",    "--help"};
   std::vector<std::string> positionals;
   for (std::size_t i = 0; i < argv.size(); ++i) {
     const std::string& arg = argv[i];
@@ -158,6 +162,7 @@ int cmd_run(const std::vector<std::string>& argv) {
                       {"spin-us", true},
                       {"show", false},
                       {"dry-run", false},
+                      kQuietOption,
                       {"help", false}});
   if (a.flag("help")) {
     std::fputs(kRunHelp, stdout);
@@ -182,6 +187,7 @@ int cmd_run(const std::vector<std::string>& argv) {
   rt::hal::HalOptions opt;
   opt.component_path = component_path(a);
   opt.output_dir = a.value("out").value_or(".");
+  opt.show_info_messages = !a.flag("quiet");
 
   std::optional<rt::hal::Ini> ini;
   try {
@@ -225,15 +231,17 @@ int cmd_run(const std::vector<std::string>& argv) {
     return kExitOk;
   }
 
-  Progress progress{limits.duration_ns, isatty(STDERR_FILENO) != 0};
-  limits.progress = print_progress;
-  limits.progress_user = &progress;
-  if (limits.duration_ns == 0 && limits.max_cycles == 0)
+  Progress progress{limits.duration_ns};
+  if (progress_shown(a)) {
+    limits.progress = print_progress;
+    limits.progress_user = &progress;
+  }
+  if (limits.duration_ns == 0 && limits.max_cycles == 0 && !a.flag("quiet"))
     std::fprintf(stderr, "running until a component stops or Ctrl-C (--time S to limit)\n");
 
   const InterruptibleRun run = run_interruptible(h, limits, realtime, wall);
   const rt::hal::RunReport& r = run.report;
-  if (progress.tty && progress.last_ns >= 0) std::fputs("\n", stderr);
+  if (progress.last_ns >= 0) std::fputs("\n", stderr);
 
   std::printf("truecut run %s\n", config.c_str());
   std::printf("  mode        %s%s\n", r.wall_clock ? "wall clock" : "simulated time",

@@ -7,6 +7,7 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "measure_options.hpp"
+#include "quiet_option.hpp"
 #include "truecut/offline/mesh_io.hpp"
 #include "truecut/offline/rigid_transform.hpp"
 #include "truecut/sim/measure/scanner.hpp"
@@ -35,6 +36,8 @@ const char* kScanHelp =
     "  --seed N                     noise and registration seed (default 1)\n"
     "  --normals estimate|view      plane fit to neighbours (default) or view direction\n"
     "  --mesh-out FILE              also a triangulated scan mesh (.ply or .stl)\n"
+    "  --quiet                      nothing on stderr but warnings and errors\n"
+    "                               (progress is shown on a terminal only)\n"
     "  --help                       this text\n";
 
 // Whether two output names reach the same file, which need not exist yet
@@ -54,7 +57,7 @@ bool same_new_file(const std::string& a, const std::string& b) {
 
 int cmd_scan(const std::vector<std::string>& argv) {
   std::vector<OptionSpec> specs = scan_option_specs("");
-  specs.insert(specs.end(), {{"out", true}, {"mesh-out", true}, {"help", false}});
+  specs.insert(specs.end(), {{"out", true}, {"mesh-out", true}, kQuietOption, {"help", false}});
   ParsedArgs a(argv, specs);
   if (a.flag("help")) {
     std::fputs(kScanHelp, stdout);
@@ -81,6 +84,7 @@ int cmd_scan(const std::vector<std::string>& argv) {
   require_writable_file("out", *out);
   if (mesh_out) require_writable_file("mesh-out", *mesh_out);
   ScanSettings settings = scan_settings(a, "");
+  settings.show_progress = progress_shown(a);
   const sim::measure::ScannerOptions& opt = settings.options;
   settings.options.build_mesh = mesh_out.has_value();
 

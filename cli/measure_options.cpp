@@ -165,9 +165,10 @@ sim::measure::ScanResult scan_mesh(const offline::TriangleMesh& mesh, ScanSettin
     s.options.registration_error = sim::measure::seeded_registration_error(
         s.registration_error_mm, s.registration_error_deg, 0.5 * (lo + hi), s.options.seed);
   }
-  s.options.progress = [](std::size_t pose, std::size_t poses, std::size_t points) {
-    std::fprintf(stderr, "scan: pose %zu/%zu, %zu points\n", pose + 1, poses, points);
-  };
+  if (s.show_progress)
+    s.options.progress = [](std::size_t pose, std::size_t poses, std::size_t points) {
+      std::fprintf(stderr, "scan: pose %zu/%zu, %zu points\n", pose + 1, poses, points);
+    };
   return sim::measure::scan(mesh, s.options);
 }
 

@@ -40,6 +40,7 @@ struct ScanSettings {
   std::string sigma_text = "20";  // as given, for the file comment
   double registration_error_mm = 0;
   double registration_error_deg = 0;
+  bool show_progress = false;  // "scan: pose i/n" on stderr
 };
 
 // --PREFIXsigma-um, density, mode, max-incidence-deg, registration-error-mm,
@@ -48,7 +49,8 @@ std::vector<OptionSpec> scan_option_specs(const std::string& prefix);
 // Parses them (UsageError on a bad value).
 ScanSettings scan_settings(const ParsedArgs& a, const std::string& prefix);
 // The scan of `mesh` (registration error about the mesh's box centre,
-// progress on stderr). Throws std::invalid_argument for an unusable mesh.
+// progress on stderr when settings.show_progress). Throws std::invalid_argument for an unusable
+// mesh.
 sim::measure::ScanResult scan_mesh(const offline::TriangleMesh& mesh, ScanSettings& settings);
 // The comment written into the point cloud file.
 std::string scan_comment(const ScanSettings& settings);

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "parameter_file_args.hpp"
+#include "quiet_option.hpp"
 #include "run_measure.hpp"
 #include "run_support.hpp"
 #include "truecut/rt/hal_file.hpp"
@@ -58,6 +59,8 @@ const char* kHelpOptions =
     "                         (same outputs; prints cycle timing and overruns)\n"
     "  --cpu N                with --realtime: pin the servo thread to CPU N\n"
     "  --fifo PRIO            with --realtime: SCHED_FIFO priority 1..99 when permitted\n"
+    "  --quiet                nothing on stderr but warnings and errors\n"
+    "                         (progress is shown on a terminal only)\n"
     "  --help                 this text\n"
     "measuring the machined part after the run (FILE relative to DIR):\n"
     "  --scan FILE            virtual optical scan (as truecut scan): .ply, .xyz, .txt, .csv\n"
@@ -66,7 +69,8 @@ const char* kHelpOptions =
     "                         --scan-registration-error-mm, --scan-registration-error-deg\n"
     "  --cmm FILE             virtual CMM on the part's compensated surfaces (as truecut cmm\n"
     "                         --nominal --part): CSV\n"
-    "  --cmm-sigma-um S       and --cmm-seed, --cmm-spacing, --cmm-surfaces, --cmm-search-mm\n";
+    "  --cmm-sigma-um S       and --cmm-seed, --cmm-spacing, --cmm-surfaces, --cmm-search-mm,\n"
+    "                         --cmm-max-points\n";
 
 // An input file that must be there: a missing one, a folder or a device
 // each named as what it is (rt/input_file.hpp).
@@ -154,6 +158,7 @@ int run_machine(const std::vector<std::string>& argv) {
                              {"realtime", false},
                              {"cpu", true},
                              {"fifo", true},
+                             kQuietOption,
                              {"help", false}});
   ParsedArgs a(argv, specs);
   if (a.flag("help")) {
@@ -198,12 +203,15 @@ int run_machine(const std::vector<std::string>& argv) {
       prepare_run_measurement(a, job.out_dir, job.nominal, job.part, job_inputs(job));
 
   Progress progress;
-  progress.tty = isatty(STDERR_FILENO) != 0;
+  const bool show_progress = progress_shown(a);
+  job.show_info_messages = !a.flag("quiet");
   sim::SoftCncResult r;
   try {
-    std::fprintf(stderr, "machining %s on %s\n", job.program.string().c_str(),
-                 job.machine.string().c_str());
+    if (!a.flag("quiet"))
+      std::fprintf(stderr, "machining %s on %s\n", job.program.string().c_str(),
+                   job.machine.string().c_str());
     r = sim::run_soft_cnc(job, [&](double t_s, double program_s) {
+      if (!show_progress) return;
       progress.total_ns = static_cast<int64_t>(program_s * 1e9);
       print_progress(&progress, static_cast<int64_t>(t_s * 1e9));
     });
@@ -217,7 +225,7 @@ int run_machine(const std::vector<std::string>& argv) {
     std::fprintf(stderr, "truecut run: %s\n", e.what());
     return kExitUsage;
   }
-  if (progress.tty && progress.last_ns >= 0) std::fputs("\n", stderr);
+  if (progress.last_ns >= 0) std::fputs("\n", stderr);
   if (r.output_errors > 0) {
     std::fprintf(stderr, "truecut run: %d output file(s) could not be written (see above)\n",
                  r.output_errors);

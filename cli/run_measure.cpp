@@ -1,5 +1,7 @@
 #include "run_measure.hpp"
 
+#include "quiet_option.hpp"
+
 #include <cstdio>
 
 #include "truecut/offline/mesh_io.hpp"
@@ -69,11 +71,13 @@ RunMeasurement prepare_run_measurement(const ParsedArgs& a, const fs::path& out_
   refuse_orphans(a, scan_option_specs("scan-"), "scan");
   refuse_orphans(a, cmm_option_specs("cmm-"), "cmm");
   RunMeasurement m;
+  m.show_progress = progress_shown(a);
   if (const auto scan = a.value("scan")) {
     if (!has_extension(*scan, {".ply", ".xyz", ".txt", ".csv"}))
       throw UsageError("--scan " + *scan + ": the point cloud must be .ply, .xyz, .txt or .csv");
     m.scan_file = output_file("scan", *scan, out_dir, inputs);
     m.scan = scan_settings(a, "scan-");
+    m.scan.show_progress = m.show_progress;
   }
   if (const auto cmm = a.value("cmm")) {
     m.cmm_file = output_file("cmm", *cmm, out_dir, inputs);
@@ -114,9 +118,22 @@ bool measure_machined_part(RunMeasurement& m, const fs::path& machined_stl) {
                 m.scan_file->string().c_str());
   }
   if (m.cmm_file) {
-    std::fprintf(stderr, "cmm: probing %zu points on %s\n", m.cmm_points.size(),
-                 machined_stl.string().c_str());
+    if (m.show_progress)
+      std::fprintf(stderr, "cmm: probing %zu points on %s\n", m.cmm_points.size(),
+                   machined_stl.string().c_str());
     const auto measurements = sim::measure::probe(machined, m.cmm_points, m.cmm.options);
+    const auto overall = sim::measure::overall_statistics(measurements);
+    // As `truecut cmm`: a report in which every probe failed is a failed
+    // measurement, not a perfect part.
+    if (overall.valid == 0) {
+      std::fprintf(stderr,
+                   "truecut run: none of the %zu CMM points found the surface of %s within %g mm "
+                   "along its normal: no measurement, %s not written (--cmm-search-mm widens "
+                   "the search)\n",
+                   overall.points, machined_stl.string().c_str(), m.cmm.options.search_distance_mm,
+                   m.cmm_file->string().c_str());
+      return false;
+    }
     fs::create_directories(m.cmm_file->parent_path());
     sim::measure::write_cmm_csv(*m.cmm_file, measurements);
     std::printf("  cmm         %zu points -> %s (deviations in um)\n", measurements.size(),

@@ -19,6 +19,7 @@ struct RunMeasurement {
   ScanSettings scan;
   CmmSettings cmm;
   std::vector<sim::measure::CmmPoint> cmm_points;  // on the nominal part
+  bool show_progress = false;                      // on a terminal, without --quiet
 };
 
 // --scan, --cmm and their --scan-*/--cmm-* options.

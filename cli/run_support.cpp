@@ -46,16 +46,12 @@ std::vector<std::filesystem::path> component_path(const ParsedArgs& a) {
 void print_progress(void* user, int64_t t_ns) {
   auto& p = *static_cast<Progress*>(user);
   if (p.last_ns >= 0 && t_ns - p.last_ns < 1'000'000'000) return;  // at most once per second
-  if (p.total_ns > 0 && !p.tty) {  // a log file: one line per tenth of the run
-    const int64_t tenth = p.last_ns < 0 ? -1 : p.last_ns * 10 / p.total_ns;
-    if (tenth == t_ns * 10 / p.total_ns) return;
-  }
   p.last_ns = t_ns;
   if (p.total_ns > 0)
-    std::fprintf(stderr, "%s  %.1f / %.1f s (%3.0f%%)%s", p.tty ? "\r" : "", t_ns * 1e-9,
-                 p.total_ns * 1e-9, 100.0 * double(t_ns) / double(p.total_ns), p.tty ? "" : "\n");
+    std::fprintf(stderr, "\r  %.1f / %.1f s (%3.0f%%)", t_ns * 1e-9, p.total_ns * 1e-9,
+                 100.0 * double(t_ns) / double(p.total_ns));
   else
-    std::fprintf(stderr, "%s  %.1f s%s", p.tty ? "\r" : "", t_ns * 1e-9, p.tty ? "" : "\n");
+    std::fprintf(stderr, "\r  %.1f s", t_ns * 1e-9);
 }
 
 InterruptibleRun run_interruptible(rt::hal::Hal& h, const rt::hal::RunLimits& limits,

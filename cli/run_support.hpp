@@ -20,11 +20,10 @@ constexpr int kExitInterrupted = 130;
 // beside the truecut binary.
 std::vector<std::filesystem::path> component_path(const ParsedArgs& a);
 
-// Progress on stderr at most once per second of run time: "t / total (p%)"
-// (a carriage-return line on a terminal, one line per report otherwise).
+// Progress on a terminal at most once per second of run time: "t / total
+// (p%)" on one carriage-return line (quiet_option.hpp: on a terminal only).
 struct Progress {
   int64_t total_ns = 0;
-  bool tty = false;
   int64_t last_ns = -1;
 };
 void print_progress(void* user, int64_t time_ns);

@@ -22,9 +22,14 @@ targets=("${@:-${all[@]}}")
 [ ${#targets[@]} -eq 0 ] && targets=("${all[@]}")
 command -v clang++ >/dev/null || { echo "fuzz.sh: clang++ is not installed (apt install clang libclang-rt-14-dev)" >&2; exit 2; }
 dir=${TRUECUT_FUZZ_DIR:-build-fuzz}
-CC=clang CXX=clang++ cmake -S . -B "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTRUECUT_FUZZ=ON \
-  -DTRUECUT_BUILD_TESTS=OFF -DTRUECUT_BUILD_BENCH=OFF >/dev/null
-cmake --build "$dir" -j"$(nproc)" --target $(printf 'fuzz_%s ' "${targets[@]}") >/dev/null
+mkdir -p "$dir"
+# Two fuzz.sh at once (one per core) build one after the other, not into each other.
+(
+  flock 9
+  CC=clang CXX=clang++ cmake -S . -B "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTRUECUT_FUZZ=ON \
+    -DTRUECUT_BUILD_TESTS=OFF -DTRUECUT_BUILD_BENCH=OFF >/dev/null
+  cmake --build "$dir" -j"$(nproc)" --target $(printf 'fuzz_%s ' "${targets[@]}") >/dev/null
+) 9>"$dir/.build.lock"
 
 # CPU seconds (user + system) a running process has used so far.
 cpu_seconds() {

@@ -148,6 +148,8 @@ void api_request_stop(tc_hal* hal) {
 
 void api_message(tc_hal* hal, tc_hal_msg_level_t level, const char* text) {
   if (level == TC_HAL_MSG_ERR) ++hal->error_messages;
+  if (level != TC_HAL_MSG_ERR && level != TC_HAL_MSG_WARN && !hal->options.show_info_messages)
+    return;
   const char* tag = level == TC_HAL_MSG_ERR    ? "error"
                     : level == TC_HAL_MSG_WARN ? "warning"
                                                : "info";

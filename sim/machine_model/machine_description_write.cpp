@@ -149,7 +149,7 @@ std::string format_machine_description(const MachineDescription& d) {
   if (d.machine.kinematics != KinematicsParams{})
     root["kinematics"] = kinematics_json(d.machine.kinematics);
   root["effects"] = effects_json(d.machine.effects);
-  return root.dump(2) + "\n";
+  return root.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n";
 }
 
 void write_machine_description(const std::filesystem::path& file, const MachineDescription& d) {

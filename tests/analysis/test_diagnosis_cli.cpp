@@ -65,7 +65,7 @@ TEST(DiagnosisCli, FindsPlantedBacklashAndWritesThreeFiles) {
                         "--machine", (dir / "believed.json").string(), "--out", out.string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("explained: backlash x"), std::string::npos) << r.out;
-  EXPECT_NE(r.err.find("diagnose: "), std::string::npos);  // progress on stderr
+  EXPECT_EQ(r.err.find("diagnose: "), std::string::npos) << r.err;  // progress: on a terminal only
   EXPECT_EQ(files_in(out),
             (std::vector<std::string>{"diagnosis.html", "diagnosis.json", "fitted_machine.json"}));
   const auto j = nlohmann::json::parse(read_file(out / "diagnosis.json"));

@@ -735,4 +735,34 @@ TEST(FieldCli, MeaninglessOptionsAndAnUnwritableOutAreRefusedAtOnce) {
   }
 }
 
+// Issue 23: `field` had no --max-blocks (an endless loop in the program ran
+// for the interpreter's default budget), and tool options were read only
+// once the meshes had been.
+TEST(FieldCli, TheProgramsBlockBudgetAndToolOptionsAreCheckedAsTheUserGaveThem) {
+  const fs::path root = scratch_dir();
+  const Part p = make_part_and_scan(root, 0.05);
+  Part looping = p;
+  looping.program = root / "loop.ngc";
+  write_text(looping.program, "#1=0\no1 while [1]\n#1=[#1+1]\no1 endwhile\nM2\n");
+  std::vector<std::string> args = field_args(looping, root / "out");
+  args.insert(args.end(), {"--max-blocks", "1000"});
+  const ProcessResult r = truecut(args);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("more than 1000 blocks executed"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(root / "out" / "field.tcf"));
+  EXPECT_NE(truecut({"field", "--help"}).out.find("--max-blocks N"), std::string::npos);
+  // A tool number beyond an int (once cast to tool 1) is refused before
+  // any mesh is read: these meshes do not exist.
+  for (const char* option : {"--cutting-length", "--corner-radius"}) {
+    const ProcessResult t =
+        truecut({"field", "missing.stl", "missing_scan.stl", "--program", "p.ngc", "--tools",
+                 "t.tbl", "--out", (root / "o").string(), option, "4294967297=5"});
+    EXPECT_EQ(t.exit_code, 2) << t.err;
+    EXPECT_NE(
+        t.err.find(std::string(option) + " '4294967297=5': expected TOOL=MM (tool 0 to 99999"),
+        std::string::npos)
+        << t.err;
+  }
+}
+
 }  // namespace

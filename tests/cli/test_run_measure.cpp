@@ -204,4 +204,26 @@ TEST(RunMeasure, AMeasurementOverAnInputIsRefusedAndTheInputKept) {
   EXPECT_FALSE(fs::exists(part / "trace.csv"));
 }
 
+// Issue 23: a CMM run in which no probe found the surface wrote a cmm.csv
+// of invalid rows and exited 0, where `truecut cmm` fails: the untouched
+// side stands 0.3 mm proud, beyond a search of 0.1 mm.
+TEST(RunMeasure, ACmmRunInWhichNoProbeFindsTheSurfaceFails) {
+  const fs::path dir = scratch_dir();
+  const fs::path part = tiny_job(dir);
+  const fs::path out = dir / "run";
+  const ProcessResult r =
+      truecut(with(run_args(part, out), {"--cmm", "cmm.csv", "--cmm-surfaces", "1", "--cmm-spacing",
+                                         "0.5", "--cmm-search-mm", "0.1"}));
+  EXPECT_EQ(1, r.exit_code) << r.err;
+  EXPECT_NE(std::string::npos,
+            r.err.find("CMM points found the surface of " + (out / "machined.stl").string() +
+                       " within 0.1 mm along its normal: no measurement, " +
+                       (out / "cmm.csv").string() + " not written"))
+      << r.err;
+  EXPECT_FALSE(fs::exists(out / "cmm.csv"));
+  EXPECT_FALSE(fs::exists(out / "cmm.csv.tmp"));
+  EXPECT_NE(std::string::npos,
+            truecut({"run", "x.json", "p.ngc", "--help"}).out.find("--cmm-max-points"));
+}
+
 }  // namespace

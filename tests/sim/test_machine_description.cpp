@@ -220,7 +220,8 @@ TEST(MachineDescription, UnreadableFileIsNamed) {
     read_machine_description("/nonexistent/machine.json");
     FAIL();
   } catch (const MachineDescriptionError& e) {
-    EXPECT_EQ(0u, std::string(e.what()).find("/nonexistent/machine.json: cannot open the machine description"));
+    EXPECT_EQ(0u, std::string(e.what()).find(
+                      "/nonexistent/machine.json: cannot open the machine description"));
   }
 }
 
@@ -389,4 +390,15 @@ TEST(BadInputText, NanInfinityDuplicatesAndSyntax) {
   EXPECT_EQ(0u, syntax.find("m.json: not valid JSON: ")) << syntax;
   EXPECT_NE(std::string::npos, syntax.find("line 4")) << syntax;
   EXPECT_EQ("m.json: (top level): must be an object", error_of(std::string("[1, 2]")));
+}
+
+// Issue 23: a name that is not UTF-8 (a Latin-1 é) made the writer throw
+// nlohmann's type_error instead of writing JSON; it is written as U+FFFD, as
+// the other commands' JSON writes such a byte.
+TEST(MachineDescription, ANameThatIsNotUtf8IsWrittenAsJson) {
+  MachineDescription d;
+  d.name = "caf\xe9";
+  std::string text;
+  ASSERT_NO_THROW(text = format_machine_description(d));
+  EXPECT_EQ(json::parse(text)["name"], "caf\xEF\xBF\xBD");
 }

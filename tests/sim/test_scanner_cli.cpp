@@ -38,7 +38,7 @@ TEST(ScanCli, WritesACloudAndAMeshRepeatably) {
                   "--registration-error-mm", "0.05", "--registration-error-deg", "0.1"});
     ASSERT_EQ(0, r.exit_code) << r.err;
     EXPECT_NE(std::string::npos, r.out.find("5 poses")) << r.out;
-    EXPECT_NE(std::string::npos, r.err.find("scan: pose 5/5")) << r.err;
+    EXPECT_EQ(std::string::npos, r.err.find("scan: pose")) << r.err;  // progress: a terminal's
   }
   EXPECT_EQ(read_file(dir / "a.ply"), read_file(dir / "b.ply"));
   EXPECT_EQ(read_file(dir / "a_mesh.ply"), read_file(dir / "b_mesh.ply"));

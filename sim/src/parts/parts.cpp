@@ -154,7 +154,7 @@ std::string part_json(const BenchmarkPart& part) {
                {"triangles", part.mesh.triangles.size()},
                {"volume_mm3", signed_volume_mm3(part.mesh)}};
   j["triangle_surface_ids"] = part.triangle_surface;
-  return j.dump(2) + "\n";
+  return j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n";
 }
 
 void write_part(const BenchmarkPart& part, const std::filesystem::path& dir) {

@@ -130,6 +130,7 @@ SoftCncResult run_soft_cnc(const SoftCncJob& given, const SoftCncProgress& progr
   rt::hal::HalOptions options;
   options.component_path = job.component_path;
   options.output_dir = job.out_dir;
+  options.show_info_messages = job.show_info_messages;
   SoftCncResult result;
   rt::hal::Hal h(options);
   try {

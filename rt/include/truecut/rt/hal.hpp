@@ -65,6 +65,9 @@ struct HalOptions {
   std::vector<std::filesystem::path> component_path;
   // Where components write their files (recorder traces, ...).
   std::filesystem::path output_dir = ".";
+  // Components' info messages on stderr; false (--quiet): warnings and
+  // errors only.
+  bool show_info_messages = true;
 };
 
 struct PinInfo {

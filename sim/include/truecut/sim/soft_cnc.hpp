@@ -71,6 +71,7 @@ struct SoftCncJob {
   std::int64_t max_blocks = 50'000'000;  // InterpreterOptions::max_blocks
   double max_program_time_s = kSoftCncMaxProgramTimeS;
   std::vector<std::filesystem::path> component_path;  // where the components' .so are
+  bool show_info_messages = true;  // components' info messages on stderr (false: --quiet)
 
   // Field swaps in time order; they need `field`. With swaps the component
   // reads out_dir/field.tcf, a copy of `field` that each swap replaces.
