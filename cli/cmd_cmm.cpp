@@ -115,17 +115,12 @@ int cmd_cmm(const std::vector<std::string>& argv) {
   } catch (const std::invalid_argument& e) {
     return input_error(e.what());
   }
-  const auto overall = sim::measure::overall_statistics(measurements);
-  // A report in which every probe failed is a failed measurement, not a
-  // perfect part: no table of zeros, no file.
-  if (overall.valid == 0) {
-    std::fprintf(stderr,
-                 "truecut cmm: none of the %zu points found the surface of %s within %g mm along "
-                 "its normal: no measurement, nothing written (is the mesh in mm and in the "
-                 "workpiece frame? --search-mm widens the search)\n",
-                 overall.points, mesh_file.c_str(), opt.search_distance_mm);
+  // No table of zeros, no file.
+  if (!some_probe_found_the_surface(
+          measurements, "truecut cmm", mesh_file, opt.search_distance_mm, "nothing written",
+          "is the mesh in mm and in the workpiece frame? --search-mm widens the search"))
     return kExitFailure;
-  }
+  const auto overall = sim::measure::overall_statistics(measurements);
   sim::measure::write_cmm_csv(*out, measurements);
 
   print_cmm_table(measurements);

@@ -251,4 +251,18 @@ void print_cmm_table(const std::vector<sim::measure::CmmMeasurement>& measuremen
   print_row(sim::measure::overall_statistics(measurements), indent);
 }
 
+bool some_probe_found_the_surface(const std::vector<sim::measure::CmmMeasurement>& measurements,
+                                  const std::string& command, const std::string& mesh_file,
+                                  double search_mm, const std::string& not_written,
+                                  const std::string& hint) {
+  const auto overall = sim::measure::overall_statistics(measurements);
+  if (overall.valid > 0) return true;
+  std::fprintf(stderr,
+               "%s: none of the %zu points found the surface of %s within %g mm along its "
+               "normal: no measurement, %s (%s)\n",
+               command.c_str(), overall.points, mesh_file.c_str(), search_mm, not_written.c_str(),
+               hint.c_str());
+  return false;
+}
+
 }  // namespace truecut::cli

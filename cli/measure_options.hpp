@@ -87,6 +87,15 @@ std::vector<sim::measure::CmmPoint> cmm_points_on_part(const std::string& nomina
 // Throws MeasureInputError when `points` probes exceed settings.max_points.
 void check_probe_budget(std::size_t points, const std::string& source, const CmmSettings& settings);
 
+// Whether some probe found the surface. A report in which every probe
+// failed is a failed measurement, not a perfect part: when none did, says so
+// on stderr ("COMMAND: none of the N points found the surface of MESH within
+// D mm along its normal: no measurement, NOT_WRITTEN (HINT)").
+bool some_probe_found_the_surface(const std::vector<sim::measure::CmmMeasurement>& measurements,
+                                  const std::string& command, const std::string& mesh_file,
+                                  double search_mm, const std::string& not_written,
+                                  const std::string& hint);
+
 // The per-surface table and the overall row, on stdout, with `indent`; a
 // row without a valid point shows "-" (no measurement), not 0.00.
 void print_cmm_table(const std::vector<sim::measure::CmmMeasurement>& measurements,

@@ -122,18 +122,10 @@ bool measure_machined_part(RunMeasurement& m, const fs::path& machined_stl) {
       std::fprintf(stderr, "cmm: probing %zu points on %s\n", m.cmm_points.size(),
                    machined_stl.string().c_str());
     const auto measurements = sim::measure::probe(machined, m.cmm_points, m.cmm.options);
-    const auto overall = sim::measure::overall_statistics(measurements);
-    // As `truecut cmm`: a report in which every probe failed is a failed
-    // measurement, not a perfect part.
-    if (overall.valid == 0) {
-      std::fprintf(stderr,
-                   "truecut run: none of the %zu CMM points found the surface of %s within %g mm "
-                   "along its normal: no measurement, %s not written (--cmm-search-mm widens "
-                   "the search)\n",
-                   overall.points, machined_stl.string().c_str(), m.cmm.options.search_distance_mm,
-                   m.cmm_file->string().c_str());
+    if (!some_probe_found_the_surface(
+            measurements, "truecut run", machined_stl.string(), m.cmm.options.search_distance_mm,
+            m.cmm_file->string() + " not written", "--cmm-search-mm widens the search"))
       return false;
-    }
     fs::create_directories(m.cmm_file->parent_path());
     sim::measure::write_cmm_csv(*m.cmm_file, measurements);
     std::printf("  cmm         %zu points -> %s (deviations in um)\n", measurements.size(),

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "face_job.hpp"
 #include "run_process.hpp"
 #include "test_paths.hpp"
 #include "truecut/rt/core/correction_field.hpp"
@@ -37,22 +38,9 @@ class RunHostile : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = new fs::path(scratch_dir());
-    const ProcessResult r =
-        run_truecut({"part", "implant", "--out", part().string(), "--mesh-edge", "1", "--stepover",
-                     "0.8", "--point-spacing", "1", "--step-down", "2"});
+    const ProcessResult r = run_truecut(coarse_implant_part_args(part()));
     ASSERT_EQ(0, r.exit_code) << r.err;
-    std::ofstream(part() / "face.ngc") << "%\n"
-                                          "G21 G17 G40 G49 G80 G90 G94\n"
-                                          "G54\n"
-                                          "T2 M6\n"
-                                          "G43 H2\n"
-                                          "S12000 M3\n"
-                                          "G0 X-5 Y0 Z20\n"
-                                          "G1 Z17 F600\n"
-                                          "G1 X5\n"
-                                          "G0 Z20\n"
-                                          "M5 G49 M30\n"
-                                          "%\n";
+    std::ofstream(part() / "face.ngc") << kFaceProgram;
   }
   static void TearDownTestSuite() {
     delete dir_;

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "face_job.hpp"
 #include "run_process.hpp"
 #include "test_paths.hpp"
 
@@ -25,26 +26,12 @@ ProcessResult truecut(std::vector<std::string> args) {
   return run_process(args);
 }
 
-// A coarse implant with a one-pass program: T2 (flat Ø4) faces the shaft top
-// at z = 17 (stock up to 17.3); the shaft's sides keep their 0.3 mm stock.
+// A coarse implant and its face program (face_job.hpp).
 fs::path tiny_job(const fs::path& dir) {
   const fs::path part = dir / "part";
-  const ProcessResult r =
-      truecut({"part", "implant", "--out", part.string(), "--mesh-edge", "1", "--stepover", "0.8",
-               "--point-spacing", "1", "--step-down", "2"});
+  const ProcessResult r = truecut(coarse_implant_part_args(part));
   EXPECT_EQ(0, r.exit_code) << r.err;
-  std::ofstream(part / "face.ngc") << "%\n"
-                                      "G21 G17 G40 G49 G80 G90 G94\n"
-                                      "G54\n"
-                                      "T2 M6\n"
-                                      "G43 H2\n"
-                                      "S12000 M3\n"
-                                      "G0 X-5 Y0 Z20\n"
-                                      "G1 Z17 F600\n"
-                                      "G1 X5\n"
-                                      "G0 Z20\n"
-                                      "M5 G49 M30\n"
-                                      "%\n";
+  std::ofstream(part / "face.ngc") << kFaceProgram;
   return part;
 }
 
@@ -216,7 +203,7 @@ TEST(RunMeasure, ACmmRunInWhichNoProbeFindsTheSurfaceFails) {
                                          "0.5", "--cmm-search-mm", "0.1"}));
   EXPECT_EQ(1, r.exit_code) << r.err;
   EXPECT_NE(std::string::npos,
-            r.err.find("CMM points found the surface of " + (out / "machined.stl").string() +
+            r.err.find(" points found the surface of " + (out / "machined.stl").string() +
                        " within 0.1 mm along its normal: no measurement, " +
                        (out / "cmm.csv").string() + " not written"))
       << r.err;
