@@ -60,6 +60,9 @@ const char* kDiagnoseHelp =
     "                          0.3 without --holdout; 0: none)\n"
     "  --servo-period S        longest simulated servo period (default 0.001): each\n"
     "                          recorded interval is split into equal sub-steps\n"
+    "  --max-servo-periods N   budget: refuse (exit 2) a recording whose re-simulation\n"
+    "                          at --servo-period takes more than N servo periods per\n"
+    "                          run (default 10000000: 2.8 h of recording at 1 ms)\n"
     "  --command-interpolation cubic|linear\n"
     "                          the command between recorded samples (default cubic:\n"
     "                          monotone, exact for constant accelerations)\n"
@@ -97,6 +100,28 @@ const char* kDiagnoseHelp =
     "  --help                  this text\n";
 
 // Input that cannot be diagnosed: the message, exit 2.
+// The servo periods one re-simulation of `rec` takes: each recorded
+// interval in equal sub-steps of at most `period_s` (as the diagnosis
+// splits them). The fit re-simulates each joint hundreds of times.
+double servo_periods_of(const analysis::Recording& rec, double period_s) {
+  double periods = 0;
+  for (std::size_t i = 1; i < rec.t_s.size(); ++i)
+    periods += std::max(1.0, std::ceil((rec.t_s[i] - rec.t_s[i - 1]) / period_s - 1e-9));
+  return periods;
+}
+
+// Refuses (UsageError) a recording whose re-simulation would exceed the budget.
+void check_servo_budget(const analysis::Recording& rec, double period_s, double budget) {
+  const double periods = servo_periods_of(rec, period_s);
+  if (!(periods > budget)) return;
+  const double seconds = rec.rows() > 1 ? rec.t_s.back() - rec.t_s.front() : 0.0;
+  throw UsageError(rt::format_printf(
+      "%s: re-simulating its %.6g s at --servo-period %g s takes %.3g servo periods per run, more "
+      "than --max-servo-periods %.6g (the fit runs each joint hundreds of times); give a longer "
+      "--servo-period (default 0.001) or raise --max-servo-periods",
+      rec.file.c_str(), seconds, period_s, periods, budget));
+}
+
 int bad_input(const std::exception& e) {
   std::fprintf(stderr, "truecut diagnose: %s\n", e.what());
   return kExitUsage;
@@ -274,6 +299,7 @@ int cmd_diagnose(const std::vector<std::string>& argv) {
                       {"holdout", true},
                       {"split", true},
                       {"servo-period", true},
+                      {"max-servo-periods", true},
                       {"command-interpolation", true},
                       {"max-delay", true},
                       {"bic-threshold", true},
@@ -317,6 +343,7 @@ int cmd_diagnose(const std::vector<std::string>& argv) {
   dg::DiagnosisOptions options;
   options.holdout_fraction = a.number("split", 0.3, 0.0, 0.9);
   options.max_servo_period_s = a.number("servo-period", 1e-3, 1e-6, 1.0);
+  const double max_servo_periods = a.number("max-servo-periods", 1e7, 1.0, 1e12);
   options.max_delay_s = a.number("max-delay", 0.0, 0.0, 1e3);
   if (const auto ci = a.value("command-interpolation")) {
     if (*ci != "cubic" && *ci != "linear")
@@ -361,6 +388,8 @@ int cmd_diagnose(const std::vector<std::string>& argv) {
       if (progress_shown(a)) std::fprintf(stderr, "diagnose: reading %s\n", holdout->c_str());
       held = analysis::read_recording(*holdout, ro);
     }
+    check_servo_budget(rec, options.max_servo_period_s, max_servo_periods);
+    if (held) check_servo_budget(*held, options.max_servo_period_s, max_servo_periods);
     if (const auto t = a.value("tools")) {
       check_tool_channel(rec, options.tool_length_mm, *t);
       if (held) check_tool_channel(*held, options.tool_length_mm, *t);

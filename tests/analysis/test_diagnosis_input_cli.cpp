@@ -285,4 +285,23 @@ TEST(DiagnoseInput, AnOutputThatCannotBeWrittenIsRefusedBeforeTheWork) {
   EXPECT_EQ(r.err.find("diagnose: reading"), std::string::npos) << r.err;
 }
 
+// F23: `--servo-period 1e-6` split each recorded sample into 1000 servo
+// periods with no estimate: the diagnosis ran with no end in sight. The
+// periods a re-simulation takes are counted from the recording first and
+// refused above the budget, naming both options.
+TEST(DiagnoseInput, AServoPeriodBeyondTheBudgetIsRefusedBeforeAnyFit) {
+  const fs::path dir = scratch_dir();
+  const std::string rec = recording(dir / "r.csv").string();
+  const fs::path out = dir / "out";
+  const ProcessResult r = diagnose({"--recording", rec, "--servo-period", "1e-6",
+                                    "--max-servo-periods", "1e6", "--out", out.string()});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  // 200 samples 10 ms apart: 1.99 s, each interval 10,000 periods of 1 µs.
+  EXPECT_NE(r.err.find(rec + ": re-simulating its 1.99 s at --servo-period 1e-06 s takes 1.99e+06 "
+                             "servo periods per run, more than --max-servo-periods 1e+06"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(out / "diagnosis.json"));
+}
+
 }  // namespace truecut::analysis::test
