@@ -59,8 +59,7 @@ int read_tools(const std::string& file, std::array<ToolRow, kMaxTools>& rows) {
   truecut::sim::PartFile part;
   try {
     part = truecut::sim::read_part_file(file, truecut::sim::kPartTools);
-    truecut::sim::check_part_units(part, file);
-    truecut::sim::check_part_tools(part, file);
+    truecut::sim::check_part_tools(part, file);  // a flute length too
   } catch (const truecut::sim::PartFileError& e) {
     throw InitError(e.what());
   }

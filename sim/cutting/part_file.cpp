@@ -7,7 +7,6 @@
 
 #include "truecut/offline/stl_io.hpp"
 #include "truecut/sim/part_file.hpp"
-#include "truecut/sim/part_plausibility.hpp"
 
 namespace truecut::sim::cutting {
 
@@ -25,8 +24,6 @@ PartStock read_part_stock(const std::filesystem::path& part_json) {
   try {
     p = read_part_file(part_json,
                        kPartVersion | kPartStock | kPartSurfaces | kPartTriangleSurfaceIds);
-    check_part_units(p, part_json.string());
-    check_part_stock(p, part_json.string());
   } catch (const PartFileError& e) {
     if (e.key().empty()) throw;
     fail(part_json, e.key(), e.detail());  // this library's "FILE: key: message"

@@ -9,6 +9,7 @@
 
 #include "truecut/rt/input_file.hpp"
 #include "truecut/sim/part_file.hpp"
+#include "truecut/sim/part_plausibility.hpp"
 
 namespace truecut::sim {
 namespace {
@@ -315,6 +316,10 @@ PartFile parse_part_file(std::string_view text, const std::string& name, unsigne
       }
     }
   }
+  // Physical sense, for every reader of part.json (cmm, field and demo as
+  // well as the machining): millimetres, tools that can cut, stock on a
+  // machine. Checked on what was read; absent lists pass.
+  check_part_file_sense(p, name);
   return p;
 }
 

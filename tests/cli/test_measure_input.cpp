@@ -229,3 +229,38 @@ TEST(MeasureInput, AnOutputThatCannotBeWrittenIsRefusedBeforeTheWork) {
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("does not exist"), std::string::npos) << r.err;
 }
+
+// F7 for every reader of part.json: `cmm --part` with `units` "inch" or a
+// tool of radius 0 exited 0 (only `run` and the cutting model checked
+// them); `field --part` read them too. Refused at the key, exit 2.
+TEST(MeasureInput, APartFileWithoutPhysicalSenseIsRefusedByEveryCommand) {
+  const fs::path dir = scratch_dir();
+  const fs::path p = make_part(dir);
+  const std::string part = read_file(p / "part.json");
+  struct Case {
+    const char *from, *to, *says;
+  };
+  for (const Case& c : {Case{"\"units\": \"mm\"", "\"units\": \"inch\"",
+                             "key 'units': 'inch': part.json lengths are millimetres"},
+                        Case{"\"radius_mm\": 1.0", "\"radius_mm\": 0.0",
+                             "key 'tools[0].radius_mm': 0 mm must be > 0 and at most 500 mm"}}) {
+    std::string text = part;
+    const auto at = text.find(c.from);
+    ASSERT_NE(at, std::string::npos) << c.from;
+    text.replace(at, std::strlen(c.from), c.to);
+    const fs::path bad = dir / "bad_part.json";
+    std::ofstream(bad, std::ios::binary) << text;
+    const std::string nominal = (p / "nominal.stl").string();
+    const ProcessResult cmm = run_truecut({"cmm", nominal, "--nominal", nominal, "--part",
+                                           bad.string(), "--out", (dir / "c.csv").string()});
+    EXPECT_EQ(cmm.exit_code, 2) << cmm.err;
+    EXPECT_NE(cmm.err.find(bad.string() + ": " + c.says), std::string::npos) << cmm.err;
+    EXPECT_FALSE(fs::exists(dir / "c.csv"));
+    const ProcessResult field = run_truecut(
+        {"field", nominal, nominal, "--program", (p / "program.ngc").string(), "--tools",
+         (p / "tools.tbl").string(), "--part", bad.string(), "--out", (dir / "f").string()});
+    EXPECT_EQ(field.exit_code, 2) << field.err;
+    EXPECT_NE(field.err.find(c.says), std::string::npos) << field.err;
+    EXPECT_FALSE(fs::exists(dir / "f" / "field.tcf"));
+  }
+}

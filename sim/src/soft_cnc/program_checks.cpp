@@ -205,7 +205,7 @@ void check_part_tools(const fs::path& part, const fs::path& tool_table,
                       const std::string& program_name) {
   try {
     const PartFile p = read_part_file(part, kPartTools | kPartStock);
-    check_part_for_machining(p, part.string());
+    check_part_for_machining(p, part.string());  // a flute length too
     for (const auto& [tool, line] : tools) {
       const PartTool* t = p.tool(tool);
       if (!t)

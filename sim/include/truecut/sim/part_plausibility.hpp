@@ -1,13 +1,11 @@
-// What part.json must say before a part is machined on the simulated
-// machine: millimetres, tools that can cut (radius and flute length > 0, up
-// to a tool 1 m across and 1 m long, as a machine description allows), a
-// known tool kind, and stock within ±1e5 mm (no machine is larger than
-// 100 m). read_part_file() checks the syntax and signs; these are the
-// ranges the cutting model and the tool_geometry component rely on. Header
-// only, so that the components can use it with truecut_part_file alone.
-//
-//   const PartFile p = read_part_file(file, kPartTools | kPartStock);
-//   check_part_for_machining(p, file.string());  // throws PartFileError
+// What part.json must say: millimetres, tools that can cut (radius and
+// flute length > 0, up to a tool 1 m across and 1 m long, as a machine
+// description allows), a known tool kind, and stock within ±1e5 mm (no
+// machine is larger than 100 m). read_part_file() applies these to what it
+// read, so every command gets them, except that a tool's flute length may
+// be absent (0: `truecut field` then takes the table's length); the
+// machining needs it (check_part_for_machining). Header only, so that the
+// components can use it with truecut_part_file alone.
 #pragma once
 
 #include <cmath>
@@ -53,15 +51,18 @@ inline void check_part_units(const PartFile& p, const std::string& file) {
                       "'" + p.units + "': part.json lengths are millimetres; only \"mm\" is read");
 }
 
-inline void check_part_tools(const PartFile& p, const std::string& file) {
+// `flute_length_required` false: a flute length of 0 (the key absent) passes.
+inline void check_part_tools(const PartFile& p, const std::string& file,
+                             bool flute_length_required = true) {
   namespace d = part_plausibility_detail;
   for (std::size_t i = 0; i < p.metadata.tools.size(); ++i) {
     const PartTool& t = p.metadata.tools[i];
     const std::string key = d::indexed("tools", i);
     d::require_length(file, key + ".radius_mm", t.radius_mm, kMaxPartToolRadiusMm,
                       "a tool of radius 0 cuts nothing; no tool is more than 1 m across");
-    d::require_length(file, key + ".flute_length_mm", t.flute_length_mm, kMaxPartToolLengthMm,
-                      "the cutter cuts only along its flutes; no tool is more than 1 m long");
+    if (flute_length_required || t.flute_length_mm != 0)
+      d::require_length(file, key + ".flute_length_mm", t.flute_length_mm, kMaxPartToolLengthMm,
+                        "the cutter cuts only along its flutes; no tool is more than 1 m long");
     if (!(t.length_mm >= 0 && t.length_mm <= kMaxPartToolLengthMm))
       throw PartFileError(file, key + ".length_mm",
                           d::number_text(t.length_mm) + " mm is outside 0 .. " +
@@ -92,7 +93,15 @@ inline void check_part_stock(const PartFile& p, const std::string& file) {
   }
 }
 
-// All three: what the simulated machining reads from part.json.
+// What read_part_file() checks of everything it read.
+inline void check_part_file_sense(const PartFile& p, const std::string& file) {
+  check_part_units(p, file);
+  check_part_tools(p, file, false);
+  check_part_stock(p, file);
+}
+
+// All three, a flute length required: what the simulated machining reads
+// from part.json.
 inline void check_part_for_machining(const PartFile& p, const std::string& file) {
   check_part_units(p, file);
   check_part_tools(p, file);
