@@ -6,6 +6,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <mutex>
 #include <optional>
 #include <string>
 
@@ -13,6 +14,7 @@
 #include "quiet_option.hpp"
 #include "run_measure.hpp"
 #include "run_support.hpp"
+#include "stage_progress.hpp"
 #include "truecut/rt/hal_file.hpp"
 #include "truecut/rt/input_file.hpp"
 #include "truecut/sim/machine_description.hpp"
@@ -210,11 +212,37 @@ int run_machine(const std::vector<std::string>& argv) {
     if (!a.flag("quiet"))
       std::fprintf(stderr, "machining %s on %s\n", job.program.string().c_str(),
                    job.machine.string().c_str());
+    // Before the first cycle: interpreting, checking and planning the
+    // program, building the cutting model (a long program takes a minute).
+    std::optional<StageProgress> loading;
+    loading.emplace("truecut run", show_progress);
+    loading->stage("reading, checking and planning the program");
+    // Messages (the cutting model's at load, the outputs' at the end) go
+    // below the progress line, not into it; the mutex because a component
+    // may write from another thread.
+    std::mutex line_mutex;
+    bool run_line_open = false;
+    if (show_progress)
+      job.message_sink = [&](const std::string& line) {
+        std::lock_guard<std::mutex> lock(line_mutex);
+        if (loading) {
+          loading->message(line);
+          return;
+        }
+        if (run_line_open) std::fputs("\n", stderr);
+        run_line_open = false;
+        std::fputs(line.c_str(), stderr);
+      };
     r = sim::run_soft_cnc(job, [&](double t_s, double program_s) {
       if (!show_progress) return;
+      std::lock_guard<std::mutex> lock(line_mutex);
+      loading.reset();
       progress.total_ns = static_cast<int64_t>(program_s * 1e9);
+      const int64_t before = progress.last_ns;
       print_progress(&progress, static_cast<int64_t>(t_s * 1e9));
+      run_line_open = run_line_open || progress.last_ns != before;
     });
+    if (run_line_open) std::fputs("\n", stderr);
   } catch (const sim::MachineDescriptionError& e) {
     std::fprintf(stderr, "truecut run: %s\n", e.what());
     return kExitUsage;
@@ -225,7 +253,6 @@ int run_machine(const std::vector<std::string>& argv) {
     std::fprintf(stderr, "truecut run: %s\n", e.what());
     return kExitUsage;
   }
-  if (progress.last_ns >= 0) std::fputs("\n", stderr);
   if (r.output_errors > 0) {
     std::fprintf(stderr, "truecut run: %d output file(s) could not be written (see above)\n",
                  r.output_errors);

@@ -24,6 +24,13 @@ void StageProgress::stage(std::string what) {
   stage_ = std::move(what);
 }
 
+void StageProgress::message(const std::string& line) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (shown_) std::fputs("\n", stderr);
+  shown_ = false;
+  std::fputs(line.c_str(), stderr);
+}
+
 void StageProgress::run() {
   std::unique_lock<std::mutex> lock(mutex_);
   while (!wake_.wait_for(lock, std::chrono::milliseconds(500), [this] { return stop_; })) {

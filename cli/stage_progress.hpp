@@ -21,6 +21,9 @@ class StageProgress {
   StageProgress& operator=(const StageProgress&) = delete;
 
   void stage(std::string what);
+  // Writes `line` (ending in a newline) to stderr below the progress line,
+  // which is drawn again on the next line.
+  void message(const std::string& line);
 
  private:
   void run();

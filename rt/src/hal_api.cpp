@@ -153,9 +153,12 @@ void api_message(tc_hal* hal, tc_hal_msg_level_t level, const char* text) {
   const char* tag = level == TC_HAL_MSG_ERR    ? "error"
                     : level == TC_HAL_MSG_WARN ? "warning"
                                                : "info";
-  std::fprintf(stderr, "%s: %s: %s\n",
-               hal->loading_module.empty() ? "hal" : hal->loading_module.c_str(), tag,
-               text ? text : "");
+  const std::string line = (hal->loading_module.empty() ? "hal" : hal->loading_module) + ": " +
+                           tag + ": " + (text ? text : "") + "\n";
+  if (hal->options.message_sink)
+    hal->options.message_sink(line);
+  else
+    std::fputs(line.c_str(), stderr);
 }
 
 void api_set_error(tc_hal* hal, const char* text) {

@@ -161,6 +161,36 @@ TEST(Recorder, WritesHeaderTimeAndTypedColumnsThenRenames) {
   }
 }
 
+// Components' messages go to HalOptions::message_sink when one is given
+// (truecut run writes them below its progress line), info messages not at
+// all with show_info_messages false (--quiet); warnings and errors always.
+TEST(Recorder, ItsMessagesGoWhereTheHalOptionsSay) {
+  auto dir = truecut::test::scratch_dir();
+  for (const bool info : {true, false}) {
+    std::vector<std::string> lines;
+    {
+      HalOptions o = opts(dir);
+      o.show_info_messages = info;
+      o.message_sink = [&lines](const std::string& line) { lines.push_back(line); };
+      Hal hal(o);
+      load_hal_text(hal,
+                    "loadrt threads name1=t period1=1000000\nloadrt siggen\n"
+                    "loadrt recorder file=m.csv columns=s\n"
+                    "net s siggen.0.sine => recorder.0.s\n"
+                    "addf siggen.0.update t\naddf recorder.0.sample t\n",
+                    "m.hal");
+      run_cycles(hal, 3);
+    }
+    if (info) {
+      ASSERT_EQ(lines.size(), 1u);
+      EXPECT_EQ(lines[0],
+                "hal: info: recorder.0: wrote 3 samples to " + (dir / "m.csv").string() + "\n");
+    } else {
+      EXPECT_TRUE(lines.empty()) << lines.front();
+    }
+  }
+}
+
 TEST(Recorder, DisabledOrNeverRunWritesNoFile) {
   auto dir = truecut::test::scratch_dir();
   {

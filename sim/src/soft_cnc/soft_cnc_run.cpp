@@ -131,6 +131,7 @@ SoftCncResult run_soft_cnc(const SoftCncJob& given, const SoftCncProgress& progr
   options.component_path = job.component_path;
   options.output_dir = job.out_dir;
   options.show_info_messages = job.show_info_messages;
+  options.message_sink = job.message_sink;
   SoftCncResult result;
   rt::hal::Hal h(options);
   try {

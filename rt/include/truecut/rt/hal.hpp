@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -68,6 +69,9 @@ struct HalOptions {
   // Components' info messages on stderr; false (--quiet): warnings and
   // errors only.
   bool show_info_messages = true;
+  // Where the messages go, one line each with its "\n" ("cut: info: ...");
+  // empty: stderr. Called from whichever thread the component calls from.
+  std::function<void(const std::string& line)> message_sink;
 };
 
 struct PinInfo {

@@ -72,6 +72,7 @@ struct SoftCncJob {
   double max_program_time_s = kSoftCncMaxProgramTimeS;
   std::vector<std::filesystem::path> component_path;  // where the components' .so are
   bool show_info_messages = true;  // components' info messages on stderr (false: --quiet)
+  std::function<void(const std::string& line)> message_sink;  // HalOptions::message_sink
 
   // Field swaps in time order; they need `field`. With swaps the component
   // reads out_dir/field.tcf, a copy of `field` that each swap replaces.
