@@ -1,7 +1,8 @@
 // Progress of a command that runs in a few long stages, on stderr: the
 // current stage and the time so far, refreshed twice a second, on a terminal
 // only and once the command has taken a second (`truecut part: writing the
-// files (3 s)`). Ends its line when destroyed.
+// files (3 s)`; $TRUECUT_PROGRESS_AFTER_S sets that second). Ends its line
+// when destroyed.
 #pragma once
 
 #include <chrono>
@@ -27,8 +28,11 @@ class StageProgress {
 
  private:
   void run();
+  void draw_if_due();  // with mutex_ held
   std::string command_;
   std::chrono::steady_clock::time_point start_;
+  double after_s_;
+  bool enabled_;
   std::mutex mutex_;
   std::condition_variable wake_;
   std::string stage_;

@@ -4,6 +4,7 @@
 // --quiet).
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -127,4 +128,38 @@ TEST(QuietProgress, EveryMeasuringCommandTakesQuiet) {
     const auto r = run_process(truecut_args({command, "--help"}));
     EXPECT_TRUE(contains(r.out, "--quiet")) << command;
   }
+}
+
+// The stage line of `part`, `field`, `rewrite` and of `run` while it loads
+// (cli/stage_progress.hpp), drawn at once with TRUECUT_PROGRESS_AFTER_S=0
+// (otherwise after a second): on a terminal, not in a log, not with --quiet.
+TEST(QuietProgress, StagesAreShownOnATerminalOnly) {
+  const auto dir = scratch_dir();
+  ASSERT_EQ(0, setenv("TRUECUT_PROGRESS_AFTER_S", "0", 1));
+  auto part = [&](const std::string& name, bool terminal, bool quiet) {
+    std::vector<std::string> args = {"part",        "implant", "--out",      (dir / name).string(),
+                                     "--mesh-edge", "4",       "--stepover", "5",
+                                     "--step-down", "10"};
+    if (quiet) args.push_back("--quiet");
+    return terminal ? run_process_on_a_terminal(truecut_args(args))
+                    : run_process(truecut_args(args));
+  };
+  const auto shown = part("tty", true, false);
+  const auto logged = part("log", false, false);
+  const auto quiet = part("quiet", true, true);
+  const auto run = run_process_on_a_terminal(truecut_args(
+      {"run", (dir / "tty" / "machine.json").string(), (dir / "tty" / "program.ngc").string(),
+       "--dexel-spacing", "1", "--out", (dir / "run").string()}));
+  unsetenv("TRUECUT_PROGRESS_AFTER_S");
+  ASSERT_EQ(0, shown.exit_code) << shown.err;
+  EXPECT_TRUE(contains(shown.err, "\rtruecut part: ")) << shown.err;
+  ASSERT_EQ(0, logged.exit_code) << logged.err;
+  EXPECT_FALSE(contains(logged.err, "truecut part: ")) << logged.err;
+  ASSERT_EQ(0, quiet.exit_code) << quiet.err;
+  EXPECT_EQ(quiet.err, "");
+  ASSERT_EQ(0, run.exit_code) << run.err;
+  EXPECT_TRUE(contains(run.err, "\rtruecut run: reading, checking and planning the program"))
+      << run.err;
+  // The cutting model's message at load comes below that line, not in it.
+  EXPECT_TRUE(contains(run.err, ")\r\ncutting: info: cut: ")) << run.err;
 }
