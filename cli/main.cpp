@@ -19,7 +19,9 @@ void print_usage(std::FILE* to) {
                "commands:\n");
   for (const auto& c : truecut::cli::commands())
     std::fprintf(to, "  %-10s %s\n", c.name, c.summary);
-  std::fprintf(to, "\nexit codes: 0 ok, 1 runtime failure, 2 usage or input error\n");
+  std::fprintf(to,
+               "\nexit codes: 0 ok, 1 runtime failure, 2 usage or input error, 130 interrupted\n"
+               "(Ctrl-C); --quiet: only warnings and errors on stderr\n");
 }
 
 // A command's standard output is often its product (`truecut canon`'s
