@@ -1,6 +1,5 @@
 // truecut canon PROGRAM.ngc: print the canonical machining calls of a G-code
 // program in the layout of LinuxCNC's standalone interpreter `rs274`.
-#include <unistd.h>
 
 #include <chrono>
 #include <cstdint>
@@ -14,6 +13,7 @@
 #include "output_spool.hpp"
 #include "parameter_file_args.hpp"
 #include "program_budget_args.hpp"
+#include "quiet_option.hpp"
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/interpreter.hpp"
 #include "truecut/interp/operations.hpp"
@@ -153,7 +153,7 @@ int cmd_canon(const std::vector<std::string>& argv) {
     // it has taken a second.
     const auto start = std::chrono::steady_clock::now();
     bool shown = false;
-    if (!a.flag("quiet") && isatty(STDERR_FILENO))
+    if (progress_shown(a))
       options.progress = [&](std::int64_t blocks) {
         const double s =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -7,13 +7,12 @@
 #include <sstream>
 #include <thread>
 
-#include <unistd.h>
-
 #include <nlohmann/json.hpp>
 
 #include "args.hpp"
 #include "commands.hpp"
 #include "demo_part.hpp"
+#include "quiet_option.hpp"
 #include "truecut/analysis/report/closed_loop_report.hpp"
 #include "truecut/rt/atomic_write.hpp"
 #include "truecut/sim/part_file.hpp"
@@ -140,7 +139,7 @@ int cmd_demo(const std::vector<std::string>& argv) {
   fs::create_directories(o.out_dir);
   std::vector<std::unique_ptr<DemoPart>> plans;
   StepGraph graph;
-  const bool progress = !a.flag("quiet") && isatty(STDERR_FILENO) != 0;
+  const bool progress = progress_shown(a);
   graph.show_progress(progress);
   for (const auto& part : parts) {
     plans.push_back(std::make_unique<DemoPart>(part, o));

@@ -100,19 +100,9 @@ const char* kDiagnoseHelp =
     "  --help                  this text\n";
 
 // Input that cannot be diagnosed: the message, exit 2.
-// The servo periods one re-simulation of `rec` takes: each recorded
-// interval in equal sub-steps of at most `period_s` (as the diagnosis
-// splits them). The fit re-simulates each joint hundreds of times.
-double servo_periods_of(const analysis::Recording& rec, double period_s) {
-  double periods = 0;
-  for (std::size_t i = 1; i < rec.t_s.size(); ++i)
-    periods += std::max(1.0, std::ceil((rec.t_s[i] - rec.t_s[i - 1]) / period_s - 1e-9));
-  return periods;
-}
-
 // Refuses (UsageError) a recording whose re-simulation would exceed the budget.
 void check_servo_budget(const analysis::Recording& rec, double period_s, double budget) {
-  const double periods = servo_periods_of(rec, period_s);
+  const double periods = dg::servo_periods_per_run(rec, period_s);
   if (!(periods > budget)) return;
   const double seconds = rec.rows() > 1 ? rec.t_s.back() - rec.t_s.front() : 0.0;
   throw UsageError(rt::format_printf(

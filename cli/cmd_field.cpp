@@ -2,8 +2,6 @@
 // the offline chain from a scan to a correction field (docs/offline.md,
 // "truecut field").
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -18,6 +16,7 @@
 #include "measure_options.hpp"
 #include "parameter_file_args.hpp"
 #include "program_budget_args.hpp"
+#include "quiet_option.hpp"
 #include "side_by_side.hpp"
 #include "stage_progress.hpp"
 #include "truecut/interp/error.hpp"
@@ -582,7 +581,7 @@ int run_field(const ParsedArgs& a, const std::vector<std::string>& argv) {
   refuse_outputs_over_inputs(a, *out);
   require_writable_folder("out", *out);
   std::optional<StageProgress> shown;
-  shown.emplace("truecut field", !quiet && isatty(STDERR_FILENO) != 0);
+  shown.emplace("truecut field", progress_shown(a));
   shown->stage("reading the inputs");
 
   const auto t_read = std::chrono::steady_clock::now();

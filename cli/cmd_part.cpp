@@ -1,6 +1,5 @@
 // truecut part NAME --out DIR: write a benchmark part (nominal STL, CAM
 // program, tool table, metadata, the machine it is machined on).
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -11,6 +10,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "quiet_option.hpp"
 #include "stage_progress.hpp"
 #include "truecut/interp/interpreter.hpp"
 #include "truecut/offline/field_outputs.hpp"
@@ -127,7 +127,7 @@ int cmd_part(const std::vector<std::string>& argv) {
           opt.mesh_edge_mm, estimate, estimate * 50e-9, max_triangles));
   }
   std::optional<StageProgress> progress;
-  progress.emplace("truecut part", !a.flag("quiet") && isatty(STDERR_FILENO) != 0);
+  progress.emplace("truecut part", progress_shown(a));
   progress->stage("building the mesh and the program");
   std::optional<sim::BenchmarkPart> driven;
   if (auto adapted_file = a.value("adapted")) {

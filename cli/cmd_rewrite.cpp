@@ -10,12 +10,11 @@
 #include <string>
 #include <vector>
 
-#include <unistd.h>
-
 #include "args.hpp"
 #include "commands.hpp"
 #include "parameter_file_args.hpp"
 #include "program_budget_args.hpp"
+#include "quiet_option.hpp"
 #include "stage_progress.hpp"
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/rewrite.hpp"
@@ -282,7 +281,7 @@ int cmd_rewrite(const std::vector<std::string>& argv) {
   try {
     // On a terminal, once it has taken a second; gone (its line ended)
     // before any message of the handlers below.
-    StageProgress progress("truecut rewrite", !a.flag("quiet") && isatty(STDERR_FILENO) != 0);
+    StageProgress progress("truecut rewrite", progress_shown(a));
     progress.stage("reading the inputs");
     add_input("tools", *tools_path, read_bytes(*tools_path, "tool table"));
     o.interpreter.tools = interp::ToolTable::load(*tools_path);

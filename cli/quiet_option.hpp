@@ -7,10 +7,6 @@
 
 namespace truecut::cli {
 
-inline constexpr const char* kQuietHelp =
-    "  --quiet                nothing on stderr but warnings and errors (progress is\n"
-    "                         shown on a terminal only)\n";
-
 inline const OptionSpec kQuietOption{"quiet", false};
 
 // Whether to show progress: stderr is a terminal and --quiet was not given.

@@ -77,6 +77,13 @@ int substeps_for(double dt_s, double max_period_s) {
   return std::clamp(int(std::ceil(dt_s / max_period_s - 1e-9)), 1, 100000);
 }
 
+double servo_periods_per_run(const Recording& rec, double max_servo_period_s) {
+  double periods = 0;
+  for (std::size_t k = 1; k < rec.t_s.size(); ++k)
+    periods += substeps_for(rec.t_s[k] - rec.t_s[k - 1], max_servo_period_s);
+  return periods;
+}
+
 namespace {
 
 template <class Axis>

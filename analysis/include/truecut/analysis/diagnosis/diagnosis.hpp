@@ -204,6 +204,12 @@ struct DiagnosisError : std::runtime_error {
 // its commands, default drives, every effect off (actual = commanded).
 sim::MachineDescription ideal_machine_for(const Recording& rec);
 
+// The servo periods one re-simulation of a joint over `rec` takes: each
+// recorded interval in equal sub-steps of at most `max_servo_period_s`, as
+// the diagnosis splits them (DiagnosisOptions::max_servo_period_s). The fit
+// re-simulates each joint hundreds of times; a budget is checked on this.
+double servo_periods_per_run(const Recording& rec, double max_servo_period_s);
+
 // Throws DiagnosisError on input that cannot be diagnosed (no joint with a
 // command and a target, too few samples).
 DiagnosisResult diagnose(const Recording& train, const Recording* holdout,
