@@ -17,7 +17,6 @@
 #include "run_support.hpp"
 #include "truecut/rt/executor.hpp"
 #include "truecut/rt/hal_file.hpp"
-#include "truecut/rt/interrupt_cleanup.hpp"
 
 namespace truecut::cli {
 namespace {
@@ -213,12 +212,6 @@ int cmd_run(const std::vector<std::string>& argv) {
   }
   const OutputFolderGuard folder{opt.output_dir, dir_created};
 
-  // The cutting component writes its part at unload through its own copy
-  // of rt's pending-file table, which this process's signal handler does not
-  // see: its temporary names in the output folder are registered here (a
-  // component `out=` below that folder is not covered).
-  const rt::PendingFile cut_stl(opt.output_dir / "machined.stl.tmp"),
-      cut_ply(opt.output_dir / "machined.ply.tmp");
   rt::hal::Hal h(opt);
   try {
     rt::hal::load_hal_file(h, config, ini ? &*ini : nullptr);
@@ -273,7 +266,8 @@ int cmd_run(const std::vector<std::string>& argv) {
   }
   // The components write their files as they unload (recorder, cutting).
   if (const int errors = h.unload(); errors > 0) {
-    std::fprintf(stderr, "truecut run: %d output file(s) could not be written (see above)\n",
+    std::fprintf(stderr,
+                 "truecut run: %d output file(s) could not be written in full (see above)\n",
                  errors);
     return kExitFailure;
   }

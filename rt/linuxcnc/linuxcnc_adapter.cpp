@@ -20,6 +20,7 @@
 // cmake/TruecutLinuxcnc.cmake); the module's name comes from
 // TRUECUT_LINUXCNC_MODULE.
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <condition_variable>
 #include <cstring>
@@ -206,14 +207,31 @@ const char* api_output_dir(tc_hal_t*) {
   return ".";  // rtapi_app's working folder
 }
 
+// rtapi_app handles SIGINT and SIGTERM itself (it unloads the modules):
+// a component's temporary file is not this adapter's to remove.
+int api_pending_file_add(tc_hal_t*, const char*) {
+  return -ENOTSUP;
+}
+
+void api_pending_file_done(tc_hal_t*, int) {}
+
 const tc_hal_api_t kApi = {
-    TC_HAL_ABI_VERSION, sizeof(tc_hal_api_t),
-    api_component_new,  api_component_ready,
-    api_alloc,          api_pin_new,
-    api_param_new,      api_funct_new,
-    api_service_new,    api_request_stop,
-    api_message,        api_set_error,
-    api_output_dir,     api_background_service_new,
+    TC_HAL_ABI_VERSION,
+    sizeof(tc_hal_api_t),
+    api_component_new,
+    api_component_ready,
+    api_alloc,
+    api_pin_new,
+    api_param_new,
+    api_funct_new,
+    api_service_new,
+    api_request_stop,
+    api_message,
+    api_set_error,
+    api_output_dir,
+    api_background_service_new,
+    api_pending_file_add,
+    api_pending_file_done,
 };
 
 void run_services(tc_hal_t* hal) {

@@ -169,14 +169,46 @@ const char* api_output_dir(tc_hal* hal) {
   return hal->output_dir_text.c_str();
 }
 
+int api_pending_file_add(tc_hal* hal, const char* path) {
+  if (path == nullptr || *path == '\0') return -EINVAL;
+  try {
+    auto file = std::make_unique<truecut::rt::PendingFile>(path);
+    if (!file->tracked()) return -ENOSPC;  // table full, or a path beyond its bytes
+    const std::lock_guard<std::mutex> lock(hal->pending_files_mutex);
+    const int handle = hal->next_pending_file++;
+    hal->pending_files.emplace(handle, std::move(file));
+    return handle;
+  } catch (...) {
+    return -ENOMEM;
+  }
+}
+
+void api_pending_file_done(tc_hal* hal, int handle) {
+  std::unique_ptr<truecut::rt::PendingFile> done;  // released outside the lock
+  const std::lock_guard<std::mutex> lock(hal->pending_files_mutex);
+  auto it = hal->pending_files.find(handle);
+  if (it == hal->pending_files.end()) return;
+  done = std::move(it->second);
+  hal->pending_files.erase(it);
+}
+
 const tc_hal_api_t kApi = {
-    TC_HAL_ABI_VERSION, sizeof(tc_hal_api_t),
-    api_component_new,  api_component_ready,
-    api_alloc,          api_pin_new,
-    api_param_new,      api_funct_new,
-    api_service_new,    api_request_stop,
-    api_message,        api_set_error,
-    api_output_dir,     api_background_service_new,
+    TC_HAL_ABI_VERSION,
+    sizeof(tc_hal_api_t),
+    api_component_new,
+    api_component_ready,
+    api_alloc,
+    api_pin_new,
+    api_param_new,
+    api_funct_new,
+    api_service_new,
+    api_request_stop,
+    api_message,
+    api_set_error,
+    api_output_dir,
+    api_background_service_new,
+    api_pending_file_add,
+    api_pending_file_done,
 };
 
 }  // namespace

@@ -6,10 +6,12 @@
 #include <atomic>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
 #include "truecut/rt/hal.hpp"
+#include "truecut/rt/interrupt_cleanup.hpp"
 
 namespace truecut::rt::hal::detail {
 
@@ -119,6 +121,11 @@ struct tc_hal {
   std::atomic<int> error_messages{0};  // api_message calls at TC_HAL_MSG_ERR (any thread)
   bool unloaded = false;               // the modules' exit functions have run
   bool threads_loaded = false;         // `loadrt threads` ran (LinuxCNC loads it once)
+  // Components' temporary files (pending_file_add), removed on a signal by
+  // this process's handler; registered from exit or from any service thread.
+  std::mutex pending_files_mutex;
+  std::map<int, std::unique_ptr<truecut::rt::PendingFile>> pending_files;
+  int next_pending_file = 0;
 
   truecut::rt::hal::detail::Component* component(int id) const;
   truecut::rt::hal::detail::Thread* thread(const std::string& name) const;

@@ -35,10 +35,40 @@ extern "C" void remove_pending_and_reraise(int sig) {
   ::raise(sig);
 }
 
+// The host of this thread's innermost PendingFilesToHost, when it has the calls.
+thread_local const tc_hal_api_t* t_host_api = nullptr;
+thread_local tc_hal_t* t_host_hal = nullptr;
+
+bool has_pending_file_calls(const tc_hal_api_t* api) {
+  return api != nullptr && TC_HAL_API_HAS(api, pending_file_done) &&
+         api->pending_file_add != nullptr && api->pending_file_done != nullptr;
+}
+
 }  // namespace
+
+PendingFilesToHost::PendingFilesToHost(const tc_hal_api_t* api, tc_hal_t* hal) noexcept
+    : outer_api_(t_host_api), outer_hal_(t_host_hal) {
+  const bool host = has_pending_file_calls(api);
+  t_host_api = host ? api : nullptr;
+  t_host_hal = host ? hal : nullptr;
+}
+
+PendingFilesToHost::~PendingFilesToHost() {
+  t_host_api = outer_api_;
+  t_host_hal = outer_hal_;
+}
 
 PendingFile::PendingFile(const std::filesystem::path& path) noexcept {
   const std::string& text = path.native();
+  if (t_host_api != nullptr) {
+    const int handle = t_host_api->pending_file_add(t_host_hal, text.c_str());
+    if (handle >= 0) {
+      slot_ = handle;
+      host_ = t_host_api;
+      host_hal_ = t_host_hal;
+      return;
+    }
+  }
   if (text.size() + 1 > kMaxPendingPathBytes) return;
   for (std::size_t i = 0; i < g_slots.size(); ++i) {
     int expected = kFree;
@@ -52,7 +82,9 @@ PendingFile::PendingFile(const std::filesystem::path& path) noexcept {
 }
 
 PendingFile::~PendingFile() {
-  if (slot_ >= 0)
+  if (host_ != nullptr)
+    host_->pending_file_done(host_hal_, slot_);
+  else if (slot_ >= 0)
     g_slots[static_cast<std::size_t>(slot_)].state.store(kFree, std::memory_order_release);
 }
 

@@ -43,6 +43,7 @@
 #include <vector>
 
 #include "truecut/rt/component_support.hpp"
+#include "truecut/rt/interrupt_cleanup.hpp"
 #include "truecut/sim/cutting/cutting_force.hpp"
 #include "truecut/sim/cutting/part_file.hpp"
 #include "truecut/sim/cutting/swept_cut.hpp"
@@ -307,6 +308,9 @@ extern "C" TC_COMPONENT_EXPORT void truecut_component_exit(const tc_hal_api_t* a
   try {
     s->removed_total_mm3 += finish(*s).removed_mm3;
     std::filesystem::create_directories(s->out_dir);
+    // machined.{stl,ply}.tmp go into the host's table of files to remove on
+    // a signal: this library's own copy of it is not the one the host reads.
+    const truecut::rt::PendingFilesToHost to_host(api, hal);
     s->model.write_machined(s->out_dir);
     api->message(hal, TC_HAL_MSG_INFO,
                  (s->name + ": wrote machined.stl and machined.ply to " + s->out_dir.string() +

@@ -1,6 +1,7 @@
 // The cutting HAL component: loads a benchmark part, cuts between the poses
 // of successive cycles, reports power and force, writes the machined surface
 // on exit; bad part files fail the load naming file and key.
+#include <dlfcn.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,6 +11,7 @@
 #include "truecut/offline/stl_io.hpp"
 #include "truecut/rt/executor.hpp"
 #include "truecut/rt/hal_file.hpp"
+#include "truecut/rt/interrupt_cleanup.hpp"
 #include "truecut/sim/benchmark_parts.hpp"
 
 using namespace truecut::rt::hal;
@@ -149,4 +151,68 @@ TEST(CuttingComponent, BadPartFileFailsTheLoadNamingFileAndKey) {
       HalError);
   EXPECT_THROW(hal.load("cutting", {nominal, "part=" + (part / "part.json").string(), "kc=3"}),
                HalError);
+}
+
+// The machined part is written at unload through the component's own copy
+// of rt, whose table of pending files the host's signal handler does not
+// see: its two temporary names must reach the host's table (hal_abi.h
+// pending_file_add), and be released at their renames. The component is
+// loaded through a copy of the host's function table that records the calls.
+namespace {
+const tc_hal_api_t* g_host = nullptr;
+tc_hal_api_t g_recording_table;
+std::vector<std::string> g_pending_added;
+int g_pending_done = 0;
+tc_component_init_fn g_cutting_init = nullptr;
+tc_component_exit_fn g_cutting_exit = nullptr;
+
+int recording_add(tc_hal_t* hal, const char* path) {
+  g_pending_added.emplace_back(path);
+  return g_host->pending_file_add(hal, path);
+}
+void recording_done(tc_hal_t* hal, int handle) {
+  ++g_pending_done;
+  g_host->pending_file_done(hal, handle);
+}
+int cutting_init(const tc_hal_api_t* api, tc_hal_t* hal, int argc, const char* const* argv,
+                 void** state) {
+  g_host = api;
+  g_recording_table = *api;
+  g_recording_table.pending_file_add = recording_add;
+  g_recording_table.pending_file_done = recording_done;
+  return g_cutting_init(&g_recording_table, hal, argc, argv, state);
+}
+void cutting_exit(const tc_hal_api_t*, tc_hal_t* hal, void* state) {
+  g_cutting_exit(&g_recording_table, hal, state);
+}
+}  // namespace
+
+TEST(CuttingComponent, ItsTemporaryFilesAreInTheHostsTableWhileItWrites) {
+  const auto dir = truecut::test::scratch_dir();
+  const auto part = implant(dir);
+  const std::string so = (truecut::test::component_dir() / "cutting.so").string();
+  void* lib = dlopen(so.c_str(), RTLD_NOW | RTLD_LOCAL);
+  ASSERT_NE(nullptr, lib) << dlerror();
+  g_cutting_init = reinterpret_cast<tc_component_init_fn>(dlsym(lib, TC_COMPONENT_INIT_SYMBOL));
+  g_cutting_exit = reinterpret_cast<tc_component_exit_fn>(dlsym(lib, TC_COMPONENT_EXIT_SYMBOL));
+  ASSERT_TRUE(g_cutting_init && g_cutting_exit);
+  g_pending_added.clear();
+  g_pending_done = 0;
+  const std::size_t before = truecut::rt::pending_file_count();
+  {
+    Hal hal(opts(dir));
+    hal.load("cutting", cutting_init, cutting_exit,
+             {"out=cut", "spacing=0.5", "nominal=" + (part / "nominal.stl").string(),
+              "part=" + (part / "part.json").string()});
+    EXPECT_EQ(0, hal.unload());
+  }
+  const auto out = std::filesystem::absolute(dir / "cut").lexically_normal();
+  EXPECT_EQ((std::vector<std::string>{(out / "machined.stl.tmp").string(),
+                                      (out / "machined.ply.tmp").string()}),
+            g_pending_added);
+  EXPECT_EQ(2, g_pending_done);
+  EXPECT_EQ(before, truecut::rt::pending_file_count());
+  EXPECT_TRUE(std::filesystem::exists(out / "machined.stl"));
+  EXPECT_TRUE(std::filesystem::exists(out / "machined.ply"));
+  dlclose(lib);
 }

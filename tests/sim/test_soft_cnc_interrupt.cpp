@@ -1,7 +1,10 @@
 // A soft-CNC run ended by SIGINT or SIGTERM leaves none of its files (issue
 // 23: the complete run.ini and soft_cnc.hal stayed in the output folder).
 // The signal comes from the first servo cycle (SoftCncJob::cycle_probe), in
-// a child process; the parent looks at the folder.
+// a child process; the parent looks at the folder. (The cutting component's
+// machined.{stl,ply}.tmp, written at unload, are in the host's table through
+// the component ABI: tests/rt/test_component_pending_files.cpp and
+// CuttingComponent.ItsTemporaryFilesAreInTheHostsTableWhileItWrites.)
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -21,7 +24,6 @@ namespace fs = std::filesystem;
 using namespace truecut;
 
 int g_probe_signal = 0;  // raised by the first servo cycle (child process)
-fs::path g_probe_out;    // the output folder (SIGTERM case)
 
 // A coarse implant and a one-pass facing program with its tool T2.
 fs::path write_job(const fs::path& dir) {
@@ -57,17 +59,6 @@ TEST(SoftCncInterrupt, AnInterruptedRunLeavesNoneOfItsFiles) {
       job.component_path = {test::component_dir()};
       g_probe_signal = sig;
       job.cycle_probe = [](void*, int) { raise(g_probe_signal); };
-      if (sig == SIGTERM) {
-        // As the cutting component is when a signal comes while it writes
-        // the machined part at unload (through its own copy of rt's table
-        // of pending files, which this process's handler does not see).
-        g_probe_out = out;
-        job.cycle_probe = [](void*, int) {
-          std::ofstream(g_probe_out / "machined.stl.tmp") << "half a part";
-          std::ofstream(g_probe_out / "machined.ply.tmp") << "half a part";
-          raise(g_probe_signal);
-        };
-      }
       try {
         sim::run_soft_cnc(job);
       } catch (...) {
@@ -80,8 +71,7 @@ TEST(SoftCncInterrupt, AnInterruptedRunLeavesNoneOfItsFiles) {
     ASSERT_TRUE(WIFSIGNALED(status)) << "exit " << WEXITSTATUS(status);
     EXPECT_EQ(sig, WTERMSIG(status));
     ASSERT_TRUE(fs::is_directory(out)) << "the run got as far as its folder";
-    for (const char* f : {"run.ini", "soft_cnc.hal", "trace.csv.tmp", "trace.csv",
-                          "machined.stl.tmp", "machined.ply.tmp"})
+    for (const char* f : {"run.ini", "soft_cnc.hal", "trace.csv.tmp", "trace.csv"})
       EXPECT_FALSE(fs::exists(out / f)) << f;
   }
 }

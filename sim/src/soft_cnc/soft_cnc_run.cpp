@@ -146,11 +146,6 @@ SoftCncResult run_soft_cnc(const SoftCncJob& given, const SoftCncProgress& progr
     rt::write_file_atomically(ini_file, soft_cnc_ini_text(job, machine, cutting_tools));
     for (const fs::path& f : written)
       interrupted_removes.push_back(std::make_unique<rt::PendingFile>(f));
-    // The cutting component writes its part at unload through its own copy
-    // of rt's pending-file table, which this process's signal handler does
-    // not see: its temporary names are registered here.
-    for (const char* f : {"machined.stl.tmp", "machined.ply.tmp"})
-      interrupted_removes.push_back(std::make_unique<rt::PendingFile>(job.out_dir / f));
     const rt::hal::Ini ini = rt::hal::Ini::load(ini_file);
     rt::hal::load_hal_file(h, hal_file, &ini);
   } catch (const rt::hal::HalFileError& e) {

@@ -97,6 +97,19 @@ typedef struct tc_hal_api {
    * under LinuxCNC in the module's non-real-time thread. A background service
    * never runs concurrently with itself. */
   int (*background_service_new)(tc_hal_t* hal, int comp_id, tc_hal_service_t service, void* arg);
+
+  /* Added later still (TC_HAL_API_HAS(api, pending_file_add)); not for the
+   * servo cycle. A file the component is writing and will rename or remove
+   * (NAME.tmp before it becomes NAME): if the process is ended by SIGINT,
+   * SIGTERM or SIGHUP while it is registered, the host removes it, as it
+   * removes its own. A component's library has its own copy of any table
+   * it keeps, which the host's signal handler does not see; this call puts
+   * the name in the host's. Returns a handle >= 0, or a negative errno when
+   * the host does not track the file (it is then written without that
+   * guarantee; under LinuxCNC, rtapi_app's own signal handling applies). */
+  int (*pending_file_add)(tc_hal_t* hal, const char* path);
+  /* The file of `handle` is renamed or removed: no longer the host's to remove. */
+  void (*pending_file_done)(tc_hal_t* hal, int handle);
 } tc_hal_api_t;
 
 /* True when the host's function table has the member `field`. */

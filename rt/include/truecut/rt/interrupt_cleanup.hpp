@@ -15,6 +15,8 @@
 #include <cstddef>
 #include <filesystem>
 
+#include "truecut/rt/hal_abi.h"
+
 namespace truecut::rt {
 
 inline constexpr std::size_t kMaxPendingFiles = 128;
@@ -29,7 +31,30 @@ class PendingFile {
   bool tracked() const noexcept { return slot_ >= 0; }
 
  private:
-  int slot_ = -1;
+  int slot_ = -1;                       // in this copy's table, or the host's handle
+  const tc_hal_api_t* host_ = nullptr;  // set when the host holds the name
+  tc_hal_t* host_hal_ = nullptr;
+};
+
+// A component in a shared library links its own copy of this table, which
+// the host's signal handler does not see. While a PendingFilesToHost lives
+// (around the writing in a component's exit or service), the PendingFiles
+// made on its thread are registered with the host through the ABI
+// (tc_hal_api_t::pending_file_add), when the host has that call; otherwise
+// in this copy's table as before.
+//
+//   truecut::rt::PendingFilesToHost to_host(api, hal);
+//   write_file_atomically(out / "machined.stl", ...);
+class PendingFilesToHost {
+ public:
+  PendingFilesToHost(const tc_hal_api_t* api, tc_hal_t* hal) noexcept;
+  ~PendingFilesToHost();
+  PendingFilesToHost(const PendingFilesToHost&) = delete;
+  PendingFilesToHost& operator=(const PendingFilesToHost&) = delete;
+
+ private:
+  const tc_hal_api_t* outer_api_;  // the enclosing guard's host, restored at the end
+  tc_hal_t* outer_hal_;
 };
 
 // Installs the handlers for SIGINT, SIGTERM and SIGHUP. A handler installed
