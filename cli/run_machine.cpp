@@ -254,7 +254,8 @@ int run_machine(const std::vector<std::string>& argv) {
     return kExitUsage;
   }
   if (r.output_errors > 0) {
-    std::fprintf(stderr, "truecut run: %d output file(s) could not be written (see above)\n",
+    std::fprintf(stderr,
+                 "truecut run: %d output file(s) could not be written in full (see above)\n",
                  r.output_errors);
     return kExitFailure;
   }

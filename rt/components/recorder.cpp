@@ -1,7 +1,7 @@
 // recorder: writes pins to a CSV trace, like LinuxCNC's sampler + halsampler.
 //
 //   loadrt recorder file=trace.csv columns=x_cmd,x_act,line:s32,on:bit
-//                   [names=NAME] [every=N] [depth=N]
+//                   [names=NAME] [every=N] [depth=N] [max-mb=N]
 //
 // One instance (`recorder.0` unless names= gives another name). Each column
 // is an input pin `<inst>.<column>` (float unless suffixed :bit, :s32, :u32).
@@ -12,7 +12,10 @@
 // absolute path, no '..'); /dev/null and FIFOs are written directly, from
 // anywhere. The temporary file is created at load time, so a file that
 // cannot be written fails the load. Samples that find the queue full are
-// dropped and counted on `<inst>.overruns`.
+// dropped and counted on `<inst>.overruns`. A trace that would grow beyond
+// max-mb (default 65536 MB: a day at 1 kHz of every soft-CNC column) stops
+// there, asks the executor to stop and reports an error at unload; the
+// lines written until then are kept.
 #include <algorithm>
 #include <boost/lockfree/spsc_queue.hpp>
 #include <cerrno>
@@ -32,6 +35,8 @@ namespace truecut::rt::hal::builtin {
 namespace {
 
 constexpr int kMaxColumns = 64;
+constexpr long kDefaultMaxMb = 65536;
+constexpr long kMaxMaxMb = 1L << 30;  // 1 PB
 
 struct Sample {
   int64_t t_ns;
@@ -63,6 +68,11 @@ struct Recorder {
   bool direct = false;  // writing straight into /dev/null or a FIFO, no rename
   bool header_written = false;
   bool write_failed = false;
+  uint64_t max_bytes = 0;
+  uint64_t written_bytes = 0;
+  long max_mb = 0;
+  bool size_limit_reached = false;
+  double last_written_t_s = 0;
   std::string line;
   const tc_hal_api_t* api = nullptr;
   tc_hal_t* hal = nullptr;
@@ -104,11 +114,20 @@ void append_number(std::string& line, double v) {
   line.append(buf, res.ptr);
 }
 
+std::string size_limit_text(const Recorder& r) {
+  char t[32];
+  std::snprintf(t, sizeof t, "%.6g", r.last_written_t_s);
+  return r.instance + ": " + r.final_path.string() +
+         " reached its size limit max-mb=" + std::to_string(r.max_mb) +
+         " (MB); the run is stopped and the trace ends at t = " + t +
+         " s (loadrt recorder ... max-mb=N raises the limit)";
+}
+
 void drain(void* arg) {
   auto& r = *static_cast<Recorder*>(arg);
   Sample s;
   while (r.queue->pop(s)) {
-    if (r.write_failed) continue;
+    if (r.write_failed || r.size_limit_reached) continue;
     if (!r.out) {
       // A FIFO is opened on first use: opening it waits for its reader.
       r.out = std::fopen(r.final_path.c_str(), "wb");
@@ -128,6 +147,7 @@ void drain(void* arg) {
         r.line += "," + c.name;
       r.line += "\n";
       std::fputs(r.line.c_str(), r.out);
+      r.written_bytes += r.line.size();
     }
     r.line.clear();
     // Time from the integer cycle clock, so it never accumulates rounding.
@@ -137,7 +157,15 @@ void drain(void* arg) {
       append_number(r.line, s.v[i]);
     }
     r.line += '\n';
+    if (r.written_bytes + r.line.size() > r.max_bytes) {
+      r.size_limit_reached = true;
+      r.api->request_stop(r.hal);
+      r.api->message(r.hal, TC_HAL_MSG_ERR, size_limit_text(r).c_str());
+      continue;
+    }
     if (std::fputs(r.line.c_str(), r.out) < 0) r.write_failed = true;
+    r.written_bytes += r.line.size();
+    r.last_written_t_s = double(s.t_ns) * 1e-9;
   }
 }
 
@@ -196,6 +224,7 @@ int recorder_init(const tc_hal_api_t* api, tc_hal_t* hal, int argc, const char* 
     auto columns = args.take("columns");
     const long every = args.take_long("every", 1, 1, 1'000'000);
     const long depth = args.take_long("depth", 8192, 16, 1 << 20);
+    const long max_mb = args.take_long("max-mb", kDefaultMaxMb, 1, kMaxMaxMb);
     args.expect_consumed("recorder");
     if (!file) throw InitError("file= is required (e.g. file=trace.csv)");
     if (!columns) throw InitError("columns= is required (e.g. columns=x_cmd,x_act)");
@@ -221,6 +250,8 @@ int recorder_init(const tc_hal_api_t* api, tc_hal_t* hal, int argc, const char* 
     r->tmp_path += ".tmp";
     r->columns = parse_columns(*columns);
     r->every = static_cast<uint32_t>(every);
+    r->max_mb = max_mb;
+    r->max_bytes = static_cast<uint64_t>(max_mb) * 1'000'000u;
     r->queue = std::make_unique<boost::lockfree::spsc_queue<Sample>>(static_cast<size_t>(depth));
     r->api = api;
     r->hal = hal;
@@ -271,6 +302,15 @@ void recorder_exit(const tc_hal_api_t* api, tc_hal_t* hal, void* state) {
     api->message(
         hal, TC_HAL_MSG_ERR,
         ("recorder: writing " + r->final_path.string() + " failed; no trace written").c_str());
+    return;
+  }
+  if (r->size_limit_reached) {
+    // Counted as an error of the unload: the run does not end with 0 on a
+    // trace that stops short.
+    api->message(hal, TC_HAL_MSG_ERR,
+                 (size_limit_text(*r) + "; " + std::to_string(r->written_bytes) +
+                  " bytes kept, the samples after it dropped")
+                     .c_str());
     return;
   }
   api->message(hal, TC_HAL_MSG_INFO,

@@ -227,6 +227,71 @@ TEST(Recorder, FullQueueDropsAndCounts) {
   EXPECT_GT(hal.get_pin_or_param("recorder.0.overruns").u, 0u);
 }
 
+// issue 23: `truecut run CONFIG.hal` without --time or --cycles recorded
+// until the disk was full. The trace stops at max-mb, whole lines only, the
+// run is asked to stop, and the unload reports an error naming the limit.
+TEST(Recorder, ATraceStopsAtItsSizeLimitAndTheRunWithIt) {
+  auto dir = truecut::test::scratch_dir();
+  std::vector<std::string> lines;
+  RunReport report;
+  int unload_errors = 0;
+  {
+    HalOptions o = opts(dir);
+    o.message_sink = [&lines](const std::string& line) { lines.push_back(line); };
+    Hal hal(o);
+    load_hal_text(hal,
+                  "loadrt threads name1=t period1=1000000\nloadrt siggen\n"
+                  "loadrt recorder file=big.csv columns=s,c max-mb=1\n"
+                  "net s siggen.0.sine => recorder.0.s\nnet c siggen.0.cosine => recorder.0.c\n"
+                  "addf siggen.0.update t\naddf recorder.0.sample t\n",
+                  "big.hal");
+    Executor ex(hal);
+    RunLimits lim;
+    lim.max_cycles = 10'000'000;
+    report = ex.run_simulated(lim);
+    unload_errors = hal.unload();
+  }
+  EXPECT_TRUE(report.stopped_by_request);
+  ASSERT_EQ(1u, report.threads.size());
+  EXPECT_LT(report.threads[0].cycles, 100'000u) << "stopped soon after the limit";
+  EXPECT_EQ(1, unload_errors);
+  const std::string text = truecut::test::read_file(dir / "big.csv");
+  EXPECT_LE(text.size(), 1'000'000u);
+  EXPECT_GT(text.size(), 1'000'000u - 100) << "filled up to the last whole line";
+  ASSERT_EQ('\n', text.back());
+  std::string header;
+  const auto rows = read_csv(dir / "big.csv", &header);
+  for (const auto& row : rows)
+    ASSERT_EQ(3u, row.size());
+  ASSERT_FALSE(lines.empty());
+  const std::string& last = lines.back();
+  EXPECT_NE(std::string::npos, last.find("error: recorder.0: " + (dir / "big.csv").string() +
+                                         " reached its size limit max-mb=1 (MB)"))
+      << last;
+  EXPECT_NE(std::string::npos, last.find("max-mb=N raises the limit")) << last;
+  char t[32];
+  std::snprintf(t, sizeof t, "%.6g", rows.back()[0]);
+  EXPECT_NE(std::string::npos, last.find(std::string("ends at t = ") + t + " s")) << last;
+}
+
+TEST(Recorder, AMaximumSizeOutsideItsRangeFailsTheLoad) {
+  auto dir = truecut::test::scratch_dir();
+  for (const char* bad : {"max-mb=0", "max-mb=-5", "max-mb=2e3", "max-mb=1099511627777"}) {
+    Hal hal(opts(dir));
+    try {
+      load_hal_text(hal,
+                    std::string("loadrt threads name1=t period1=1000000\n"
+                                "loadrt recorder file=x.csv columns=a ") +
+                        bad + "\n",
+                    "x.hal");
+      ADD_FAILURE() << bad << " loaded";
+    } catch (const HalFileError& e) {
+      EXPECT_NE(std::string::npos, std::string(e.what()).find("max-mb")) << e.what();
+    }
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.csv.tmp"));
+}
+
 TEST(Recorder, BadColumnsAreRejected) {
   Hal hal(opts("."));
   EXPECT_THROW(hal.load("recorder", {"file=a.csv", "columns=a,,b"}), HalError);
