@@ -113,7 +113,9 @@ inline std::vector<PathMove> path_moves(const CanonProgram& p, const RewriteOpti
   return out;
 }
 
-// A spindle or coolant call, and how many moves (path_moves) came before it.
+// A call that switches something on the machine (spindle, coolant, an
+// output, an override, a stop, orient, a log line), and how many moves
+// (path_moves) came before it.
 struct MachineSwitch {
   std::string call;
   size_t moves_before;
@@ -130,7 +132,17 @@ inline std::vector<MachineSwitch> machine_switches(const CanonProgram& p) {
     } else if (std::holds_alternative<SetSpindleSpeed>(c.op) ||
                std::holds_alternative<SetSpindleMode>(c.op) ||
                std::holds_alternative<StartSpindle>(c.op) ||
-               std::holds_alternative<StopSpindle>(c.op) || std::holds_alternative<Coolant>(c.op)) {
+               std::holds_alternative<StopSpindle>(c.op) || std::holds_alternative<Coolant>(c.op) ||
+               std::holds_alternative<OutputBit>(c.op) ||
+               std::holds_alternative<OutputValue>(c.op) ||
+               std::holds_alternative<FeedOverride>(c.op) ||
+               std::holds_alternative<SpeedOverride>(c.op) ||
+               std::holds_alternative<AdaptiveFeed>(c.op) ||
+               std::holds_alternative<FeedHold>(c.op) ||
+               std::holds_alternative<ProgramStop>(c.op) ||
+               std::holds_alternative<OrientSpindle>(c.op) ||
+               std::holds_alternative<WaitOrientComplete>(c.op) ||
+               std::holds_alternative<LogFile>(c.op)) {
       out.push_back({format_rs274(c.op), moves});
     }
   }
@@ -239,13 +251,13 @@ inline void expect_same_path_shifted(const std::string& original, const std::str
   ASSERT_EQ(got_switches.size(), want_switches.size()) << rewritten;
   for (size_t i = 0; i < want_switches.size(); ++i) {
     const MachineSwitch& w = want_switches[i];
-    EXPECT_EQ(got_switches[i].call, w.call) << "spindle or coolant call " << i;
+    EXPECT_EQ(got_switches[i].call, w.call) << "machine switch " << i;
     const size_t k = w.moves_before;
     const size_t earliest = k > 0 ? matched[k - 1] + 1 : 0;
     const size_t latest = k < want.size() ? matched[k] : got.size();
     EXPECT_TRUE(got_switches[i].moves_before >= earliest && got_switches[i].moves_before <= latest)
-        << "spindle or coolant call " << i << " (" << w.call << ") after "
-        << got_switches[i].moves_before << " moves of the new program, which meets the "
+        << "machine switch " << i << " (" << w.call << ") after " << got_switches[i].moves_before
+        << " moves of the new program, which meets the "
         << "original's move " << k << " (the last before it) with its move " << earliest;
   }
 }

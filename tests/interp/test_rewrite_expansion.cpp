@@ -383,11 +383,54 @@ TEST(RewriteExpansion, ThreadingMovesInALoopStayOneG33LineEach) {
       << r1.text;
 }
 
+// Outputs, override switches, optional stops, spindle orient and log lines
+// inside a loop: each written where it came among the moves (M62/M63 and
+// M67 before the move they go with), as the calls of the original
+// (issue 22 point 5; before, the rewrite refused the loop).
+TEST(RewriteExpansion, OutputsOverridesStopsAndLogsInALoopComeWhereTheyDid) {
+  const std::string program = kHead +
+                              "(LOGOPEN,holes.txt)\n"
+                              "#1 = 0\n"
+                              "o100 while [#1 lt 3]\n"
+                              "M62 P1\n"
+                              "G1 Z-1 F100\n"
+                              "M63 P1\n"
+                              "M50 P0\n"
+                              "M67 E2 Q[2.5 * #1]\n"
+                              "G1 X[10 + #1] F300\n"
+                              "M64 P3\n"
+                              "M68 E0 Q-1.25\n"
+                              "(LOG,pass #1 at x #5420)\n"
+                              "M1\n"
+                              "M51 P0\n"
+                              "M52 P1\n"
+                              "M53 P0\n"
+                              "G1 Y4\n"
+                              "M65 P3 M48\n"
+                              "M5\n"
+                              "M19 R[90 + #1] P1 Q2\n"
+                              "G0 Z5\n"
+                              "M19 Q0.5\n"
+                              "S1000 M3\n"
+                              "#1 = [#1 + 1]\n"
+                              "o100 endwhile\n"
+                              "(LOGCLOSE)\n"
+                              "M30\n";
+  const V offset(0.02, -0.01, 0.015);
+  expect_rewritten_shifted(program, offset);
+  const RewriteResult r = rewrite_program(program, "p.ngc", constant(offset), options());
+  EXPECT_EQ(r.summary.expansions, 1) << r.text;
+  for (const char* line : {"M62 P1\nG1 X0.020000 Y-0.010000 Z4.515000 F100", "M67 E2 Q5\n",
+                           "M68 E0 Q-1.25\n", "(LOG,pass 2.000000 at x 12.000000)\n",
+                           "M19 R92 P1 Q2\n", "M19 Q0.5\n", "M50 P1\nM51 P1\n"})
+    EXPECT_NE(r.text.find(line), std::string::npos) << line << "\n" << r.text;
+}
+
 TEST(RewriteExpansion, WhatAnExpansionCannotWriteIsRefusedNamingTheLoop) {
   const std::string output = kHead +
                              "o1 repeat [2]\n"
                              "G1 Z-1 F100\n"
-                             "M64 P0\n"
+                             "M61 Q1\n"
                              "G0 Z5\n"
                              "o1 endrepeat\n"
                              "M30\n";

@@ -647,11 +647,12 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
         {file_of(program, c.context, name), c.context.line, 0},
         what + ", inside " + e.what + " (lines " + std::to_string(e.first_line) + "-" +
             std::to_string(e.last_line) + "), which the rewrite writes out move by move (" + e.why +
-            "): an expansion writes moves, feeds, dwells, planes, path modes, spindle, coolant "
-            "and comments only");
+            "): an expansion writes moves, feeds, dwells, planes, path modes, spindle, coolant, "
+            "outputs, override switches, stops, logs and comments only");
   };
   // One call inside an expansion.
   // `cycle_end`: a canned cycle's move, written to that end (program units).
+  long last_expanded_block = -1;  // the block of the last other call written
   auto expand_call = [&](const CanonCall& c, const Axes6* cycle_end = nullptr) {
     const CallContext& ctx = c.context;
     ex.incremental = ctx.incremental;
@@ -732,6 +733,41 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
         pl.moves.back() += " Q" + exact(q->tolerance);
         rl.others.push_back(format_rs274(c.op, check_format()));
         return;
+      } else if (const auto* b = std::get_if<OutputBit>(&c.op); b && !ctx.canned_cycle) {
+        // M62/M63 switch with the next move: written before its first line.
+        text = std::string(b->synchronized ? (b->on ? "M62" : "M63") : (b->on ? "M64" : "M65")) +
+               " P" + std::to_string(b->index);
+      } else if (const auto* v = std::get_if<OutputValue>(&c.op); v && !ctx.canned_cycle) {
+        text = std::string(v->synchronized ? "M67" : "M68") + " E" + std::to_string(v->index) +
+               " Q" + exact(v->value);
+      } else if (const auto* f = std::get_if<FeedOverride>(&c.op); f && !ctx.canned_cycle) {
+        // M48/M49 make both override calls; M50 and M51 one each.
+        text = std::string("M50 P") + (f->enabled ? "1" : "0");
+      } else if (const auto* f = std::get_if<SpeedOverride>(&c.op); f && !ctx.canned_cycle) {
+        text = std::string("M51 P") + (f->enabled ? "1" : "0");
+      } else if (const auto* f = std::get_if<AdaptiveFeed>(&c.op)) {
+        text = std::string("M52 P") + (f->enabled ? "1" : "0");
+      } else if (const auto* f = std::get_if<FeedHold>(&c.op)) {
+        text = std::string("M53 P") + (f->enabled ? "1" : "0");
+      } else if (const auto* st = std::get_if<ProgramStop>(&c.op); st && !ctx.canned_cycle) {
+        text = st->optional ? "M1" : "M0";
+      } else if (const auto* o19 = std::get_if<OrientSpindle>(&c.op);
+                 o19 && o19->m19_direction >= 0) {
+        text = "M19 R" + exact(o19->degrees) + " P" + std::to_string(o19->m19_direction);
+      } else if (const auto* w = std::get_if<WaitOrientComplete>(&c.op)) {
+        // M19 R.. Q.. makes both calls: the Q goes onto that M19 line.
+        if (!pl.moves.empty() && pl.moves.back().rfind("M19 R", 0) == 0 &&
+            last_expanded_block == ctx.executed_block) {
+          pl.moves.back() += " Q" + exact(w->timeout_s);
+          rl.others.push_back(format_rs274(c.op, check_format()));
+          return;
+        }
+        text = "M19 Q" + exact(w->timeout_s);
+      } else if (const auto* lf = std::get_if<LogFile>(&c.op)) {
+        text = lf->kind == LogFile::kOpen     ? "(LOGOPEN," + lf->text + ")"
+               : lf->kind == LogFile::kAppend ? "(LOGAPPEND," + lf->text + ")"
+               : lf->kind == LogFile::kClose  ? std::string("(LOGCLOSE)")
+                                              : "(LOG," + lf->text + ")";
       } else if (std::holds_alternative<ProbeSwitch>(c.op) ||
                  std::holds_alternative<StraightProbe>(c.op)) {
         throw expansion_error(c, std::string("this line makes ") + call_name(c.op) +
@@ -742,6 +778,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       }
       pl.moves.push_back(text);
       rl.others.push_back(format_rs274(c.op, check_format()));
+      last_expanded_block = ctx.executed_block;
       return;
     }
     if (std::holds_alternative<NurbsFeed>(c.op)) throw expansion_error(c, "NURBS block here");
