@@ -426,6 +426,51 @@ TEST(RewriteExpansion, OutputsOverridesStopsAndLogsInALoopComeWhereTheyDid) {
     EXPECT_NE(r.text.find(line), std::string::npos) << line << "\n" << r.text;
 }
 
+// A grid of parts from one subroutine, each under its own G52 local offset,
+// and a G92 set at a position inside a loop: each offset is written as the
+// G52 that gives it, and the moves after it in that frame (issue 22 point 5).
+TEST(RewriteExpansion, LocalOffsetsInALoopAreWrittenAsTheG52TheyGive) {
+  const std::string grid = kHead +
+                           "o<part> sub\n"
+                           "G0 X0 Y0\n"
+                           "G1 Z-1 F100\n"
+                           "G1 X6 F300\n"
+                           "G2 X6 Y6 I0 J3\n"
+                           "G0 Z5\n"
+                           "o<part> endsub\n"
+                           "#1 = 0\n"
+                           "o100 while [#1 lt 3]\n"
+                           "G52 X[#1 * 20] Y[#1 * 5]\n"
+                           "o<part> call\n"
+                           "#1 = [#1 + 1]\n"
+                           "o100 endwhile\n"
+                           "G52 X0 Y0\n"
+                           "G0 X1 Y1\n"
+                           "M30\n";
+  const V offset(0.02, -0.01, 0.015);
+  expect_rewritten_shifted(grid, offset);
+  const RewriteResult r = rewrite_program(grid, "p.ngc", constant(offset), options());
+  EXPECT_EQ(r.summary.expansions, 1) << r.text;
+  EXPECT_NE(r.text.find("G52 X40 Y10 Z0 A0 C0\n"), std::string::npos) << r.text;
+
+  const std::string g92 = kHead +
+                          "o100 repeat [2]\n"
+                          "G0 X0 Y0\n"
+                          "G92 X-15 Y0\n"
+                          "G1 Z-1 F100\n"
+                          "G1 X-5 F300\n"
+                          "G0 Z5\n"
+                          "G92.1\n"
+                          "G0 X10\n"
+                          "G92 X0\n"
+                          "G1 X3\n"
+                          "G92.2\n"
+                          "o100 endrepeat\n"
+                          "G0 X0 Y0\n"
+                          "M30\n";
+  expect_rewritten_shifted(g92, offset);
+}
+
 TEST(RewriteExpansion, WhatAnExpansionCannotWriteIsRefusedNamingTheLoop) {
   const std::string output = kHead +
                              "o1 repeat [2]\n"

@@ -648,7 +648,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
         what + ", inside " + e.what + " (lines " + std::to_string(e.first_line) + "-" +
             std::to_string(e.last_line) + "), which the rewrite writes out move by move (" + e.why +
             "): an expansion writes moves, feeds, dwells, planes, path modes, spindle, coolant, "
-            "outputs, override switches, stops, logs and comments only");
+            "G52/G92 offsets, outputs, override switches, stops, logs and comments only");
   };
   // One call inside an expansion.
   // `cycle_end`: a canned cycle's move, written to that end (program units).
@@ -763,6 +763,14 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
           return;
         }
         text = "M19 Q" + exact(w->timeout_s);
+      } else if (const auto* g92 = std::get_if<SetG92Offset>(&c.op)) {
+        // G52, G92 and G92.1-G92.3 make SET_G92_OFFSET with the offset now
+        // in force: written as the G52 that sets it on every axis (the moves
+        // after it are written in the frame it gives, as they came).
+        if (g92->offset.b != 0)
+          throw expansion_error(c, "this line makes SET_G92_OFFSET with a B offset");
+        Axes6 unused;
+        text = "G52" + exact_words(g92->offset, true, true, unused);
       } else if (const auto* lf = std::get_if<LogFile>(&c.op)) {
         text = lf->kind == LogFile::kOpen     ? "(LOGOPEN," + lf->text + ")"
                : lf->kind == LogFile::kAppend ? "(LOGAPPEND," + lf->text + ")"
