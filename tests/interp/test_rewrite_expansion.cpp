@@ -471,6 +471,63 @@ TEST(RewriteExpansion, LocalOffsetsInALoopAreWrittenAsTheG52TheyGive) {
   expect_rewritten_shifted(g92, offset);
 }
 
+// Fixtures in a loop: each pass selects its work offset (G55, G56 set with
+// G10 L2 before the loop, one of them rotated), sets the one in use again
+// with G10 L2 and G10 L20, and switches units; each is written where it
+// came (issue 22 point 5).
+TEST(RewriteExpansion, WorkOffsetsAndUnitsInALoopAreWrittenWhereTheyCame) {
+  const V offset(0.02, -0.01, 0.015);
+  const std::string program = kHead +
+                              "G10 L2 P2 X40 Y0 Z0\n"
+                              "G10 L2 P3 X80 Y5 Z-1 R10\n"
+                              "#1 = 0\n"
+                              "o100 while [#1 lt 3]\n"
+                              "o101 if [#1 eq 1]\n"
+                              "G55\n"
+                              "o101 elseif [#1 eq 2]\n"
+                              "G56\n"
+                              "o101 endif\n"
+                              "G0 X0 Y0\n"
+                              "G1 Z-1 F100\n"
+                              "G1 X6 F300\n"
+                              "G10 L2 P0 X[40 + #1] Y1 R[2 * #1]\n"
+                              "G1 Y3\n"
+                              "G10 L20 P0 Z4\n"
+                              "G0 Z5\n"
+                              "G20\n"
+                              "G0 X0.1\n"
+                              "G21\n"
+                              "G54\n"
+                              "#1 = [#1 + 1]\n"
+                              "o100 endwhile\n"
+                              "G0 X0 Y0\n"
+                              "M30\n";
+  expect_rewritten_shifted(program, offset);
+  const RewriteResult r = rewrite_program(program, "p.ngc", constant(offset), options());
+  EXPECT_EQ(r.summary.expansions, 1) << r.text;
+  for (const char* line : {"\nG55\n", "\nG56\n", "\nG10 L2 P3 X42 Y1 Z-1 A0 C0 R4\n", "\nG20\n"})
+    EXPECT_NE(r.text.find(line), std::string::npos) << line << "\n" << r.text;
+
+  // G10 L2 of a system not in use: its values are only parameters, which an
+  // expansion does not see; refused at its line, naming it.
+  const std::string other = kHead +
+                            "o100 repeat [2]\n"
+                            "G1 Z-1 F100\n"
+                            "G10 L2 P4 X5\n"
+                            "G0 Z5\n"
+                            "o100 endrepeat\n"
+                            "M30\n";
+  try {
+    rewrite_program(other, "p.ngc", constant(offset), options());
+    ADD_FAILURE() << "no error";
+  } catch (const GcodeError& e) {
+    EXPECT_EQ(e.where().line, 8) << e.what();
+    EXPECT_NE(std::string(e.what()).find("origin of a coordinate system not in use"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(RewriteExpansion, WhatAnExpansionCannotWriteIsRefusedNamingTheLoop) {
   const std::string output = kHead +
                              "o1 repeat [2]\n"

@@ -647,12 +647,22 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
         {file_of(program, c.context, name), c.context.line, 0},
         what + ", inside " + e.what + " (lines " + std::to_string(e.first_line) + "-" +
             std::to_string(e.last_line) + "), which the rewrite writes out move by move (" + e.why +
-            "): an expansion writes moves, feeds, dwells, planes, path modes, spindle, coolant, "
-            "G52/G92 offsets, outputs, override switches, stops, logs and comments only");
+            "): an expansion writes moves, feeds, dwells, planes, path modes, units, spindle, "
+            "coolant, work offsets, outputs, override switches, stops, logs and comments only");
   };
   // One call inside an expansion.
   // `cycle_end`: a canned cycle's move, written to that end (program units).
   long last_expanded_block = -1;  // the block of the last other call written
+  // A SET_G5X_OFFSET written inside an expansion, until its block's
+  // SET_XY_ROTATION tells a selection (with SET_G92_OFFSET) from a G10 L2.
+  struct OpenG5x {
+    long block = -1;
+    size_t written_at = 0;  // its line in the expansion's moves
+    int index = 0;
+    Axes6 offset;
+    bool with_g92 = false;
+  };
+  OpenG5x g5x_open;
   auto expand_call = [&](const CanonCall& c, const Axes6* cycle_end = nullptr) {
     const CallContext& ctx = c.context;
     ex.incremental = ctx.incremental;
@@ -669,6 +679,10 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       if (std::holds_alternative<SetFeedRate>(c.op)) return;
       std::string text;
       if (const auto* m = std::get_if<Comment>(&c.op)) {
+        if (m->text == "interpreter: setting coordinate system origin")
+          throw expansion_error(c,
+                                "this line sets the origin of a coordinate system not in "
+                                "use (G10 L2/L20)");
         // The interpreter's own notes of a mode change come from the mode
         // words the expansion writes (G90, G91), not from a copy.
         if (is_interpreter_note(*m)) return;
@@ -763,6 +777,37 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
           return;
         }
         text = "M19 Q" + exact(w->timeout_s);
+      } else if (const auto* g5x = std::get_if<SetG5xOffset>(&c.op)) {
+        // G54 ... G59.3 make SET_G5X_OFFSET, SET_G92_OFFSET, SET_XY_ROTATION;
+        // G10 L2/L20 of the system in use SET_G5X_OFFSET, SET_XY_ROTATION.
+        // Written as the selection, made a G10 L2 below when no G92 call
+        // follows in the block.
+        static const char* const kSystems[] = {"G54", "G55",   "G56",   "G57",  "G58",
+                                               "G59", "G59.1", "G59.2", "G59.3"};
+        if (g5x->index < 1 || g5x->index > 9 || g5x->offset.b != 0)
+          throw expansion_error(c, "this line makes SET_G5X_OFFSET(" + std::to_string(g5x->index) +
+                                       ") with a B offset");
+        text = kSystems[g5x->index - 1];
+        g5x_open = {ctx.executed_block, pl.moves.size(), g5x->index, g5x->offset, false};
+      } else if (std::holds_alternative<SetG92Offset>(c.op) &&
+                 g5x_open.block == ctx.executed_block) {
+        g5x_open.with_g92 = true;  // the selection's own call
+        rl.others.push_back(format_rs274(c.op, check_format()));
+        return;
+      } else if (const auto* rot = std::get_if<SetXYRotation>(&c.op)) {
+        if (g5x_open.block != ctx.executed_block)
+          throw expansion_error(c, "this line makes SET_XY_ROTATION alone");
+        if (!g5x_open.with_g92) {
+          Axes6 unused;
+          pl.moves[g5x_open.written_at] = "G10 L2 P" + std::to_string(g5x_open.index) +
+                                          exact_words(g5x_open.offset, true, true, unused) + " R" +
+                                          exact(rot->degrees);
+        }
+        g5x_open = {};
+        rl.others.push_back(format_rs274(c.op, check_format()));
+        return;
+      } else if (const auto* u = std::get_if<UseLengthUnits>(&c.op)) {
+        text = u->units == LengthUnits::kInch ? "G20" : "G21";
       } else if (const auto* g92 = std::get_if<SetG92Offset>(&c.op)) {
         // G52, G92 and G92.1-G92.3 make SET_G92_OFFSET with the offset now
         // in force: written as the G52 that sets it on every axis (the moves
