@@ -528,11 +528,47 @@ TEST(RewriteExpansion, WorkOffsetsAndUnitsInALoopAreWrittenWhereTheyCame) {
   }
 }
 
+// Two tools in turn inside a loop, with G43, G43.1, G43.2 and G49: the
+// changes and offsets written where they came, each tool's feeds corrected
+// with its own length offset in force (issue 22 point 5).
+TEST(RewriteExpansion, ToolChangesAndLengthOffsetsInALoopAreWrittenWhereTheyCame) {
+  const std::string program = kHead +
+                              "o100 repeat [2]\n"
+                              "T1 M6\n"
+                              "G43 H1\n"
+                              "S8000 M3\n"
+                              "G0 X0 Y0 Z5\n"
+                              "G1 Z-1 F100\n"
+                              "G1 X6 F300\n"
+                              "G0 Z5\n"
+                              "T2 M6\n"
+                              "G43 H2\n"
+                              "G43.1 Z41.5\n"
+                              "M3\n"
+                              "G1 Z-1 F100\n"
+                              "G1 Y6 F300\n"
+                              "G43.2 H1\n"
+                              "G0 Z80\n"
+                              "G49\n"
+                              "M61 Q2\n"
+                              "G43 H0\n"
+                              "G0 Z5\n"
+                              "o100 endrepeat\n"
+                              "M30\n";
+  const V offset(0.02, -0.01, 0.015);
+  expect_rewritten_shifted(program, offset);
+  const RewriteResult r = rewrite_program(program, "p.ngc", constant(offset), options());
+  EXPECT_EQ(r.summary.expansions, 1) << r.text;
+  for (const char* line : {"\nT1\nM6\nG43.1 X0 Y0 Z35 A0 C0\n", "\nG43.1 X0 Y0 Z41.5 A0 C0\n",
+                           "\nG43.1 X0 Y0 Z76.5 A0 C0\n", "\nG49\nM61 Q2\nG43.1 X0 Y0 Z40 A0 C0\n"})
+    EXPECT_NE(r.text.find(line), std::string::npos) << line << "\n" << r.text;
+}
+
 TEST(RewriteExpansion, WhatAnExpansionCannotWriteIsRefusedNamingTheLoop) {
   const std::string output = kHead +
                              "o1 repeat [2]\n"
                              "G1 Z-1 F100\n"
-                             "M61 Q1\n"
+                             "G38.2 Z-10 F50\n"
                              "G0 Z5\n"
                              "o1 endrepeat\n"
                              "M30\n";

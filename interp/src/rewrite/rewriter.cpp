@@ -647,8 +647,9 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
         {file_of(program, c.context, name), c.context.line, 0},
         what + ", inside " + e.what + " (lines " + std::to_string(e.first_line) + "-" +
             std::to_string(e.last_line) + "), which the rewrite writes out move by move (" + e.why +
-            "): an expansion writes moves, feeds, dwells, planes, path modes, units, spindle, "
-            "coolant, work offsets, outputs, override switches, stops, logs and comments only");
+            "): an expansion writes moves, feeds, dwells, planes, path modes, units, tool "
+            "changes and length offsets, spindle, coolant, work offsets, outputs, override "
+            "switches, stops, logs and comments only");
   };
   // One call inside an expansion.
   // `cycle_end`: a canned cycle's move, written to that end (program units).
@@ -663,6 +664,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     bool with_g92 = false;
   };
   OpenG5x g5x_open;
+  long m6_block = -1;  // the block of the last M6 written inside an expansion
   auto expand_call = [&](const CanonCall& c, const Axes6* cycle_end = nullptr) {
     const CallContext& ctx = c.context;
     ex.incremental = ctx.incremental;
@@ -677,6 +679,11 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     }
     if (!is_motion(c.op)) {
       if (std::holds_alternative<SetFeedRate>(c.op)) return;
+      if ((std::holds_alternative<StopSpindle>(c.op) || std::holds_alternative<ChangeTool>(c.op)) &&
+          m6_block == ctx.executed_block) {
+        rl.others.push_back(format_rs274(c.op, check_format()));  // the M6 written makes it
+        return;
+      }
       std::string text;
       if (const auto* m = std::get_if<Comment>(&c.op)) {
         if (m->text == "interpreter: setting coordinate system origin")
@@ -806,6 +813,23 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
         g5x_open = {};
         rl.others.push_back(format_rs274(c.op, check_format()));
         return;
+      } else if (const auto* t = std::get_if<SelectTool>(&c.op)) {
+        text = "T" + std::to_string(t->tool);
+      } else if (std::holds_alternative<StartChange>(c.op)) {
+        // M6 makes START_CHANGE, STOP_SPINDLE_TURNING, CHANGE_TOOL.
+        text = "M6";
+        m6_block = ctx.executed_block;
+      } else if (const auto* n = std::get_if<ChangeToolNumber>(&c.op)) {
+        text = "M61 Q" + std::to_string(n->tool);
+      } else if (const auto* tlo = std::get_if<UseToolLengthOffset>(&c.op)) {
+        // G43 H, G43.1, G43.2 and G49 make USE_TOOL_LENGTH_OFFSET with the
+        // offsets now in force: written as the G43.1 that sets them all
+        // (G49 when they are zero).
+        if (tlo->offset.b != 0)
+          throw expansion_error(c, "this line makes USE_TOOL_LENGTH_OFFSET with a B offset");
+        Axes6 unused;
+        text = tlo->offset == Axes6{} ? std::string("G49")
+                                      : "G43.1" + exact_words(tlo->offset, true, true, unused);
       } else if (const auto* u = std::get_if<UseLengthUnits>(&c.op)) {
         text = u->units == LengthUnits::kInch ? "G20" : "G21";
       } else if (const auto* g92 = std::get_if<SetG92Offset>(&c.op)) {

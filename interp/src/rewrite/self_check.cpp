@@ -198,8 +198,17 @@ void check_rewrite(const std::string& text, const CheckInput& in) {
       continue;
     }
     if (rw.last_line > 0) {
-      if (others_out[line] != rw.others)
-        fail(line, "the expanded lines do not make the original's dwells, planes and comments");
+      if (const std::vector<std::string>& made = others_out[line]; made != rw.others) {
+        // The first call that differs, as rs274 prints it.
+        size_t k = 0;
+        while (k < made.size() && k < rw.others.size() && made[k] == rw.others[k])
+          ++k;
+        const std::string want = k < rw.others.size() ? rw.others[k] : "nothing more";
+        const std::string have = k < made.size() ? made[k] : "nothing more";
+        fail(line, "the expanded lines do not make the original's calls other than moves: " + have +
+                       " where the original makes " + want + " (call " + std::to_string(k + 1) +
+                       " of them)");
+      }
       if (got != rw.expected.size())
         fail(line, std::to_string(got) + " moves from the expanded lines, expected " +
                        std::to_string(rw.expected.size()));
