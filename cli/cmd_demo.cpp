@@ -16,6 +16,7 @@
 #include "truecut/analysis/report/closed_loop_report.hpp"
 #include "truecut/rt/atomic_write.hpp"
 #include "truecut/sim/part_file.hpp"
+#include "truecut/sim/soft_cnc_outputs.hpp"
 
 namespace truecut::cli {
 namespace {
@@ -181,7 +182,7 @@ int cmd_demo(const std::vector<std::string>& argv) {
     pj["wall_s"] = r.wall_s;
     double reference_rms = 0;
     for (const auto& st : r.stages) {
-      rp.stages.push_back({st.key, st.title, st.dir / "machined.stl", st.cmm});
+      rp.stages.push_back({st.key, st.title, st.dir / sim::kMachinedStl, st.cmm});
       const auto stats = analysis::report::judged_statistics(st.cmm, rp.surfaces);
       const auto& all = stats.back();
       if (st.key == "uncompensated") reference_rms = all.rms_um;

@@ -19,6 +19,7 @@
 #include "truecut/rt/input_file.hpp"
 #include "truecut/sim/machine_description.hpp"
 #include "truecut/sim/soft_cnc.hpp"
+#include "truecut/sim/soft_cnc_outputs.hpp"
 
 namespace truecut::cli {
 namespace {
@@ -114,7 +115,9 @@ std::vector<fs::path> job_inputs(const sim::SoftCncJob& job) {
 // The run's own outputs must not replace what it reads (`--out` the part's
 // folder with `--nominal` named machined.stl, say).
 void refuse_outputs_over_inputs(const sim::SoftCncJob& job) {
-  for (const char* name : {"machined.stl", "machined.ply", "trace.csv", "soft_cnc.hal", "run.ini"})
+  for (const char* name : sim::kSoftCncOutputs) {
+    // The field's copy (for swaps) over the field itself is the same bytes.
+    if (name == sim::kFieldCopy) continue;
     for (const fs::path& input : job_inputs(job)) {
       std::error_code ec;
       if (fs::equivalent(job.out_dir / name, input, ec) && !ec)
@@ -122,6 +125,7 @@ void refuse_outputs_over_inputs(const sim::SoftCncJob& job) {
                          " there, which is the input " + input.string() +
                          "; choose another folder");
     }
+  }
 }
 
 // A field that corrected nothing of the cut: at every service point at
@@ -300,7 +304,7 @@ int run_machine(const std::vector<std::string>& argv) {
                  job.max_correction_mm, r.clamped_cycles, job.field->string().c_str());
   std::printf("  output      %s/{machined.stl,machined.ply,trace.csv,soft_cnc.hal,run.ini}\n",
               job.out_dir.string().c_str());
-  if (!measure_machined_part(measure, job.out_dir / "machined.stl")) return kExitFailure;
+  if (!measure_machined_part(measure, job.out_dir / sim::kMachinedStl)) return kExitFailure;
   return kExitOk;
 }
 

@@ -6,15 +6,12 @@
 
 #include "truecut/offline/mesh_io.hpp"
 #include "truecut/sim/part_file.hpp"
+#include "truecut/sim/soft_cnc_outputs.hpp"
 
 namespace truecut::cli {
 namespace {
 
 namespace fs = std::filesystem;
-
-// What the run itself writes into its folder.
-constexpr const char* kRunOutputs[] = {"machined.stl", "machined.ply", "trace.csv",
-                                       "soft_cnc.hal", "run.ini",      "field.tcf"};
 
 // NAME inside the run's folder: no absolute path, no '..' (the run writes
 // only into --out, as the recorder's file= does).
@@ -33,7 +30,7 @@ fs::path output_file(const std::string& option, const std::string& given, const 
                      const std::vector<fs::path>& inputs) {
   require_inside_out_dir(option, given);
   const fs::path file = out_dir / given;
-  for (const char* name : kRunOutputs)
+  for (const char* name : sim::kSoftCncOutputs)
     if (fs::absolute(file).lexically_normal() == fs::absolute(out_dir / name).lexically_normal())
       throw UsageError("--" + option + " " + given + ": the run writes " + name + " itself");
   for (const fs::path& input : inputs) {

@@ -12,6 +12,7 @@
 #include "truecut/offline/ply_io.hpp"
 #include "truecut/offline/stl_io.hpp"
 #include "truecut/sim/cutting/dexel_model.hpp"
+#include "truecut/sim/soft_cnc_outputs.hpp"
 
 namespace truecut::sim::cutting {
 
@@ -299,8 +300,8 @@ void DexelModel::write_machined(const std::filesystem::path& dir,
   const offline::TriangleMesh mesh = machined_mesh();
   const std::string text =
       comment.empty() ? std::string("truecut machined surface, workpiece frame, mm") : comment;
-  offline::write_stl(dir / "machined.stl", mesh, offline::StlEncoding::kBinary, text.substr(0, 80));
-  offline::write_ply(dir / "machined.ply", mesh, offline::PlyEncoding::kBinaryLittleEndian, text);
+  offline::write_stl(dir / kMachinedStl, mesh, offline::StlEncoding::kBinary, text.substr(0, 80));
+  offline::write_ply(dir / kMachinedPly, mesh, offline::PlyEncoding::kBinaryLittleEndian, text);
 }
 
 double DexelModel::removed_total_mm3() const {

@@ -24,6 +24,7 @@
 #include "truecut/sim/measure/part_surfaces.hpp"
 #include "truecut/sim/part_file.hpp"
 #include "truecut/sim/soft_cnc.hpp"
+#include "truecut/sim/soft_cnc_outputs.hpp"
 
 namespace truecut::analysis::diagnosis {
 
@@ -140,14 +141,14 @@ class Machinist {
       options_.progress("re-machining (" + why + "): reused " + dir.string());
     }
     Run run;
-    const auto mesh = offline::read_stl(dir / "machined.stl");
+    const auto mesh = offline::read_stl(dir / sim::kMachinedStl);
     sim::measure::CmmOptions o;
     o.sigma_mm = 0.0;
     const auto probed = sim::measure::probe(mesh, points_, o);
     run.deviation_mm.reserve(probed.size());
     for (const auto& p : probed)
       run.deviation_mm.push_back(p.valid ? p.deviation_mm : kNaN);
-    rotary_ranges(dir / "trace.csv", run);
+    rotary_ranges(dir / sim::kTraceCsv, run);
     return run;
   }
   int runs() const { return runs_; }

@@ -16,6 +16,7 @@
 #include "truecut/rt/interrupt_cleanup.hpp"
 #include "truecut/sim/program_travel.hpp"
 #include "truecut/sim/soft_cnc.hpp"
+#include "truecut/sim/soft_cnc_outputs.hpp"
 
 namespace truecut::sim {
 namespace {
@@ -122,7 +123,7 @@ SoftCncResult run_soft_cnc(const SoftCncJob& given, const SoftCncProgress& progr
   const bool dir_created = !fs::exists(given.out_dir);
   fs::create_directories(given.out_dir);
   SoftCncJob job = given;
-  const fs::path hal_file = job.out_dir / "soft_cnc.hal", ini_file = job.out_dir / "run.ini";
+  const fs::path hal_file = job.out_dir / kSoftCncHal, ini_file = job.out_dir / kRunIni;
   std::vector<fs::path> written;
   // The wiring and its INI belong to the run's outputs: a run ended by a
   // signal removes them as it removes trace.csv.tmp.
@@ -136,7 +137,7 @@ SoftCncResult run_soft_cnc(const SoftCncJob& given, const SoftCncProgress& progr
   rt::hal::Hal h(options);
   try {
     if (!job.field_swaps.empty()) {
-      job.field = job.out_dir / "field.tcf";
+      job.field = job.out_dir / kFieldCopy;
       written.push_back(*job.field);
       rt::copy_file_atomically(*given.field, *job.field);
     }
