@@ -306,10 +306,17 @@ ParameterRef read_parameter_ref(Cursor& c, const Parameters& params) {
     ref.name = read_name(c);
     return ref;
   }
+  // `###1` is #(#(#1)): each '#' reads a value as deep as a bracket does,
+  // and counts against the same limit (a chain of 4000 overflowed the stack).
+  if (++c.nesting > kMaxExpressionNesting)
+    c.fail_at(ref.at, "parameter reference nested deeper than " +
+                          std::to_string(kMaxExpressionNesting) +
+                          " (brackets and '#' of '#' together)");
   const size_t at = c.pos;
   int index = read_integer_value(c, params);
   if (!Parameters::valid_index(index))
     c.fail_at(at, "parameter number #" + std::to_string(index) + " out of range (1..5601)");
+  --c.nesting;
   ref.index = index;
   return ref;
 }

@@ -137,6 +137,24 @@ TEST(Expressions, NestingDeeperThanTheLimitIsRefusedAtTheBracket) {
   EXPECT_DOUBLE_EQ(2, eval(std::string(limit, '[') + "2" + std::string(limit, ']')));
 }
 
+// Found by fuzz_expression (2026-12-02): a chain of 4000 '#' (each reads the
+// number of the next parameter) overflowed the stack; it counts against the
+// bracket limit now, and so does a chain that mixes both.
+TEST(Expressions, AParameterChainDeeperThanTheLimitIsRefusedAtItsHash) {
+  constexpr int kMaxExpressionNesting = 1000;  // docs/gcode.md, "Limits"
+  const auto e = error_of("G0 X" + std::string(50000, '#') + "1\nM2\n");
+  EXPECT_EQ(1, e.where().line);
+  EXPECT_EQ(4 + kMaxExpressionNesting + 1, e.where().column);  // the 1001st '#'
+  EXPECT_NE(std::string::npos, e.message().find("nested deeper than 1000")) << e.message();
+  std::string mixed;
+  for (int i = 0; i < 20000; ++i)
+    mixed += i % 2 ? "[" : "#";
+  const auto m = error_of("G0 X" + mixed + "1\nM2\n");
+  EXPECT_EQ(4 + kMaxExpressionNesting + 1, m.where().column) << m.message();
+  // At the limit the chain is read: #1 = 1, so every #...#1 is 1.
+  EXPECT_DOUBLE_EQ(1, eval(std::string(kMaxExpressionNesting, '#') + "1", "#1 = 1\n"));
+}
+
 TEST(Expressions, OverflowIsRefusedWhereItArises) {
   struct Case {
     const char* program;
