@@ -582,6 +582,23 @@ TEST(RewriteExpansion, WhatAnExpansionCannotWriteIsRefusedNamingTheLoop) {
         << msg;
     EXPECT_NE(msg.find("run more than once"), std::string::npos) << msg;
   }
+  // A tapping cycle in a loop switches the overrides itself: not written out
+  // as M50/M51 around plain feeds (a tap needs the cycle), refused by name.
+  const std::string tapping = kHead +
+                              "S500 M3\n"
+                              "o100 repeat [2]\n"
+                              "G1 Z1 F100\n"
+                              "G84 X5 Y5 Z-3 R1 F50\n"
+                              "G80\n"
+                              "o100 endrepeat\n"
+                              "M30\n";
+  try {
+    rewrite_program(tapping, "p.ngc", constant(V(0.01, 0, 0)), options());
+    ADD_FAILURE() << "no error";
+  } catch (const GcodeError& e) {
+    EXPECT_EQ(e.where().line, 9) << e.what();
+    EXPECT_NE(std::string(e.what()).find("DISABLE_FEED_OVERRIDE"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
