@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <random>
 #include <string>
 #include <vector>
@@ -61,6 +62,17 @@ void expect_rewritten_shifted(const std::string& program, const V& offset) {
   } catch (const GcodeError& e) {
     ADD_FAILURE() << e.what();
   }
+}
+
+// The program written out as one expansion, its moves shifted by `offset`
+// (expect_rewritten_shifted), with each of `lines` in the new text.
+void expect_one_expansion_with(const std::string& program, const V& offset,
+                               std::initializer_list<const char*> lines) {
+  expect_rewritten_shifted(program, offset);
+  const RewriteResult r = rewrite_program(program, "p.ngc", constant(offset), options());
+  EXPECT_EQ(r.summary.expansions, 1) << r.text;
+  for (const char* line : lines)
+    EXPECT_NE(r.text.find(line), std::string::npos) << line << "\n" << r.text;
 }
 
 const std::string kHead = "G21 G17 G90 G94\nT2 M6\nG43 H2\nG0 X0 Y0 Z5\n(OPERATION: POCKET)\n";
@@ -417,13 +429,10 @@ TEST(RewriteExpansion, OutputsOverridesStopsAndLogsInALoopComeWhereTheyDid) {
                               "(LOGCLOSE)\n"
                               "M30\n";
   const V offset(0.02, -0.01, 0.015);
-  expect_rewritten_shifted(program, offset);
-  const RewriteResult r = rewrite_program(program, "p.ngc", constant(offset), options());
-  EXPECT_EQ(r.summary.expansions, 1) << r.text;
-  for (const char* line : {"M62 P1\nG1 X0.020000 Y-0.010000 Z4.515000 F100", "M67 E2 Q5\n",
-                           "M68 E0 Q-1.25\n", "(LOG,pass 2.000000 at x 12.000000)\n",
-                           "M19 R92 P1 Q2\n", "M19 Q0.5\n", "M50 P1\nM51 P1\n"})
-    EXPECT_NE(r.text.find(line), std::string::npos) << line << "\n" << r.text;
+  expect_one_expansion_with(program, offset,
+                            {"M62 P1\nG1 X0.020000 Y-0.010000 Z4.515000 F100", "M67 E2 Q5\n",
+                             "M68 E0 Q-1.25\n", "(LOG,pass 2.000000 at x 12.000000)\n",
+                             "M19 R92 P1 Q2\n", "M19 Q0.5\n", "M50 P1\nM51 P1\n"});
 }
 
 // A grid of parts from one subroutine, each under its own G52 local offset,
@@ -448,10 +457,7 @@ TEST(RewriteExpansion, LocalOffsetsInALoopAreWrittenAsTheG52TheyGive) {
                            "G0 X1 Y1\n"
                            "M30\n";
   const V offset(0.02, -0.01, 0.015);
-  expect_rewritten_shifted(grid, offset);
-  const RewriteResult r = rewrite_program(grid, "p.ngc", constant(offset), options());
-  EXPECT_EQ(r.summary.expansions, 1) << r.text;
-  EXPECT_NE(r.text.find("G52 X40 Y10 Z0 A0 C0\n"), std::string::npos) << r.text;
+  expect_one_expansion_with(grid, offset, {"G52 X40 Y10 Z0 A0 C0\n"});
 
   const std::string g92 = kHead +
                           "o100 repeat [2]\n"
@@ -502,11 +508,8 @@ TEST(RewriteExpansion, WorkOffsetsAndUnitsInALoopAreWrittenWhereTheyCame) {
                               "o100 endwhile\n"
                               "G0 X0 Y0\n"
                               "M30\n";
-  expect_rewritten_shifted(program, offset);
-  const RewriteResult r = rewrite_program(program, "p.ngc", constant(offset), options());
-  EXPECT_EQ(r.summary.expansions, 1) << r.text;
-  for (const char* line : {"\nG55\n", "\nG56\n", "\nG10 L2 P3 X42 Y1 Z-1 A0 C0 R4\n", "\nG20\n"})
-    EXPECT_NE(r.text.find(line), std::string::npos) << line << "\n" << r.text;
+  expect_one_expansion_with(program, offset,
+                            {"\nG55\n", "\nG56\n", "\nG10 L2 P3 X42 Y1 Z-1 A0 C0 R4\n", "\nG20\n"});
 
   // G10 L2 of a system not in use: its values are only parameters, which an
   // expansion does not see; refused at its line, naming it.
@@ -556,12 +559,10 @@ TEST(RewriteExpansion, ToolChangesAndLengthOffsetsInALoopAreWrittenWhereTheyCame
                               "o100 endrepeat\n"
                               "M30\n";
   const V offset(0.02, -0.01, 0.015);
-  expect_rewritten_shifted(program, offset);
-  const RewriteResult r = rewrite_program(program, "p.ngc", constant(offset), options());
-  EXPECT_EQ(r.summary.expansions, 1) << r.text;
-  for (const char* line : {"\nT1\nM6\nG43.1 X0 Y0 Z35 A0 C0\n", "\nG43.1 X0 Y0 Z41.5 A0 C0\n",
-                           "\nG43.1 X0 Y0 Z76.5 A0 C0\n", "\nG49\nM61 Q2\nG43.1 X0 Y0 Z40 A0 C0\n"})
-    EXPECT_NE(r.text.find(line), std::string::npos) << line << "\n" << r.text;
+  expect_one_expansion_with(
+      program, offset,
+      {"\nT1\nM6\nG43.1 X0 Y0 Z35 A0 C0\n", "\nG43.1 X0 Y0 Z41.5 A0 C0\n",
+       "\nG43.1 X0 Y0 Z76.5 A0 C0\n", "\nG49\nM61 Q2\nG43.1 X0 Y0 Z40 A0 C0\n"});
 }
 
 TEST(RewriteExpansion, WhatAnExpansionCannotWriteIsRefusedNamingTheLoop) {
