@@ -625,7 +625,12 @@ void BlockExecutor::coord_system_data() {
     out_.emit(SetG5xOffset{s_.coord_index, s_.to_program(s_.g5x_mm)});
     out_.emit(SetXYRotation{s_.rotation_deg});
   } else {
-    out_.emit_now(Comment{"interpreter: setting coordinate system origin"});
+    Comment note{"interpreter: setting coordinate system origin"};
+    note.sets_system = index;
+    for (int i = 0; i < 6; ++i)
+      note.system_origin[i] = s_.to_program(i, s_.from_param(i, params_.get(base + i)));
+    note.system_rotation_deg = params_.get(base + kCoordSystemRotation);
+    out_.emit_now(std::move(note));
   }
 }
 

@@ -510,25 +510,40 @@ TEST(RewriteExpansion, WorkOffsetsAndUnitsInALoopAreWrittenWhereTheyCame) {
                               "M30\n";
   expect_one_expansion_with(program, offset,
                             {"\nG55\n", "\nG56\n", "\nG10 L2 P3 X42 Y1 Z-1 A0 C0 R4\n", "\nG20\n"});
+}
 
-  // G10 L2 of a system not in use: its values are only parameters, which an
-  // expansion does not see; refused at its line, naming it.
-  const std::string other = kHead +
-                            "o100 repeat [2]\n"
-                            "G1 Z-1 F100\n"
-                            "G10 L2 P4 X5\n"
-                            "G0 Z5\n"
-                            "o100 endrepeat\n"
-                            "M30\n";
-  try {
-    rewrite_program(other, "p.ngc", constant(offset), options());
-    ADD_FAILURE() << "no error";
-  } catch (const GcodeError& e) {
-    EXPECT_EQ(e.where().line, 8) << e.what();
-    EXPECT_NE(std::string(e.what()).find("origin of a coordinate system not in use"),
-              std::string::npos)
-        << e.what();
-  }
+// G10 L2 and L20 of systems not in use inside a loop, each pass then cutting
+// in the system it set (and the one set last selected again after the loop):
+// the interpreter's COMMENT carries the origin each G10 gave, written as the
+// G10 L2 that gives it (issue 22 point 5; these were refused before).
+TEST(RewriteExpansion, OriginsOfSystemsNotInUseSetInALoopAreWrittenAsG10L2) {
+  const V offset(0.02, -0.01, 0.015);
+  const std::string program = kHead +
+                              "#1 = 0\n"
+                              "o100 while [#1 lt 2]\n"
+                              "G10 L2 P4 X[30 * #1 + 10] Y2 R[5 * #1]\n"
+                              "G0 X3 Y4\n"
+                              "G10 L20 P5 X1 Y[#1]\n"
+                              "G57\n"
+                              "G0 X0 Y0\n"
+                              "G1 Z-1 F100\n"
+                              "G1 X6 F300\n"
+                              "G0 Z5\n"
+                              "G58\n"
+                              "G1 X2 Y2 F300\n"
+                              "G54\n"
+                              "G0 X0 Y0\n"
+                              "#1 = [#1 + 1]\n"
+                              "o100 endwhile\n"
+                              "G58\n"
+                              "G0 X1 Y1\n"
+                              "G54\n"
+                              "M30\n";
+  // Second pass: G54 origin 0, tool at G54 (3, 4) when G10 L20 P5 X1 Y1
+  // puts G58's origin at (2, 3).
+  expect_one_expansion_with(
+      program, offset,
+      {"\nG10 L2 P4 X40 Y2 Z0 A0 C0 R5\n", "\nG10 L2 P5 X2 Y3 Z", "\nG57\n", "\nG58\n"});
 }
 
 // Two tools in turn inside a loop, with G43, G43.1, G43.2 and G49: the

@@ -694,10 +694,21 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       }
       std::string text;
       if (const auto* m = std::get_if<Comment>(&c.op)) {
-        if (m->text == "interpreter: setting coordinate system origin")
-          throw expansion_error(c,
-                                "this line sets the origin of a coordinate system not in "
-                                "use (G10 L2/L20)");
+        if (m->sets_system != 0) {
+          // G10 L2/L20 of a system not in use: written as the G10 L2 that
+          // gives that system the origin and rotation the original gave it.
+          if (m->sets_system > 9 || m->system_origin.b != 0)
+            throw expansion_error(c, "this line sets the origin of coordinate system " +
+                                         std::to_string(m->sets_system) + " with a B offset");
+          Axes6 unused;
+          pl.moves.push_back("G10 L2 P" + std::to_string(m->sets_system) +
+                             exact_words(m->system_origin, true, true, unused) + " R" +
+                             exact(m->system_rotation_deg));
+          // Its COMMENT is an interpreter note, which the self-check does not
+          // compare; the selection of that system later does.
+          last_expanded_block = ctx.executed_block;
+          return;
+        }
         // The interpreter's own notes of a mode change come from the mode
         // words the expansion writes (G90, G91), not from a copy.
         if (is_interpreter_note(*m)) return;

@@ -223,6 +223,13 @@ struct Coolant {
 // Program flow and text.
 struct Comment {
   std::string text;
+  // G10 L2/L20 of a system not in use makes only rs274's comment "interpreter:
+  // setting coordinate system origin"; truecut also carries the system and
+  // the origin it now has (program units, as SET_G5X_OFFSET, and its
+  // rotation), which the canon text does not print.
+  int sets_system = 0;  // 1..9 (G54..G59.3), 0: none
+  Axes6 system_origin{};
+  double system_rotation_deg = 0;
 };
 struct Message {  // (MSG, ...)
   std::string text;

@@ -37,6 +37,10 @@ struct PathPiece {
 };
 
 Vec5 evaluate(const PathPiece& piece, double u) noexcept;
+// The point at u + du, with du's share of an arc's angle kept apart from u's:
+// u + du keeps 16 digits, so far along an arc of many turns (u of 6e8 mm,
+// last digit 1e-7 mm) differences over a small du would read its rounding.
+Vec5 evaluate_near(const PathPiece& piece, double u, double du) noexcept;
 
 // A jerk-limited (S-curve) law s(t) in at most 7 phases of constant jerk.
 struct TimeLaw {
