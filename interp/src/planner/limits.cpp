@@ -22,6 +22,7 @@ struct Stencil {
   Joint5 d1, d2, d3;
 };
 
+// The joints at u + du (see evaluate_near); joints_at is du = 0.
 Joint5 joints_near(const Move& m, double u, double du, double w) {
   const MappedPoint mp = map_point(m.tcp, m.kinematics, w, evaluate_near(m.piece, u, du), {});
   return {mp.joints.x_mm, mp.joints.y_mm, mp.joints.z_mm, mp.joints.a_deg, mp.joints.c_deg};
@@ -56,8 +57,7 @@ double step_for(double span) {
 }  // namespace
 
 Joint5 joints_at(const Move& m, double u, double w) {
-  const MappedPoint mp = map_point(m.tcp, m.kinematics, w, evaluate(m.piece, u), {});
-  return {mp.joints.x_mm, mp.joints.y_mm, mp.joints.z_mm, mp.joints.a_deg, mp.joints.c_deg};
+  return joints_near(m, u, 0.0, w);
 }
 
 int stretches(const Move& m, double w) {
