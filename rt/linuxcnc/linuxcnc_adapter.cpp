@@ -80,6 +80,7 @@ struct tc_hal {
   };
   std::vector<Service> services;
   void* module_state = nullptr;
+  std::atomic<bool> cycles_ran{false};  // a LinuxCNC thread has called a funct
 
   std::thread service_thread;
   std::mutex mutex;
@@ -140,6 +141,7 @@ void run_funct(void* arg, long period_ns) {
   for (const tc_hal::PinSlot& p : f.hal->pins)
     *p.comp_slot = *p.shm_slot;
   f.fn(f.arg, period_ns);
+  f.hal->cycles_ran.store(true, std::memory_order_relaxed);
 }
 
 int api_funct_new(tc_hal_t* hal, int comp_id, const char* name, tc_hal_funct_t funct, void* arg,
@@ -215,6 +217,10 @@ int api_pending_file_add(tc_hal_t*, const char*) {
 
 void api_pending_file_done(tc_hal_t*, int) {}
 
+int api_cycles_ran(tc_hal_t* hal) {
+  return hal->cycles_ran.load(std::memory_order_relaxed) ? 1 : 0;
+}
+
 const tc_hal_api_t kApi = {
     TC_HAL_ABI_VERSION,
     sizeof(tc_hal_api_t),
@@ -232,6 +238,7 @@ const tc_hal_api_t kApi = {
     api_background_service_new,
     api_pending_file_add,
     api_pending_file_done,
+    api_cycles_ran,
 };
 
 void run_services(tc_hal_t* hal) {

@@ -119,6 +119,7 @@ struct Executor::Impl {
     s.stats->compute.add(compute);
     s.stats->cycles++;
     s.next_ns += th.period_ns;
+    st.cycles_ran.store(true, std::memory_order_relaxed);
     return compute;
   }
 

@@ -192,6 +192,10 @@ void api_pending_file_done(tc_hal* hal, int handle) {
   hal->pending_files.erase(it);
 }
 
+int api_cycles_ran(tc_hal* hal) {
+  return hal->cycles_ran.load(std::memory_order_relaxed) ? 1 : 0;
+}
+
 const tc_hal_api_t kApi = {
     TC_HAL_ABI_VERSION,
     sizeof(tc_hal_api_t),
@@ -209,6 +213,7 @@ const tc_hal_api_t kApi = {
     api_background_service_new,
     api_pending_file_add,
     api_pending_file_done,
+    api_cycles_ran,
 };
 
 }  // namespace

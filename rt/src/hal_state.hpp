@@ -118,9 +118,10 @@ struct tc_hal {
   std::vector<truecut::rt::hal::detail::Module> modules;  // load order
   std::vector<std::unique_ptr<unsigned char[]>> allocations;
   std::atomic<bool> stop{false};
-  std::atomic<int> error_messages{0};  // api_message calls at TC_HAL_MSG_ERR (any thread)
-  bool unloaded = false;               // the modules' exit functions have run
-  bool threads_loaded = false;         // `loadrt threads` ran (LinuxCNC loads it once)
+  std::atomic<int> error_messages{0};   // api_message calls at TC_HAL_MSG_ERR (any thread)
+  bool unloaded = false;                // the modules' exit functions have run
+  bool threads_loaded = false;          // `loadrt threads` ran (LinuxCNC loads it once)
+  std::atomic<bool> cycles_ran{false};  // a thread has run a cycle (api cycles_ran)
   // Components' temporary files (pending_file_add), removed on a signal by
   // this process's handler; registered from exit or from any service thread.
   std::mutex pending_files_mutex;

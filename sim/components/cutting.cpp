@@ -27,7 +27,8 @@
 // default) a tool instance is placed only where the swept solid needs one
 // (swept_cut.hpp), with sampling=cycle at every cycle's pose. On exit the
 // pending motion is cut and the machined surface is written to
-// OUT/machined.stl and OUT/machined.ply. threads=N (default 0: one per
+// OUT/machined.stl and OUT/machined.ply (nothing when no cycle ran: a dry
+// run, a load refused after this one). threads=N (default 0: one per
 // hardware thread) cuts each tool instance's grid rows on N threads (the
 // servo thread and N − 1 helpers the model starts); the result is the same
 // bit for bit for any N. max-dexels (default 10 million, at most 50
@@ -305,19 +306,26 @@ extern "C" TC_COMPONENT_EXPORT void truecut_component_exit(const tc_hal_api_t* a
                                                            void* module_state) {
   std::unique_ptr<State> s(static_cast<State*>(module_state));
   if (!s) return;
+  // The surface of a run that never ran (a dry run, a load that another
+  // component or the host's checks refused) is the stock: not an output.
+  if (TC_HAL_API_HAS(api, cycles_ran) && api->cycles_ran(hal) == 0) {
+    api->message(hal, TC_HAL_MSG_INFO,
+                 (s->name + ": no cycle ran: machined.stl and machined.ply not written").c_str());
+    return;
+  }
   try {
     s->removed_total_mm3 += finish(*s).removed_mm3;
     std::filesystem::create_directories(s->out_dir);
     // machined.{stl,ply}.tmp go into the host's table of files to remove on
     // a signal: this library's own copy of it is not the one the host reads.
     const truecut::rt::PendingFilesToHost to_host(api, hal);
+    const auto t = s->model.thread_stats();  // of the cut, before the mesh's own job
     s->model.write_machined(s->out_dir);
     api->message(hal, TC_HAL_MSG_INFO,
                  (s->name + ": wrote machined.stl and machined.ply to " + s->out_dir.string() +
                   " (" + std::to_string(s->removed_total_mm3) + " mm³ removed)")
                      .c_str());
     // How the tool instances were shared with the helper threads.
-    const auto t = s->model.thread_stats();
     if (t.jobs > 0) {
       char line[256];
       std::snprintf(

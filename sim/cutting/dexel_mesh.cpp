@@ -13,6 +13,7 @@
 #include "truecut/offline/stl_io.hpp"
 #include "truecut/sim/cutting/dexel_model.hpp"
 #include "truecut/sim/soft_cnc_outputs.hpp"
+#include "worker_pool.hpp"
 
 namespace truecut::sim::cutting {
 
@@ -194,17 +195,32 @@ offline::TriangleMesh DexelModel::machined_mesh() const {
   auto edge_key = [](std::uint32_t a, std::uint32_t b) {
     return (std::uint64_t(std::min(a, b)) << 32) | std::max(a, b);
   };
-  // The vertices opposite each candidate edge (one or two triangles).
-  std::unordered_map<std::uint64_t, std::array<std::uint32_t, 2>> opposite;
-  for (const auto& t : triangles_)
-    for (int k = 0; k < 3; ++k)
-      if (candidate(t[k], t[(k + 1) % 3])) {
-        auto [it, added] =
-            opposite.try_emplace(edge_key(t[k], t[(k + 1) % 3]), std::array{kNoSplit, kNoSplit});
-        it->second[added ? 0 : 1] = t[(k + 2) % 3];
+  // The candidate edges, each once, in the order the triangles meet them
+  // (edge k of a triangle runs from its corner k to k + 1), with the
+  // vertices opposite each (one or two triangles); per triangle edge, its
+  // candidate's index or kNoSplit.
+  struct Candidate {
+    std::uint32_t a, b;  // a < b
+    std::array<std::uint32_t, 2> opposite{kNoSplit, kNoSplit};
+  };
+  std::vector<Candidate> candidates;
+  std::vector<std::uint32_t> edge_candidate(3 * triangles_.size(), kNoSplit);
+  {
+    std::unordered_map<std::uint64_t, std::uint32_t> index;
+    for (std::size_t t = 0; t < triangles_.size(); ++t)
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t a = triangles_[t][k], b = triangles_[t][(k + 1) % 3];
+        if (!candidate(a, b)) continue;
+        const auto [it, added] =
+            index.try_emplace(edge_key(a, b), static_cast<std::uint32_t>(candidates.size()));
+        if (added) candidates.push_back({std::min(a, b), std::max(a, b)});
+        candidates[it->second].opposite[added ? 0 : 1] = triangles_[t][(k + 2) % 3];
+        edge_candidate[3 * t + k] = it->second;
       }
-  std::unordered_map<std::uint64_t, std::uint32_t> split;
-  auto find_cusp = [&](std::uint32_t a, std::uint32_t b) -> std::uint32_t {
+  }
+  // The cusp of a candidate edge (a < b), if it has one.
+  auto find_cusp = [&](const Candidate& edge, Eigen::Vector3d& cusp_mm) -> bool {
+    const std::uint32_t a = edge.a, b = edge.b;
     const SweptSurface sa = swept(a), sb = swept(b);
     const Eigen::Vector3d pa = position_[a], dp = position_[b] - position_[a];
     auto line_at = [&](double s, Eigen::Vector3d& n) {
@@ -225,7 +241,7 @@ offline::TriangleMesh DexelModel::machined_mesh() const {
     constexpr double kAgree = 5e-4;
     if (!(std::abs(ha0 - line_[a].height) < kAgree && std::abs(hb1 - line_[b].height) < kAgree &&
           hb0 > ha0 + 1e-6 && ha1 > hb1 + 1e-6))
-      return kNoSplit;
+      return false;
     double lo = 0, hi = 1;
     for (int it = 0; it < 48; ++it) {
       const double mid = 0.5 * (lo + hi);
@@ -234,7 +250,7 @@ offline::TriangleMesh DexelModel::machined_mesh() const {
       (ha < hb ? lo : hi) = mid;
     }
     const double s = 0.5 * (lo + hi);
-    if (s < 0.05 || s > 0.95) return kNoSplit;
+    if (s < 0.05 || s > 0.95) return false;
     double ha, hb;
     heights(s, ha, hb);
     Eigen::Vector3d n;
@@ -242,7 +258,7 @@ offline::TriangleMesh DexelModel::machined_mesh() const {
     // Any other surface near the edge (of the vertices opposite it) that
     // passes lower bounds the cusp too.
     double ridge = std::min(ha, hb);
-    for (const std::uint32_t c : opposite.at(edge_key(a, b)))
+    for (const std::uint32_t c : edge.opposite)
       if (c != kNoSplit && sweep_kind_[c] != kSweptNone && on_line(c))
         ridge = std::min(ridge, entry(swept(c), x, n));
     const double straight = (1 - s) * line_[a].height + s * line_[b].height;
@@ -252,25 +268,56 @@ offline::TriangleMesh DexelModel::machined_mesh() const {
     constexpr double kMinRise = 5e-4;
     if (!(ridge > straight + kMinRise && ridge < straight + 0.5 * dp.norm() &&
           ridge < options_.max_stock_mm))
-      return kNoSplit;
-    mesh.vertices_mm.push_back(x + ridge * n);
-    return static_cast<std::uint32_t>(mesh.vertices_mm.size() - 1);
+      return false;
+    cusp_mm = x + ridge * n;
+    return true;
   };
-  auto cusp = [&](std::uint32_t a, std::uint32_t b) -> std::uint32_t {
-    if (!candidate(a, b)) return kNoSplit;
-    if (a > b) std::swap(a, b);
-    const auto [it, added] = split.try_emplace(edge_key(a, b), kNoSplit);
-    if (added) it->second = find_cusp(a, b);
-    return it->second;
+  // The bisections are independent: the model's cutting threads share them
+  // (half of the free-form's machined_mesh() on one thread), and the cusp
+  // vertices are then numbered in the candidates' order, whichever thread
+  // found them: the mesh is the same for any number of threads.
+  std::vector<Eigen::Vector3d> cusp_point(candidates.size());
+  std::vector<char> has_cusp(candidates.size(), 0);
+  constexpr std::uint32_t kCandidatesPerChunk = 1024;
+  const auto chunks = static_cast<std::uint32_t>((candidates.size() + kCandidatesPerChunk - 1) /
+                                                 kCandidatesPerChunk);
+  auto find_chunk = [&](std::uint32_t chunk) {
+    const std::size_t end =
+        std::min<std::size_t>(candidates.size(), std::size_t(chunk + 1) * kCandidatesPerChunk);
+    for (std::size_t i = std::size_t(chunk) * kCandidatesPerChunk; i < end; ++i)
+      has_cusp[i] = find_cusp(candidates[i], cusp_point[i]);
+  };
+  detail::WorkerPool* pool = threads_.get();
+  if (pool != nullptr && pool->threads() > 1 && chunks > 1) {
+    pool->run(
+        chunks,
+        [](void* context, std::uint32_t chunk, int) {
+          (*static_cast<decltype(find_chunk)*>(context))(chunk);
+        },
+        &find_chunk);
+  } else {
+    for (std::uint32_t c = 0; c < chunks; ++c)
+      find_chunk(c);
+  }
+  std::vector<std::uint32_t> cusp_vertex(candidates.size(), kNoSplit);
+  for (std::size_t i = 0; i < candidates.size(); ++i)
+    if (has_cusp[i]) {
+      cusp_vertex[i] = static_cast<std::uint32_t>(mesh.vertices_mm.size());
+      mesh.vertices_mm.push_back(cusp_point[i]);
+    }
+  auto cusp = [&](std::size_t t, int k) -> std::uint32_t {
+    const std::uint32_t c = edge_candidate[3 * t + k];
+    return c == kNoSplit ? kNoSplit : cusp_vertex[c];
   };
 
   // Relocated vertices can collapse a triangle; readers reject those (STL
   // stores float), so drop the ones that are degenerate in float.
   mesh.triangles.reserve(triangles_.size());
   std::vector<offline::Triangle> pieces;
-  for (const auto& t : triangles_) {
+  for (std::size_t ti = 0; ti < triangles_.size(); ++ti) {
+    const auto& t = triangles_[ti];
     const std::uint32_t c[3] = {t[0], t[1], t[2]};
-    const std::uint32_t m[3] = {cusp(t[0], t[1]), cusp(t[1], t[2]), cusp(t[2], t[0])};
+    const std::uint32_t m[3] = {cusp(ti, 0), cusp(ti, 1), cusp(ti, 2)};
     pieces.clear();
     emit_split(c, m, mesh.vertices_mm, pieces);
     const bool own = placed[t[0]] + placed[t[1]] + placed[t[2]] == 3 && on_line(t[0]) &&

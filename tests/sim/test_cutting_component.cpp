@@ -201,9 +201,12 @@ TEST(CuttingComponent, ItsTemporaryFilesAreInTheHostsTableWhileItWrites) {
   const std::size_t before = truecut::rt::pending_file_count();
   {
     Hal hal(opts(dir));
+    hal.new_thread("servo", 1'000'000);
     hal.load("cutting", cutting_init, cutting_exit,
              {"out=cut", "spacing=0.5", "nominal=" + (part / "nominal.stl").string(),
               "part=" + (part / "part.json").string()});
+    hal.add_function("cutting.0.update", "servo");
+    Executor(hal).step();  // a run of one cycle: its surface is an output
     EXPECT_EQ(0, hal.unload());
   }
   const auto out = std::filesystem::absolute(dir / "cut").lexically_normal();
@@ -215,4 +218,30 @@ TEST(CuttingComponent, ItsTemporaryFilesAreInTheHostsTableWhileItWrites) {
   EXPECT_TRUE(std::filesystem::exists(out / "machined.stl"));
   EXPECT_TRUE(std::filesystem::exists(out / "machined.ply"));
   dlclose(lib);
+}
+
+// A HAL whose threads never ran (a dry run, a load refused after this
+// component's) has machined nothing: no surface is written, and the
+// component says so.
+TEST(CuttingComponent, WritesNoSurfaceWhenNoCycleRan) {
+  const auto dir = truecut::test::scratch_dir();
+  const auto part = implant(dir);
+  std::string messages;
+  {
+    HalOptions o = opts(dir);
+    o.message_sink = [&](const std::string& line) { messages += line; };
+    Hal hal(o);
+    load_hal_text(hal,
+                  "loadrt threads name1=servo period1=1000000\n"
+                  "loadrt cutting names=cut out=machined spacing=0.5 nominal=" +
+                      (part / "nominal.stl").string() + " part=" + (part / "part.json").string() +
+                      "\naddf cut.update servo\n",
+                  "cut.hal");
+    EXPECT_EQ(0, hal.unload());
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "machined" / "machined.stl"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "machined" / "machined.ply"));
+  EXPECT_NE(std::string::npos,
+            messages.find("cut: no cycle ran: machined.stl and machined.ply not written"))
+      << messages;
 }

@@ -1,6 +1,6 @@
 // The cutting model gives the same result bit for bit whatever the number of
 // threads that cut (DexelOptions::threads): every call's engagement, every
-// dexel's height and the machined mesh.
+// dexel's height and the machined mesh (whose cusps the threads share).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -105,7 +105,10 @@ TEST(CuttingThreads, SameResultWhateverTheThreadCount) {
     for (std::size_t i = 0; i < models[0].size(); ++i)
       differing_heights += !same_bits(models[0].height_mm(i), models[t].height_mm(i));
     EXPECT_EQ(0u, differing_heights) << models[t].threads() << " threads";
+    // The cusps' bisections of the mesh are shared too (one job more).
     const auto a = models[0].machined_mesh(), b = models[t].machined_mesh();
+    EXPECT_EQ(stats.jobs + 1, models[t].thread_stats().jobs)
+        << "machined_mesh() shared its cusps between " << models[t].threads() << " threads";
     ASSERT_EQ(a.vertices_mm.size(), b.vertices_mm.size());
     ASSERT_EQ(a.triangles.size(), b.triangles.size());
     std::size_t differing_vertices = 0;

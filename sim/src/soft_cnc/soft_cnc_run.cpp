@@ -1,5 +1,6 @@
 // Runs a soft-CNC job: writes the wiring and its INI, loads, runs, shuts down.
 #include <algorithm>
+#include <future>
 #include <memory>
 #include <stdexcept>
 #include <vector>
@@ -64,13 +65,17 @@ void on_service(void* user, int64_t time_ns) {
   if (*hook.callback) (*hook.callback)(t_s, hook.program_s);
 }
 
-// The program as the planner component will interpret and plan it, checked
-// against the machine's travel before anything is written.
-// Also: positions no machine reaches, the planned time against the job's
-// budget, and the tools it cuts with against the field, part.json and the
-// tool table (program_checks.hpp).
-// Returns the tools the program cuts with (the field must have their layers).
-std::vector<int32_t> check_program(const SoftCncJob& job, const MachineDescription& machine) {
+// The program as the planner component will interpret it, checked before
+// anything is written: positions no machine reaches, a duration beyond the
+// job's budget, and the tools it cuts with against the field, part.json and
+// the tool table (program_checks.hpp). The planned path's own checks
+// (check_planned_path) follow.
+struct CheckedProgram {
+  interp::CanonProgram canon;
+  std::vector<int32_t> cutting_tools;  // the field must have their layers
+};
+
+CheckedProgram check_program(const SoftCncJob& job, const MachineDescription& machine) {
   try {
     interp::InterpreterOptions io;
     io.tools = interp::ToolTable::load(job.tools);
@@ -79,23 +84,32 @@ std::vector<int32_t> check_program(const SoftCncJob& job, const MachineDescripti
         job.parameters_in_inches ? interp::LengthUnits::kInch : interp::LengthUnits::kMm;
     io.parameters.units = units;  // as the planner component: units with or without a file
     if (job.parameters) io.parameters = interp::ParameterFile::load(*job.parameters, units);
-    const interp::CanonProgram canon = interp::Interpreter(io).run_file(job.program);
-    soft_cnc::check_program_positions(canon);
+    CheckedProgram checked{interp::Interpreter(io).run_file(job.program), {}};
+    soft_cnc::check_program_positions(checked.canon);
     const interp::PlannerOptions planner = soft_cnc_planner_options(job, machine);
-    soft_cnc::check_program_time_bound(canon, planner.start_joints, job.max_program_time_s);
-    const interp::Plan plan = interp::plan_program(canon, planner);
+    soft_cnc::check_program_time_bound(checked.canon, planner.start_joints, job.max_program_time_s);
+    const auto tools = soft_cnc::cutting_tools(checked.canon);
+    soft_cnc::check_part_tools(job.part, job.tools, io.tools, tools, job.program.string());
+    if (job.field) soft_cnc::check_field_layers(*job.field, tools, job.program.string());
+    for (const auto& [tool, line] : tools)
+      checked.cutting_tools.push_back(tool);
+    return checked;
+  } catch (const interp::GcodeError& e) {
+    throw SoftCncInputError(e.what());
+  }
+}
+
+// The planned program: its duration against the job's budget, and its path
+// against the machine's travel.
+void check_planned_path(const SoftCncJob& job, const MachineDescription& machine,
+                        const interp::CanonProgram& canon) {
+  try {
+    const interp::Plan plan = interp::plan_program(canon, soft_cnc_planner_options(job, machine));
     soft_cnc::check_planned_time(plan, job.program.string(), job.max_program_time_s);
     const ProgramTravel travel = program_travel(plan, machine.machine, job.program.string());
     if (!travel.inside())
       throw SoftCncInputError(travel.first_excursion->message + " (machine " +
                               job.machine.string() + ")");
-    const auto tools = soft_cnc::cutting_tools(canon);
-    soft_cnc::check_part_tools(job.part, job.tools, io.tools, tools, job.program.string());
-    if (job.field) soft_cnc::check_field_layers(*job.field, tools, job.program.string());
-    std::vector<int32_t> numbers;
-    for (const auto& [tool, line] : tools)
-      numbers.push_back(tool);
-    return numbers;
   } catch (const interp::GcodeError& e) {
     throw SoftCncInputError(e.what());
   }
@@ -119,9 +133,16 @@ SoftCncResult run_soft_cnc(const SoftCncJob& given, const SoftCncProgress& progr
   for (const auto& swap : given.field_swaps)
     if (!fs::is_regular_file(swap.field))
       throw std::runtime_error(swap.field.string() + ": no such file (field swap)");
-  const std::vector<int32_t> cutting_tools = check_program(given, machine);
+  const CheckedProgram checked = check_program(given, machine);
+  // Planning the program for the travel check takes as long as the planner
+  // component's own planning at load (half a second of the free-form's
+  // run): the two run side by side. A load the check then refuses is
+  // unloaded before any cycle has run, so the components write nothing
+  // (cycles_ran in hal_abi.h), and the wiring is removed as after a refused
+  // load.
+  std::future<void> path_check =
+      std::async(std::launch::async, [&] { check_planned_path(given, machine, checked.canon); });
   const bool dir_created = !fs::exists(given.out_dir);
-  fs::create_directories(given.out_dir);
   SoftCncJob job = given;
   const fs::path hal_file = job.out_dir / kSoftCncHal, ini_file = job.out_dir / kRunIni;
   std::vector<fs::path> written;
@@ -136,25 +157,36 @@ SoftCncResult run_soft_cnc(const SoftCncJob& given, const SoftCncProgress& progr
   SoftCncResult result;
   rt::hal::Hal h(options);
   try {
-    if (!job.field_swaps.empty()) {
-      job.field = job.out_dir / kFieldCopy;
-      written.push_back(*job.field);
-      rt::copy_file_atomically(*given.field, *job.field);
+    try {
+      fs::create_directories(given.out_dir);
+      if (!job.field_swaps.empty()) {
+        job.field = job.out_dir / kFieldCopy;
+        written.push_back(*job.field);
+        rt::copy_file_atomically(*given.field, *job.field);
+      }
+      written.push_back(hal_file);
+      rt::write_file_atomically(hal_file, soft_cnc_hal_text());
+      written.push_back(ini_file);
+      rt::write_file_atomically(ini_file, soft_cnc_ini_text(job, machine, checked.cutting_tools));
+      for (const fs::path& f : written)
+        interrupted_removes.push_back(std::make_unique<rt::PendingFile>(f));
+      const rt::hal::Ini ini = rt::hal::Ini::load(ini_file);
+      rt::hal::load_hal_file(h, hal_file, &ini);
+    } catch (...) {
+      // The check's refusal comes first: it would have been met before
+      // anything was loaded.
+      path_check.get();
+      throw;
     }
-    written.push_back(hal_file);
-    rt::write_file_atomically(hal_file, soft_cnc_hal_text());
-    written.push_back(ini_file);
-    rt::write_file_atomically(ini_file, soft_cnc_ini_text(job, machine, cutting_tools));
-    for (const fs::path& f : written)
-      interrupted_removes.push_back(std::make_unique<rt::PendingFile>(f));
-    const rt::hal::Ini ini = rt::hal::Ini::load(ini_file);
-    rt::hal::load_hal_file(h, hal_file, &ini);
+    path_check.get();
   } catch (const rt::hal::HalFileError& e) {
     // A component refused the job (its message names the file and key);
     // the wiring file it points to is removed with the rest.
+    h.unload();
     remove_written(written, job.out_dir, dir_created);
     throw SoftCncInputError(e.message());
   } catch (...) {
+    h.unload();
     remove_written(written, job.out_dir, dir_created);
     throw;
   }

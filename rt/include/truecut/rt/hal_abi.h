@@ -110,6 +110,13 @@ typedef struct tc_hal_api {
   int (*pending_file_add)(tc_hal_t* hal, const char* path);
   /* The file of `handle` is renamed or removed: no longer the host's to remove. */
   void (*pending_file_done)(tc_hal_t* hal, int handle);
+
+  /* Added later still (TC_HAL_API_HAS(api, cycles_ran)). Nonzero once a
+   * thread of this HAL has run a cycle; real-time safe. For exit: a
+   * component whose files describe what the run did (a machined surface)
+   * writes none when no cycle ran: a dry run, or a load that another
+   * component or the host's own checks refused. */
+  int (*cycles_ran)(tc_hal_t* hal);
 } tc_hal_api_t;
 
 /* True when the host's function table has the member `field`. */
