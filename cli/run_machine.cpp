@@ -279,6 +279,12 @@ int run_machine(const std::vector<std::string>& argv) {
   std::printf("truecut run %s %s\n", job.machine.string().c_str(), job.program.string().c_str());
   std::printf("  time        %.3f s machined in %.3f s wall (%.1fx real time)\n", r.simulated_s,
               r.wall_s, r.wall_s > 0 ? r.simulated_s / r.wall_s : 0.0);
+  const double command_s = r.load_wall_s + r.wall_s + r.unload_wall_s;
+  std::printf(
+      "  stages      %.3f s checking, planning and loading, %.3f s machining, %.3f s writing the "
+      "outputs: %.3f s (%.1fx real time)\n",
+      r.load_wall_s, r.wall_s, r.unload_wall_s, command_s,
+      command_s > 0 ? r.simulated_s / command_s : 0.0);
   if (job.wall_clock) {
     for (const auto& note : r.report.notes)
       std::printf("  realtime    %s\n", note.c_str());

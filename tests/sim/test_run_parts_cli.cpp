@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -202,6 +203,27 @@ TEST_P(RunPart, AllEffectsOnMachinesRecordsScansAndProbes) {
   EXPECT_GT(max_feed, 1.0);
   EXPECT_GT(max_power_kw, 0.0) << "the cut loads the spindle";
   EXPECT_FALSE(tools.empty());
+
+  // The run's stages: before the loop, the loop (the "machined in" time),
+  // the outputs; they add up to the total printed.
+  {
+    const auto at = r.out.find("  stages      ");
+    ASSERT_NE(std::string::npos, at) << r.out;
+    double load_s = -1, loop_s = -1, write_s = -1, all_s = -1;
+    ASSERT_EQ(4, std::sscanf(r.out.c_str() + at,
+                             "  stages %lf s checking, planning and loading, %lf s machining, "
+                             "%lf s writing the outputs: %lf s",
+                             &load_s, &loop_s, &write_s, &all_s))
+        << r.out.substr(at, 200);
+    EXPECT_GT(load_s, 0);
+    EXPECT_GT(write_s, 0);
+    const auto time_at = r.out.find(" machined in ");
+    ASSERT_NE(std::string::npos, time_at) << r.out;
+    double machined_s = -1;
+    ASSERT_EQ(1, std::sscanf(r.out.c_str() + time_at, " machined in %lf s", &machined_s));
+    EXPECT_EQ(machined_s, loop_s) << "the loop's time is the \"machined in\" one";
+    EXPECT_NEAR(load_s + loop_s + write_s, all_s, 0.0021);
+  }
 
   // Scan and CMM.
   EXPECT_NE(std::string::npos, r.out.find(" points (sigma 20 um, seed 1) -> ")) << r.out;

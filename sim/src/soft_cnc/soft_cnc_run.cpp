@@ -1,5 +1,6 @@
 // Runs a soft-CNC job: writes the wiring and its INI, loads, runs, shuts down.
 #include <algorithm>
+#include <chrono>
 #include <future>
 #include <memory>
 #include <stdexcept>
@@ -127,6 +128,10 @@ void remove_written(const std::vector<fs::path>& files, const fs::path& dir, boo
 }  // namespace
 
 SoftCncResult run_soft_cnc(const SoftCncJob& given, const SoftCncProgress& progress) {
+  const auto start = std::chrono::steady_clock::now();
+  auto seconds_since = [](std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  };
   const MachineDescription machine = read_machine_description(given.machine);
   if (!given.field_swaps.empty() && !given.field)
     throw std::runtime_error("field swaps need a field to start with");
@@ -191,6 +196,7 @@ SoftCncResult run_soft_cnc(const SoftCncJob& given, const SoftCncProgress& progr
     throw;
   }
   result.program_s = h.get_pin_or_param("planner.program-time").as_double();
+  result.load_wall_s = seconds_since(start);
 
   rt::hal::RunLimits limits;
   // The planner stops the run at the program end; the limit only guards a
@@ -215,7 +221,9 @@ SoftCncResult run_soft_cnc(const SoftCncJob& given, const SoftCncProgress& progr
   result.clamped_cycles = h.get_pin_or_param("comp.clamp-count").s;
   result.cutting_samples = hook.cutting_samples;
   result.corrected_cutting_samples = hook.corrected_samples;
+  const auto unload_start = std::chrono::steady_clock::now();
   result.output_errors = h.unload();  // the recorder and the cutting write their files
+  result.unload_wall_s = seconds_since(unload_start);
   return result;
 }
 

@@ -90,7 +90,12 @@ struct SoftCncJob {
 struct SoftCncResult {
   double program_s = 0.0;    // planned duration of the program
   double simulated_s = 0.0;  // time the loop ran
-  double wall_s = 0.0;
+  double wall_s = 0.0;       // of the loop
+  // Wall time before the loop (reading and checking the inputs, planning,
+  // loading the wiring: the cutting model's build among it) and after it
+  // (the components' exits: the machined mesh and the files written).
+  double load_wall_s = 0.0;
+  double unload_wall_s = 0.0;
   bool finished = false;         // the planner reached the program end
   bool limit_fault = false;      // a joint command left the machine's travel
   int32_t limit_fault_line = 0;  // program line at the service point (10 ms) that first saw it
