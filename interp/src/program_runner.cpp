@@ -460,6 +460,7 @@ void ProgramRunner::control(const OWord& o, const LexedLine& line) {
         if (*o.condition != 0.0) {
           frame.pc = frame.loops[li].start + 1;
         } else {
+          note_loop_end(static_cast<size_t>(li), pc);
           frame.loops.resize(li);
           frame.pc = pc + 1;
         }
@@ -470,8 +471,12 @@ void ProgramRunner::control(const OWord& o, const LexedLine& line) {
           frame.loops.push_back({o.label, OKeyword::kWhile, pc});
         frame.pc = pc + 1;
       } else {
-        if (li >= 0) frame.loops.resize(li);
-        frame.pc = find_forward(fi, pc + 1, o.label, {OKeyword::kEndwhile}, line) + 1;
+        const size_t end = find_forward(fi, pc + 1, o.label, {OKeyword::kEndwhile}, line);
+        if (li >= 0) {
+          note_loop_end(static_cast<size_t>(li), end);
+          frame.loops.resize(li);
+        }
+        frame.pc = end + 1;
       }
       return;
     }
@@ -497,6 +502,7 @@ void ProgramRunner::control(const OWord& o, const LexedLine& line) {
       if (--frame.loops[li].remaining > 0) {
         frame.pc = frame.loops[li].start + 1;
       } else {
+        note_loop_end(static_cast<size_t>(li), pc);
         frame.loops.resize(li);
         frame.pc = pc + 1;
       }
@@ -517,6 +523,7 @@ void ProgramRunner::control(const OWord& o, const LexedLine& line) {
       else
         end = find_forward(fi, pc + 1, o.label, {OKeyword::kWhile}, line);
       if (o.keyword == OKeyword::kBreak) {
+        note_loop_end(static_cast<size_t>(li), end);
         frame.loops.resize(li);
         frame.pc = end + 1;
       } else {
@@ -526,6 +533,15 @@ void ProgramRunner::control(const OWord& o, const LexedLine& line) {
       return;
     }
   }
+}
+
+void ProgramRunner::note_loop_end(size_t li, size_t end) {
+  if (frames_.size() != 1 || li != 0) return;
+  const File& main = files_.front();
+  const int first = main.lines[frames_.front().loops.front().start].line;
+  const int last = main.lines[end].line;
+  const auto [at, fresh] = out_.loop_last_lines.try_emplace(first, last);
+  if (!fresh && at->second != last) at->second = 0;
 }
 
 }  // namespace truecut::interp

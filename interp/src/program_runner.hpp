@@ -55,6 +55,9 @@ class ProgramRunner {
   // Executes the line at the current frame's pc; false when the program ends.
   bool step();
   void control(const OWord& o, const LexedLine& line);
+  // Loop `li` of the current frame ends at line index `end` of its file
+  // (CanonProgram::loop_last_lines: the main program's outermost loops).
+  void note_loop_end(size_t li, size_t end);
   void assign(const Block& block, const LexedLine& line);
   // M98 P.. [L..] and M99 (Fanuc-style subprograms); false when the line
   // has neither. `ends` is set when M99 ends the main program.

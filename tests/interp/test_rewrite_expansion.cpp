@@ -13,6 +13,7 @@
 #include <fstream>
 #include <initializer_list>
 #include <random>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -124,6 +125,61 @@ TEST(RewriteExpansion, ARepeatInIncrementalDistanceEndsInG91AsTheOriginal) {
   // after it (a relative move up from the loop's last point).
   EXPECT_NE(r.text.find("\nG91\nG0 Z6\n"), std::string::npos) << r.text;
   expect_same_path_shifted(program, r.text, options(), offset);
+}
+
+// Issue 22 point 5: a loop under a computed label (o[#5] while, o#6 repeat,
+// a do ... while and a break under o[...]) ended where the interpreter's run
+// of it ended; it was refused ("its end cannot be found"). Written out, it
+// gives the moves of the same program under literal labels, line for line
+// but for the note naming the loop; the label #5 changes inside the while
+// loop, so its closing line could not be read from the text alone.
+TEST(RewriteExpansion, LoopsUnderComputedLabelsAreWrittenOutAsUnderLiteralOnes) {
+  struct Case {
+    std::string computed, literal;
+  };
+  const std::string head = kHead + "#5 = 100\n#6 = 7\n";
+  const std::vector<Case> cases = {
+      {"#1 = 1\no[#5] while [#1 LE 3]\nG1 Z[-#1] F100\nG1 X10 F300\n#5 = 100\nG0 Z5\n"
+       "G0 X0\n#1 = [#1 + 1]\no[#5] endwhile\n",
+       "#1 = 1\no100 while [#1 LE 3]\nG1 Z[-#1] F100\nG1 X10 F300\n#5 = 100\nG0 Z5\n"
+       "G0 X0\n#1 = [#1 + 1]\no100 endwhile\n"},
+      {"G1 Z-1 F100\no#6 repeat [3]\nG91 G1 X5 F250\nG0 Y2\no#6 endrepeat\nG90\n",
+       "G1 Z-1 F100\no7 repeat [3]\nG91 G1 X5 F250\nG0 Y2\no7 endrepeat\nG90\n"},
+      {"#2 = 0\no[#6 + 1] do\nG1 X[#2 * 4] Y[#2] F200\n#2 = [#2 + 1]\no[#6 + 1] while [#2 LT 3]\n",
+       "#2 = 0\no8 do\nG1 X[#2 * 4] Y[#2] F200\n#2 = [#2 + 1]\no8 while [#2 LT 3]\n"},
+      {"#2 = 0\no[#5] while [1]\nG1 X[#2] Y[#2 * 2] F200\n#2 = [#2 + 1]\no[#5] if [#2 GT 2]\n"
+       "o[#5] break\no[#5] endif\no[#5] endwhile\n",
+       "#2 = 0\no100 while [1]\nG1 X[#2] Y[#2 * 2] F200\n#2 = [#2 + 1]\no101 if [#2 GT 2]\n"
+       "o100 break\no101 endif\no100 endwhile\n"},
+  };
+  const V offset(0.012, -0.007, 0.02);
+  for (const Case& c : cases) {
+    const std::string computed = head + c.computed + "G0 Z20\nM30\n";
+    const std::string literal = head + c.literal + "G0 Z20\nM30\n";
+    try {
+      const RewriteResult rc = rewrite_program(computed, "p.ngc", constant(offset), options());
+      const RewriteResult rl = rewrite_program(literal, "p.ngc", constant(offset), options());
+      EXPECT_EQ(rc.summary.expansions, 1) << rc.text;
+      EXPECT_EQ(rc.summary.moves_rewritten, rl.summary.moves_rewritten);
+      // The same text but for the note's name of the loop.
+      std::istringstream a(rc.text), b(rl.text);
+      std::string la, lb;
+      int line = 0, notes = 0;
+      while (std::getline(a, la) && std::getline(b, lb)) {
+        ++line;
+        if (la.rfind("(truecut rewrite: lines ", 0) == 0) {
+          ++notes;
+          continue;
+        }
+        EXPECT_EQ(la, lb) << "line " << line << "\n" << rc.text;
+      }
+      EXPECT_TRUE(a.eof() || !std::getline(a, la)) << rc.text;
+      EXPECT_EQ(notes, 1) << rc.text;
+      expect_same_path_shifted(computed, rc.text, options(), offset);
+    } catch (const GcodeError& e) {
+      ADD_FAILURE() << e.what() << "\n" << computed;
+    }
+  }
 }
 
 TEST(RewriteExpansion, ASubroutineFileCalledTwiceIsWrittenOutAtEachCall) {

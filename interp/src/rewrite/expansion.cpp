@@ -37,18 +37,35 @@ std::string call_text(const std::vector<RawLine>& raw, const std::string& name, 
 }
 
 // The last line of the loop that starts at `start` (its endwhile, the while
-// of a do, its endrepeat).
-int loop_end(const std::vector<RawLine>& raw, const std::string& name, int start,
-             std::string& what) {
+// of a do, its endrepeat). A loop under a computed label (o[#1] while) ends
+// where the interpreter's run of it ended: its closing line's label is
+// known only with the parameters of that moment.
+int loop_end(const CanonProgram& program, const std::vector<RawLine>& raw, const std::string& name,
+             int start, std::string& what) {
   const std::optional<OWord> open = oword_of(raw, name, start);
-  if (!open || open->computed)
-    throw GcodeError({name, start, 0},
-                     "loop with a computed label: its end cannot be found to expand it");
+  if (!open)
+    throw GcodeError({name, start, 0}, "no loop starts at this line: it cannot be expanded");
   OKeyword closing = OKeyword::kEndwhile;
   const char* shape = "while ... endwhile";
   if (open->keyword == OKeyword::kDo) closing = OKeyword::kWhile, shape = "do ... while";
   if (open->keyword == OKeyword::kRepeat)
     closing = OKeyword::kEndrepeat, shape = "repeat ... endrepeat";
+  if (open->computed) {
+    // The label as written: from the O word to the next blank.
+    const std::string& text = raw.at(static_cast<std::size_t>(start) - 1).content;
+    const std::size_t from = open->column > 0 ? static_cast<std::size_t>(open->column) - 1
+                                              : text.find_first_not_of(" \t");
+    const std::string label = text.substr(from, text.find_first_of(" \t", from) - from);
+    what = "the loop " + label + " " + shape;
+    const auto ended = program.loop_last_lines.find(start);
+    if (ended == program.loop_last_lines.end() || ended->second <= start)
+      throw GcodeError({name, start, 0},
+                       what +
+                           " (a computed label) did not end in a way the interpreter saw once "
+                           "(the program ended inside it, or its runs ended at different "
+                           "lines): its end cannot be found to expand it");
+    return ended->second;
+  }
   what = "the loop " + label_text(*open) + " " + shape;
   for (int line = start + 1; line <= static_cast<int>(raw.size()); ++line) {
     const std::optional<OWord> o = oword_of(raw, name, line);
@@ -111,7 +128,7 @@ Expansions find_expansions(const CanonProgram& program, const std::vector<RawLin
     e.first_line = e.last_line = outer;
     e.why = why;
     if (ctx.outer_loop_line > 0) {
-      e.last_line = loop_end(raw, name, outer, e.what);
+      e.last_line = loop_end(program, raw, name, outer, e.what);
     } else {
       e.what = ctx.file == 0 && ctx.line == outer ? std::string("the line")
                                                   : call_text(raw, name, outer);

@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <string>
 #include <variant>
 #include <vector>
@@ -317,6 +318,12 @@ struct CanonCall {
 struct CanonProgram {
   std::vector<std::string> files;  // main program first, then subroutine files
   std::vector<CanonCall> calls;
+  // Loops of the main program that no loop there encloses, by their first
+  // line: the line they ended at (their endwhile or endrepeat, the while of
+  // a do, or the end a break left them for); 0 when runs of one ended at
+  // different lines. The rewrite finds the end of a loop whose label is
+  // computed (o[#1] while) here.
+  std::map<int, int> loop_last_lines;
 };
 
 // Receives canonical calls one by one (InterpreterOptions::on_call).
