@@ -311,6 +311,21 @@ TEST(RunPartBadInput, ExitTwoNamingFileAndKeyOrLineWithNothingWritten) {
     EXPECT_NE(std::string::npos, r.err.find(c.message)) << r.err;
     EXPECT_FALSE(fs::exists(out)) << c.message << ": nothing written";
   }
+  // The travel check plans beside the wiring's load: when the load fails
+  // too (the cutting model over --max-dexels), the travel's refusal is the
+  // one reported, as when the check ran first.
+  const ProcessResult both = truecut({"run", machine, cases[4].program, "--out", out.string(),
+                                      "--dexel-spacing", "1", "--max-dexels", "1"});
+  EXPECT_EQ(2, both.exit_code) << both.err;
+  EXPECT_NE(std::string::npos, both.err.find(cases[4].message)) << both.err;
+  EXPECT_EQ(std::string::npos, both.err.find("max-dexels 1")) << both.err;
+  EXPECT_FALSE(fs::exists(out)) << "nothing written";
+  // The load alone failing is reported as before.
+  const ProcessResult load = truecut(
+      {"run", machine, good, "--out", out.string(), "--dexel-spacing", "1", "--max-dexels", "1"});
+  EXPECT_EQ(2, load.exit_code) << load.err;
+  EXPECT_NE(std::string::npos, load.err.find("more than max-dexels 1")) << load.err;
+  EXPECT_FALSE(fs::exists(out)) << "nothing written";
 }
 
 }  // namespace
