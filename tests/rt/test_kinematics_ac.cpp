@@ -232,6 +232,38 @@ TEST(KinematicsAc, TiltInsideTheSingularBandDoesNotSpinC) {
   EXPECT_NEAR(exact.joints.c_deg, 90.0, 1e-9);
 }
 
+// The singular band is the tilt whose sine lies below sin(singular_tilt_deg)
+// (the header's rule, computed here as written), whatever the band's width:
+// axes on either side of its edge, and, for wide bands, tilts between sin(x)
+// and x (radians), where a cheaper test of the tilt against x alone would
+// differ.
+TEST(KinematicsAc, TheSingularBandEndsWhereTheRuleSays) {
+  for (const double band_deg : {1e-8, 1e-6, 1e-3, 0.5, 10.0, 30.0, 60.0, 80.0}) {
+    AcTrtParams p;
+    p.singular_tilt_deg = band_deg;
+    const double edge = std::sin(band_deg * M_PI / 180);
+    int singular = 0, regular = 0;
+    for (const double rel : {-1e-9, -1e-12, 0.0, 1e-12, 1e-9, 1e-3, 0.2}) {
+      for (const double away_deg : {0.0, 20.0, 40.0, 100.0}) {
+        // A tilt angle near the edge, and for wide bands also between the
+        // edge's sine and its angle in radians.
+        const double t = std::asin(std::min(1.0, edge * (1 + rel))) + away_deg * M_PI / 180 / 1000;
+        const double c = 0.7;  // the tilt's plane
+        const ToolPose pose{{1, 2, 3},
+                            {std::sin(t) * std::sin(c), std::sin(t) * std::cos(c), std::cos(t)}};
+        const Eigen::Vector3d n = pose.axis / pose.axis.norm();
+        const bool expect_singular = std::hypot(n.x(), n.y()) < edge;
+        const AcIkResult r = inverse_ac(p, pose, {0, 0, 0, 0, 10});
+        EXPECT_EQ(r.status == AcIkStatus::kSingular, expect_singular)
+            << "band " << band_deg << " deg, tilt " << t * 180 / M_PI << " deg";
+        (expect_singular ? singular : regular)++;
+      }
+    }
+    EXPECT_GT(singular, 0) << band_deg;
+    EXPECT_GT(regular, 0) << band_deg;
+  }
+}
+
 TEST(KinematicsAc, InverseIsContinuousAlongAPathThroughAZero) {
   AcTrtParams p;
   p.y_offset_mm = 20;

@@ -106,7 +106,11 @@ AcIkResult inverse_ac(const AcTrtParams& p, const ToolPose& pose, const AcJoints
   // Table angles (alpha, gamma) satisfy n = (sin a sin g, sin a cos g, cos a).
   const double tilt_sin = std::hypot(n.x(), n.y());
   Candidate chosen{};
-  if (tilt_sin < std::sin(p.singular_tilt_deg * kRadPerDeg)) {
+  // sin(x) <= x for x >= 0 (also as computed: x is a double), so a tilt
+  // beyond x itself, as of nearly every pose, needs no sine; the choice is
+  // the same as with it (the sine was a twentieth of the planner's time).
+  const double singular_rad = p.singular_tilt_deg * kRadPerDeg;
+  if (tilt_sin < singular_rad && tilt_sin < std::sin(singular_rad)) {
     // C is undefined: keep the hint's C and tilt within its plane.
     const double gamma = sigma * to_rad(hint.c_deg);
     const double alpha = std::atan2(n.x() * std::sin(gamma) + n.y() * std::cos(gamma), n.z());
