@@ -195,6 +195,27 @@ offline::TriangleMesh DexelModel::machined_mesh() const {
   // (edge k of a triangle runs from its corner k to k + 1), with the
   // vertices opposite each (one or two triangles); per triangle edge, its
   // candidate's index or kNoSplit.
+  // fn(begin, end) over [0, n) in chunks of `per_chunk`, on the model's
+  // cutting threads when it has several; each chunk writes only its own
+  // items, so the result is the same for any number of threads.
+  detail::WorkerPool* pool = threads_.get();
+  auto in_chunks = [&](std::size_t n, std::size_t per_chunk, auto&& fn) {
+    const auto chunks = static_cast<std::uint32_t>((n + per_chunk - 1) / per_chunk);
+    auto run_chunk = [&](std::uint32_t c) {
+      fn(std::size_t(c) * per_chunk, std::min(n, std::size_t(c + 1) * per_chunk));
+    };
+    if (pool != nullptr && pool->threads() > 1 && chunks > 1) {
+      pool->run(
+          chunks,
+          [](void* context, std::uint32_t c, int) {
+            (*static_cast<decltype(run_chunk)*>(context))(c);
+          },
+          &run_chunk);
+    } else {
+      for (std::uint32_t c = 0; c < chunks; ++c)
+        run_chunk(c);
+    }
+  };
   struct Candidate {
     std::uint32_t a, b;  // a < b
     std::array<std::uint32_t, 2> opposite{kNoSplit, kNoSplit};
@@ -213,12 +234,13 @@ offline::TriangleMesh DexelModel::machined_mesh() const {
     auto low = [&](std::size_t site) { return std::min(corner(site, 0), corner(site, 1)); };
     auto high = [&](std::size_t site) { return std::max(corner(site, 0), corner(site, 1)); };
     std::vector<char> is_site(sites, 0);
+    in_chunks(sites, 16384, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t site = begin; site < end; ++site)
+        is_site[site] = candidate(corner(site, 0), corner(site, 1));
+    });
     std::vector<std::uint32_t> group_start(nd + 1, 0);
     for (std::size_t site = 0; site < sites; ++site)
-      if (candidate(corner(site, 0), corner(site, 1))) {
-        is_site[site] = 1;
-        ++group_start[low(site) + 1];
-      }
+      if (is_site[site]) ++group_start[low(site) + 1];
     for (std::size_t v = 0; v < nd; ++v)
       group_start[v + 1] += group_start[v];
     std::vector<std::uint32_t> grouped(group_start[nd]);
@@ -311,27 +333,10 @@ offline::TriangleMesh DexelModel::machined_mesh() const {
   // found them: the mesh is the same for any number of threads.
   std::vector<Eigen::Vector3d> cusp_point(candidates.size());
   std::vector<char> has_cusp(candidates.size(), 0);
-  constexpr std::uint32_t kCandidatesPerChunk = 1024;
-  const auto chunks = static_cast<std::uint32_t>((candidates.size() + kCandidatesPerChunk - 1) /
-                                                 kCandidatesPerChunk);
-  auto find_chunk = [&](std::uint32_t chunk) {
-    const std::size_t end =
-        std::min<std::size_t>(candidates.size(), std::size_t(chunk + 1) * kCandidatesPerChunk);
-    for (std::size_t i = std::size_t(chunk) * kCandidatesPerChunk; i < end; ++i)
+  in_chunks(candidates.size(), 1024, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i)
       has_cusp[i] = find_cusp(candidates[i], cusp_point[i]);
-  };
-  detail::WorkerPool* pool = threads_.get();
-  if (pool != nullptr && pool->threads() > 1 && chunks > 1) {
-    pool->run(
-        chunks,
-        [](void* context, std::uint32_t chunk, int) {
-          (*static_cast<decltype(find_chunk)*>(context))(chunk);
-        },
-        &find_chunk);
-  } else {
-    for (std::uint32_t c = 0; c < chunks; ++c)
-      find_chunk(c);
-  }
+  });
   std::vector<std::uint32_t> cusp_vertex(candidates.size(), kNoSplit);
   for (std::size_t i = 0; i < candidates.size(); ++i)
     if (has_cusp[i]) {

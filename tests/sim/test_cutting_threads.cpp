@@ -105,10 +105,12 @@ TEST(CuttingThreads, SameResultWhateverTheThreadCount) {
     for (std::size_t i = 0; i < models[0].size(); ++i)
       differing_heights += !same_bits(models[0].height_mm(i), models[t].height_mm(i));
     EXPECT_EQ(0u, differing_heights) << models[t].threads() << " threads";
-    // The cusps' bisections of the mesh are shared too (one job more).
+    // The mesh's candidate edges and their cusps' bisections are shared too
+    // (two jobs more).
     const auto a = models[0].machined_mesh(), b = models[t].machined_mesh();
-    EXPECT_EQ(stats.jobs + 1, models[t].thread_stats().jobs)
-        << "machined_mesh() shared its cusps between " << models[t].threads() << " threads";
+    EXPECT_EQ(stats.jobs + 2, models[t].thread_stats().jobs)
+        << "machined_mesh() shared its edges and cusps between " << models[t].threads()
+        << " threads";
     ASSERT_EQ(a.vertices_mm.size(), b.vertices_mm.size());
     ASSERT_EQ(a.triangles.size(), b.triangles.size());
     std::size_t differing_vertices = 0;
