@@ -57,13 +57,7 @@ void run_case(sim::PartId id, const Case& c, int cut_threads, const fs::path& ro
   const fs::path dir = root / std::string(sim::part_name(id));
   fs::remove_all(dir);
   sim::write_part(part, dir);
-  sim::SoftCncJob job;
-  job.machine = dir / "machine.json";
-  job.program = dir / "program.ngc";
-  job.nominal = dir / "nominal.stl";
-  job.part = dir / "part.json";
-  job.tools = dir / "tools.tbl";
-  job.out_dir = dir / "run";
+  sim::SoftCncJob job = sim::part_folder_job(dir, dir / "run");
   job.dexel_spacing_mm = default_spacing_mm(id) * c.dexel_scale;
   job.cut_threads = cut_threads;
   job.component_path = {TRUECUT_COMPONENT_DIR};

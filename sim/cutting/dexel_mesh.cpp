@@ -191,10 +191,6 @@ offline::TriangleMesh DexelModel::machined_mesh() const {
     return sa.vector.cross(sb.vector).norm() > 1e-5 ||
            (d - d.dot(sa.vector) * sa.vector).norm() > kSame;
   };
-  // The candidate edges, each once, in the order the triangles meet them
-  // (edge k of a triangle runs from its corner k to k + 1), with the
-  // vertices opposite each (one or two triangles); per triangle edge, its
-  // candidate's index or kNoSplit.
   // fn(begin, end) over [0, n) in chunks of `per_chunk`, on the model's
   // cutting threads when it has several; each chunk writes only its own
   // items, so the result is the same for any number of threads.
@@ -216,6 +212,10 @@ offline::TriangleMesh DexelModel::machined_mesh() const {
         run_chunk(c);
     }
   };
+  // The candidate edges, each once, in the order the triangles meet them
+  // (edge k of a triangle runs from its corner k to k + 1), with the
+  // vertices opposite each (one or two triangles); per triangle edge, its
+  // candidate's index or kNoSplit.
   struct Candidate {
     std::uint32_t a, b;  // a < b
     std::array<std::uint32_t, 2> opposite{kNoSplit, kNoSplit};

@@ -101,13 +101,8 @@ class SurfaceDiagnosis : public ::testing::Test {
     const fs::path out = *dir_ / name;
     fs::create_directories(out);
     write_machine_description(out / "machine.json", truth);
-    SoftCncJob job;
-    job.machine = out / "machine.json";
-    job.program = *parts_ / part / "program.ngc";
-    job.nominal = *parts_ / part / "nominal.stl";
-    job.part = *parts_ / part / "part.json";
-    job.tools = *parts_ / part / "tools.tbl";
-    job.out_dir = out;
+    SoftCncJob job = part_folder_job(*parts_ / part, out);
+    job.machine = out / "machine.json";  // the truth written above
     job.component_path = {component_dir()};
     job.record_every = 100;
     if (std::getenv("TRUECUT_DIAGNOSIS_VERBOSE"))

@@ -65,13 +65,7 @@ inline void write_synthetic_field(const std::filesystem::path& file, const sim::
 // effect off), so the only deviation the field adds is the field's.
 inline sim::SoftCncJob ideal_job(const std::filesystem::path& part_dir,
                                  const std::filesystem::path& out_dir) {
-  sim::SoftCncJob job;
-  job.machine = part_dir / "machine_ideal.json";
-  job.program = part_dir / "program.ngc";
-  job.nominal = part_dir / "nominal.stl";
-  job.part = part_dir / "part.json";
-  job.tools = part_dir / "tools.tbl";
-  job.out_dir = out_dir;
+  sim::SoftCncJob job = sim::part_folder_job(part_dir, out_dir, "machine_ideal.json");
   job.component_path = {component_dir()};
   return job;
 }

@@ -48,13 +48,7 @@ TEST(SoftCncInterrupt, AnInterruptedRunLeavesNoneOfItsFiles) {
     const pid_t pid = fork();
     if (pid == 0) {
       rt::remove_pending_files_on_signals();
-      sim::SoftCncJob job;
-      job.machine = part / "machine_ideal.json";
-      job.program = part / "face.ngc";
-      job.nominal = part / "nominal.stl";
-      job.part = part / "part.json";
-      job.tools = part / "tools.tbl";
-      job.out_dir = out;
+      sim::SoftCncJob job = sim::part_folder_job(part, out, "machine_ideal.json", "face.ngc");
       job.dexel_spacing_mm = 0.5;
       job.component_path = {test::component_dir()};
       g_probe_signal = sig;

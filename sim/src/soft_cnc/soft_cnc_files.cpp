@@ -50,6 +50,19 @@ std::array<double, 5> start_joints(const MachineDescription& machine) {
 
 }  // namespace
 
+SoftCncJob part_folder_job(const std::filesystem::path& part_dir,
+                           const std::filesystem::path& out_dir, const std::string& machine,
+                           const std::string& program) {
+  SoftCncJob job;
+  job.machine = part_dir / machine;
+  job.program = part_dir / program;
+  job.nominal = part_dir / "nominal.stl";
+  job.part = part_dir / "part.json";
+  job.tools = part_dir / "tools.tbl";
+  job.out_dir = out_dir;
+  return job;
+}
+
 interp::PlannerOptions soft_cnc_planner_options(const SoftCncJob& job,
                                                 const MachineDescription& machine) {
   const KinematicsParams& k = machine.machine.kinematics;

@@ -137,6 +137,14 @@ const std::string& soft_cnc_hal_text();
 std::string soft_cnc_ini_text(const SoftCncJob& job, const MachineDescription& machine,
                               const std::vector<int32_t>& field_tools = {});
 
+// A job for a part folder as `truecut part` writes it: its `machine` file,
+// its `program`, and its nominal.stl, part.json and tools.tbl; the outputs
+// go to out_dir. The other fields keep their defaults.
+SoftCncJob part_folder_job(const std::filesystem::path& part_dir,
+                           const std::filesystem::path& out_dir,
+                           const std::string& machine = "machine.json",
+                           const std::string& program = "program.ngc");
+
 // The options the wiring gives interp_planner for this job (run.ini's
 // [KINS], START and SERVO_PERIOD_NS): what run_soft_cnc plans the program
 // with to check the travel before it machines.
