@@ -5,8 +5,10 @@
 // operation must come out shifted by the (constant) correction, every other
 // move exactly where it was, in the same order.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -17,8 +19,11 @@
 #include <string>
 #include <vector>
 
+#include "oracle.hpp"
 #include "rewrite_path_oracle.hpp"
 #include "rewrite_test_util.hpp"
+#include "rs274_oracle.hpp"
+#include "run_process.hpp"
 #include "test_paths.hpp"
 #include "truecut/interp/error.hpp"
 #include "truecut/interp/interpreter.hpp"
@@ -654,23 +659,79 @@ TEST(RewriteExpansion, WhatAnExpansionCannotWriteIsRefusedNamingTheLoop) {
         << msg;
     EXPECT_NE(msg.find("run more than once"), std::string::npos) << msg;
   }
-  // A tapping cycle in a loop switches the overrides itself: not written out
-  // as M50/M51 around plain feeds (a tap needs the cycle), refused by name.
-  const std::string tapping = kHead +
+}
+
+// The switches a canned cycle makes itself, in a loop: G84/G74 tapping turns
+// the feed and speed overrides off and reverses the spindle at the bottom,
+// G88 stops the spindle and the program there. Written out as the M50/M51,
+// M5/M3/M4, G4 and M0 lines that make the same calls, between the same
+// moves, each hole corrected at its bottom (issue 22 point 5; before, the
+// rewrite refused the loop). rs274 runs the rewritten program to the same
+// calls but for the holes.
+TEST(RewriteExpansion, TappingAndManualBoringInALoopSwitchAsTheCycleDid) {
+  const std::string program = kHead +
+                              "#1 = 0\n"
+                              "o100 while [#1 lt 2]\n"
                               "S500 M3\n"
-                              "o100 repeat [2]\n"
-                              "G1 Z1 F100\n"
-                              "G84 X5 Y5 Z-3 R1 F50\n"
+                              "G98 G84 X[#1 * 10] Y5 Z-3 R1 F250\n"
                               "G80\n"
-                              "o100 endrepeat\n"
+                              "S400 M4\n"
+                              "G99 G74 X[#1 * 10] Y15 Z-4 R1 F200\n"
+                              "G80\n"
+                              "S300 M3\n"
+                              "G88 X[#1 * 10] Y25 Z-2 R1 P0.5 F100\n"
+                              "G80\n"
+                              "#1 = [#1 + 1]\n"
+                              "o100 endwhile\n"
+                              "G0 Z20\n"
                               "M30\n";
-  try {
-    rewrite_program(tapping, "p.ngc", constant(V(0.01, 0, 0)), options());
-    ADD_FAILURE() << "no error";
-  } catch (const GcodeError& e) {
-    EXPECT_EQ(e.where().line, 9) << e.what();
-    EXPECT_NE(std::string(e.what()).find("DISABLE_FEED_OVERRIDE"), std::string::npos) << e.what();
-  }
+  const V offset(0.02, -0.01, 0.015);
+  expect_one_expansion_with(
+      program, offset,
+      {"M50 P0\nM51 P0\nG1 X0.020000 Y4.990000 Z-2.985000 F250\nM5\nM4\nG4 P0\n",
+       "M5\nM3\nM50 P1\nM51 P1\n", "G4 P0.5\nM5\nM0\nM3\n"});
+  const RewriteResult r = rewrite_program(program, "p.ngc", constant(offset), options());
+  EXPECT_EQ(r.summary.expanded_holes, 6) << r.text;
+
+  std::string why;
+  const auto& rs274 = testing::rs274_oracle(why);
+  if (!rs274) TRUECUT_ORACLE_MISSING(testing::rs274_missing(why));
+  const fs::path dir =
+      truecut::test::binary_dir() / "rewrite-expansion-tapping" / std::to_string(::getpid());
+  fs::create_directories(dir);
+  std::ofstream(dir / "tools.tbl") << kTools;
+  std::ofstream(dir / "original.ngc") << program;
+  std::ofstream(dir / "rewritten.ngc") << r.text;
+  // rs274's calls but for the positions of moves (and comments, which the
+  // rewrite adds), as "NAME(args)".
+  auto switches = [&](const char* file) {
+    const auto run = truecut::test::run_process(
+        {rs274->program.string(), "-g", "-t", (dir / "tools.tbl").string(), std::string(file)},
+        dir);
+    EXPECT_EQ(run.exit_code, 0) << file << ": " << run.err;
+    std::vector<std::string> out;
+    std::istringstream in(run.out);
+    std::string line, feed;
+    while (std::getline(in, line)) {
+      const size_t at = line.find("N..... ");
+      if (at == std::string::npos) continue;
+      std::string call = line.substr(at + 7);
+      if (call.rfind("COMMENT", 0) == 0) continue;
+      // The feed goes with the move (the rewrite writes F on the move's line).
+      if (call.rfind("SET_FEED_RATE", 0) == 0) {
+        feed = call;
+        continue;
+      }
+      if (call.rfind("STRAIGHT_FEED", 0) == 0) call = "STRAIGHT_FEED at " + feed;
+      if (call.rfind("STRAIGHT_TRAVERSE", 0) == 0) call = "STRAIGHT_TRAVERSE";
+      out.push_back(call);
+    }
+    return out;
+  };
+  const std::vector<std::string> want = switches("original.ngc");
+  EXPECT_EQ(std::count(want.begin(), want.end(), "PROGRAM_STOP()"), 2);
+  EXPECT_EQ(std::count(want.begin(), want.end(), "DISABLE_FEED_OVERRIDE()"), 4);
+  EXPECT_EQ(switches("rewritten.ngc"), want) << r.text;
 }
 
 }  // namespace

@@ -654,13 +654,6 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
   // One call inside an expansion.
   // `cycle_end`: a canned cycle's move, written to that end (program units).
   long last_expanded_block = -1;  // the block of the last other call written
-  // Blocks that run a canned cycle: their own override switches and stops
-  // (G74/G84 tapping, G88) are not written out as M codes. The calls other
-  // than moves carry no cycle code, so the blocks are found from the moves.
-  std::set<long> cycle_blocks;
-  for (const CanonCall& c : program.calls)
-    if (is_motion(c.op) && c.context.canned_cycle != 0)
-      cycle_blocks.insert(c.context.executed_block);
   // A SET_G5X_OFFSET written inside an expansion, until its block's
   // SET_XY_ROTATION tells a selection (with SET_G92_OFFSET) from a G10 L2.
   struct OpenG5x {
@@ -674,7 +667,6 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
   long m6_block = -1;  // the block of the last M6 written inside an expansion
   auto expand_call = [&](const CanonCall& c, const Axes6* cycle_end = nullptr) {
     const CallContext& ctx = c.context;
-    const bool in_cycle = cycle_blocks.count(ctx.executed_block) != 0;
     ex.incremental = ctx.incremental;
     ex.inverse_time = ctx.feed_mode == FeedMode::kInverseTime;
     const int first = ex.e->first_line;
@@ -773,23 +765,23 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
         pl.moves.back() += " Q" + exact(q->tolerance);
         rl.others.push_back(format_rs274(c.op, check_format()));
         return;
-      } else if (const auto* b = std::get_if<OutputBit>(&c.op); b && !in_cycle) {
+      } else if (const auto* b = std::get_if<OutputBit>(&c.op); b) {
         // M62/M63 switch with the next move: written before its first line.
         text = std::string(b->synchronized ? (b->on ? "M62" : "M63") : (b->on ? "M64" : "M65")) +
                " P" + std::to_string(b->index);
-      } else if (const auto* v = std::get_if<OutputValue>(&c.op); v && !in_cycle) {
+      } else if (const auto* v = std::get_if<OutputValue>(&c.op); v) {
         text = std::string(v->synchronized ? "M67" : "M68") + " E" + std::to_string(v->index) +
                " Q" + exact(v->value);
-      } else if (const auto* f = std::get_if<FeedOverride>(&c.op); f && !in_cycle) {
+      } else if (const auto* f = std::get_if<FeedOverride>(&c.op); f) {
         // M48/M49 make both override calls; M50 and M51 one each.
         text = std::string("M50 P") + (f->enabled ? "1" : "0");
-      } else if (const auto* f = std::get_if<SpeedOverride>(&c.op); f && !in_cycle) {
+      } else if (const auto* f = std::get_if<SpeedOverride>(&c.op); f) {
         text = std::string("M51 P") + (f->enabled ? "1" : "0");
       } else if (const auto* f = std::get_if<AdaptiveFeed>(&c.op)) {
         text = std::string("M52 P") + (f->enabled ? "1" : "0");
       } else if (const auto* f = std::get_if<FeedHold>(&c.op)) {
         text = std::string("M53 P") + (f->enabled ? "1" : "0");
-      } else if (const auto* st = std::get_if<ProgramStop>(&c.op); st && !in_cycle) {
+      } else if (const auto* st = std::get_if<ProgramStop>(&c.op); st) {
         text = st->optional ? "M1" : "M0";
       } else if (const auto* o19 = std::get_if<OrientSpindle>(&c.op);
                  o19 && o19->m19_direction >= 0) {
