@@ -195,7 +195,7 @@ void expect_refused(const std::string& prog, int line, const std::string& messag
 
 // A cycle in G91, with an expression or in polar coordinates cannot be
 // kept, corrected, on its line: it is written out as its moves (test_rewrite_expansion.cpp), the
-// hole corrected; G87 is refused by name, also inside a loop.
+// hole corrected.
 TEST(RewriteCycles, CyclesThatCannotBeKeptAreWrittenOutOrRefusedByName) {
   const std::string head =
       "G21 G17 G90 G94\nT2 M6\nG43 H2\nS1000 M3\nG0 X0 Y0 Z10\n(OPERATION: HOLES)\n";
@@ -211,11 +211,83 @@ TEST(RewriteCycles, CyclesThatCannotBeKeptAreWrittenOutOrRefusedByName) {
     // The bottom of the hole (10, 5, -3) moved by the vector planted there.
     EXPECT_NE(r.text.find("G1 X10.020000 Y5.000000 Z-3.000000"), std::string::npos) << r.text;
   }
-  expect_refused(head + "G98 G87 X10 Y5 Z-3 R2 I1 J0 K-1 F100\nG80\nM30\n", 7, "G87 (back boring)");
-  expect_refused(head +
-                     "G98 G81 X10 Y5 Z-3 R2 F100\n#1 = 0\no1 while [#1 LT 2]\nG87 X20 Y5 Z-3 R2 "
-                     "I1 J0 K-1\n#1 = [#1 + 1]\no1 endwhile\nG80\nM30\n",
-                 10, "canned cycle G87 (back boring) on this line: its entry offset");
+  expect_refused(head + "G18 G98 G87 X10 Z5 Y-3 R2 I1 K0 J-1 F100\nG80\nM30\n", 7,
+                 "G87 (back boring) outside G17");
+  // In a loop, G87 under M4 orients the spindle with CANON_DIRECTION 3,
+  // which no M19 makes.
+  expect_refused(
+      "G21 G17 G90 G94\nT2 M6\nG43 H2\nS1000 M4\nG0 X0 Y0 Z10\n(OPERATION: HOLES)\n"
+      "#1 = 0\no1 while [#1 LT 2]\nG98 G87 X[10 + #1 * 10] Y5 Z-5 R2 I1 J0 K-3 F100\n"
+      "G80\n#1 = [#1 + 1]\no1 endwhile\nM30\n",
+      9, "ORIENT_SPINDLE(..., 3) has no M19 form");
+}
+
+// The feeds of each G87 line, in order, as the interpreter runs `text`.
+std::map<int, std::vector<Axes6>> feeds_by_line(const std::string& text) {
+  const CanonProgram p = Interpreter(options().interpreter).run_text(text, "p.ngc");
+  std::map<int, std::vector<Axes6>> out;
+  for (const CanonCall& c : p.calls)
+    if (const auto* f = std::get_if<StraightFeed>(&c.op))
+      if (c.context.canned_cycle == 870) out[c.context.line].push_back(f->end);
+  return out;
+}
+
+// G87 back bores upwards from below the part (Z) to K, entering beside the
+// hole (I J): the cut is at K, so the correction planted there moves the
+// hole in X Y and K by it, while Z, where the tool waits below the part, and
+// the entry offset stay (issue 22 point 5; before, G87 was refused).
+TEST(RewriteCycles, BackBoringIsCorrectedAtItsBackBoreHeight) {
+  const std::string program =
+      "G21 G17 G90 G94\nT2 M6\nG43 H2\nS1000 M3\nG0 X0 Y0 Z10\n(OPERATION: HOLES)\n"
+      "G98 G87 X10 Y5 Z-8 R2 I1.5 J-0.5 K-3 F100 (back bore)\n"
+      "X20\n"
+      "G80\nG0 Z20\nM30\n";
+  // Planted at each hole's back-bore point (X Y K); nothing at Z.
+  const std::vector<Hole> holes = {{V(10, 5, -3), V(0.02, -0.01, 0.015)},
+                                   {V(20, 5, -3), V(-0.03, 0.02, -0.01)}};
+  const RewriteResult r = rewrite_program(program, "p.ngc", clusters(holes), options());
+  EXPECT_EQ(r.summary.holes_rewritten, 2) << r.text;
+  EXPECT_EQ(r.summary.expansions, 0) << r.text;
+  EXPECT_NE(r.text.find("; G87 with the hole and back-bore height X Y K the correction at K "
+                        "gives, Z kept)"),
+            std::string::npos)
+      << r.text;
+  const auto out = lines_of(r.text);
+  EXPECT_NE(out.at(7).find("G98 G87 R2 I1.5 J-0.5 F100 X10.020000 Y4.990000 Z-8 K-2.985000 "
+                           "(back bore)"),
+            std::string::npos)
+      << out.at(7);
+  const auto before = feeds_by_line(program);
+  const auto after = feeds_by_line(r.text);
+  for (int k = 0; k < 2; ++k) {
+    SCOPED_TRACE("hole " + std::to_string(k));
+    const int line = 7 + k;
+    ASSERT_EQ(before.at(line).size(), 2u);
+    ASSERT_EQ(after.at(line + 1).size(), 2u) << r.text;
+    const V& c = holes[k].programmed;
+    const V& d = holes[k].shift;
+    // Up to K, then down to Z, both over the shifted hole.
+    const Axes6& up = after.at(line + 1)[0];
+    const Axes6& down = after.at(line + 1)[1];
+    EXPECT_NEAR(up.x, c.x() + d.x(), 1e-9);
+    EXPECT_NEAR(up.y, c.y() + d.y(), 1e-9);
+    EXPECT_NEAR(up.z, c.z() + d.z(), 1e-9);
+    EXPECT_NEAR(down.x, c.x() + d.x(), 1e-9);
+    EXPECT_NEAR(down.y, c.y() + d.y(), 1e-9);
+    EXPECT_EQ(down.z, -8.0);
+    EXPECT_EQ(before.at(line)[0].z, -3.0);
+  }
+  // The entry beside the hole keeps its offset from the hole.
+  const CanonProgram p = Interpreter(options().interpreter).run_text(r.text, "p.ngc");
+  int offset_entries = 0;
+  for (const CanonCall& c : p.calls)
+    if (const auto* t = std::get_if<StraightTraverse>(&c.op))
+      if (c.context.line == 8 && std::fabs(t->end.z + 8) < 1e-12 &&
+          std::fabs(t->end.x - 11.52) < 1e-9) {
+        EXPECT_NEAR(t->end.y, 4.49, 1e-9);
+        ++offset_entries;
+      }
+  EXPECT_EQ(offset_entries, 2) << r.text;  // down beside the hole, and out again
 }
 
 }  // namespace

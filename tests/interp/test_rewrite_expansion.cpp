@@ -734,5 +734,30 @@ TEST(RewriteExpansion, TappingAndManualBoringInALoopSwitchAsTheCycleDid) {
   EXPECT_EQ(switches("rewritten.ngc"), want) << r.text;
 }
 
+// G87 in a loop, under M3: its moves written out, the hole corrected at its
+// back-bore height K (the top of its feeds), the entry beside the hole
+// shifted with it, and its spindle orients as the M19 R0 P2 that makes the
+// same ORIENT_SPINDLE call (issue 22 point 5; before, refused).
+TEST(RewriteExpansion, BackBoringInALoopIsWrittenOutCorrectedAtItsBackBoreHeight) {
+  const std::string program = kHead +
+                              "S800 M3\n"
+                              "#1 = 0\n"
+                              "o100 while [#1 lt 2]\n"
+                              "G98 G87 X[#1 * 10] Y5 Z-8 R2 I1.5 J0 K-3 F100\n"
+                              "G80\n"
+                              "#1 = [#1 + 1]\n"
+                              "o100 endwhile\n"
+                              "G0 Z20\n"
+                              "M30\n";
+  const V offset(0.02, -0.01, 0.015);
+  expect_one_expansion_with(
+      program, offset,
+      {"G0 X1.520000 Y4.990000 Z2.000000\nM5\nM19 R0 P2\n",
+       "G0 X0.020000 Y4.990000 Z-8.000000\nM3\nG1 X0.020000 Y4.990000 Z-2.985000 F100\n"
+       "G1 X0.020000 Y4.990000 Z-8.000000\nM5\nM19 R0 P2\n"});
+  const RewriteResult r = rewrite_program(program, "p.ngc", constant(offset), options());
+  EXPECT_EQ(r.summary.expanded_holes, 2) << r.text;
+}
+
 }  // namespace
 }  // namespace truecut::interp

@@ -37,7 +37,8 @@ bool is_cycle_code(int code) {  // G73, G74, G76 excluded, G81-G89, x10
 // cycle: the line of a canned cycle, whose hole and bottom (X Y Z) are cut
 // out and everything else of the cycle (its G code, R, Q, P, L, F, G98/G99)
 // kept.
-LineWords split_line(const std::string& source, const std::string& file, int line_no, bool cycle) {
+LineWords split_line(const std::string& source, const std::string& file, int line_no, bool cycle,
+                     bool back_boring = false) {
   const LexedLine lx = lex_line(source, file, line_no);
   const std::string& t = lx.text;
   auto column = [&](size_t i) { return i < lx.column.size() ? lx.column[i] : lx.end_column; };
@@ -93,8 +94,10 @@ LineWords split_line(const std::string& source, const std::string& file, int lin
     if (cycle) {
       const bool keep_word = w.letter == 'r' || w.letter == 'q' || w.letter == 'p' ||
                              w.letter == 'l' || w.letter == 'f' || w.letter == 'n' ||
-                             w.letter == 's' || w.letter == 't' || w.letter == 'h';
-      if (w.letter == 'x' || w.letter == 'y' || w.letter == 'z') {
+                             w.letter == 's' || w.letter == 't' || w.letter == 'h' ||
+                             (back_boring && (w.letter == 'i' || w.letter == 'j'));
+      if (w.letter == 'x' || w.letter == 'y' || w.letter == 'z' ||
+          (back_boring && w.letter == 'k')) {
         remove[k] = true;
         continue;
       }
@@ -271,8 +274,9 @@ LineWords split_move_line(const std::string& source, const std::string& file, in
   return split_line(source, file, line_no, false);
 }
 
-LineWords split_cycle_line(const std::string& source, const std::string& file, int line_no) {
-  return split_line(source, file, line_no, true);
+LineWords split_cycle_line(const std::string& source, const std::string& file, int line_no,
+                           bool back_boring) {
+  return split_line(source, file, line_no, true, back_boring);
 }
 
 std::string with_words_before_comment(const std::string& residual, const std::string& words) {

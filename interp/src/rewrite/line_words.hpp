@@ -30,7 +30,10 @@ LineWords split_move_line(const std::string& source, const std::string& file, in
 // The line of a canned cycle (G73 G74 G81-G89) without its X Y Z words;
 // the cycle's other words (its G code, R Q P L F, G98/G99) and comments
 // stay. Throws GcodeError as split_move_line, and for polar words.
-LineWords split_cycle_line(const std::string& source, const std::string& file, int line);
+// `back_boring` (G87): its K, the back-bore height, goes with X Y Z; its
+// entry offset I J stays.
+LineWords split_cycle_line(const std::string& source, const std::string& file, int line,
+                           bool back_boring = false);
 
 // residual with `words` inserted after its last word, before any comment.
 std::string with_words_before_comment(const std::string& residual, const std::string& words);

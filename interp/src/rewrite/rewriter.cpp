@@ -459,6 +459,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
   std::vector<CycleMove> cycle_moves;
   CallContext cycle_ctx;
   std::set<int> cycle_lines_planned;
+  bool back_bores_rewritten = false;  // a G87 line of the operation was written
   // A cycle line was written with another hole or bottom: the cycle's later
   // lines, which take X Y Z from it, are written with their own.
   bool cycle_words_pending = false;
@@ -472,24 +473,32 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       throw GcodeError({file, line, 0}, "canned cycle " + g +
                                             " line runs more than once (loop or subroutine): it "
                                             "cannot be rewritten");
-    if (ctx.canned_cycle == 870)
+    // G87 back bores upwards from the bottom (Z, below the part) to K: the
+    // cut is at K, where the correction is taken; X Y and K are written
+    // corrected, Z and the entry offset I J as they were.
+    const bool back_boring = ctx.canned_cycle == 870;
+    if (back_boring && ctx.cycle_plane != Plane::kXY)
       throw GcodeError({file, line, 0},
-                       "canned cycle G87 (back boring): its entry offset and back-bore height "
-                       "cannot be corrected; keep it outside the operation");
+                       "canned cycle G87 (back boring) outside G17: the rewrite corrects it in "
+                       "the XY plane only");
     if (ctx.cycle_incremental)
       throw GcodeError({file, line, 0}, "canned cycle " + g +
                                             " in G91 (incremental distance): its hole and depth "
                                             "are relative and cannot be corrected; program it "
                                             "in G90");
     const int normal = ctx.cycle_plane == Plane::kXY ? 2 : ctx.cycle_plane == Plane::kXZ ? 1 : 0;
-    // The hole's bottom: the deepest end of a feed (R lies above the bottom).
+    // The hole's bottom: the deepest end of a feed (R lies above the bottom);
+    // G87's cut: the highest.
     const ToolPath::Move* bottom = nullptr;
-    for (const CycleMove& m : cycle_moves)
-      if (m.feed && (!bottom || path.to_program(m.move.end, ctx)[normal] <
-                                    path.to_program(bottom->end, ctx)[normal]))
-        bottom = &m.move;
+    const ToolPath::Move* top = nullptr;
+    for (const CycleMove& m : cycle_moves) {
+      if (!m.feed) continue;
+      const double h = path.to_program(m.move.end, ctx)[normal];
+      if (!bottom || h < path.to_program(bottom->end, ctx)[normal]) bottom = &m.move;
+      if (!top || h > path.to_program(top->end, ctx)[normal]) top = &m.move;
+    }
     if (!bottom) throw GcodeError({file, line, 0}, "canned cycle " + g + " without a feed move");
-    const Vec5 p = bottom->end;
+    const Vec5 p = back_boring ? top->end : bottom->end;
     Correction corr;
     if (in_op) {
       corr = correction(path.tool_point(p, ctx), ctx, radius_by_tool.at(ctx.tool));
@@ -503,7 +512,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     }
     const Vec5 corrected = shifts ? path.shifted(p, ctx, corr.shift_mm) : p;
     const Axes6 q = path.to_program(corrected, ctx);
-    const LineWords words = split_cycle_line(raw[line - 1].content, file, line);
+    const LineWords words = split_cycle_line(raw[line - 1].content, file, line, back_boring);
     const int decimals = o.decimals > 0 ? o.decimals : ctx.units == LengthUnits::kInch ? 5 : 4;
     std::string axis_words;
     RewrittenLine rl;
@@ -513,7 +522,11 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     const char letters[] = {'X', 'Y', 'Z'};
     for (int ax = 0; ax < 3; ++ax) {
       const std::string v = shifts ? rt::format_fixed(q[ax], decimals) : exact(q[ax]);
-      axis_words += std::string(axis_words.empty() ? "" : " ") + letters[ax] + v;
+      if (back_boring && ax == 2) {
+        axis_words += " Z" + exact(path.to_program(bottom->end, ctx)[2]) + " K" + v;
+      } else {
+        axis_words += std::string(axis_words.empty() ? "" : " ") + letters[ax] + v;
+      }
       rl.expected[0][ax] = std::strtod(v.c_str(), nullptr);
     }
     PlannedLine pl;
@@ -528,6 +541,7 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       sum_mm += mag;
     }
     if (in_op) ++s.holes_rewritten;
+    if (in_op && back_boring) back_bores_rewritten = true;
     cycle_words_pending = shifts;
     displaced = shifts;
   };
@@ -783,9 +797,15 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
         text = std::string("M53 P") + (f->enabled ? "1" : "0");
       } else if (const auto* st = std::get_if<ProgramStop>(&c.op); st) {
         text = st->optional ? "M1" : "M0";
-      } else if (const auto* o19 = std::get_if<OrientSpindle>(&c.op);
-                 o19 && o19->m19_direction >= 0) {
-        text = "M19 R" + exact(o19->degrees) + " P" + std::to_string(o19->m19_direction);
+      } else if (const auto* o19 = std::get_if<OrientSpindle>(&c.op)) {
+        // G87's orient prints LinuxCNC's CANON_DIRECTION, 2 for a clockwise
+        // spindle: the call M19 P2 makes. M19 has no P3.
+        if (o19->m19_direction < 0 && !o19->clockwise)
+          throw expansion_error(c,
+                                "this line orients the spindle counter-clockwise for G87 (M4): "
+                                "ORIENT_SPINDLE(..., 3) has no M19 form");
+        text = "M19 R" + exact(o19->degrees) + " P" +
+               std::to_string(o19->m19_direction >= 0 ? o19->m19_direction : 2);
       } else if (const auto* w = std::get_if<WaitOrientComplete>(&c.op)) {
         // M19 R.. Q.. makes both calls: the Q goes onto that M19 line.
         if (!pl.moves.empty() && pl.moves.back().rfind("M19 R", 0) == 0 &&
@@ -987,10 +1007,10 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     std::vector<bool> is_move(expanded_cycle.size(), false);
     const CanonCall& head = *expanded_cycle.front();
     const CallContext& cctx = head.context;
-    if (cctx.canned_cycle == 870)
-      throw expansion_error(head,
-                            "canned cycle G87 (back boring) on this line: its entry offset "
-                            "and back-bore height cannot be corrected");
+    // G87 goes down beside the hole (the entry offset I J) and back bores
+    // upwards: every move of the block belongs to its one hole, and the cut
+    // is the feed's top (K), where the correction is taken.
+    const bool back_boring = cctx.canned_cycle == 870;
     const int normal = cctx.cycle_plane == Plane::kXY ? 2 : cctx.cycle_plane == Plane::kXZ ? 1 : 0;
     path.rebase(cctx);
     size_t k = 0;
@@ -998,24 +1018,30 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
       // A hole: the moves that end over the same point of the plane.
       size_t end = k;
       const Axes6* hole = nullptr;
-      const Axes6* bottom = nullptr;
+      const Axes6* cut = nullptr;  // the bottom (G87: the top) of the feeds
       for (; end < expanded_cycle.size(); ++end) {
         const CanonCall& c = *expanded_cycle[end];
         if (!is_motion(c.op)) continue;
+        const bool feed = !std::holds_alternative<StraightTraverse>(c.op);
         const Axes6 e = end_of(c.op);
         bool same = true;
         for (int ax = 0; ax < 3; ++ax)
           if (ax != normal && hole && e[ax] != (*hole)[ax]) same = false;
-        if (!same) break;
+        if (!same && back_boring && feed)
+          throw expansion_error(c,
+                                "canned cycle G87 (back boring) on this line bores more than "
+                                "one hole (L repeats in G91)");
+        if (!same && !back_boring) break;
         is_move[end] = true;
         ends[end] = e;
-        if (!hole) hole = &ends[end];
-        if (!std::holds_alternative<StraightTraverse>(c.op) &&
-            (!bottom || e[normal] < (*bottom)[normal]))
-          bottom = &ends[end];
+        if (feed && !hole) hole = &ends[end];
+        if (!back_boring && !hole) hole = &ends[end];
+        if (feed &&
+            (!cut || (back_boring ? e[normal] > (*cut)[normal] : e[normal] < (*cut)[normal])))
+          cut = &ends[end];
       }
-      if (bottom && cctx.operation == o.operation) {
-        const Axes6 b = *bottom;
+      if (cut && cctx.operation == o.operation) {
+        const Axes6 b = *cut;
         const Vec5 p = path.line_to(b, cctx).end;
         const Correction corr =
             correction(path.tool_point(p, cctx), cctx, radius_by_tool.at(cctx.tool));
@@ -1023,10 +1049,11 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
           const Axes6 q = path.to_program(path.shifted(p, cctx, corr.shift_mm), cctx);
           for (size_t i = k; i < end; ++i) {
             if (!is_move[i]) continue;
+            const bool feed = !std::holds_alternative<StraightTraverse>(expanded_cycle[i]->op);
             for (int ax = 0; ax < 3; ++ax)
               if (ax != normal)
                 ends[i][ax] += q[ax] - b[ax];
-              else if (ends[i][ax] == b[ax])
+              else if (ends[i][ax] == b[ax] && (feed || !back_boring))
                 ends[i][ax] = q[ax];
           }
         }
@@ -1420,7 +1447,11 @@ RewriteResult run(std::string_view text, const std::string& name, const RewriteO
     if (s.holes_rewritten > 0) {
       r.text += "(truecut rewrite: canned cycles kept: " + std::to_string(s.holes_rewritten) +
                 " cycle lines of operation " + o.operation +
-                " written with the hole and bottom X Y Z the correction at the bottom gives)\n";
+                " written with the hole and bottom X Y Z the correction at the bottom gives" +
+                (back_bores_rewritten ? std::string("; G87 with the hole and back-bore height "
+                                                    "X Y K the correction at K gives, Z kept")
+                                      : std::string()) +
+                ")\n";
       origin.push_back({1, OutputLine::kResidual});
     }
     if (!returns.empty()) {

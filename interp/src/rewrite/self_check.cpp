@@ -60,7 +60,10 @@ void check_cycle_line(int line, const RewrittenLine& rw, const std::vector<const
           fail(line,
                "the written canned cycle feeds off its hole (incremental distance mode G91 "
                "active?)");
-      if (!deepest || f->end[normal] < (*deepest)[normal]) deepest = &f->end;
+      // G87 back bores upwards: its cut, the highest feed, is the one written.
+      if (!deepest || (rw.context.canned_cycle == 870 ? f->end[normal] > (*deepest)[normal]
+                                                      : f->end[normal] < (*deepest)[normal]))
+        deepest = &f->end;
       if (c->context.operation != rw.context.operation || c->context.tool != rw.context.tool)
         fail(line, "the written canned cycle runs in another mode than the original");
     }
